@@ -1,0 +1,34 @@
+//! # brush-model
+//!
+//! The physical core of maobi: how a hairy brush pressed into paper leaves a footprint.
+//!
+//! * [`units`]: unit-carrying types ([`Brush`], [`Press`], [`TrackPoint`], [`Track`]); lengths
+//!   in mm, angles in radians, units in every field name.
+//! * [`footprint`]: the B-BSM footprint ([`Footprint`]: tip length `lt`, root length `lh`, belly
+//!   half-width `lr`) as two mirrored cubic Béziers, placed on the paper by an anchor and `β`.
+//! * [`regression`]: the least-squares fits from measured presses to footprints (the paper's
+//!   general Eq. 6 and its Eq. 1–5 form) with a statsmodels-style report.
+//! * [`measurements`]: the measurements CSV.
+//! * [`profile`]: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
+//!   and the inverse model (the h that gives a wanted width).
+//!
+//! ```
+//! use brush_model::{BrushProfile, Extrapolation, Press};
+//! let pen1 = BrushProfile::builtin("pen1").unwrap();
+//! let fp = pen1.predict(&Press::from_degrees(15.0, 5.0, 0.0), Extrapolation::Refuse).unwrap();
+//! assert!(fp.lt_mm > fp.lh_mm && fp.lr_mm < pen1.brush.radius_mm);
+//! // A press deeper than the calibrated range is refused unless asked for.
+//! assert!(pen1.predict(&Press::from_degrees(30.0, 0.0, 0.0), Extrapolation::Refuse).is_err());
+//! ```
+
+pub mod footprint;
+pub mod measurements;
+pub mod profile;
+pub mod regression;
+pub mod units;
+
+pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
+pub use measurements::{load_measurements, read_measurements, Measurement, MeasurementError};
+pub use profile::{BrushProfile, Clamp, Extrapolation, InverseH, PressRanges, ProfileError, Range, Source};
+pub use regression::{fit, fit_general, fit_paper, FitError, FitReport, Form, LinearModel, OutputFit, Terms};
+pub use units::{deg_to_rad, rad_to_deg, Brush, PointMm, Press, Stroke, Track, TrackPoint};

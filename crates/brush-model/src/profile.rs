@@ -1,0 +1,436 @@
+//! Brush profiles: a brush, the press range it was calibrated over, and the linear model from
+//! press to footprint (DESIGN §5).
+//!
+//! Profiles are versioned JSON. The built-in `pen1` and `pen2` are *nominal*: their coefficients
+//! come from the brush geometry (see `docs/brush-model.md`), not from measurements, and a
+//! calibration (`maobi calibrate`) replaces them.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::footprint::Footprint;
+use crate::regression::{FitReport, LinearModel, Terms};
+use crate::units::{Brush, Press};
+
+/// The profile format version this crate reads and writes.
+pub const PROFILE_VERSION: u32 = 1;
+
+/// Errors from loading, validating or using a profile.
+#[derive(Debug, Error)]
+pub enum ProfileError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {error}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The I/O error.
+        error: std::io::Error,
+    },
+    /// The JSON is malformed or a field is missing or of the wrong type.
+    #[error("{source_name}: not a valid brush profile: {error}")]
+    Json {
+        /// File name or other label.
+        source_name: String,
+        /// serde_json's message (names the field, line and column).
+        error: serde_json::Error,
+    },
+    /// A field has an impossible value.
+    #[error("{source_name}: field `{field}`: {reason}")]
+    Invalid {
+        /// File name or other label.
+        source_name: String,
+        /// Dotted path of the field.
+        field: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A press lies outside the calibrated range and extrapolation was not allowed.
+    #[error("{quantity} = {value:.4} is outside the calibrated range [{min:.4}, {max:.4}] of profile `{profile}` (allow extrapolation to use it anyway)")]
+    OutOfRange {
+        /// The profile's name.
+        profile: String,
+        /// Which quantity, with its unit.
+        quantity: &'static str,
+        /// The value asked for, in the quantity's unit.
+        value: f64,
+        /// Range minimum.
+        min: f64,
+        /// Range maximum.
+        max: f64,
+    },
+    /// The model predicts a non-positive length for this press.
+    #[error("profile `{profile}` predicts a non-positive {field} ({value:.4} mm) for this press")]
+    Degenerate {
+        /// The profile's name.
+        profile: String,
+        /// Which length.
+        field: &'static str,
+        /// The predicted value.
+        value: f64,
+    },
+    /// The belly width does not depend on h, so no h gives a wanted width.
+    #[error("profile `{profile}`: lr does not change with h, so h cannot be chosen from a width")]
+    NotInvertible {
+        /// The profile's name.
+        profile: String,
+    },
+    /// No built-in profile has this name.
+    #[error("unknown built-in brush `{0}` (known: pen1, pen2)")]
+    UnknownBuiltin(String),
+}
+
+/// Where a profile's numbers come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Source {
+    /// Derived from the brush geometry; to be replaced by a calibration.
+    Nominal,
+    /// Fitted from measurements.
+    Calibrated,
+}
+
+/// A closed interval `[min, max]`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Range {
+    /// Lower end.
+    pub min: f64,
+    /// Upper end.
+    pub max: f64,
+}
+
+impl Range {
+    /// A range from its ends.
+    pub const fn new(min: f64, max: f64) -> Self {
+        Self { min, max }
+    }
+    /// Whether `v` lies in the range (with a relative tolerance of 1e-9).
+    pub fn contains(&self, v: f64) -> bool {
+        let tol = 1e-9 * self.min.abs().max(self.max.abs()).max(1.0);
+        v >= self.min - tol && v <= self.max + tol
+    }
+    /// `v` clamped into the range.
+    pub fn clamp(&self, v: f64) -> f64 {
+        v.clamp(self.min, self.max)
+    }
+    /// The point at fraction `f ∈ [0, 1]` of the range.
+    pub fn lerp(&self, f: f64) -> f64 {
+        self.min + f * (self.max - self.min)
+    }
+}
+
+/// The press ranges a profile is valid over (mm and radians).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressRanges {
+    /// Press depth, mm.
+    pub h_mm: Range,
+    /// Tilt, radians.
+    pub alpha_rad: Range,
+    /// Rotation, radians.
+    pub beta_rad: Range,
+}
+
+impl PressRanges {
+    /// The eight corner presses of the range box. With a linear model every footprint length
+    /// takes its extremes at corners.
+    pub fn corners(&self) -> Vec<Press> {
+        let mut v = Vec::with_capacity(8);
+        for h in [self.h_mm.min, self.h_mm.max] {
+            for a in [self.alpha_rad.min, self.alpha_rad.max] {
+                for b in [self.beta_rad.min, self.beta_rad.max] {
+                    v.push(Press::new(h, a, b));
+                }
+            }
+        }
+        v
+    }
+}
+
+/// Whether prediction may leave the calibrated range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Extrapolation {
+    /// Refuse presses outside the calibrated range (the default).
+    #[default]
+    Refuse,
+    /// Predict anyway.
+    Allow,
+}
+
+/// Which way the inverse model clamped h.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Clamp {
+    /// The exact solution lies inside the range.
+    None,
+    /// The wanted width needs less than the minimum h; the minimum is returned.
+    Min,
+    /// The wanted width needs more than the maximum h; the maximum is returned.
+    Max,
+}
+
+/// The result of the inverse model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct InverseH {
+    /// The press depth to use, mm (inside the calibrated range).
+    pub h_mm: f64,
+    /// The unclamped solution, mm.
+    pub exact_h_mm: f64,
+    /// Whether and which way it was clamped.
+    pub clamped: Clamp,
+}
+
+/// A brush profile.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BrushProfile {
+    /// Format version ([`PROFILE_VERSION`]).
+    pub version: u32,
+    /// A short name, e.g. `pen1`.
+    pub name: String,
+    /// Where the coefficients come from.
+    pub source: Source,
+    /// The brush.
+    pub brush: Brush,
+    /// The calibrated press ranges.
+    pub ranges: PressRanges,
+    /// Footprint lengths as linear functions of `(h, α, β)`.
+    pub model: LinearModel,
+    /// The fit that produced the model, when calibrated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<FitReport>,
+}
+
+impl BrushProfile {
+    /// A built-in nominal profile by name: `pen1` or `pen2`.
+    ///
+    /// # Errors
+    /// [`ProfileError::UnknownBuiltin`] for any other name.
+    pub fn builtin(name: &str) -> Result<Self, ProfileError> {
+        match name {
+            "pen1" => Ok(Self::nominal("pen1", Brush { length_mm: 48.0, radius_mm: 6.0 }, Range::new(11.0, 20.0))),
+            "pen2" => {
+                // The paper keeps the press under half the bundle length; scale pen1's h range by
+                // the length ratio 32/48.
+                let k = 32.0 / 48.0;
+                Ok(Self::nominal(
+                    "pen2",
+                    Brush { length_mm: 32.0, radius_mm: 4.5 },
+                    Range::new(11.0 * k, 20.0 * k),
+                ))
+            }
+            other => Err(ProfileError::UnknownBuiltin(other.to_string())),
+        }
+    }
+
+    /// Names of the built-in profiles.
+    pub const BUILTINS: [&'static str; 2] = ["pen1", "pen2"];
+
+    /// A nominal profile derived from the brush geometry over the paper's angle ranges
+    /// (α 0–10°, β 0–5°). See `docs/brush-model.md` for the derivation of each coefficient.
+    pub fn nominal(name: &str, brush: Brush, h_range: Range) -> Self {
+        let (l, r) = (brush.length_mm, brush.radius_mm);
+        let h_mid = 0.5 * (h_range.min + h_range.max);
+        // Contact length grows in proportion to h (κ = 1.25 mm per mm), split 72/28 between tip
+        // and root; tilting lays more hair on the paper, about h_mid mm per radian in total.
+        let lt = Terms { intercept: 0.0, h_mm: Some(0.9), alpha_rad: Some(0.8 * h_mid), beta_rad: Some(0.0) };
+        let lh = Terms { intercept: 0.0, h_mm: Some(0.35), alpha_rad: Some(0.2 * h_mid), beta_rad: Some(0.0) };
+        // Belly half-width: the cone's radius R·h/L where it meets the paper, flattened by 1.6.
+        let lr = Terms { intercept: 0.0, h_mm: Some(1.6 * r / l), alpha_rad: Some(0.1 * r), beta_rad: Some(0.0) };
+        BrushProfile {
+            version: PROFILE_VERSION,
+            name: name.to_string(),
+            source: Source::Nominal,
+            brush,
+            ranges: PressRanges {
+                h_mm: h_range,
+                alpha_rad: Range::new(0.0, 10f64.to_radians()),
+                beta_rad: Range::new(0.0, 5f64.to_radians()),
+            },
+            model: LinearModel { lt_mm: lt, lh_mm: lh, lr_mm: lr },
+            fit: None,
+        }
+    }
+
+    /// A calibrated profile from a fit, over the ranges spanned by the measurements.
+    pub fn calibrated(name: &str, brush: Brush, ranges: PressRanges, fit: FitReport) -> Self {
+        BrushProfile {
+            version: PROFILE_VERSION,
+            name: name.to_string(),
+            source: Source::Calibrated,
+            brush,
+            ranges,
+            model: fit.linear_model(),
+            fit: Some(fit),
+        }
+    }
+
+    /// Loads and validates a profile from a JSON file.
+    ///
+    /// # Errors
+    /// [`ProfileError::Io`], [`ProfileError::Json`] (names the missing or mistyped field, with
+    /// line and column) or [`ProfileError::Invalid`].
+    pub fn load(path: &Path) -> Result<Self, ProfileError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|error| ProfileError::Io { path: path.display().to_string(), error })?;
+        Self::from_json(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates a profile; `source_name` labels errors.
+    ///
+    /// # Errors
+    /// As [`BrushProfile::load`].
+    pub fn from_json(text: &str, source_name: &str) -> Result<Self, ProfileError> {
+        let p: BrushProfile = serde_json::from_str(text)
+            .map_err(|error| ProfileError::Json { source_name: source_name.to_string(), error })?;
+        p.validate(source_name)?;
+        Ok(p)
+    }
+
+    /// The profile as pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("profile serialises")
+    }
+
+    /// Checks every field for impossible values.
+    ///
+    /// # Errors
+    /// [`ProfileError::Invalid`] naming the first bad field.
+    pub fn validate(&self, source_name: &str) -> Result<(), ProfileError> {
+        let bad = |field: &str, reason: String| ProfileError::Invalid {
+            source_name: source_name.to_string(),
+            field: field.to_string(),
+            reason,
+        };
+        if self.version != PROFILE_VERSION {
+            return Err(bad("version", format!("unsupported version {} (this build reads {PROFILE_VERSION})", self.version)));
+        }
+        if self.name.trim().is_empty() {
+            return Err(bad("name", "must not be empty".into()));
+        }
+        for (f, v) in [("brush.length_mm", self.brush.length_mm), ("brush.radius_mm", self.brush.radius_mm)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(f, format!("must be a positive length in mm, got {v}")));
+            }
+        }
+        for (f, r) in [
+            ("ranges.h_mm", self.ranges.h_mm),
+            ("ranges.alpha_rad", self.ranges.alpha_rad),
+            ("ranges.beta_rad", self.ranges.beta_rad),
+        ] {
+            if !(r.min.is_finite() && r.max.is_finite()) {
+                return Err(bad(f, "ends must be finite".into()));
+            }
+            if r.min > r.max {
+                return Err(bad(f, format!("empty range: min {} > max {}", r.min, r.max)));
+            }
+        }
+        if self.ranges.h_mm.min < 0.0 {
+            return Err(bad("ranges.h_mm", "press depth cannot be negative".into()));
+        }
+        for (f, t) in [("model.lt_mm", self.model.lt_mm), ("model.lh_mm", self.model.lh_mm), ("model.lr_mm", self.model.lr_mm)] {
+            let vals = [Some(t.intercept), t.h_mm, t.alpha_rad, t.beta_rad];
+            if vals.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(bad(f, "coefficients must be finite".into()));
+            }
+        }
+        for c in self.ranges.corners() {
+            let fp = self.raw(&c);
+            for (f, v) in [("model.lt_mm", fp[0]), ("model.lh_mm", fp[1]), ("model.lr_mm", fp[2])] {
+                if v <= 0.0 {
+                    return Err(bad(
+                        f,
+                        format!("predicts {v:.4} mm at the range corner h={} α={} β={}; lengths must be positive", c.h_mm, c.alpha_rad, c.beta_rad),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn raw(&self, p: &Press) -> [f64; 3] {
+        let m = &self.model;
+        [m.lt_mm, m.lh_mm, m.lr_mm].map(|t| t.eval(p.h_mm, p.alpha_rad, p.beta_rad))
+    }
+
+    fn check_range(&self, p: &Press) -> Result<(), ProfileError> {
+        let r = &self.ranges;
+        for (quantity, value, range) in [
+            ("h_mm", p.h_mm, r.h_mm),
+            ("alpha_rad", p.alpha_rad, r.alpha_rad),
+            ("beta_rad", p.beta_rad, r.beta_rad),
+        ] {
+            if !range.contains(value) {
+                return Err(ProfileError::OutOfRange {
+                    profile: self.name.clone(),
+                    quantity,
+                    value,
+                    min: range.min,
+                    max: range.max,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The footprint this brush leaves for a press.
+    ///
+    /// # Errors
+    /// [`ProfileError::OutOfRange`] outside the calibrated range unless `extrapolation` is
+    /// [`Extrapolation::Allow`]; [`ProfileError::Degenerate`] if a length comes out non-positive.
+    pub fn predict(&self, press: &Press, extrapolation: Extrapolation) -> Result<Footprint, ProfileError> {
+        if extrapolation == Extrapolation::Refuse {
+            self.check_range(press)?;
+        }
+        let [lt, lh, lr] = self.raw(press);
+        for (field, value) in [("lt_mm", lt), ("lh_mm", lh), ("lr_mm", lr)] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(ProfileError::Degenerate { profile: self.name.clone(), field, value });
+            }
+        }
+        Ok(Footprint { lt_mm: lt, lh_mm: lh, lr_mm: lr })
+    }
+
+    /// The press depth giving a belly half-width `lr_mm` at tilt `alpha_rad` and rotation
+    /// `beta_rad` (closed form for the linear model), clamped to the calibrated h range.
+    ///
+    /// # Errors
+    /// [`ProfileError::OutOfRange`] if α or β lie outside their ranges;
+    /// [`ProfileError::NotInvertible`] if `lr` does not depend on h.
+    pub fn h_for_half_width(&self, lr_mm: f64, alpha_rad: f64, beta_rad: f64) -> Result<InverseH, ProfileError> {
+        self.check_range(&Press::new(self.ranges.h_mm.min, alpha_rad, beta_rad))?;
+        let t = &self.model.lr_mm;
+        let slope = t.h_mm.unwrap_or(0.0);
+        if slope.abs() < 1e-12 {
+            return Err(ProfileError::NotInvertible { profile: self.name.clone() });
+        }
+        let rest = t.eval(0.0, alpha_rad, beta_rad);
+        let exact = (lr_mm - rest) / slope;
+        let r = self.ranges.h_mm;
+        let (h, clamped) = if exact < r.min {
+            (r.min, Clamp::Min)
+        } else if exact > r.max {
+            (r.max, Clamp::Max)
+        } else {
+            (exact, Clamp::None)
+        };
+        Ok(InverseH { h_mm: h, exact_h_mm: exact, clamped })
+    }
+
+    /// The largest footprint extent over the calibrated range: the maximum over the range's
+    /// corners of the outline's diagonal `hypot(x extent, 2·lr)`, mm. A canvas this wide holds
+    /// any footprint of the range at any rotation.
+    pub fn max_extent_mm(&self) -> f64 {
+        self.ranges
+            .corners()
+            .iter()
+            .filter_map(|c| self.predict(c, Extrapolation::Allow).ok())
+            .map(|f| {
+                let b = f.local_bounds();
+                b.width().hypot(b.height())
+            })
+            .fold(0.0, f64::max)
+    }
+}

@@ -1,0 +1,77 @@
+//! `maobi calibrate`: measurements → regression → brush profile.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use brush_model::{load_measurements, BrushProfile, Form, PressRanges, Range};
+
+use crate::common::{load_brush, print_json, write_atomic};
+
+/// Arguments of `maobi calibrate`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Measurements CSV with columns h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm (any order).
+    measurements: PathBuf,
+    /// Regression form: `general` (Eq. 6, one model per length) or `paper` (Eq. 1–5).
+    #[arg(long, value_enum, default_value_t = FormArg::General)]
+    form: FormArg,
+    /// Write the calibrated profile (JSON) here.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON.
+    #[arg(long, default_value = "pen1")]
+    brush: String,
+    /// Name of the new profile (default: the measurements file's stem).
+    #[arg(long)]
+    name: Option<String>,
+    /// Print the fit report as JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum FormArg {
+    General,
+    Paper,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let rows = load_measurements(&args.measurements)?;
+    let form = match args.form {
+        FormArg::General => Form::General,
+        FormArg::Paper => Form::Paper,
+    };
+    let report = brush_model::fit(&rows, form)
+        .with_context(|| format!("{}: cannot fit", args.measurements.display()))?;
+    let brush = load_brush(&args.brush)?.brush;
+    let span = |f: fn(&brush_model::Measurement) -> f64| {
+        let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
+        let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
+        Range::new(lo, hi)
+    };
+    let ranges = PressRanges {
+        h_mm: span(|m| m.press.h_mm),
+        alpha_rad: span(|m| m.press.alpha_rad),
+        beta_rad: span(|m| m.press.beta_rad),
+    };
+    let name = args.name.clone().unwrap_or_else(|| {
+        args.measurements.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into())
+    });
+    if let Some(out) = &args.output {
+        let profile = BrushProfile::calibrated(&name, brush, ranges, report.clone());
+        profile
+            .validate(&out.display().to_string())
+            .context("the fitted model is not a usable profile")?;
+        write_atomic(out, profile.to_json().as_bytes())?;
+    }
+    if args.json {
+        print_json(&report)?;
+    } else {
+        print!("{report}");
+        if let Some(out) = &args.output {
+            println!("\nprofile `{name}` written to {}", out.display());
+        }
+    }
+    Ok(())
+}

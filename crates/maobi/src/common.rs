@@ -1,0 +1,40 @@
+//! Helpers shared by the subcommands: brush selection and atomic file output.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use brush_model::BrushProfile;
+
+/// Resolves `--brush`: a built-in name (`pen1`, `pen2`) or a profile JSON file.
+pub fn load_brush(spec: &str) -> Result<BrushProfile> {
+    if BrushProfile::BUILTINS.contains(&spec) {
+        return Ok(BrushProfile::builtin(spec)?);
+    }
+    let path = Path::new(spec);
+    if !path.exists() && !spec.ends_with(".json") {
+        anyhow::bail!("--brush `{spec}`: not a built-in brush (pen1, pen2) nor an existing profile file");
+    }
+    Ok(BrushProfile::load(path)?)
+}
+
+/// Writes `bytes` to `path` atomically: into a temporary file in the same folder, then renamed,
+/// so a failure never leaves a half-written output. Creates the parent folder if needed.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)
+        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.persist(path).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(())
+}
+
+/// Prints a value as pretty JSON on stdout.
+pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}

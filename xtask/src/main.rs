@@ -1,0 +1,34 @@
+//! `cargo xtask`: project automation for maobi (see `cargo xtask help`).
+
+use std::process::ExitCode;
+
+mod fixtures;
+mod rng;
+
+const HELP: &str = "\
+cargo xtask <task>
+
+Tasks:
+  help                 print this help
+  fixtures [--check]   regenerate every generated file under fixtures/ (or, with --check,
+                       verify the committed files are what the generators produce now)
+";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        None | Some("help") | Some("--help") | Some("-h") => {
+            print!("{HELP}");
+            Ok(())
+        }
+        Some("fixtures") => fixtures::run(&args[1..]),
+        Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
