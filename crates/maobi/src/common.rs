@@ -38,3 +38,38 @@ pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     println!("{}", serde_json::to_string_pretty(value)?);
     Ok(())
 }
+
+/// Loads an image file as coverage (ink = 1), naming the file on error.
+pub fn load_image(path: &Path) -> Result<bezier_raster::Coverage> {
+    Ok(bezier_raster::Coverage::load(path)?)
+}
+
+/// Wraps a coverage image for the metrics crate.
+pub fn gray(c: &bezier_raster::Coverage) -> stroke_metrics::GrayRef<'_> {
+    stroke_metrics::GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("coverage buffers have width × height values")
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(len);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({per_sec}, {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+/// The `--brush` argument shared by most commands.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BrushArg {
+    /// Brush: pen1, pen2 or a profile JSON file.
+    #[arg(long, default_value = "pen1")]
+    pub brush: String,
+}
+
+/// The `--model` argument: a stroke model name.
+pub fn parse_model(s: &str) -> std::result::Result<bezier_raster::ModelKind, String> {
+    s.parse()
+}

@@ -24,13 +24,36 @@ enum Command {
     Calibrate(cmd::calibrate::Args),
     /// Predict the footprint a press leaves.
     Footprint(cmd::footprint::Args),
+    /// Render one footprint (PNG or SVG).
+    Stroke(cmd::stroke::Args),
+    /// Compare two images: CSIM, SSIM, IoU, MSE, PSNR.
+    Compare(cmd::compare::Args),
+    /// Write a dataset of random footprints (PNGs + labels.csv).
+    Dataset(cmd::dataset::Args),
+    /// Score every stroke model against the B-BSM footprint (the paper's Table 2).
+    Models(cmd::models::Args),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            // --help and --version.
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("{}", one_line(&e.render().to_string()));
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Footprint(a) => cmd::footprint::run(a),
+        Command::Stroke(a) => cmd::stroke::run(a),
+        Command::Compare(a) => cmd::compare::run(a),
+        Command::Dataset(a) => cmd::dataset::run(a),
+        Command::Models(a) => cmd::models::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -39,4 +62,13 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// Folds clap's multi-line usage error into one line, dropping the usage and help hints.
+fn one_line(msg: &str) -> String {
+    msg.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }

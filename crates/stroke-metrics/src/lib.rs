@@ -111,7 +111,7 @@ pub fn csim(a: GrayRef<'_>, b: GrayRef<'_>) -> Result<f64, MetricsError> {
     }
     Ok(match (aa > 0.0, bb > 0.0) {
         (false, false) => 1.0,
-        (true, true) => ab / (aa.sqrt() * bb.sqrt()),
+        (true, true) => (ab / (aa.sqrt() * bb.sqrt())).min(1.0),
         _ => 0.0,
     })
 }

@@ -1,0 +1,151 @@
+//! The coverage image type and its PNG/SVG forms.
+
+use std::io::Cursor;
+use std::path::Path;
+
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ExtendedColorType, ImageEncoder};
+use thiserror::Error;
+
+/// Errors from image I/O.
+#[derive(Debug, Error)]
+pub enum RasterError {
+    /// The file could not be read or decoded.
+    #[error("{path}: cannot read image: {message}")]
+    Read {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// Encoding failed.
+    #[error("cannot encode PNG: {0}")]
+    Encode(String),
+    /// A size was zero or too large.
+    #[error("bad image size {0}×{1} (each side must be 1..=16384 px)")]
+    BadSize(u32, u32),
+}
+
+/// A grayscale coverage image: `width × height` values in `[0, 1]`, row-major, ink = 1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coverage {
+    width: u32,
+    height: u32,
+    data: Vec<f32>,
+}
+
+impl Coverage {
+    /// A blank (all paper) image.
+    ///
+    /// # Panics
+    /// If either side is zero; use [`Coverage::try_new`] for sizes from user input.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self::try_new(width, height).expect("non-zero image size")
+    }
+
+    /// A blank image, checking the size.
+    ///
+    /// # Errors
+    /// [`RasterError::BadSize`] if a side is 0 or above 16384.
+    pub fn try_new(width: u32, height: u32) -> Result<Self, RasterError> {
+        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+            return Err(RasterError::BadSize(width, height));
+        }
+        Ok(Self { width, height, data: vec![0.0; width as usize * height as usize] })
+    }
+
+    /// Wraps existing values (row-major, ink = 1).
+    ///
+    /// # Errors
+    /// [`RasterError::BadSize`] if the length does not match.
+    pub fn from_vec(width: u32, height: u32, data: Vec<f32>) -> Result<Self, RasterError> {
+        if data.len() != width as usize * height as usize || width == 0 || height == 0 {
+            return Err(RasterError::BadSize(width, height));
+        }
+        Ok(Self { width, height, data })
+    }
+
+    /// Width, px.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+    /// Height, px.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+    /// The values, row-major.
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+    /// The values, mutable.
+    pub fn data_mut(&mut self) -> &mut [f32] {
+        &mut self.data
+    }
+    /// The value at column `x`, row `y`.
+    pub fn get(&self, x: u32, y: u32) -> f32 {
+        self.data[y as usize * self.width as usize + x as usize]
+    }
+    /// Sets every pixel to paper (0).
+    pub fn clear(&mut self) {
+        self.data.fill(0.0);
+    }
+    /// Total ink, in pixels (sum of coverage).
+    pub fn ink(&self) -> f64 {
+        self.data.iter().map(|&v| v as f64).sum()
+    }
+    /// Per-pixel maximum with `other` (same size).
+    ///
+    /// # Panics
+    /// If the sizes differ.
+    pub fn max_with(&mut self, other: &Coverage) {
+        assert_eq!((self.width, self.height), (other.width, other.height), "sizes differ");
+        for (a, b) in self.data.iter_mut().zip(&other.data) {
+            *a = a.max(*b);
+        }
+    }
+
+    /// 8-bit gray pixels as written to disk: black ink on white (`255 − round(255·v)`).
+    pub fn to_gray8(&self) -> Vec<u8> {
+        self.data.iter().map(|&v| 255 - (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect()
+    }
+
+    /// Encodes as an 8-bit grayscale PNG, black ink on white (fast compression).
+    ///
+    /// # Errors
+    /// [`RasterError::Encode`] (not expected in practice).
+    pub fn encode_png(&self) -> Result<Vec<u8>, RasterError> {
+        let mut out = Vec::with_capacity(self.data.len() / 4 + 128);
+        PngEncoder::new_with_quality(Cursor::new(&mut out), CompressionType::Fast, FilterType::Sub)
+            .write_image(&self.to_gray8(), self.width, self.height, ExtendedColorType::L8)
+            .map_err(|e| RasterError::Encode(e.to_string()))?;
+        Ok(out)
+    }
+
+    /// Decodes an image file (PNG or JPEG, any colour type) into coverage: dark ink on light
+    /// paper becomes ink = 1; transparent pixels count as paper.
+    ///
+    /// # Errors
+    /// [`RasterError::Read`] naming the file when it cannot be opened or decoded.
+    pub fn load(path: &Path) -> Result<Self, RasterError> {
+        let err = |message: String| RasterError::Read { path: path.display().to_string(), message };
+        let img = image::ImageReader::open(path)
+            .map_err(|e| err(e.to_string()))?
+            .with_guessed_format()
+            .map_err(|e| err(e.to_string()))?
+            .decode()
+            .map_err(|e| err(e.to_string()))?;
+        let la = img.to_luma_alpha8();
+        let (w, h) = la.dimensions();
+        let data = la.pixels().map(|p| (1.0 - p.0[0] as f32 / 255.0) * (p.0[1] as f32 / 255.0)).collect();
+        Self::from_vec(w, h, data).map_err(|e| err(e.to_string()))
+    }
+}
+
+/// An SVG document (black fill on white) of a path given in millimetres, on a page of
+/// `width_mm × height_mm`.
+pub fn svg_document(path_mm: &kurbo::BezPath, width_mm: f64, height_mm: f64) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width_mm}mm\" height=\"{height_mm}mm\" viewBox=\"0 0 {width_mm} {height_mm}\">\n  <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n  <path d=\"{}\" fill=\"black\" fill-rule=\"nonzero\"/>\n</svg>\n",
+        path_mm.to_svg()
+    )
+}

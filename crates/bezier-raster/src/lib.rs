@@ -1,0 +1,48 @@
+//! # bezier-raster
+//!
+//! Footprints to pixels, exactly and fast.
+//!
+//! * [`models`]: the [`StrokeModel`] trait: the analytic B-BSM outline ([`Bsm`]) and the paper's
+//!   baselines ([`Circle`], [`Ellipse`], [`Line`], [`Qbc`]), all built from the same
+//!   [`Footprint`](brush_model::Footprint) and anchor so comparisons are fair. Outlines are kurbo
+//!   [`BezPath`](kurbo::BezPath)s in paper millimetres.
+//! * [`raster`]: a reusable [`Rasterizer`] that fills a path, scaled by `px_per_mm`, into a
+//!   [`Coverage`] image with tiny-skia's anti-aliasing (ink = 1), either replacing the image or
+//!   stamping into it by per-pixel max (DESIGN §7).
+//! * [`canvas`]: the single-footprint canvas convention shared by `maobi stroke`, the dataset and
+//!   the neural generator ([`StrokeCanvas`]).
+//! * [`batch`]: parallel rendering with rayon and the [`Compositor`] for many stamps.
+//! * [`dataset`]: deterministic random presses over a profile's range and their images.
+//! * [`coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG.
+//!
+//! Pixel convention: x right, y down; pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in pixel
+//! units, so its centre is at `(i + 0.5, j + 0.5)`; paper point `(x, y)` mm is at
+//! `(x·px_per_mm, y·px_per_mm)` px.
+//!
+//! ```
+//! use bezier_raster::{Bsm, Rasterizer, StrokeCanvas, Coverage};
+//! use brush_model::{BrushProfile, Extrapolation, Press};
+//! let pen1 = BrushProfile::builtin("pen1").unwrap();
+//! let canvas = StrokeCanvas::for_profile(&pen1, 128);
+//! let press = Press::from_degrees(15.0, 5.0, 0.0);
+//! let fp = pen1.predict(&press, Extrapolation::Refuse).unwrap();
+//! let mut img = Coverage::new(128, 128);
+//! Rasterizer::new().render(&Bsm, &fp, canvas.anchor_mm(&fp, press.beta_rad), press.beta_rad, canvas.px_per_mm, &mut img);
+//! let ink: f32 = img.data().iter().sum();
+//! let area_px = fp.area_mm2() * canvas.px_per_mm * canvas.px_per_mm;
+//! assert!((ink as f64 - area_px).abs() < 0.02 * area_px);
+//! ```
+
+pub mod batch;
+pub mod canvas;
+pub mod coverage;
+pub mod dataset;
+pub mod models;
+pub mod raster;
+
+pub use batch::{render_batch, Compositor, Stamp};
+pub use canvas::StrokeCanvas;
+pub use coverage::{Coverage, RasterError};
+pub use dataset::{DatasetSpec, Sample};
+pub use models::{Bsm, Circle, Ellipse, Line, ModelKind, Qbc, StrokeModel};
+pub use raster::Rasterizer;

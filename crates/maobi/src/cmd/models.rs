@@ -1,0 +1,185 @@
+//! `maobi models`: every stroke model against the B-BSM footprint (the paper's Table 2), or
+//! against real stroke photos.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
+use brush_model::{Extrapolation, Press};
+use rayon::prelude::*;
+use serde::Serialize;
+use stroke_metrics::{csim, SsimWorkspace, Summary};
+
+use crate::common::{gray, load_brush, load_image, print_json, progress, BrushArg};
+
+/// Arguments of `maobi models`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Number of random presses over the calibrated range.
+    #[arg(long, default_value_t = 500)]
+    n: u64,
+    /// Canvas side, px.
+    #[arg(long, default_value_t = 128)]
+    size: u32,
+    #[command(flatten)]
+    brush: BrushArg,
+    /// Random seed for the presses.
+    #[arg(long, default_value_t = 2024)]
+    seed: u64,
+    /// Compare against real stroke photos instead: a folder with `labels.csv`
+    /// (`file,h_mm,alpha_deg,beta_deg`) and square images registered to the stroke canvas
+    /// (footprint centred, scale from an optional `px_per_mm` column or the default canvas).
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// CSIM and SSIM summaries of one model.
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct ModelScores {
+    /// Cosine similarity over the set.
+    pub csim: Summary,
+    /// Structural similarity over the set.
+    pub ssim: Summary,
+}
+
+#[derive(Serialize)]
+struct Report {
+    reference: String,
+    n: usize,
+    brush: String,
+    size: u32,
+    models: BTreeMap<&'static str, ModelScores>,
+}
+
+/// One comparison target: the press and, for photos, the image.
+struct Target {
+    press: Press,
+    photo: Option<Coverage>,
+    px_per_mm: f64,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let profile = load_brush(&args.brush.brush)?;
+    let (targets, size, models, reference) = match &args.reference {
+        None => {
+            if args.n == 0 {
+                bail!("--n 0: expected at least one press");
+            }
+            let spec = DatasetSpec::new(profile.clone(), args.size, args.seed);
+            let t = (0..args.n).map(|i| Target { press: spec.press(i), photo: None, px_per_mm: spec.canvas.px_per_mm }).collect();
+            (t, args.size, ModelKind::BASELINES.to_vec(), "bsm".to_string())
+        }
+        Some(dir) => {
+            let (t, size) = load_reference(dir, &profile)?;
+            (t, size, ModelKind::ALL.to_vec(), format!("photos:{}", dir.display()))
+        }
+    };
+    let pb = progress(targets.len() as u64, "models");
+    let ex = if args.reference.is_some() { Extrapolation::Allow } else { Extrapolation::Refuse };
+    // Per target: (csim, ssim) for each model.
+    let scores: Vec<Vec<(f64, f64)>> = targets
+        .par_iter()
+        .map_init(
+            || (Rasterizer::new(), Coverage::new(size, size), Coverage::new(size, size), SsimWorkspace::new()),
+            |(raster, truth, img, ws), t| -> Result<Vec<(f64, f64)>> {
+                let fp = profile.predict(&t.press, ex)?;
+                let canvas = StrokeCanvas::with_scale(size, t.px_per_mm);
+                let anchor = canvas.anchor_mm(&fp, t.press.beta_rad);
+                let truth: &Coverage = match &t.photo {
+                    Some(p) => p,
+                    None => {
+                        raster.render(ModelKind::Bsm.model(), &fp, anchor, t.press.beta_rad, t.px_per_mm, truth);
+                        truth
+                    }
+                };
+                let mut out = Vec::with_capacity(models.len());
+                for m in &models {
+                    raster.render(m.model(), &fp, anchor, t.press.beta_rad, t.px_per_mm, img);
+                    out.push((csim(gray(truth), gray(img))?, ws.ssim(gray(truth), gray(img))?));
+                }
+                pb.inc(1);
+                Ok(out)
+            },
+        )
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let mut table = BTreeMap::new();
+    for (k, m) in models.iter().enumerate() {
+        table.insert(
+            m.name(),
+            ModelScores {
+                csim: Summary::of(scores.iter().map(|s| s[k].0)),
+                ssim: Summary::of(scores.iter().map(|s| s[k].1)),
+            },
+        );
+    }
+    let report = Report { reference, n: targets.len(), brush: profile.name.clone(), size, models: table };
+    if args.json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "{} presses of {} at {size}², each model against {} (%):",
+            report.n, report.brush, report.reference
+        );
+        println!("{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}", "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean");
+        for m in &models {
+            let s = report.models[m.name()];
+            println!(
+                "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
+                m.name(),
+                100.0 * s.csim.best,
+                100.0 * s.csim.worst,
+                100.0 * s.csim.mean,
+                100.0 * s.ssim.best,
+                100.0 * s.ssim.worst,
+                100.0 * s.ssim.mean
+            );
+        }
+    }
+    Ok(())
+}
+
+fn load_reference(dir: &Path, profile: &brush_model::BrushProfile) -> Result<(Vec<Target>, u32)> {
+    let labels = dir.join("labels.csv");
+    let name = labels.display().to_string();
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(&labels)
+        .with_context(|| format!("{name}: cannot read"))?;
+    let header = rdr.headers().with_context(|| format!("{name}: cannot read the header"))?.clone();
+    let col = |c: &str| header.iter().position(|h| h == c);
+    let need = |c: &'static str| col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"));
+    let (fi, hi, ai, bi) = (need("file")?, need("h_mm")?, need("alpha_deg")?, need("beta_deg")?);
+    let si = col("px_per_mm");
+    let mut targets = Vec::new();
+    let mut size = None;
+    for rec in rdr.records() {
+        let rec = rec.with_context(|| format!("{name}: malformed CSV"))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        let num = |i: usize, c: &str| -> Result<f64> {
+            let v = rec.get(i).unwrap_or("");
+            v.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
+        };
+        let press = Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?);
+        let file = dir.join(rec.get(fi).unwrap_or(""));
+        let photo = load_image(&file)?;
+        if photo.width() != photo.height() {
+            bail!("{}: expected a square image registered to the stroke canvas, got {}×{}", file.display(), photo.width(), photo.height());
+        }
+        if *size.get_or_insert(photo.width()) != photo.width() {
+            bail!("{}: all reference images must have the same size", file.display());
+        }
+        let px_per_mm = match si {
+            Some(i) => num(i, "px_per_mm")?,
+            None => StrokeCanvas::for_profile(profile, photo.width()).px_per_mm,
+        };
+        targets.push(Target { press, photo: Some(photo), px_per_mm });
+    }
+    let size = size.with_context(|| format!("{name}: no rows"))?;
+    Ok((targets, size))
+}

@@ -1,0 +1,86 @@
+//! `maobi stroke`: render one footprint to PNG or SVG.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use bezier_raster::{coverage::svg_document, Coverage, ModelKind, Rasterizer, StrokeCanvas};
+use brush_model::{Extrapolation, Press};
+use serde_json::json;
+
+use crate::common::{load_brush, parse_model, print_json, write_atomic, BrushArg};
+
+/// Arguments of `maobi stroke`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Press depth h, mm.
+    #[arg(long = "h", value_name = "MM", allow_negative_numbers = true)]
+    h_mm: f64,
+    /// Tilt α, degrees.
+    #[arg(long = "alpha", value_name = "DEG", allow_negative_numbers = true)]
+    alpha_deg: f64,
+    /// Rotation β, degrees.
+    #[arg(long = "beta", value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
+    beta_deg: f64,
+    #[command(flatten)]
+    brush: BrushArg,
+    /// Stroke model: bsm, circle, ellipse, line or qbc.
+    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    model: ModelKind,
+    /// Canvas side, px.
+    #[arg(long, default_value_t = 128)]
+    size: u32,
+    /// Scale, px per mm (default: the brush's largest footprint fits the canvas).
+    #[arg(long, allow_negative_numbers = true)]
+    px_per_mm: Option<f64>,
+    /// Predict even outside the profile's calibrated range.
+    #[arg(long)]
+    extrapolate: bool,
+    /// Output file: `.png` (black ink on white) or `.svg`.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Print the footprint, scale and anchor as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let profile = load_brush(&args.brush.brush)?;
+    if !(8..=8192).contains(&args.size) {
+        bail!("--size {}: expected a canvas side between 8 and 8192 px", args.size);
+    }
+    let canvas = match args.px_per_mm {
+        Some(s) if s.is_finite() && s > 0.0 => StrokeCanvas::with_scale(args.size, s),
+        Some(s) => bail!("--px-per-mm {s}: expected a positive scale"),
+        None => StrokeCanvas::for_profile(&profile, args.size),
+    };
+    let press = Press::from_degrees(args.h_mm, args.alpha_deg, args.beta_deg);
+    let ex = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
+    let fp = profile.predict(&press, ex)?;
+    let anchor = canvas.anchor_mm(&fp, press.beta_rad);
+    let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let bytes = match ext.as_deref() {
+        Some("png") => {
+            let mut img = Coverage::new(args.size, args.size);
+            Rasterizer::new().render(args.model.model(), &fp, anchor, press.beta_rad, canvas.px_per_mm, &mut img);
+            img.encode_png()?
+        }
+        Some("svg") => {
+            let path = args.model.model().outline(&fp, anchor, press.beta_rad);
+            svg_document(&path, canvas.size_mm(), canvas.size_mm()).into_bytes()
+        }
+        _ => bail!("-o {}: expected a .png or .svg file name", args.output.display()),
+    };
+    write_atomic(&args.output, &bytes)?;
+    if args.json {
+        print_json(&json!({
+            "footprint": fp,
+            "px_per_mm": canvas.px_per_mm,
+            "anchor_px": canvas.anchor_px(&fp, press.beta_rad),
+            "beta_rad": press.beta_rad,
+            "size": args.size,
+            "model": args.model.name(),
+        }))?;
+    }
+    Ok(())
+}
