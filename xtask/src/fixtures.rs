@@ -8,22 +8,76 @@ use brush_model::{BrushProfile, Extrapolation, Press};
 
 use crate::rng::SplitMix;
 
+/// Inputs a generator may need.
+pub struct Inputs {
+    /// An unpacked hanzi-writer-data package (`npm pack hanzi-writer-data`), if given.
+    pub hanzi_data: Option<PathBuf>,
+}
+
 /// One generated file.
 struct Fixture {
     /// Path relative to the repository root.
     path: &'static str,
     /// What it holds, for the listing.
     about: &'static str,
+    /// Whether it needs `--hanzi-data` (and so cannot be checked offline without it).
+    needs_hanzi: bool,
     /// Produces its bytes.
-    generate: fn() -> Result<Vec<u8>>,
+    generate: fn(&Inputs) -> Result<Vec<u8>>,
 }
 
+/// Characters the tests, gates and docs use; embedded even when not among the 1,000 most
+/// frequent.
+pub const EXTRA_CHARS: &str = "永字八法十口人丁山水火木中国书大小日月";
+
 fn all() -> Vec<Fixture> {
-    vec![Fixture {
-        path: "fixtures/measurements/pen1-sample.csv",
-        about: "synthetic pen1 measurements on the paper's grid (nominal model + 0.15 mm noise)",
-        generate: sample_measurements,
-    }]
+    vec![
+        Fixture {
+            path: "fixtures/measurements/pen1-sample.csv",
+            about: "synthetic pen1 measurements on the paper's grid (nominal model + 0.15 mm noise)",
+            needs_hanzi: false,
+            generate: |_| sample_measurements(),
+        },
+        Fixture {
+            path: "crates/trajectory/data/hanzi-subset.jsonl",
+            about: "hanzi-writer-data for the 1,000 most frequent characters plus the test set",
+            needs_hanzi: true,
+            generate: hanzi_subset,
+        },
+        Fixture {
+            path: "crates/trajectory/data/ARPHICPL.TXT",
+            about: "the Arphic Public License shipped with the subset",
+            needs_hanzi: true,
+            generate: |i| Ok(std::fs::read(hanzi_dir(i)?.join("ARPHICPL.TXT"))?),
+        },
+    ]
+}
+
+fn hanzi_dir(i: &Inputs) -> Result<&Path> {
+    i.hanzi_data.as_deref().context("needs --hanzi-data DIR (an unpacked `npm pack hanzi-writer-data`)")
+}
+
+/// One minified line per character: `{"c":"永","strokes":[...],"medians":[...]}`, in frequency
+/// order, then the extra characters.
+fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
+    let dir = hanzi_dir(i)?;
+    let freq = std::fs::read_to_string(root().join("fixtures/hanzi/frequency.txt"))?;
+    let mut chars: Vec<char> = freq.lines().filter(|l| !l.starts_with('#')).filter_map(|l| l.chars().next()).take(1000).collect();
+    for c in EXTRA_CHARS.chars() {
+        if !chars.contains(&c) {
+            chars.push(c);
+        }
+    }
+    let mut out = String::new();
+    for c in chars {
+        let path = dir.join(format!("{c}.json"));
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        let line = serde_json::json!({"c": c.to_string(), "strokes": v["strokes"], "medians": v["medians"]});
+        out.push_str(&serde_json::to_string(&line)?);
+        out.push('\n');
+    }
+    Ok(out.into_bytes())
 }
 
 /// The repository root (xtask's parent folder).
@@ -32,14 +86,24 @@ pub fn root() -> PathBuf {
 }
 
 pub fn run(args: &[String]) -> Result<()> {
-    let check = args.iter().any(|a| a == "--check");
-    if let Some(bad) = args.iter().find(|a| *a != "--check") {
-        anyhow::bail!("fixtures: unknown argument `{bad}` (expected --check)");
+    let mut check = false;
+    let mut inputs = Inputs { hanzi_data: None };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--check" => check = true,
+            "--hanzi-data" => inputs.hanzi_data = Some(it.next().context("--hanzi-data needs a folder")?.into()),
+            other => anyhow::bail!("fixtures: unknown argument `{other}` (expected --check, --hanzi-data DIR)"),
+        }
     }
     let root = root();
     let mut differ = Vec::new();
     for f in all() {
-        let bytes = (f.generate)().with_context(|| format!("generating {}", f.path))?;
+        if f.needs_hanzi && inputs.hanzi_data.is_none() {
+            println!("skipped  {}  (needs --hanzi-data DIR; not regenerable offline)", f.path);
+            continue;
+        }
+        let bytes = (f.generate)(&inputs).with_context(|| format!("generating {}", f.path))?;
         let path = root.join(f.path);
         if check {
             match std::fs::read(&path) {

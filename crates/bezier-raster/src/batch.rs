@@ -1,6 +1,6 @@
 //! Many footprints: parallel batches and the per-pixel-max compositor.
 
-use brush_model::{Footprint, PointMm};
+use brush_model::{BrushProfile, Extrapolation, Footprint, PointMm, ProfileError, Track};
 use rayon::prelude::*;
 
 use crate::coverage::Coverage;
@@ -68,4 +68,42 @@ impl Compositor {
     pub fn into_image(self) -> Coverage {
         self.image
     }
+}
+
+/// The stamps of a brush track: each point's footprint (from `profile`, with the point's β as a
+/// writing direction, see [`BrushProfile::predict_oriented`]) at its anchor, in writing order.
+///
+/// # Errors
+/// [`ProfileError`] for the first point the profile refuses.
+pub fn track_stamps(track: &Track, profile: &BrushProfile, extrapolation: Extrapolation) -> Result<Vec<Stamp>, ProfileError> {
+    track
+        .points()
+        .map(|p| {
+            Ok(Stamp { footprint: profile.predict_oriented(&p.press(), extrapolation)?, anchor: p.anchor(), beta_rad: p.beta_rad })
+        })
+        .collect()
+}
+
+/// Renders a track into a `width × height` image whose top-left corner is paper point
+/// `origin_mm`, at `px_per_mm`, composing footprints by per-pixel max.
+///
+/// # Errors
+/// [`ProfileError`] for the first point the profile refuses.
+#[allow(clippy::too_many_arguments)]
+pub fn render_track(
+    track: &Track,
+    profile: &BrushProfile,
+    model: &dyn StrokeModel,
+    extrapolation: Extrapolation,
+    origin_mm: PointMm,
+    px_per_mm: f64,
+    width: u32,
+    height: u32,
+) -> Result<Coverage, ProfileError> {
+    let mut c = Compositor::new(width, height, px_per_mm);
+    for s in track_stamps(track, profile, extrapolation)? {
+        let shifted = Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..s };
+        c.stamp(model, &shifted);
+    }
+    Ok(c.into_image())
 }

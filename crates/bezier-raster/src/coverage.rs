@@ -149,3 +149,26 @@ pub fn svg_document(path_mm: &kurbo::BezPath, width_mm: f64, height_mm: f64) -> 
         path_mm.to_svg()
     )
 }
+
+/// An RGB PNG comparing two images of the same size: paper white, ink of both black, ink only
+/// in `reference` red (missed), ink only in `render` blue (overshoot).
+///
+/// # Errors
+/// [`RasterError::BadSize`] if the sizes differ; [`RasterError::Encode`].
+pub fn overlay_png(reference: &Coverage, render: &Coverage) -> Result<Vec<u8>, RasterError> {
+    if (reference.width, reference.height) != (render.width, render.height) {
+        return Err(RasterError::BadSize(render.width, render.height));
+    }
+    let mut rgb = Vec::with_capacity(reference.data.len() * 3);
+    for (&a, &b) in reference.data.iter().zip(&render.data) {
+        let (a, b) = (a.clamp(0.0, 1.0), b.clamp(0.0, 1.0));
+        rgb.push((255.0 * (1.0 - b)).round() as u8);
+        rgb.push((255.0 * (1.0 - a.max(b))).round() as u8);
+        rgb.push((255.0 * (1.0 - a)).round() as u8);
+    }
+    let mut out = Vec::new();
+    PngEncoder::new_with_quality(Cursor::new(&mut out), CompressionType::Fast, FilterType::Sub)
+        .write_image(&rgb, reference.width, reference.height, ExtendedColorType::Rgb8)
+        .map_err(|e| RasterError::Encode(e.to_string()))?;
+    Ok(out)
+}

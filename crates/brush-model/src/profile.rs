@@ -393,6 +393,19 @@ impl BrushProfile {
         Ok(Footprint { lt_mm: lt, lh_mm: lh, lr_mm: lr })
     }
 
+    /// The footprint for a press whose β is a writing direction (any angle). A round brush's
+    /// footprint does not depend on which way it faces, so β enters the size model only
+    /// reduced into the calibrated β range (wrapped to (−π, π], then clamped); the full β is for
+    /// rotating the outline.
+    ///
+    /// # Errors
+    /// As [`BrushProfile::predict`], for h and α.
+    pub fn predict_oriented(&self, press: &Press, extrapolation: Extrapolation) -> Result<Footprint, ProfileError> {
+        let b = (press.beta_rad + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let shape = Press::new(press.h_mm, press.alpha_rad, self.ranges.beta_rad.clamp(b));
+        self.predict(&shape, extrapolation)
+    }
+
     /// The press depth giving a belly half-width `lr_mm` at tilt `alpha_rad` and rotation
     /// `beta_rad` (closed form for the linear model), clamped to the calibrated h range.
     ///

@@ -83,3 +83,15 @@ fn loading_names_what_is_wrong() {
     let e = BrushProfile::load(std::path::Path::new("/nonexistent/p.json")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/p.json"));
 }
+
+#[test]
+fn oriented_prediction_ignores_the_writing_direction() {
+    let p = BrushProfile::builtin("pen1").unwrap();
+    let base = p.predict(&Press::from_degrees(15.0, 5.0, 0.0), Extrapolation::Refuse).unwrap();
+    for beta in [-170.0, -90.0, 0.0, 45.0, 180.0, 400.0] {
+        let f = p.predict_oriented(&Press::from_degrees(15.0, 5.0, beta), Extrapolation::Refuse).unwrap();
+        assert_eq!(f, base, "beta {beta}");
+    }
+    // h is still checked.
+    assert!(p.predict_oriented(&Press::from_degrees(25.0, 5.0, 90.0), Extrapolation::Refuse).is_err());
+}

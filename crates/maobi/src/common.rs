@@ -44,10 +44,7 @@ pub fn load_image(path: &Path) -> Result<bezier_raster::Coverage> {
     Ok(bezier_raster::Coverage::load(path)?)
 }
 
-/// Wraps a coverage image for the metrics crate.
-pub fn gray(c: &bezier_raster::Coverage) -> stroke_metrics::GrayRef<'_> {
-    stroke_metrics::GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("coverage buffers have width × height values")
-}
+pub use maobi::pipeline::gray;
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
 pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {

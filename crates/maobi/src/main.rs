@@ -30,6 +30,10 @@ enum Command {
     Compare(cmd::compare::Args),
     /// Write a dataset of random footprints (PNGs + labels.csv).
     Dataset(cmd::dataset::Args),
+    /// Write characters: brush track, render, reference and scores.
+    Write(cmd::write::Args),
+    /// Run the write pipeline over many characters and report mean scores.
+    Evaluate(cmd::evaluate::Args),
     /// Score every stroke model against the B-BSM footprint (the paper's Table 2).
     Models(cmd::models::Args),
 }
@@ -54,6 +58,8 @@ fn main() -> ExitCode {
         Command::Compare(a) => cmd::compare::run(a),
         Command::Dataset(a) => cmd::dataset::run(a),
         Command::Models(a) => cmd::models::run(a),
+        Command::Write(a) => cmd::write::run(a),
+        Command::Evaluate(a) => cmd::evaluate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

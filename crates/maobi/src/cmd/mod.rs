@@ -3,6 +3,8 @@
 pub mod calibrate;
 pub mod compare;
 pub mod dataset;
+pub mod evaluate;
 pub mod footprint;
 pub mod models;
 pub mod stroke;
+pub mod write;

@@ -1,0 +1,106 @@
+//! `maobi evaluate`: the write pipeline over many characters, in parallel, with mean scores.
+
+use anyhow::{bail, Result};
+use bezier_raster::ModelKind;
+use maobi::pipeline::{prepare, write_char, CharReport, WriteOptions};
+use rayon::prelude::*;
+use serde_json::json;
+use trajectory::{glyph, CharBox, Method};
+
+use crate::common::{load_brush, parse_model, print_json, progress, BrushArg};
+
+/// Arguments of `maobi evaluate`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Characters to evaluate (default: the whole embedded set).
+    #[arg(long)]
+    chars: Option<String>,
+    /// Only the first N characters.
+    #[arg(long)]
+    limit: Option<usize>,
+    /// Centre-line method.
+    #[arg(long = "from", default_value = "medians", value_parser = parse_method)]
+    method: Method,
+    #[command(flatten)]
+    brush: BrushArg,
+    /// Stroke model.
+    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    model: ModelKind,
+    /// Image side, px.
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+    /// Char box side, mm (default: chosen per character from its widths).
+    #[arg(long)]
+    char_mm: Option<f64>,
+    /// Print every character's report and the means as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_method(s: &str) -> std::result::Result<Method, String> {
+    match s {
+        "medians" => Ok(Method::Medians),
+        "skeleton" => Ok(Method::Skeleton),
+        _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
+    }
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let profile = load_brush(&args.brush.brush)?;
+    let mut chars: Vec<char> = match &args.chars {
+        Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
+        None => glyph::embedded_chars(),
+    };
+    if let Some(n) = args.limit {
+        chars.truncate(n);
+    }
+    if chars.is_empty() {
+        bail!("no characters to evaluate");
+    }
+    let opts = WriteOptions { model: args.model, size: args.size, upper_bound: true, ..WriteOptions::default() };
+    let pb = progress(chars.len() as u64, "evaluate");
+    let reports: Vec<CharReport> = chars
+        .par_iter()
+        .map(|&c| {
+            let p = prepare(glyph::embedded(c)?, Some(args.method))?;
+            let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, 0.0));
+            let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
+            pb.inc(1);
+            Ok(r.report)
+        })
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let summary = summarize(&reports);
+    if args.json {
+        print_json(&json!({"method": args.method.name(), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}))?;
+    } else {
+        println!("{} characters, {} via {}, brush {}:", reports.len(), args.model.name(), args.method.name(), profile.name);
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+    }
+    Ok(())
+}
+
+/// Means and counts over character reports.
+pub fn summarize(r: &[CharReport]) -> serde_json::Value {
+    let n = r.len() as f64;
+    let mean = |f: &dyn Fn(&CharReport) -> f64| r.iter().map(f).sum::<f64>() / n;
+    let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.strokes_expected.is_some()).collect();
+    let strokes_ok = with_medians.iter().filter(|c| c.strokes_expected == Some(c.strokes_found)).count();
+    let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
+    let ub: Vec<_> = r.iter().filter_map(|c| c.upper_bound).collect();
+    json!({
+        "count": r.len(),
+        "csim": mean(&|c| c.csim),
+        "ssim": mean(&|c| c.ssim),
+        "iou": mean(&|c| c.iou),
+        "chamfer_pct": if chamfers.is_empty() { None } else { Some(chamfers.iter().sum::<f64>() / chamfers.len() as f64) },
+        "strokes_match_fraction": if with_medians.is_empty() { None } else { Some(strokes_ok as f64 / with_medians.len() as f64) },
+        "millis_mean": mean(&|c| c.millis),
+        "unconstrained": if ub.is_empty() { serde_json::Value::Null } else { json!({
+            "csim": ub.iter().map(|u| u.csim).sum::<f64>() / ub.len() as f64,
+            "ssim": ub.iter().map(|u| u.ssim).sum::<f64>() / ub.len() as f64,
+            "iou": ub.iter().map(|u| u.iou).sum::<f64>() / ub.len() as f64,
+        })},
+    })
+}

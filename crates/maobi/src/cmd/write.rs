@@ -1,0 +1,219 @@
+//! `maobi write`: characters → brush tracks, renders, references and scores.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use bezier_raster::{coverage::overlay_png, ModelKind};
+use brush_model::{BrushProfile, Extrapolation, Stroke, Track};
+use maobi::pipeline::{prepare, render_char, write_char, CharReport, CharResult, Prepared, WriteOptions};
+use rayon::prelude::*;
+use serde_json::json;
+use trajectory::{glyph, CharBox, Method};
+
+use crate::common::{load_brush, parse_model, print_json, progress, write_atomic, BrushArg};
+
+/// Arguments of `maobi write`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The character(s) to write.
+    text: String,
+    /// Glyphs from an unpacked hanzi-writer-data package (files `<char>.json`).
+    #[arg(long, group = "source")]
+    hanzi_data: Option<PathBuf>,
+    /// Glyphs from a TrueType/OpenType CJK font.
+    #[arg(long, group = "source")]
+    font: Option<PathBuf>,
+    /// The glyph from a photo or scan of one character (dark ink on light paper).
+    #[arg(long, group = "source")]
+    image: Option<PathBuf>,
+    /// Centre lines from the source's medians or from a skeleton (default: medians when the
+    /// source has them).
+    #[arg(long = "from", value_parser = parse_method)]
+    method: Option<Method>,
+    #[command(flatten)]
+    brush: BrushArg,
+    /// Stroke model used to render the track.
+    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    model: ModelKind,
+    /// Side of each character's images, px.
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+    /// Side of the character box on paper, mm (default: chosen so the brush's width range
+    /// covers the glyphs' stroke widths; see docs/trajectory.md).
+    #[arg(long)]
+    char_mm: Option<f64>,
+    /// Constant brush tilt α, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    alpha: f64,
+    /// Lay several characters out in rows, left to right (default: columns, right to left).
+    #[arg(long)]
+    rows: bool,
+    /// Characters per column (or row).
+    #[arg(long, default_value_t = 4)]
+    per_line: usize,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_method(s: &str) -> std::result::Result<Method, String> {
+    match s {
+        "medians" => Ok(Method::Medians),
+        "skeleton" => Ok(Method::Skeleton),
+        _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
+    }
+}
+
+fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
+    Ok(if let Some(dir) = &args.hanzi_data {
+        glyph::from_hanzi_dir(dir, ch)?
+    } else if let Some(font) = &args.font {
+        glyph::from_font(font, ch)?
+    } else if let Some(img) = &args.image {
+        glyph::from_image(img, ch)?
+    } else {
+        glyph::embedded(ch)?
+    })
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let chars: Vec<char> = args.text.chars().filter(|c| !c.is_whitespace()).collect();
+    if chars.is_empty() {
+        bail!("TEXT is empty: give at least one character");
+    }
+    if args.image.is_some() && chars.len() != 1 {
+        bail!("--image holds one character; TEXT has {}", chars.len());
+    }
+    if !(64..=4096).contains(&args.size) {
+        bail!("--size {}: expected 64..=4096 px", args.size);
+    }
+    if args.per_line == 0 {
+        bail!("--per-line 0: expected at least 1");
+    }
+    let profile = load_brush(&args.brush.brush)?;
+    let alpha_rad = args.alpha.to_radians();
+    if !profile.ranges.alpha_rad.contains(alpha_rad) {
+        bail!("--alpha {}: outside the brush's calibrated tilt range {:.1}–{:.1}°", args.alpha, profile.ranges.alpha_rad.min.to_degrees(), profile.ranges.alpha_rad.max.to_degrees());
+    }
+    // Load and analyse every glyph before writing anything.
+    let prepared: Vec<Prepared> = chars
+        .par_iter()
+        .map(|&c| prepare(load_glyph(&args, c)?, args.method))
+        .collect::<Result<_>>()?;
+    let char_mm = match args.char_mm {
+        Some(v) if v.is_finite() && v > 0.0 => v,
+        Some(v) => bail!("--char-mm {v}: expected a positive size in mm"),
+        None => {
+            let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
+            trajectory::auto_char_mm(&all, &profile, alpha_rad)
+        }
+    };
+    let boxes = layout(chars.len(), char_mm, args.per_line, args.rows);
+    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, ..WriteOptions::default() };
+    let pb = progress(chars.len() as u64, "write");
+    let results: Vec<CharResult> = prepared
+        .par_iter()
+        .zip(boxes.par_iter())
+        .map(|(p, b)| {
+            let r = write_char(p, &profile, *b, &opts);
+            pb.inc(1);
+            r
+        })
+        .collect::<Result<_>>()?;
+    pb.finish_and_clear();
+    let single = results.len() == 1;
+    for (i, r) in results.iter().enumerate() {
+        let dir = if single { args.out.clone() } else { args.out.join(format!("{:02}-{}", i + 1, r.report.char)) };
+        write_outputs(&dir, r, &profile)?;
+    }
+    let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
+    let mean = |f: fn(&CharReport) -> f64| reports.iter().map(|r| f(r)).sum::<f64>() / reports.len() as f64;
+    let summary = json!({
+        "text": chars.iter().collect::<String>(),
+        "char_mm": char_mm,
+        "brush": profile.name,
+        "model": args.model.name(),
+        "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
+        "chars": reports,
+    });
+    if !single {
+        let sheet = sheet_image(&results, &profile, args.model, char_mm, args.size)?;
+        write_atomic(&args.out.join("sheet.png"), &sheet.encode_png()?)?;
+        write_atomic(&args.out.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    }
+    if args.json {
+        print_json(&summary)?;
+    } else {
+        for r in &reports {
+            println!(
+                "{} ({} via {}, {}): CSIM {:.4}  SSIM {:.4}  IoU {:.4}{}  strokes {}{}  points {}  {:.1} ms",
+                r.char,
+                r.source,
+                r.method,
+                r.model,
+                r.csim,
+                r.ssim,
+                r.iou,
+                r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
+                r.strokes_found,
+                r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
+                r.points,
+                r.millis
+            );
+        }
+        println!("char box {char_mm:.1} mm; outputs in {}", args.out.display());
+    }
+    Ok(())
+}
+
+/// Character boxes on the paper: columns right to left (or rows left to right), a gap of a
+/// tenth of the box between characters and around the sheet.
+fn layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Vec<CharBox> {
+    let gap = 0.1 * char_mm;
+    let step = char_mm + gap;
+    let lines = n.div_ceil(per_line);
+    (0..n)
+        .map(|i| {
+            let (line, pos) = (i / per_line, i % per_line);
+            let (x, y) = if rows { (pos, line) } else { (lines - 1 - line, pos) };
+            CharBox { x0_mm: gap + x as f64 * step, y0_mm: gap + y as f64 * step, size_mm: char_mm }
+        })
+        .collect()
+}
+
+fn sheet_image(results: &[CharResult], profile: &BrushProfile, model: ModelKind, char_mm: f64, size: u32) -> Result<bezier_raster::Coverage> {
+    let (mut w, mut h) = (0.0f64, 0.0f64);
+    let mut all = Track::default();
+    for r in results {
+        w = w.max(r.char_box.x0_mm + r.char_box.size_mm);
+        h = h.max(r.char_box.y0_mm + r.char_box.size_mm);
+        all.strokes.extend(r.track.strokes.iter().cloned().map(|s: Stroke| s));
+    }
+    let gap = 0.1 * char_mm;
+    let px_per_mm = size as f64 / char_mm;
+    let sheet = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 1.0 };
+    let (wp, hp) = (((w + gap) * px_per_mm).ceil() as u32, ((h + gap) * px_per_mm).ceil() as u32);
+    let _ = sheet;
+    Ok(bezier_raster::render_track(&all, profile, model.model(), Extrapolation::Refuse, brush_model::PointMm::new(0.0, 0.0), px_per_mm, wp, hp)?)
+}
+
+fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
+    write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
+    write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
+    write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;
+    let track = json!({
+        "char": r.report.char,
+        "char_box_mm": [r.char_box.x0_mm, r.char_box.y0_mm, r.char_box.size_mm],
+        "brush": profile,
+        "strokes": r.track.strokes,
+    });
+    write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
+    write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
+    let _ = render_char;
+    Ok(())
+}

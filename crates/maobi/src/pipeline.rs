@@ -1,0 +1,190 @@
+//! Character pipeline: glyph → centre lines → track → render → scores.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use bezier_raster::{render_track, Coverage, ModelKind};
+use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
+use serde::Serialize;
+use stroke_metrics::GrayRef;
+use trajectory::{build_track, centre_lines, chamfer_pct, raster::render_glyph, CharBox, Glyph, Method, Sizing, StrokePath, TrackOptions};
+
+/// Analysis raster for widths and skeletons, px per em box.
+pub const ANALYSIS_PX: u32 = 256;
+
+/// Options of [`write_char`].
+#[derive(Clone, Copy, Debug)]
+pub struct WriteOptions {
+    /// Centre-line method; `None` picks medians when the source has them.
+    pub method: Option<Method>,
+    /// Stroke model for rendering.
+    pub model: ModelKind,
+    /// Side of the render and reference images, px.
+    pub size: u32,
+    /// Constant tilt, radians.
+    pub alpha_rad: f64,
+    /// Track point spacing, mm.
+    pub spacing_mm: f64,
+    /// Also score an unconstrained run (footprints sized freely from the glyph).
+    pub upper_bound: bool,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        Self {
+            method: None,
+            model: ModelKind::Bsm,
+            size: 512,
+            alpha_rad: 0.0,
+            spacing_mm: trajectory::DEFAULT_SPACING_MM,
+            upper_bound: true,
+        }
+    }
+}
+
+/// CSIM, SSIM and IoU of a render against its reference.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Similarity {
+    /// Cosine similarity.
+    pub csim: f64,
+    /// Structural similarity.
+    pub ssim: f64,
+    /// Intersection over union at 0.5.
+    pub iou: f64,
+}
+
+/// Scores `render` against `reference` (same size).
+pub fn similarity(reference: &Coverage, render: &Coverage) -> Result<Similarity> {
+    let g = gray;
+    Ok(Similarity {
+        csim: stroke_metrics::csim(g(reference), g(render))?,
+        ssim: stroke_metrics::ssim(g(reference), g(render))?,
+        iou: stroke_metrics::iou(g(reference), g(render))?,
+    })
+}
+
+/// Wraps a coverage image for the metrics crate.
+pub fn gray(c: &Coverage) -> GrayRef<'_> {
+    GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("coverage buffers have width × height values")
+}
+
+/// A glyph with its centre lines, ready to be placed.
+pub struct Prepared {
+    /// The glyph.
+    pub glyph: Glyph,
+    /// The method used.
+    pub method: Method,
+    /// Its centre lines with half-widths.
+    pub paths: Vec<StrokePath>,
+}
+
+/// Finds the centre lines of a glyph.
+///
+/// # Errors
+/// When the method cannot be used on this source, or the glyph is blank.
+pub fn prepare(glyph: Glyph, method: Option<Method>) -> Result<Prepared> {
+    let method = method.unwrap_or(if glyph.medians.is_some() { Method::Medians } else { Method::Skeleton });
+    let paths = centre_lines(&glyph, method, ANALYSIS_PX).with_context(|| format!("{:?}", glyph.ch))?;
+    Ok(Prepared { glyph, method, paths })
+}
+
+/// Everything `maobi write` reports for one character.
+#[derive(Clone, Debug, Serialize)]
+pub struct CharReport {
+    /// The character.
+    pub char: String,
+    /// Glyph source kind.
+    pub source: &'static str,
+    /// `medians` or `skeleton`.
+    pub method: &'static str,
+    /// Stroke model.
+    pub model: &'static str,
+    /// Render vs reference.
+    pub csim: f64,
+    /// Render vs reference.
+    pub ssim: f64,
+    /// Render vs reference.
+    pub iou: f64,
+    /// Symmetric chamfer distance of the track to the medians, % of the em box (null without
+    /// medians).
+    pub chamfer_pct: Option<f64>,
+    /// Strokes in the source (null without medians).
+    pub strokes_expected: Option<usize>,
+    /// Strokes in the track.
+    pub strokes_found: usize,
+    /// Track points.
+    pub points: usize,
+    /// Wall time of track building, rendering and scoring, ms.
+    pub millis: f64,
+    /// Char box side, mm.
+    pub char_mm: f64,
+    /// Points whose glyph width was below / above what the brush can make (h clamped).
+    pub clamped_low: usize,
+    /// See `clamped_low`.
+    pub clamped_high: usize,
+    /// The same scores for footprints sized freely from the glyph (upper bound of the model).
+    pub upper_bound: Option<Similarity>,
+}
+
+/// One written character.
+pub struct CharResult {
+    /// The report.
+    pub report: CharReport,
+    /// The track on the paper.
+    pub track: Track,
+    /// Where the character sits.
+    pub char_box: CharBox,
+    /// The render, `size²`, em box on the whole image.
+    pub render: Coverage,
+    /// The reference glyph at the same scale.
+    pub reference: Coverage,
+}
+
+/// Renders a track over a char box onto a `size²` image of the box.
+///
+/// # Errors
+/// When the profile refuses a point.
+pub fn render_char(track: &Track, profile: &BrushProfile, model: ModelKind, ex: Extrapolation, b: &CharBox, size: u32) -> Result<Coverage> {
+    Ok(render_track(track, profile, model.model(), ex, PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)?)
+}
+
+/// Builds, renders and scores one prepared character placed at `char_box`.
+///
+/// # Errors
+/// When the profile refuses the track or the images cannot be scored.
+pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts: &WriteOptions) -> Result<CharResult> {
+    let t0 = Instant::now();
+    let topts = TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
+    let built = build_track(&p.paths, profile, &topts)?;
+    let render = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
+    let reference = render_glyph(&p.glyph, opts.size);
+    let sim = similarity(&reference, &render)?;
+    let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
+    let millis = t0.elapsed().as_secs_f64() * 1e3;
+    let upper_bound = if opts.upper_bound {
+        let free = build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
+        let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+        Some(similarity(&reference, &img)?)
+    } else {
+        None
+    };
+    let report = CharReport {
+        char: p.glyph.ch.to_string(),
+        source: p.glyph.source.kind(),
+        method: p.method.name(),
+        model: opts.model.name(),
+        csim: sim.csim,
+        ssim: sim.ssim,
+        iou: sim.iou,
+        chamfer_pct: chamfer,
+        strokes_expected: p.glyph.medians.as_ref().map(Vec::len),
+        strokes_found: built.track.strokes.len(),
+        points: built.track.point_count(),
+        millis,
+        char_mm: char_box.size_mm,
+        clamped_low: built.clamped_low,
+        clamped_high: built.clamped_high,
+        upper_bound,
+    };
+    Ok(CharResult { report, track: built.track, char_box, render, reference })
+}

@@ -1,0 +1,276 @@
+//! Glyph sources: hanzi-writer-data JSON (embedded subset or a folder), CJK fonts, and images.
+//!
+//! Every glyph lives in the **em frame**: the 1024-unit box of Make Me a Hanzi with y flipped to
+//! point down, so `x' = x`, `y' = 900 − y` (DESIGN §3). The em box is `[0, 1024]²` in `(x', y')`.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::OnceLock;
+
+use kurbo::{BezPath, Point};
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::image_glyph;
+
+/// Side of the em box, em units.
+pub const EM: f64 = 1024.0;
+/// The original data's top edge: `y' = EM_TOP − y`.
+pub const EM_TOP: f64 = 900.0;
+
+/// The embedded hanzi-writer-data subset: one minified JSON object per line.
+pub static EMBEDDED_SUBSET: &str = include_str!("../data/hanzi-subset.jsonl");
+/// The Arphic Public License the embedded subset is distributed under.
+pub static ARPHIC_LICENSE: &str = include_str!("../data/ARPHICPL.TXT");
+
+/// Errors from loading glyphs.
+#[derive(Debug, Error)]
+pub enum GlyphError {
+    /// The character is not in the source.
+    #[error("character {ch:?} (U+{code:04X}) is not in {source_name}")]
+    Unknown {
+        /// The character.
+        ch: char,
+        /// Its code point.
+        code: u32,
+        /// Which source was searched.
+        source_name: String,
+    },
+    /// A file could not be read.
+    #[error("{path}: cannot read: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// The data is malformed.
+    #[error("{source_name}: {message}")]
+    Malformed {
+        /// File or source.
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// An image holds no usable glyph.
+    #[error("{path}: {message}")]
+    BadImage {
+        /// The file.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Where a glyph came from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GlyphSource {
+    /// The subset compiled into this crate.
+    Embedded,
+    /// A hanzi-writer-data folder.
+    HanziData(String),
+    /// A font file.
+    Font(String),
+    /// An image file.
+    Image(String),
+}
+
+impl GlyphSource {
+    /// A short label for reports: `embedded`, `hanzi-data`, `font` or `image`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            GlyphSource::Embedded => "embedded",
+            GlyphSource::HanziData(_) => "hanzi-data",
+            GlyphSource::Font(_) => "font",
+            GlyphSource::Image(_) => "image",
+        }
+    }
+}
+
+/// The shape of a glyph in the em frame.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// Filled outlines (nonzero rule each), one per stroke for hanzi data, one in all for a font.
+    Outlines(Vec<BezPath>),
+    /// A bitmap whose `size × size` pixels cover the em box, ink = 1.
+    Bitmap {
+        /// Side, px.
+        size: u32,
+        /// Values, row-major.
+        ink: Vec<f32>,
+    },
+}
+
+/// A character's glyph.
+#[derive(Clone, Debug)]
+pub struct Glyph {
+    /// The character.
+    pub ch: char,
+    /// Where it came from.
+    pub source: GlyphSource,
+    /// Its shape.
+    pub shape: Shape,
+    /// Stroke outlines in writing order, when the source has them (hanzi data).
+    pub stroke_outlines: Option<Vec<BezPath>>,
+    /// Stroke centre lines in writing order (em frame), when the source has them.
+    pub medians: Option<Vec<Vec<Point>>>,
+}
+
+#[derive(Deserialize)]
+struct HanziJson {
+    strokes: Vec<String>,
+    medians: Vec<Vec<[f64; 2]>>,
+}
+
+fn flip(p: Point) -> Point {
+    Point::new(p.x, EM_TOP - p.y)
+}
+
+/// Parses one hanzi-writer-data character file (`{"strokes": [...], "medians": [...]}`).
+///
+/// # Errors
+/// [`GlyphError::Malformed`] naming `source_name` and the stroke at fault.
+pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: &str) -> Result<Glyph, GlyphError> {
+    let bad = |message: String| GlyphError::Malformed { source_name: source_name.to_string(), message };
+    let j: HanziJson = serde_json::from_str(text).map_err(|e| bad(format!("not hanzi-writer data: {e}")))?;
+    if j.strokes.is_empty() || j.strokes.len() != j.medians.len() {
+        return Err(bad(format!("{} strokes but {} medians", j.strokes.len(), j.medians.len())));
+    }
+    let mut outlines = Vec::with_capacity(j.strokes.len());
+    for (i, s) in j.strokes.iter().enumerate() {
+        let mut p = BezPath::from_svg(s).map_err(|e| bad(format!("stroke {}: bad SVG path: {e}", i + 1)))?;
+        p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
+        outlines.push(p);
+    }
+    let mut medians = Vec::with_capacity(j.medians.len());
+    for (i, m) in j.medians.iter().enumerate() {
+        if m.is_empty() || m.iter().flatten().any(|v| !v.is_finite()) {
+            return Err(bad(format!("median {} is empty or not finite", i + 1)));
+        }
+        medians.push(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect());
+    }
+    Ok(Glyph { ch, source, shape: Shape::Outlines(outlines.clone()), stroke_outlines: Some(outlines), medians: Some(medians) })
+}
+
+fn embedded_index() -> &'static HashMap<char, &'static str> {
+    static INDEX: OnceLock<HashMap<char, &'static str>> = OnceLock::new();
+    INDEX.get_or_init(|| {
+        EMBEDDED_SUBSET
+            .lines()
+            .filter_map(|l| {
+                // Each line starts with {"c":"X", ...
+                let rest = l.strip_prefix("{\"c\":\"")?;
+                Some((rest.chars().next()?, l))
+            })
+            .collect()
+    })
+}
+
+/// The characters of the embedded subset, in the order of the frequency list.
+pub fn embedded_chars() -> Vec<char> {
+    EMBEDDED_SUBSET.lines().filter_map(|l| l.strip_prefix("{\"c\":\"")?.chars().next()).collect()
+}
+
+/// A glyph from the embedded hanzi-writer-data subset.
+///
+/// # Errors
+/// [`GlyphError::Unknown`] if the character is not in the subset.
+pub fn embedded(ch: char) -> Result<Glyph, GlyphError> {
+    let line = embedded_index().get(&ch).ok_or(GlyphError::Unknown {
+        ch,
+        code: ch as u32,
+        source_name: "the embedded subset (use --hanzi-data DIR for the full set)".into(),
+    })?;
+    parse_hanzi_json(ch, line, GlyphSource::Embedded, "embedded subset")
+}
+
+/// A glyph from an unpacked hanzi-writer-data folder (files `<char>.json`).
+///
+/// # Errors
+/// [`GlyphError::Unknown`] if there is no file for the character; [`GlyphError::Malformed`].
+pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
+    if !dir.is_dir() {
+        return Err(GlyphError::Io { path: dir.display().to_string(), message: "not a folder".into() });
+    }
+    let path = dir.join(format!("{ch}.json"));
+    let text = std::fs::read_to_string(&path).map_err(|_| GlyphError::Unknown {
+        ch,
+        code: ch as u32,
+        source_name: dir.display().to_string(),
+    })?;
+    parse_hanzi_json(ch, &text, GlyphSource::HanziData(dir.display().to_string()), &path.display().to_string())
+}
+
+struct OutlineSink {
+    path: BezPath,
+    scale: f64,
+}
+
+impl OutlineSink {
+    fn p(&self, x: f32, y: f32) -> Point {
+        Point::new(x as f64 * self.scale, EM_TOP - y as f64 * self.scale)
+    }
+}
+
+impl ttf_parser::OutlineBuilder for OutlineSink {
+    fn move_to(&mut self, x: f32, y: f32) {
+        let p = self.p(x, y);
+        self.path.move_to(p);
+    }
+    fn line_to(&mut self, x: f32, y: f32) {
+        let p = self.p(x, y);
+        self.path.line_to(p);
+    }
+    fn quad_to(&mut self, x1: f32, y1: f32, x: f32, y: f32) {
+        let (a, b) = (self.p(x1, y1), self.p(x, y));
+        self.path.quad_to(a, b);
+    }
+    fn curve_to(&mut self, x1: f32, y1: f32, x2: f32, y2: f32, x: f32, y: f32) {
+        let (a, b, c) = (self.p(x1, y1), self.p(x2, y2), self.p(x, y));
+        self.path.curve_to(a, b, c);
+    }
+    fn close(&mut self) {
+        self.path.close_path();
+    }
+}
+
+/// A glyph from a TrueType/OpenType font's outlines. Font units are scaled so the em is 1024
+/// units with the baseline at `y = 0` of the original frame (so the ideographic em box, from
+/// about −0.12 em to 0.88 em, lands on the 1024 box like hanzi-writer-data). No medians.
+///
+/// # Errors
+/// [`GlyphError::Io`], [`GlyphError::Malformed`] (not a font), [`GlyphError::Unknown`].
+pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
+    let name = path.display().to_string();
+    let data = std::fs::read(path).map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?;
+    let face = ttf_parser::Face::parse(&data, 0)
+        .map_err(|e| GlyphError::Malformed { source_name: name.clone(), message: format!("not a TrueType/OpenType font: {e}") })?;
+    let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: name.clone() };
+    let gid = face.glyph_index(ch).ok_or_else(unknown)?;
+    let mut sink = OutlineSink { path: BezPath::new(), scale: EM / face.units_per_em() as f64 };
+    face.outline_glyph(gid, &mut sink).ok_or_else(unknown)?;
+    Ok(Glyph {
+        ch,
+        source: GlyphSource::Font(name),
+        shape: Shape::Outlines(vec![sink.path]),
+        stroke_outlines: None,
+        medians: None,
+    })
+}
+
+/// A glyph from a photo or scan of one character (dark ink on light paper): Otsu threshold,
+/// specks removed, padded to a square whose sides are the em box.
+///
+/// # Errors
+/// [`GlyphError::Io`] for unreadable files, [`GlyphError::BadImage`] for an image with no ink
+/// or nothing but ink.
+pub fn from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
+    let (size, ink) = image_glyph::load_clean(path)?;
+    Ok(Glyph {
+        ch,
+        source: GlyphSource::Image(path.display().to_string()),
+        shape: Shape::Bitmap { size, ink },
+        stroke_outlines: None,
+        medians: None,
+    })
+}

@@ -1,0 +1,182 @@
+//! # trajectory
+//!
+//! From a Chinese character to the 5D brush track `T_i = (H_i, α_i, x_i, y_i, β_i)` a robot can
+//! write.
+//!
+//! 1. **Glyph** ([`glyph`]): hanzi-writer-data JSON (an embedded subset of the most common
+//!    characters, or a full unpacked package), a CJK font's outlines, or a photo of a character.
+//!    Everything is in the em frame (1024 box, y down).
+//! 2. **Centre lines** ([`centre_lines`]): the source's stroke medians ([`Method::Medians`]), or a
+//!    skeleton of the glyph image ([`Method::Skeleton`]: Zhang–Suen thinning, spur pruning,
+//!    junction merging, a graph search that goes straight through crossings, stroke ordering).
+//!    Each point carries the glyph's local half-width from a Euclidean distance transform (of
+//!    the stroke's own outline when the source has one).
+//! 3. **Track** ([`build_track`]): footprints that trail the motion, sized through the brush
+//!    profile's inverse model, placed on the paper by a [`CharBox`].
+//!
+//! ```
+//! use trajectory::{centre_lines, build_track, glyph, CharBox, Method, Sizing, TrackOptions, DEFAULT_SPACING_MM};
+//! use brush_model::BrushProfile;
+//! let g = glyph::embedded('十').unwrap();
+//! let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+//! let pen1 = BrushProfile::builtin("pen1").unwrap();
+//! let opts = TrackOptions {
+//!     char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 },
+//!     spacing_mm: DEFAULT_SPACING_MM, alpha_rad: 0.0, sizing: Sizing::Brush,
+//! };
+//! let built = build_track(&paths, &pen1, &opts).unwrap();
+//! assert_eq!(built.track.strokes.len(), 2);
+//! ```
+
+pub mod distance;
+pub mod glyph;
+pub mod graph;
+mod image_glyph;
+pub mod raster;
+pub mod thinning;
+pub mod track;
+
+use kurbo::Point;
+use thiserror::Error;
+
+pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
+pub use graph::GraphOptions;
+pub use image_glyph::otsu_threshold;
+pub use track::{auto_char_mm, build_track, chamfer_pct, BuiltTrack, CharBox, Sizing, StrokePath, TrackOptions, DEFAULT_SPACING_MM};
+
+/// How centre lines are found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The source's stroke medians (hanzi-writer-data).
+    Medians,
+    /// A skeleton of the glyph image.
+    Skeleton,
+}
+
+impl Method {
+    /// `medians` or `skeleton`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Medians => "medians",
+            Method::Skeleton => "skeleton",
+        }
+    }
+}
+
+/// Errors from centre-line extraction.
+#[derive(Debug, Error)]
+pub enum TrajectoryError {
+    /// Medians were asked for but the source has none.
+    #[error("{0} has no stroke medians; use --from skeleton")]
+    NoMedians(String),
+    /// The glyph has no ink at the analysis resolution.
+    #[error("the glyph of {0:?} has no ink to trace")]
+    Empty(char),
+}
+
+/// The stroke centre lines of a glyph with half-widths, in writing order, using `method` on an
+/// `analysis_px × analysis_px` raster of the em box.
+///
+/// # Errors
+/// [`TrajectoryError::NoMedians`] for [`Method::Medians`] on a source without medians;
+/// [`TrajectoryError::Empty`] for a blank glyph.
+pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<StrokePath>, TrajectoryError> {
+    let n = analysis_px as usize;
+    let px_to_em = glyph::EM / analysis_px as f64;
+    match method {
+        Method::Medians => {
+            let medians = g.medians.as_ref().ok_or_else(|| TrajectoryError::NoMedians(g.source.kind().to_string()))?;
+            let outlines = g.stroke_outlines.as_ref();
+            let whole = raster::mask_of(&raster::render_glyph(g, analysis_px));
+            let whole_dt = distance::distance_to_background(&whole, n, n);
+            let mut out = Vec::with_capacity(medians.len());
+            for (i, m) in medians.iter().enumerate() {
+                let dt = match outlines.and_then(|o| o.get(i)) {
+                    Some(o) => {
+                        let mask = raster::mask_of(&raster::render_outlines(std::slice::from_ref(o), analysis_px));
+                        distance::distance_to_background(&mask, n, n)
+                    }
+                    None => whole_dt.clone(),
+                };
+                let (pts, half_widths) = centre_on_ridge(&densify(m, 8.0), &dt, n, px_to_em);
+                out.push(StrokePath { points: pts, half_widths });
+            }
+            Ok(out)
+        }
+        Method::Skeleton => {
+            let mask = raster::mask_of(&raster::render_glyph(g, analysis_px));
+            if !mask.iter().any(|&b| b) {
+                return Err(TrajectoryError::Empty(g.ch));
+            }
+            let dt = distance::distance_to_background(&mask, n, n);
+            let mut skel = mask;
+            thinning::zhang_suen(&mut skel, n, n);
+            thinning::remove_staircases(&mut skel, n, n);
+            let polys = graph::skeleton_strokes(&skel, &dt, n, &GraphOptions::default());
+            Ok(polys
+                .into_iter()
+                .map(|p| {
+                    let half_widths = p.iter().map(|q| distance::sample(&dt, n, n, q.x, q.y) * px_to_em).collect();
+                    StrokePath { points: p.iter().map(|q| Point::new(q.x * px_to_em, q.y * px_to_em)).collect(), half_widths }
+                })
+                .collect())
+        }
+    }
+}
+
+/// Inserts points so no segment is longer than `step` (em units).
+fn densify(p: &[Point], step: f64) -> Vec<Point> {
+    let mut out = vec![p[0]];
+    for w in p.windows(2) {
+        let k = (w[0].distance(w[1]) / step).ceil().max(1.0) as usize;
+        for i in 1..=k {
+            out.push(w[0].lerp(w[1], i as f64 / k as f64));
+        }
+    }
+    out
+}
+
+/// Moves each point of a median across the stroke onto the ridge of the stroke's distance
+/// transform (hanzi-writer medians are hand-drawn and often off-centre), and returns the ridge
+/// height there as the half-width (em units). The shifts are smoothed along the stroke so the
+/// line stays smooth.
+fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
+    let at = |q: Point| distance::sample(dt, n, n, q.x / px_to_em, q.y / px_to_em);
+    let mut shifts = Vec::with_capacity(p.len());
+    let mut widths = Vec::with_capacity(p.len());
+    for i in 0..p.len() {
+        let (a, b) = (p[i.saturating_sub(1)], p[(i + 1).min(p.len() - 1)]);
+        let d = b - a;
+        let len = d.hypot();
+        if len < 1e-9 {
+            shifts.push(0.0);
+            widths.push(at(p[i]) * px_to_em);
+            continue;
+        }
+        let normal = kurbo::Vec2::new(-d.y / len, d.x / len);
+        let reach = (at(p[i]) + 3.0).min(40.0) * px_to_em;
+        let (mut best, mut best_off) = (at(p[i]), 0.0);
+        let steps = (reach / (0.5 * px_to_em)).ceil() as i64;
+        for k in -steps..=steps {
+            let off = k as f64 * 0.5 * px_to_em;
+            let v = at(p[i] + normal * off);
+            if v > best + 1e-9 {
+                best = v;
+                best_off = off;
+            }
+        }
+        shifts.push(best_off);
+        widths.push(best * px_to_em);
+    }
+    // Smooth the shifts (window 5) and apply them along each point's normal.
+    let mut out = Vec::with_capacity(p.len());
+    for i in 0..p.len() {
+        let (lo, hi) = (i.saturating_sub(2), (i + 2).min(p.len() - 1));
+        let off = shifts[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64;
+        let (a, b) = (p[i.saturating_sub(1)], p[(i + 1).min(p.len() - 1)]);
+        let d = b - a;
+        let len = d.hypot().max(1e-9);
+        out.push(p[i] + kurbo::Vec2::new(-d.y / len, d.x / len) * off);
+    }
+    (out, widths)
+}
