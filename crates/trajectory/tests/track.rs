@@ -67,3 +67,54 @@ fn every_embedded_test_character_parses() {
     assert!(glyph::embedded_chars().len() >= 1000);
     assert!(glyph::embedded('\u{10FFFF}').is_err());
 }
+
+#[test]
+fn halving_the_spacing_changes_the_render_by_under_half_a_percent() {
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    for ch in "永法".chars() {
+        let g = glyph::embedded(ch).unwrap();
+        let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+        let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm };
+        let render = |spacing: f64| {
+            let opts = TrackOptions { char_box: b, spacing_mm: spacing, alpha_rad: 0.0, sizing: Sizing::Brush };
+            let t = build_track(&paths, &pen1, &opts).unwrap().track;
+            render_track(&t, &pen1, ModelKind::Bsm.model(), Extrapolation::Refuse, PointMm::new(0.0, 0.0), 512.0 / mm, 512, 512).unwrap()
+        };
+        let (a, b2) = (render(trajectory::DEFAULT_SPACING_MM), render(trajectory::DEFAULT_SPACING_MM / 2.0));
+        let iou = stroke_metrics::iou(
+            stroke_metrics::GrayRef::new(a.data(), 512, 512).unwrap(),
+            stroke_metrics::GrayRef::new(b2.data(), 512, 512).unwrap(),
+        )
+        .unwrap();
+        assert!(iou > 0.995, "{ch}: IoU between spacings {iou}");
+    }
+}
+
+#[test]
+fn hanzi_folders_and_malformed_data() {
+    let dir = std::env::temp_dir().join(format!("maobi-hanzi-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let line = glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap();
+    std::fs::write(dir.join("十.json"), line).unwrap();
+    let g = glyph::from_hanzi_dir(&dir, '十').unwrap();
+    assert_eq!(g.medians.unwrap().len(), 2);
+    assert!(matches!(glyph::from_hanzi_dir(&dir, '口'), Err(trajectory::GlyphError::Unknown { .. })));
+    std::fs::write(dir.join("口.json"), r#"{"strokes": ["M 0 0 L 10 10 Z"], "medians": []}"#).unwrap();
+    let e = glyph::from_hanzi_dir(&dir, '口').unwrap_err().to_string();
+    assert!(e.contains("口.json") && e.contains("1 strokes but 0 medians"), "{e}");
+    std::fs::write(dir.join("口.json"), r#"{"strokes": ["M 0 0 X"], "medians": [[[0, 0]]]}"#).unwrap();
+    let e = glyph::from_hanzi_dir(&dir, '口').unwrap_err().to_string();
+    assert!(e.contains("stroke 1: bad SVG path"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn em_frame_follows_the_design_notes() {
+    // Make Me a Hanzi's (x, y) with y up maps to (x, 900 − y).
+    let g = glyph::embedded('十').unwrap();
+    let raw: serde_json::Value = serde_json::from_str(glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap()).unwrap();
+    let (x, y) = (raw["medians"][0][0][0].as_f64().unwrap(), raw["medians"][0][0][1].as_f64().unwrap());
+    let p = g.medians.unwrap()[0][0];
+    assert_eq!((p.x, p.y), (x, 900.0 - y));
+}

@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use bezier_raster::{coverage::overlay_png, ModelKind};
-use brush_model::{BrushProfile, Extrapolation, Stroke, Track};
-use maobi::pipeline::{prepare, render_char, write_char, CharReport, CharResult, Prepared, WriteOptions};
+use brush_model::{BrushProfile, Extrapolation, Track};
+use maobi::pipeline::{prepare, write_char, CharReport, CharResult, Prepared, WriteOptions};
 use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{glyph, CharBox, Method};
@@ -40,10 +40,10 @@ pub struct Args {
     size: u32,
     /// Side of the character box on paper, mm (default: chosen so the brush's width range
     /// covers the glyphs' stroke widths; see docs/trajectory.md).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     char_mm: Option<f64>,
     /// Constant brush tilt α, degrees.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     alpha: f64,
     /// Lay several characters out in rows, left to right (default: columns, right to left).
     #[arg(long)]
@@ -191,13 +191,11 @@ fn sheet_image(results: &[CharResult], profile: &BrushProfile, model: ModelKind,
     for r in results {
         w = w.max(r.char_box.x0_mm + r.char_box.size_mm);
         h = h.max(r.char_box.y0_mm + r.char_box.size_mm);
-        all.strokes.extend(r.track.strokes.iter().cloned().map(|s: Stroke| s));
+        all.strokes.extend(r.track.strokes.iter().cloned());
     }
     let gap = 0.1 * char_mm;
     let px_per_mm = size as f64 / char_mm;
-    let sheet = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 1.0 };
     let (wp, hp) = (((w + gap) * px_per_mm).ceil() as u32, ((h + gap) * px_per_mm).ceil() as u32);
-    let _ = sheet;
     Ok(bezier_raster::render_track(&all, profile, model.model(), Extrapolation::Refuse, brush_model::PointMm::new(0.0, 0.0), px_per_mm, wp, hp)?)
 }
 
@@ -214,6 +212,5 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<(
     });
     write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
     write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
-    let _ = render_char;
     Ok(())
 }
