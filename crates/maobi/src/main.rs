@@ -34,6 +34,9 @@ enum Command {
     Write(cmd::write::Args),
     /// Run the write pipeline over many characters and report mean scores.
     Evaluate(cmd::evaluate::Args),
+    /// Robot arms: check, export, send, simulate.
+    #[command(subcommand)]
+    Robot(cmd::robot::RobotCmd),
     /// Score every stroke model against the B-BSM footprint (the paper's Table 2).
     Models(cmd::models::Args),
 }
@@ -60,6 +63,7 @@ fn main() -> ExitCode {
         Command::Models(a) => cmd::models::run(a),
         Command::Write(a) => cmd::write::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
+        Command::Robot(c) => cmd::robot::run(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,5 +6,6 @@ pub mod dataset;
 pub mod evaluate;
 pub mod footprint;
 pub mod models;
+pub mod robot;
 pub mod stroke;
 pub mod write;

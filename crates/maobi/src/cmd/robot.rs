@@ -1,0 +1,275 @@
+//! `maobi robot`: check, export, send and simulate writing programs.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use robot_io::aubo::{run_program, RunOptions, RPC_PORT};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{build_program, RobotConfig};
+use robot_io::sim::{Faults, Simulator};
+use robot_io::TrackFile;
+
+use crate::common::{print_json, progress, write_atomic};
+
+/// `maobi robot` subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum RobotCmd {
+    /// Reachability and safety report for a track.
+    Check(CheckArgs),
+    /// Export the program: aubo-lua, urscript or gcode.
+    Export(ExportArgs),
+    /// Run the program on a controller (or on `maobi robot sim`).
+    Send(SendArgs),
+    /// A loopback AUBO JSON-RPC simulator.
+    Sim(SimArgs),
+    /// Render a simulator trace as what the brush wrote, framed like `maobi write`'s render.
+    RenderTrace(RenderTraceArgs),
+}
+
+/// Arguments of `maobi robot render-trace`.
+#[derive(clap::Args, Debug)]
+pub struct RenderTraceArgs {
+    /// The trace (`maobi robot sim --trace`).
+    trace: PathBuf,
+    /// `track.json` the run came from (for the brush and the char box).
+    #[arg(long)]
+    track: PathBuf,
+    /// `paper.json` used for the run.
+    #[arg(long)]
+    paper: PathBuf,
+    /// Image side, px.
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+    /// Output PNG.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Inputs every program command needs.
+#[derive(clap::Args, Debug)]
+pub struct ProgramArgs {
+    /// `track.json` from `maobi write`.
+    track: PathBuf,
+    /// `paper.json`: touched points (paper mm ↔ robot m).
+    #[arg(long)]
+    paper: PathBuf,
+    /// `robot.json`: speeds, heights, limits (defaults when omitted).
+    #[arg(long)]
+    robot: Option<PathBuf>,
+}
+
+/// Arguments of `maobi robot check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    #[command(flatten)]
+    program: ProgramArgs,
+    /// Print the report as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `maobi robot export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    program: ProgramArgs,
+    /// Output format.
+    #[arg(long, value_parser = ["aubo-lua", "urscript", "gcode"])]
+    format: String,
+    /// Output file.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Arguments of `maobi robot send`.
+#[derive(clap::Args, Debug)]
+pub struct SendArgs {
+    #[command(flatten)]
+    program: ProgramArgs,
+    /// Controller host.
+    #[arg(long)]
+    host: String,
+    /// JSON-RPC port.
+    #[arg(long, default_value_t = RPC_PORT)]
+    port: u16,
+    /// Check and print the plan without connecting.
+    #[arg(long)]
+    dry_run: bool,
+    /// Timeout per call, ms.
+    #[arg(long, default_value_t = 2000)]
+    timeout_ms: u64,
+}
+
+/// Arguments of `maobi robot sim`.
+#[derive(clap::Args, Debug)]
+pub struct SimArgs {
+    /// Port to listen on (127.0.0.1).
+    #[arg(long, default_value_t = RPC_PORT)]
+    port: u16,
+    /// Inject a fault: drop-after=N, delay-ms=D or queue-full-every=K (repeatable).
+    #[arg(long)]
+    fault: Vec<String>,
+    /// Write the executed TCP path here (JSON), updated as moves arrive.
+    #[arg(long)]
+    trace: Option<PathBuf>,
+}
+
+/// Runs a `maobi robot` subcommand.
+pub fn run(cmd: RobotCmd) -> Result<()> {
+    match cmd {
+        RobotCmd::Check(a) => check(a),
+        RobotCmd::Export(a) => export(a),
+        RobotCmd::Send(a) => send(a),
+        RobotCmd::Sim(a) => sim(a),
+        RobotCmd::RenderTrace(a) => render_trace(a),
+    }
+}
+
+struct Loaded {
+    track: TrackFile,
+    frame: PaperFrame,
+    cfg: RobotConfig,
+}
+
+fn load(a: &ProgramArgs) -> Result<Loaded> {
+    let track = TrackFile::load(&a.track)?;
+    let frame = PaperFrame::load(&a.paper)?;
+    let cfg = match &a.robot {
+        Some(p) => RobotConfig::load(p)?,
+        None => RobotConfig::default(),
+    };
+    Ok(Loaded { track, frame, cfg })
+}
+
+fn title(t: &TrackFile) -> String {
+    t.char.clone().unwrap_or_else(|| "track".into())
+}
+
+fn check(a: CheckArgs) -> Result<()> {
+    let l = load(&a.program)?;
+    let (_, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
+    if a.json {
+        print_json(&report)?;
+    } else {
+        println!(
+            "safe: {} strokes, {} points, {} moves; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
+            report.strokes, report.points, report.moves, report.max_press_mm, l.track.brush.ranges.h_mm.max, report.frame_residual_mm, report.estimated_seconds
+        );
+    }
+    Ok(())
+}
+
+fn export(a: ExportArgs) -> Result<()> {
+    let l = load(&a.program)?;
+    let track = l.track.track();
+    let (program, _) = build_program(&track, &l.track.brush, &l.frame, &l.cfg)?;
+    let t = title(&l.track);
+    let text = match a.format.as_str() {
+        "aubo-lua" => robot_io::export::aubo_lua(&program, &t),
+        "urscript" => robot_io::export::urscript(&program, &t),
+        _ => {
+            let (g, warnings) = robot_io::export::gcode(&track, &l.cfg, &t);
+            for w in warnings {
+                eprintln!("warning: {w}");
+            }
+            g
+        }
+    };
+    write_atomic(&a.output, text.as_bytes())
+}
+
+fn send(a: SendArgs) -> Result<()> {
+    let l = load(&a.program)?;
+    let (program, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
+    if a.dry_run {
+        println!("dry run: {} strokes, {} moves would be sent to {}:{}; nothing connected", report.strokes, report.moves, a.host, a.port);
+        return Ok(());
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    let s2 = stop.clone();
+    ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
+    let pb = progress(program.strokes.len() as u64, "strokes");
+    let opts = RunOptions { timeout: Duration::from_millis(a.timeout_ms), max_reconnects: 5, backoff: Duration::from_millis(200), lift_m: l.cfg.lift_mm / 1000.0, stop: &stop };
+    let addr = format!("{}:{}", a.host, a.port);
+    let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| pb.set_position(r.strokes_completed.len() as u64));
+    pb.finish_and_clear();
+    let r = result.with_context(|| format!("running on {addr}"))?;
+    println!(
+        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed{}",
+        r.strokes_completed.len(),
+        r.strokes_total,
+        r.reconnects,
+        r.strokes_resumed,
+        if r.stopped { "; stopped on request, brush lifted" } else { "" }
+    );
+    Ok(())
+}
+
+fn sim(a: SimArgs) -> Result<()> {
+    let mut faults = Faults::default();
+    for f in &a.fault {
+        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
+        let n: u64 = v.parse().with_context(|| format!("--fault {f}: {v} is not a whole number"))?;
+        match k {
+            "drop-after" => faults.drop_after_moves = Some(n as usize),
+            "delay-ms" => faults.delay_ms = Some(n),
+            "queue-full-every" => faults.queue_full_every = Some(n as usize),
+            _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
+        }
+    }
+    let sim = Simulator::start(&format!("127.0.0.1:{}", a.port), faults)?;
+    eprintln!("simulating an AUBO-i5 (robot `{}`) on {}; Ctrl-C to stop", robot_io::sim::SIM_ROBOT, sim.addr);
+    let stop = Arc::new(AtomicBool::new(false));
+    let s2 = stop.clone();
+    ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
+    let mut written = 0;
+    while !stop.load(Ordering::SeqCst) {
+        std::thread::sleep(Duration::from_millis(100));
+        if let Some(path) = &a.trace {
+            let t = sim.trace();
+            if t.len() != written {
+                written = t.len();
+                write_atomic(path, serde_json::to_string(&t)?.as_bytes())?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn render_trace(a: RenderTraceArgs) -> Result<()> {
+    let name = a.track.display().to_string();
+    let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
+    let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;
+    let b: Vec<f64> = serde_json::from_value(v["char_box_mm"].clone()).with_context(|| format!("{name}: field `char_box_mm` must be [x0, y0, size]"))?;
+    if b.len() != 3 || b[2] <= 0.0 {
+        bail!("{name}: field `char_box_mm` must be [x0, y0, size] with size > 0");
+    }
+    let tf = TrackFile::load(&a.track)?;
+    let frame = PaperFrame::load(&a.paper)?;
+    let tname = a.trace.display().to_string();
+    let trace: Vec<robot_io::sim::TraceEntry> = serde_json::from_str(&std::fs::read_to_string(&a.trace).with_context(|| format!("{tname}: cannot read"))?)
+        .with_context(|| format!("{tname}: not a simulator trace"))?;
+    let brush = tf.brush.clone();
+    let track = robot_io::sim::trace_to_track(&trace, &frame, |h| {
+        brush
+            .predict_oriented(&brush_model::Press::new(h, 0.0, 0.0), brush_model::Extrapolation::Allow)
+            .map(|f| f.length_mm())
+            .unwrap_or(0.0)
+    });
+    let img = bezier_raster::render_track(
+        &track,
+        &tf.brush,
+        bezier_raster::ModelKind::Bsm.model(),
+        brush_model::Extrapolation::Allow,
+        brush_model::PointMm::new(b[0], b[1]),
+        a.size as f64 / b[2],
+        a.size,
+        a.size,
+    )?;
+    write_atomic(&a.output, &img.encode_png()?)?;
+    println!("{} strokes, {} pressed points rendered to {}", track.strokes.len(), track.point_count(), a.output.display());
+    Ok(())
+}

@@ -1,0 +1,90 @@
+//! Program exporters: AUBO ARCS Lua script, Universal Robots URScript, and G-code for 3-axis
+//! brush plotters.
+
+use brush_model::Track;
+
+use crate::program::{Move, Program, RobotConfig};
+
+fn f(v: f64) -> String {
+    let s = format!("{v:.6}");
+    if s == "-0.000000" { "0.000000".into() } else { s }
+}
+
+fn list(v: &[f64]) -> String {
+    v.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ")
+}
+
+/// An ARCS Lua script (`return function(api) ... end`) that sets the tool offset and speed
+/// fraction and runs every move.
+pub fn aubo_lua(program: &Program, title: &str) -> String {
+    let mut s = String::new();
+    s.push_str(&format!("-- maobi writing program: {title}\n-- {} strokes, {} moves. Generated; do not edit by hand.\n", program.strokes.len(), program.move_count()));
+    s.push_str("return function(api)\n");
+    s.push_str("  local robot_name = api:getRobotNames()[1]\n");
+    s.push_str("  local robot = api:getRobotInterface(robot_name)\n");
+    s.push_str(&format!("  robot:getRobotConfig():setTcpOffset({{0, 0, {}, 0, 0, 0}})\n", f(program.tcp_offset_m)));
+    s.push_str("  local mc = robot:getMotionControl()\n");
+    s.push_str(&format!("  mc:setSpeedFraction({})\n", f(program.speed_fraction)));
+    let emit = |s: &mut String, m: &Move| match m {
+        Move::Joint { q, a, v } => s.push_str(&format!("  mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", list(q), f(*a), f(*v))),
+        Move::Line { pose, a, v, blend_m } => s.push_str(&format!("  mc:moveLine({{{}}}, {}, {}, {}, 0)\n", list(&pose.0), f(*a), f(*v), f(*blend_m))),
+    };
+    emit(&mut s, &program.start);
+    for st in &program.strokes {
+        s.push_str(&format!("  -- stroke {}\n", st.index + 1));
+        for m in st.moves() {
+            emit(&mut s, m);
+        }
+    }
+    s.push_str("end\n");
+    s
+}
+
+/// A URScript program: `movel(p[x, y, z, rx, ry, rz], a, v, r=blend)` with rotation vectors.
+pub fn urscript(program: &Program, title: &str) -> String {
+    let mut s = format!("# maobi writing program: {title}\ndef maobi_write():\n");
+    s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", f(program.tcp_offset_m)));
+    let emit = |s: &mut String, m: &Move| match m {
+        Move::Joint { q, a, v } => s.push_str(&format!("  movej([{}], a={}, v={})\n", list(q), f(*a), f(*v))),
+        Move::Line { pose, a, v, blend_m } => {
+            let p = pose.position();
+            let r = pose.rotation_vector();
+            s.push_str(&format!("  movel(p[{}, {}], a={}, v={}, r={})\n", list(&p), list(&r), f(*a), f(*v), f(*blend_m)));
+        }
+    };
+    emit(&mut s, &program.start);
+    for st in &program.strokes {
+        s.push_str(&format!("  # stroke {}\n", st.index + 1));
+        for m in st.moves() {
+            emit(&mut s, m);
+        }
+    }
+    s.push_str("end\nmaobi_write()\n");
+    s
+}
+
+/// G-code for a 3-axis brush plotter working in paper millimetres: X, Y on the paper, Z = −H
+/// (Z 0 where the tip touches, positive up), feed rates from the configured speeds. Tilt α and
+/// direction β cannot be expressed and are ignored; the returned warnings say so.
+pub fn gcode(track: &Track, cfg: &RobotConfig, title: &str) -> (String, Vec<String>) {
+    let mut warnings = Vec::new();
+    if track.points().any(|p| p.alpha_rad.abs() > 1e-9) {
+        warnings.push("G-code has no tilt axis: α is ignored".to_string());
+    }
+    warnings.push("G-code has no brush rotation axis: β is ignored".to_string());
+    let write_f = cfg.write_speed_m_s * 60_000.0;
+    let travel_f = cfg.travel_speed_m_s * 60_000.0;
+    let mut s = format!("; maobi writing program: {title}\nG21 ; millimetres\nG90 ; absolute\n");
+    s.push_str(&format!("G0 Z{}\n", f(cfg.lift_mm)));
+    for (i, st) in track.strokes.iter().enumerate() {
+        let Some(first) = st.points.first() else { continue };
+        s.push_str(&format!("; stroke {}\n", i + 1));
+        s.push_str(&format!("G0 X{} Y{} F{}\n", f(first.x_mm), f(first.y_mm), f(travel_f)));
+        for p in &st.points {
+            s.push_str(&format!("G1 X{} Y{} Z{} F{}\n", f(p.x_mm), f(p.y_mm), f(-p.h_mm), f(write_f)));
+        }
+        s.push_str(&format!("G0 Z{}\n", f(cfg.lift_mm)));
+    }
+    s.push_str("M2\n");
+    (s, warnings)
+}

@@ -1,0 +1,120 @@
+//! # robot-io
+//!
+//! From a maobi brush track to a robot arm, safely. No image or ML dependencies.
+//!
+//! * [`frame`]: the paper's pose in the robot base frame, fitted (Kabsch, SVD) from three or
+//!   more touched points (`paper.json`), with its residual; collinear points are refused.
+//! * [`pose`]: a track point `(H, α, x, y, β)` → the TCP pose `[x, y, z, rx, ry, rz]` (m, rad,
+//!   `R = Rz·Ry·Rx`): the brush tip `H` into the paper, tilted by α towards β.
+//! * [`kinematics`]: AUBO-i5 forward kinematics (modified DH) and a numerical inverse.
+//! * [`program`]: `robot.json`, the writing program (travel, descend, press, lift, optional
+//!   dipping) and the safety envelope checked before anything moves.
+//! * [`aubo`]: the ARCS JSON-RPC client and a fault-tolerant runner (reconnect, lift, resume).
+//! * [`export`]: ARCS Lua script, URScript, G-code.
+//! * [`sim`]: a loopback simulator of the controller for tests and dry runs.
+//!
+//! ```
+//! use robot_io::{frame::PaperFrame, pose::{brush_pose, Pose}};
+//! use brush_model::TrackPoint;
+//! let paper = PaperFrame::level([0.4, 0.1, 0.02], [200.0, 200.0]);
+//! let p = TrackPoint { x_mm: 50.0, y_mm: 20.0, h_mm: 15.0, alpha_rad: 0.0, beta_rad: 0.0 };
+//! let pose = brush_pose(&paper, &p);
+//! // 50 mm along +x, 20 mm along −y, 15 mm below the paper surface.
+//! assert!((pose.0[0] - 0.45).abs() < 1e-12 && (pose.0[1] - 0.08).abs() < 1e-12 && (pose.0[2] - 0.005).abs() < 1e-12);
+//! ```
+
+pub mod aubo;
+pub mod export;
+pub mod frame;
+pub mod kinematics;
+pub mod pose;
+pub mod program;
+pub mod sim;
+
+use std::path::Path;
+
+use brush_model::{BrushProfile, Stroke, Track};
+use serde::Deserialize;
+use thiserror::Error;
+
+/// Errors of robot-io.
+#[derive(Debug, Error)]
+pub enum RobotError {
+    /// A configuration file is unreadable or invalid.
+    #[error("{file}: {message}")]
+    Config {
+        /// The file.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The program would leave the safety envelope; nothing was sent.
+    #[error("refused{}{}: {reason}", stroke.map_or(String::new(), |s| format!(" at stroke {}", s + 1)), point.map_or(String::new(), |p| format!(", point {}", p + 1)))]
+    Unsafe {
+        /// Zero-based stroke index.
+        stroke: Option<usize>,
+        /// Zero-based point index within the stroke.
+        point: Option<usize>,
+        /// Why.
+        reason: String,
+    },
+    /// The connection failed or was lost.
+    #[error("connection: {0}")]
+    Io(String),
+    /// A call did not answer in time.
+    #[error("timeout waiting for {0}")]
+    Timeout(String),
+    /// The controller's answer is not valid JSON-RPC.
+    #[error("protocol: {0}")]
+    Protocol(String),
+    /// A JSON-RPC `error` object.
+    #[error("{method}: JSON-RPC error {code}: {message}")]
+    Rpc {
+        /// The method called.
+        method: String,
+        /// Error code.
+        code: i64,
+        /// Error message.
+        message: String,
+    },
+    /// The controller returned a negative status.
+    #[error("{method}: controller error code {code}")]
+    Controller {
+        /// The method called.
+        method: String,
+        /// The status.
+        code: i64,
+    },
+}
+
+/// `track.json` as `maobi write` writes it: the brush profile and the strokes (other fields
+/// ignored).
+#[derive(Debug, Deserialize)]
+pub struct TrackFile {
+    /// The character, if recorded.
+    #[serde(default)]
+    pub char: Option<String>,
+    /// The brush profile the track was made for.
+    pub brush: BrushProfile,
+    /// The strokes.
+    pub strokes: Vec<Stroke>,
+}
+
+impl TrackFile {
+    /// Loads and validates `track.json`.
+    ///
+    /// # Errors
+    /// [`RobotError::Config`] naming the file.
+    pub fn load(path: &Path) -> Result<Self, RobotError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let t: TrackFile = serde_json::from_str(&text).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        t.brush.validate(&name).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        Ok(t)
+    }
+
+    /// The strokes as a [`Track`].
+    pub fn track(&self) -> Track {
+        Track { strokes: self.strokes.clone() }
+    }
+}

@@ -1,0 +1,243 @@
+//! robot-io: frames, poses, kinematics, the safety envelope, exporters, and full runs against the
+//! simulator on loopback (including a dropped connection mid-stroke).
+
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use nalgebra::{Rotation3, Vector3};
+use robot_io::aubo::{run_program, RunOptions};
+use robot_io::export::{aubo_lua, gcode, urscript};
+use robot_io::frame::{PaperFile, PaperFrame, TouchPoint};
+use robot_io::kinematics::{forward, inverse};
+use robot_io::pose::{brush_pose, Pose};
+use robot_io::program::{build_program, tcp_iso, RobotConfig};
+use robot_io::sim::{Faults, Simulator, TraceKind};
+use robot_io::RobotError;
+
+fn pen1() -> BrushProfile {
+    BrushProfile::builtin("pen1").unwrap()
+}
+
+fn paper() -> PaperFrame {
+    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
+}
+
+/// Two short strokes: a horizontal and a vertical, pressed at 15 mm.
+fn small_track() -> Track {
+    let line = |pts: &[(f64, f64)], beta: f64| Stroke {
+        points: pts.iter().map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta }).collect(),
+    };
+    Track {
+        strokes: vec![
+            line(&[(40.0, 60.0), (50.0, 60.0), (60.0, 61.0), (70.0, 62.0)], std::f64::consts::PI),
+            line(&[(55.0, 40.0), (55.0, 55.0), (55.0, 70.0), (55.5, 85.0)], -std::f64::consts::FRAC_PI_2),
+        ],
+    }
+}
+
+fn same_rotation(a: &Pose, b: &Pose) -> bool {
+    a.to_iso().rotation.angle_to(&b.to_iso().rotation) < 1e-9
+}
+
+#[test]
+fn level_paper_vertical_brush_is_pi_0_0() {
+    let f = paper();
+    let p = TrackPoint { x_mm: 30.0, y_mm: 40.0, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    let pose = brush_pose(&f, &p);
+    let want = Pose([0.38, 0.11, 0.05 - 0.012, std::f64::consts::PI, 0.0, 0.0]);
+    for k in 0..3 {
+        assert!((pose.0[k] - want.0[k]).abs() < 1e-12, "{:?}", pose.0);
+    }
+    assert!(same_rotation(&pose, &want), "{:?}", pose.0);
+    // β alone does not spin the tool when α = 0.
+    let turned = brush_pose(&f, &TrackPoint { beta_rad: 1.0, ..p });
+    assert!(same_rotation(&turned, &want));
+    // The quaternion of Rx(π) is [0, 1, 0, 0] up to sign.
+    let q = pose.quaternion();
+    assert!((q[1].abs() - 1.0).abs() < 1e-12 && q[0].abs() < 1e-12);
+}
+
+#[test]
+fn tilt_leans_the_tool_towards_the_footprint() {
+    // Hand computation: on the level paper the tool z is base −z when upright; tilted by α
+    // towards β = 0 (paper +x = base +x) it becomes (sin α, 0, −cos α).
+    let f = paper();
+    let a = 0.2f64;
+    let pose = brush_pose(&f, &TrackPoint { x_mm: 0.0, y_mm: 0.0, h_mm: 0.0, alpha_rad: a, beta_rad: 0.0 });
+    let z = pose.to_iso().rotation * Vector3::z();
+    assert!((z - Vector3::new(a.sin(), 0.0, -a.cos())).norm() < 1e-12, "{z}");
+    // β = 90° is paper +y, which is base −y on this sheet.
+    let pose = brush_pose(&f, &TrackPoint { x_mm: 0.0, y_mm: 0.0, h_mm: 0.0, alpha_rad: a, beta_rad: std::f64::consts::FRAC_PI_2 });
+    let z = pose.to_iso().rotation * Vector3::z();
+    assert!((z - Vector3::new(0.0, -a.sin(), -a.cos())).norm() < 1e-12, "{z}");
+    // Euler convention: R = Rz(rz)·Ry(ry)·Rx(rx).
+    let [_, _, _, rx, ry, rz] = pose.0;
+    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), rz) * Rotation3::from_axis_angle(&Vector3::y_axis(), ry) * Rotation3::from_axis_angle(&Vector3::x_axis(), rx);
+    assert!((r.matrix() - pose.to_iso().rotation.to_rotation_matrix().matrix()).norm() < 1e-12);
+}
+
+#[test]
+fn kabsch_recovers_a_tilted_sheet_and_refuses_bad_ones() {
+    let truth = nalgebra::Isometry3::new(Vector3::new(0.3, -0.1, 0.12), Vector3::new(0.05, -0.03, 2.0));
+    let touch = |u: f64, v: f64| {
+        let q = truth * nalgebra::Point3::new(u / 1000.0, v / 1000.0, 0.0);
+        TouchPoint { paper_mm: [u, v], robot_m: [q.x, q.y, q.z] }
+    };
+    let file = PaperFile { touch_points: vec![touch(0.0, 0.0), touch(200.0, 0.0), touch(0.0, 150.0), touch(180.0, 140.0)], size_mm: Some([210.0, 297.0]), max_residual_mm: None };
+    let f = PaperFrame::fit(&file).unwrap();
+    assert!(f.residual_mm < 1e-9);
+    assert!((f.iso.translation.vector - truth.translation.vector).norm() < 1e-12);
+    assert!(f.iso.rotation.angle_to(&truth.rotation) < 1e-12);
+    let back = f.to_paper([truth.translation.vector.x, truth.translation.vector.y, truth.translation.vector.z]);
+    assert!(back.iter().all(|v| v.abs() < 1e-9));
+    let collinear = PaperFile { touch_points: vec![touch(0.0, 0.0), touch(100.0, 0.0), touch(200.0, 0.0)], size_mm: None, max_residual_mm: None };
+    assert!(PaperFrame::fit(&collinear).unwrap_err().to_string().contains("collinear"));
+    let mut noisy = file.clone();
+    noisy.touch_points[3].robot_m[2] += 0.01;
+    assert!(PaperFrame::fit(&noisy).unwrap_err().to_string().contains("residual"));
+    let two = PaperFile { touch_points: file.touch_points[..2].to_vec(), size_mm: None, max_residual_mm: None };
+    assert!(PaperFrame::fit(&two).unwrap_err().to_string().contains("at least 3"));
+}
+
+#[test]
+fn inverse_kinematics_round_trips() {
+    let tcp = tcp_iso(0.048);
+    for q in [[0.1, 0.4, 1.5, 0.2, 1.4, 0.3], [-0.8, 0.2, 1.9, -0.3, 1.6, -1.0]] {
+        let pose = Pose::from_iso(&forward(&q, &tcp));
+        let sol = inverse(&pose, &tcp, None).expect("reachable");
+        let back = Pose::from_iso(&forward(&sol, &tcp));
+        for k in 0..3 {
+            assert!((back.0[k] - pose.0[k]).abs() < 2e-5);
+        }
+        assert!(same_rotation_loose(&back, &pose));
+    }
+    // Two metres away is out of reach.
+    assert!(inverse(&Pose([2.0, 0.0, 0.2, std::f64::consts::PI, 0.0, 0.0]), &tcp, None).is_none());
+}
+
+fn same_rotation_loose(a: &Pose, b: &Pose) -> bool {
+    a.to_iso().rotation.angle_to(&b.to_iso().rotation) < 2e-4
+}
+
+#[test]
+fn the_safety_envelope_refuses_before_anything_moves() {
+    let (f, cfg) = (paper(), RobotConfig::default());
+    let (prog, report) = build_program(&small_track(), &pen1(), &f, &cfg).unwrap();
+    assert_eq!(report.strokes, 2);
+    assert_eq!(prog.strokes[0].press.len(), 3);
+    assert!(report.estimated_seconds > 0.0);
+    let refuse = |t: Track, cfg: &RobotConfig, f: &PaperFrame, needle: &str| {
+        let e = build_program(&t, &pen1(), f, cfg).unwrap_err();
+        assert!(matches!(e, RobotError::Unsafe { .. }), "{e}");
+        assert!(e.to_string().contains(needle), "{e}");
+    };
+    let mut deep = small_track();
+    deep.strokes[1].points[2].h_mm = 25.0;
+    refuse(deep, &cfg, &f, "stroke 2, point 3: press h = 25.000 mm is deeper");
+    let mut off = small_track();
+    off.strokes[0].points[1].x_mm = 250.0;
+    refuse(off, &cfg, &f, "outside the paper");
+    let far = PaperFrame::level([1.5, 0.0, 0.05], [200.0, 200.0]);
+    refuse(small_track(), &cfg, &far, "not reachable");
+    let fast = RobotConfig { write_speed_m_s: 0.5, ..RobotConfig::default() };
+    refuse(small_track(), &fast, &f, "write_speed_m_s = 0.5 exceeds the limit 0.25");
+    refuse(Track::default(), &cfg, &f, "no points");
+}
+
+#[test]
+fn exports_follow_the_documented_forms() {
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    let lua = aubo_lua(&prog, "test");
+    assert!(lua.contains("return function(api)") && lua.trim_end().ends_with("end"));
+    assert!(lua.contains("setTcpOffset({0, 0, 0.048000, 0, 0, 0})") && lua.contains("mc:setSpeedFraction(1.000000)"));
+    assert_eq!(lua.matches("mc:moveLine(").count() + lua.matches("mc:moveJoint(").count(), prog.move_count());
+    let ur = urscript(&prog, "test");
+    assert!(ur.starts_with("# maobi") && ur.contains("def maobi_write():") && ur.trim_end().ends_with("maobi_write()"));
+    let movel = ur.lines().find(|l| l.trim_start().starts_with("movel(")).unwrap();
+    let inside = movel.trim().trim_start_matches("movel(p[").split(']').next().unwrap();
+    assert_eq!(inside.split(", ").count(), 6, "{movel}");
+    assert!(movel.contains("a=") && movel.contains("v=") && movel.contains("r="));
+    // The level paper's upright brush is Rx(π): rotation vector (π, 0, 0) up to sign.
+    let (g, warnings) = gcode(&small_track(), &RobotConfig::default(), "test");
+    assert!(g.contains("G21") && g.contains("G90") && g.trim_end().ends_with("M2"));
+    assert!(g.contains("G1 X40.000000 Y60.000000 Z-15.000000 F1200.000000"), "{g}");
+    assert!(warnings.iter().any(|w| w.contains("α")) && warnings.iter().any(|w| w.contains("β")));
+}
+
+fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::aubo::RunReport, RobotError> {
+    let stop = AtomicBool::new(false);
+    let opts = RunOptions { timeout: Duration::from_millis(500), max_reconnects: 3, backoff: Duration::from_millis(10), lift_m: 0.02, stop: &stop };
+    run_program(&sim.addr.to_string(), prog, None, &opts, |_| {})
+}
+
+#[test]
+fn a_full_run_on_the_simulator_follows_the_track() {
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    let sim = Simulator::start("127.0.0.1:0", Faults { queue_full_every: Some(4), ..Faults::default() }).unwrap();
+    let report = run(&sim, &prog).unwrap();
+    assert_eq!(report.strokes_completed, vec![0, 1]);
+    assert_eq!(report.reconnects, 0);
+    let trace = sim.trace();
+    assert_eq!(trace[0].kind, TraceKind::Joint);
+    // Every pressed pose of the program was executed, in order.
+    let pressed: Vec<Pose> = trace.iter().filter(|t| t.kind == TraceKind::Line).map(|t| t.pose).filter(|p| p.0[2] < 0.05 - 0.01).collect();
+    assert_eq!(pressed.len(), 8);
+    let f = paper();
+    let first = f.to_paper(pressed[0].position());
+    assert!((first[0] - 40.0).abs() < 1e-9 && (first[1] - 60.0).abs() < 1e-9 && (first[2] - 15.0).abs() < 1e-9);
+}
+
+#[test]
+fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    // Moves: 1 joint, stroke 1 = 2 approach + 3 press + 1 lift (moves 2–7); stroke 2 travels
+    // (8), descends onto its first point (9), presses (10, 11, ...): the drop hits move 11, in
+    // the middle of stroke 2.
+    let sim = Simulator::start("127.0.0.1:0", Faults { drop_after_moves: Some(11), ..Faults::default() }).unwrap();
+    let report = run(&sim, &prog).unwrap();
+    assert_eq!(report.strokes_completed, vec![0, 1]);
+    assert_eq!((report.reconnects, report.strokes_resumed), (1, 1));
+    let trace = sim.trace();
+    let f = paper();
+    // Stroke 1's first pressed point was written exactly once; stroke 2's first point twice
+    // (before the drop and on resumption), with a lift in between.
+    let count_at = |x: f64, y: f64| {
+        trace.iter().filter(|t| {
+            let p = f.to_paper(t.pose.position());
+            (p[0] - x).abs() < 1e-6 && (p[1] - y).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
+        }).count()
+    };
+    assert_eq!(count_at(40.0, 60.0), 1);
+    assert_eq!(count_at(70.0, 62.0), 1);
+    assert_eq!(count_at(55.0, 40.0), 2);
+    assert_eq!(count_at(55.0, 55.0), 2);
+    assert_eq!(count_at(55.0, 70.0), 1);
+    assert_eq!(count_at(55.5, 85.0), 1);
+    let i_resume = trace.iter().rposition(|t| {
+        let p = f.to_paper(t.pose.position());
+        (p[0] - 55.0).abs() < 1e-6 && (p[1] - 40.0).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
+    }).unwrap();
+    // Before resuming, the brush went up to the safe height.
+    assert!(trace[..i_resume].iter().rev().take(3).any(|t| f.to_paper(t.pose.position())[2] < -10.0));
+}
+
+#[test]
+fn the_simulator_validates_requests() {
+    let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
+    let mut c = robot_io::aubo::AuboClient::connect(&sim.addr.to_string(), Duration::from_millis(500)).unwrap();
+    assert_eq!(c.robot_names().unwrap(), vec!["rob1".to_string()]);
+    let e = c.call("rob9.MotionControl.getExecId", serde_json::json!([])).unwrap_err();
+    assert!(matches!(e, RobotError::Rpc { code: -32601, .. }), "{e}");
+    let bad = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0], 0.5, 0.1, 0.0, 0.0])).unwrap_err();
+    assert!(matches!(bad, RobotError::Controller { code: -5, .. }), "{bad}");
+    let far = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[3.0, 0.0, 0.1, 3.14, 0.0, 0.0], 0.5, 0.1, 0.0, 0.0])).unwrap_err();
+    assert!(matches!(far, RobotError::Controller { code: -10, .. }), "{far}");
+    let fast = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0, 0.0], 0.5, 9.0, 0.0, 0.0])).unwrap_err();
+    assert!(matches!(fast, RobotError::Controller { code: -5, .. }));
+    assert_eq!(c.exec_id("rob1").unwrap(), -1);
+    // A slow controller times out.
+    let slow = Simulator::start("127.0.0.1:0", Faults { delay_ms: Some(300), ..Faults::default() }).unwrap();
+    let mut c = robot_io::aubo::AuboClient::connect(&slow.addr.to_string(), Duration::from_millis(100)).unwrap();
+    assert!(matches!(c.robot_names(), Err(RobotError::Timeout(_))));
+}
