@@ -22,6 +22,9 @@ struct Fixture {
     about: &'static str,
     /// Whether it needs `--hanzi-data` (and so cannot be checked offline without it).
     needs_hanzi: bool,
+    /// Whether it needs Python with numpy, scikit-image and statsmodels (golden values from
+    /// independent tools); skipped, and said so, when they are not installed.
+    needs_python: bool,
     /// Produces its bytes.
     generate: fn(&Inputs) -> Result<Vec<u8>>,
 }
@@ -36,21 +39,99 @@ fn all() -> Vec<Fixture> {
             path: "fixtures/measurements/pen1-sample.csv",
             about: "synthetic pen1 measurements on the paper's grid (nominal model + 0.15 mm noise)",
             needs_hanzi: false,
+            needs_python: false,
             generate: |_| sample_measurements(),
         },
         Fixture {
             path: "crates/trajectory/data/hanzi-subset.jsonl",
             about: "hanzi-writer-data for the 1,000 most frequent characters plus the test set",
             needs_hanzi: true,
+            needs_python: false,
             generate: hanzi_subset,
+        },
+        Fixture {
+            path: "fixtures/baselines/images/footprints-128.png",
+            about: "pen1 h=15 α=5° β=3° with every stroke model side by side (bsm, circle, ellipse, line, qbc)",
+            needs_hanzi: false,
+            needs_python: false,
+            generate: |_| footprint_sheet(),
+        },
+        Fixture {
+            path: "fixtures/baselines/images/yong-medians-256.png",
+            about: "永 written by the medians pipeline with nominal pen1, 256²",
+            needs_hanzi: false,
+            needs_python: false,
+            generate: |_| character_render('永', trajectory::Method::Medians),
+        },
+        Fixture {
+            path: "fixtures/baselines/images/yong-skeleton-256.png",
+            about: "永 written by the skeleton pipeline with nominal pen1, 256²",
+            needs_hanzi: false,
+            needs_python: false,
+            generate: |_| character_render('永', trajectory::Method::Skeleton),
+        },
+        Fixture {
+            path: "crates/stroke-metrics/tests/golden/metrics.json",
+            about: "CSIM/SSIM/IoU/MSE golden values from scikit-image and numpy",
+            needs_hanzi: false,
+            needs_python: true,
+            generate: |_| python_golden("crates/stroke-metrics/tests/golden", "gen_metrics.py"),
+        },
+        Fixture {
+            path: "crates/brush-model/tests/golden/regression.json",
+            about: "regression golden table from statsmodels",
+            needs_hanzi: false,
+            needs_python: true,
+            generate: |_| python_golden("crates/brush-model/tests/golden", "gen_regression.py"),
         },
         Fixture {
             path: "crates/trajectory/data/ARPHICPL.TXT",
             about: "the Arphic Public License shipped with the subset",
             needs_hanzi: true,
+            needs_python: false,
             generate: |i| Ok(std::fs::read(hanzi_dir(i)?.join("ARPHICPL.TXT"))?),
         },
     ]
+}
+
+fn footprint_sheet() -> Result<Vec<u8>> {
+    use bezier_raster::{Compositor, ModelKind, Stamp, StrokeCanvas};
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let press = Press::from_degrees(15.0, 5.0, 3.0);
+    let fp = pen1.predict(&press, Extrapolation::Refuse)?;
+    let canvas = StrokeCanvas::for_profile(&pen1, 128);
+    let mut sheet = Compositor::new(128 * 5, 128, canvas.px_per_mm);
+    for (i, m) in ModelKind::ALL.iter().enumerate() {
+        let a = canvas.anchor_mm(&fp, press.beta_rad);
+        let anchor = brush_model::PointMm::new(a.x_mm + i as f64 * canvas.size_mm(), a.y_mm);
+        sheet.stamp(m.model(), &Stamp { footprint: fp, anchor, beta_rad: press.beta_rad });
+    }
+    Ok(sheet.image().encode_png()?)
+}
+
+fn character_render(ch: char, method: trajectory::Method) -> Result<Vec<u8>> {
+    use maobi::pipeline::{prepare, write_char, WriteOptions};
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let p = prepare(trajectory::glyph::embedded(ch)?, Some(method))?;
+    let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
+    let opts = WriteOptions { size: 256, upper_bound: false, ..WriteOptions::default() };
+    let r = write_char(&p, &pen1, trajectory::CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
+    Ok(r.render.encode_png()?)
+}
+
+fn python_ready() -> bool {
+    std::process::Command::new("python3")
+        .args(["-c", "import numpy, skimage, statsmodels"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+fn python_golden(dir: &str, script: &str) -> Result<Vec<u8>> {
+    let out = std::process::Command::new("python3").arg(script).current_dir(root().join(dir)).output().with_context(|| format!("running python3 {script}"))?;
+    if !out.status.success() {
+        anyhow::bail!("python3 {script} failed: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    Ok(out.stdout)
 }
 
 fn hanzi_dir(i: &Inputs) -> Result<&Path> {
@@ -98,7 +179,12 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     let root = root();
     let mut differ = Vec::new();
+    let python = python_ready();
     for f in all() {
+        if f.needs_python && !python {
+            println!("skipped  {}  (needs python3 with numpy, scikit-image, statsmodels)", f.path);
+            continue;
+        }
         if f.needs_hanzi && inputs.hanzi_data.is_none() {
             println!("skipped  {}  (needs --hanzi-data DIR; not regenerable offline)", f.path);
             continue;

@@ -2,7 +2,9 @@
 
 use std::process::ExitCode;
 
+mod bench;
 mod fixtures;
+mod gates;
 mod rng;
 
 const HELP: &str = "\
@@ -10,8 +12,12 @@ cargo xtask <task>
 
 Tasks:
   help                 print this help
-  fixtures [--check]   regenerate every generated file under fixtures/ (or, with --check,
+  fixtures [--check] [--hanzi-data DIR]
+                       regenerate every generated file under fixtures/ (or, with --check,
                        verify the committed files are what the generators produce now)
+  gates [--update]     similarity regression gates against fixtures/baselines/*.json
+  bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
+                       (also target/bench-summary.md)
 ";
 
 fn main() -> ExitCode {
@@ -22,6 +28,8 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some("fixtures") => fixtures::run(&args[1..]),
+        Some("gates") => gates::run(&args[1..]),
+        Some("bench") => bench::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };
     match result {

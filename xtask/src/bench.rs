@@ -1,0 +1,90 @@
+//! `cargo xtask bench`: runs the criterion benchmarks (release) and the dataset throughput, and
+//! prints one summary table, also written to `target/bench-summary.md`.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+
+use crate::fixtures::root;
+
+/// Every criterion benchmark target: (package, bench).
+const BENCHES: &[(&str, &str)] = &[("stroke-metrics", "metrics"), ("bezier-raster", "raster"), ("trajectory", "track"), ("maobi", "write")];
+
+/// (criterion id, label).
+const ROWS: &[(&str, &str)] = &[
+    ("footprint_128/bsm", "B-BSM footprint render, 128², reused buffer"),
+    ("footprint_128/qbc", "QBC footprint render, 128²"),
+    ("batch_128/bsm_256", "256 footprints in parallel (rayon), 128²"),
+    ("composite_400_stamps_512", "400 stamps composed into 512²"),
+    ("ssim/128x128", "SSIM 128²"),
+    ("ssim/512x512", "SSIM 512²"),
+    ("centre_lines_medians_yong", "centre lines of 永, medians (256² analysis)"),
+    ("centre_lines_skeleton_yong", "centre lines of 永, skeleton"),
+    ("build_track_yong", "track building for 永"),
+    ("write_yong_medians_512", "`write` 永 end to end, medians, 512²"),
+    ("write_yong_skeleton_512", "`write` 永 end to end, skeleton, 512²"),
+];
+
+fn estimate_ns(dir: &Path, id: &str) -> Option<f64> {
+    let p = dir.join(id).join("new/estimates.json");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()?;
+    v["mean"]["point_estimate"].as_f64()
+}
+
+fn human(ns: f64) -> String {
+    if ns < 1e3 {
+        format!("{ns:.0} ns")
+    } else if ns < 1e6 {
+        format!("{:.1} µs", ns / 1e3)
+    } else if ns < 1e9 {
+        format!("{:.2} ms", ns / 1e6)
+    } else {
+        format!("{:.2} s", ns / 1e9)
+    }
+}
+
+/// Runs the benchmarks and writes the table.
+pub fn run(args: &[String]) -> Result<()> {
+    let quick = args.iter().any(|a| a == "--quick");
+    let root = root();
+    for (package, bench) in BENCHES {
+        let mut cmd = Command::new(env!("CARGO"));
+        cmd.current_dir(&root).args(["bench", "-p", package, "--bench", bench, "--"]);
+        if quick {
+            cmd.args(["--warm-up-time", "1", "--measurement-time", "2"]);
+        }
+        let st = cmd.status().with_context(|| format!("running the {package} benchmarks"))?;
+        if !st.success() {
+            bail!("cargo bench -p {package} --bench {bench} failed");
+        }
+    }
+    let crit = root.join("target/criterion");
+    let mut table = String::from("| benchmark | time (mean) |\n|---|---|\n");
+    for (id, label) in ROWS {
+        let cell = estimate_ns(&crit, id).map_or("not run".to_string(), human);
+        table.push_str(&format!("| {label} | {cell} |\n"));
+    }
+    // Dataset throughput: the CLI end to end (process start, rendering, PNG writing).
+    let st = Command::new(env!("CARGO")).current_dir(&root).args(["build", "--release", "-q", "-p", "maobi"]).status()?;
+    if !st.success() {
+        bail!("building maobi failed");
+    }
+    let out = root.join("target/bench-dataset");
+    let _ = std::fs::remove_dir_all(&out);
+    let t0 = Instant::now();
+    let st = Command::new(root.join("target/release/maobi")).args(["dataset", "--n", "10000", "--size", "128", "-o"]).arg(&out).status()?;
+    let secs = t0.elapsed().as_secs_f64();
+    if !st.success() {
+        bail!("maobi dataset failed");
+    }
+    table.push_str(&format!("| `maobi dataset --n 10000 --size 128` ({} threads) | {:.2} s, {:.0} images/s |\n", std::thread::available_parallelism().map_or(1, |n| n.get()), secs, 10000.0 / secs));
+    let _ = std::fs::remove_dir_all(&out);
+    table.push_str("| generator inference / training step | not built yet (neural-gen) |\n");
+    let path = root.join("target/bench-summary.md");
+    std::fs::write(&path, format!("# maobi benchmarks\n\n{table}"))?;
+    print!("{table}");
+    println!("written to {}", path.display());
+    Ok(())
+}

@@ -1,0 +1,270 @@
+//! `cargo xtask gates [--update]`: similarity regression gates.
+//!
+//! Every figure is computed afresh and compared with `fixtures/baselines/<group>.json`. A figure
+//! that got worse by more than its tolerance fails the gate with a message naming the figure, its
+//! baseline and its value; improvements pass (run `--update` to record them deliberately).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeModel};
+use brush_model::BrushProfile;
+use maobi::pipeline::{prepare, write_char, WriteOptions};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
+use trajectory::{glyph, CharBox, Method};
+
+use crate::fixtures::root;
+
+/// Characters the character gates write (all in the embedded subset).
+pub const GATE_CHARS: &str = "永字八法十口人丁山水中国书大小日月";
+
+/// Which way is better for a figure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Better {
+    /// Larger values are better (similarities).
+    Higher,
+    /// Smaller values are better (distances, errors).
+    Lower,
+}
+
+/// One recorded figure.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Figure {
+    /// The value.
+    pub value: f64,
+    /// How much worse it may get before the gate fails.
+    pub tolerance: f64,
+    /// Which way is better.
+    pub better: Better,
+}
+
+/// A group of figures, as stored in `fixtures/baselines/<group>.json`.
+pub type Figures = BTreeMap<String, Figure>;
+
+/// A figure that got worse than its baseline allows.
+#[derive(Debug, PartialEq)]
+pub struct Regression {
+    /// Figure name.
+    pub name: String,
+    /// Baseline value.
+    pub baseline: f64,
+    /// Value now.
+    pub value: f64,
+    /// Allowed change.
+    pub tolerance: f64,
+}
+
+impl std::fmt::Display for Regression {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} regressed: baseline {:.6}, now {:.6} (tolerance {})", self.name, self.baseline, self.value, self.tolerance)
+    }
+}
+
+/// Compares figures with their baselines: every figure that got worse by more than its
+/// tolerance, and every baseline figure that is missing now.
+pub fn compare(baseline: &Figures, now: &Figures) -> Vec<Regression> {
+    let mut out = Vec::new();
+    for (name, b) in baseline {
+        let Some(n) = now.get(name) else {
+            out.push(Regression { name: format!("{name} (missing)"), baseline: b.value, value: f64::NAN, tolerance: b.tolerance });
+            continue;
+        };
+        let worse = match b.better {
+            Better::Higher => b.value - n.value,
+            Better::Lower => n.value - b.value,
+        };
+        if !(worse <= b.tolerance) {
+            out.push(Regression { name: name.clone(), baseline: b.value, value: n.value, tolerance: b.tolerance });
+        }
+    }
+    out
+}
+
+fn fig(value: f64, tolerance: f64, better: Better) -> Figure {
+    Figure { value, tolerance, better }
+}
+
+fn gray(c: &Coverage) -> GrayRef<'_> {
+    GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("sized")
+}
+
+/// Stroke-model figures: each of `models` against `reference` over `n` presses of pen1 at 128²
+/// (CSIM and SSIM best, worst, mean), plus the reference's mean relative error of rendered ink
+/// against the analytic B-BSM area.
+pub fn model_figures(reference: &dyn StrokeModel, models: &[(&str, &dyn StrokeModel)], n: u64) -> Figures {
+    let spec = DatasetSpec::new(BrushProfile::builtin("pen1").expect("built-in"), 128, 2024);
+    let s2 = spec.canvas.px_per_mm * spec.canvas.px_per_mm;
+    let rows: Vec<(f64, Vec<(f64, f64)>)> = (0..n)
+        .into_par_iter()
+        .map_init(
+            || (Rasterizer::new(), Coverage::new(128, 128), Coverage::new(128, 128), SsimWorkspace::new()),
+            |(r, truth, img, ws), i| {
+                let s = spec.sample(i).expect("in range");
+                spec.render(&s, reference, r, truth);
+                let area_err = (truth.ink() - s.footprint.area_mm2() * s2).abs() / (s.footprint.area_mm2() * s2);
+                let scores = models
+                    .iter()
+                    .map(|(_, m)| {
+                        spec.render(&s, *m, r, img);
+                        (stroke_metrics::csim(gray(truth), gray(img)).expect("same size"), ws.ssim(gray(truth), gray(img)).expect("same size"))
+                    })
+                    .collect();
+                (area_err, scores)
+            },
+        )
+        .collect();
+    let mut f = Figures::new();
+    f.insert("models/bsm/ink_vs_area_rel_error".into(), fig(rows.iter().map(|r| r.0).sum::<f64>() / n as f64, 0.002, Better::Lower));
+    for (k, (name, _)) in models.iter().enumerate() {
+        for (metric, idx) in [("csim", 0), ("ssim", 1)] {
+            let s = Summary::of(rows.iter().map(|r| if idx == 0 { r.1[k].0 } else { r.1[k].1 }));
+            // A baseline model scoring *higher* against the B-BSM is as suspicious as lower: both
+            // mean a model changed. Record means two-sided via two entries.
+            f.insert(format!("models/{name}/{metric}_mean"), fig(s.mean, 0.002, Better::Higher));
+            f.insert(format!("models/{name}/{metric}_mean_upper"), fig(s.mean, 0.002, Better::Lower));
+            f.insert(format!("models/{name}/{metric}_worst"), fig(s.worst, 0.005, Better::Higher));
+            f.insert(format!("models/{name}/{metric}_best"), fig(s.best, 0.005, Better::Higher));
+        }
+    }
+    f
+}
+
+/// Character figures: the write pipeline on [`GATE_CHARS`] for each method and model at 256²,
+/// mean CSIM, SSIM, IoU and chamfer.
+pub fn character_figures() -> Result<Figures> {
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let chars: Vec<char> = GATE_CHARS.chars().collect();
+    let mut f = Figures::new();
+    for method in [Method::Medians, Method::Skeleton] {
+        let prepared = chars
+            .par_iter()
+            .map(|&c| prepare(glyph::embedded(c)?, Some(method)))
+            .collect::<Result<Vec<_>>>()?;
+        for model in ModelKind::ALL {
+            let opts = WriteOptions { model, size: 256, upper_bound: false, ..WriteOptions::default() };
+            let reports = prepared
+                .par_iter()
+                .map(|p| {
+                    let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
+                    Ok(write_char(p, &pen1, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?.report)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let n = reports.len() as f64;
+            let key = |m: &str| format!("chars/{}/{}/{m}", method.name(), model.name());
+            f.insert(key("csim"), fig(reports.iter().map(|r| r.csim).sum::<f64>() / n, 0.003, Better::Higher));
+            f.insert(key("ssim"), fig(reports.iter().map(|r| r.ssim).sum::<f64>() / n, 0.003, Better::Higher));
+            f.insert(key("iou"), fig(reports.iter().map(|r| r.iou).sum::<f64>() / n, 0.005, Better::Higher));
+            if model == ModelKind::Bsm {
+                let ch: Vec<f64> = reports.iter().filter_map(|r| r.chamfer_pct).collect();
+                f.insert(key("chamfer_pct"), fig(ch.iter().sum::<f64>() / ch.len() as f64, 0.05, Better::Lower));
+                let right = reports.iter().filter(|r| r.strokes_expected == Some(r.strokes_found)).count();
+                f.insert(key("strokes_right_fraction"), fig(right as f64 / n, 0.0, Better::Higher));
+            }
+        }
+    }
+    Ok(f)
+}
+
+fn baseline_path(group: &str) -> PathBuf {
+    root().join(format!("fixtures/baselines/{group}.json"))
+}
+
+/// Runs the gates (or rewrites the baselines with `--update`).
+pub fn run(args: &[String]) -> Result<()> {
+    let update = args.iter().any(|a| a == "--update");
+    if let Some(bad) = args.iter().find(|a| *a != "--update") {
+        bail!("gates: unknown argument `{bad}` (expected --update)");
+    }
+    let t0 = std::time::Instant::now();
+    let baselines: Vec<(&str, &dyn StrokeModel)> = ModelKind::BASELINES.iter().map(|m| (m.name(), m.model())).collect();
+    let groups: Vec<(&str, Figures)> = vec![
+        ("models", model_figures(ModelKind::Bsm.model(), &baselines, 300)),
+        ("characters", character_figures()?),
+    ];
+    println!("{:<48} {:>12} {:>12} {:>10}  {}", "figure", "baseline", "now", "Δ", "");
+    let mut failures = Vec::new();
+    for (group, now) in &groups {
+        let path = baseline_path(group);
+        let base: Option<Figures> = std::fs::read_to_string(&path).ok().map(|t| serde_json::from_str(&t)).transpose().with_context(|| format!("{}: not a baseline file", path.display()))?;
+        for (name, n) in now {
+            let b = base.as_ref().and_then(|b| b.get(name));
+            let (bs, d) = match b {
+                Some(b) => (format!("{:.6}", b.value), format!("{:+.6}", n.value - b.value)),
+                None => ("—".into(), "new".into()),
+            };
+            let regressed = b.is_some_and(|b| !compare(&BTreeMap::from([(name.clone(), *b)]), &BTreeMap::from([(name.clone(), *n)])).is_empty());
+            println!("{name:<48} {bs:>12} {:>12.6} {d:>10}  {}", n.value, if regressed { "FAIL" } else { "ok" });
+        }
+        match (&base, update) {
+            (_, true) => {
+                std::fs::create_dir_all(path.parent().expect("folder"))?;
+                std::fs::write(&path, serde_json::to_string_pretty(now)? + "\n")?;
+                println!("updated {}", path.display());
+            }
+            (Some(b), false) => failures.extend(compare(b, now)),
+            (None, false) => failures.push(Regression { name: format!("{group} (no baseline file {})", path.display()), baseline: f64::NAN, value: f64::NAN, tolerance: 0.0 }),
+        }
+    }
+    println!("gates ran in {:.1} s", t0.elapsed().as_secs_f64());
+    if !failures.is_empty() {
+        for f in &failures {
+            eprintln!("gate: {f}");
+        }
+        bail!("{} figure(s) regressed; if the change is intended, run `cargo xtask gates --update` and explain it in the commit", failures.len());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use brush_model::{Footprint, PointMm};
+    use kurbo::BezPath;
+
+    /// The B-BSM with its belly narrowed by 15 %: a plausible bug.
+    struct Narrow;
+    impl StrokeModel for Narrow {
+        fn name(&self) -> &'static str {
+            "narrow"
+        }
+        fn local_outline(&self, fp: &Footprint) -> BezPath {
+            let f = Footprint { lr_mm: fp.lr_mm * 0.85, ..*fp };
+            bezier_raster::Bsm.local_outline(&f)
+        }
+    }
+
+    #[test]
+    fn comparison_is_directional_with_tolerance() {
+        let base = Figures::from([("a".into(), fig(0.9, 0.01, Better::Higher)), ("d".into(), fig(1.0, 0.1, Better::Lower))]);
+        let ok = Figures::from([("a".into(), fig(0.895, 0.01, Better::Higher)), ("d".into(), fig(0.5, 0.1, Better::Lower))]);
+        assert!(compare(&base, &ok).is_empty());
+        let bad = Figures::from([("a".into(), fig(0.85, 0.01, Better::Higher)), ("d".into(), fig(1.2, 0.1, Better::Lower))]);
+        let r = compare(&base, &bad);
+        assert_eq!(r.len(), 2);
+        assert_eq!(r[0].to_string(), "a regressed: baseline 0.900000, now 0.850000 (tolerance 0.01)");
+        let nan = Figures::from([("a".into(), fig(f64::NAN, 0.01, Better::Higher))]);
+        assert_eq!(compare(&base, &nan).len(), 2, "NaN and a missing figure both fail");
+    }
+
+    #[test]
+    fn a_degraded_stroke_model_fails_the_gate_with_a_readable_message() {
+        let circle: &dyn StrokeModel = ModelKind::Circle.model();
+        let base = model_figures(ModelKind::Bsm.model(), &[("circle", circle)], 24);
+        // The same computation passes.
+        assert!(compare(&base, &model_figures(ModelKind::Bsm.model(), &[("circle", circle)], 24)).is_empty());
+        // A broken B-BSM fails on its ink-vs-area figure and on the model comparisons.
+        let broken = model_figures(&Narrow, &[("circle", circle)], 24);
+        let r = compare(&base, &broken);
+        let msgs: Vec<String> = r.iter().map(|x| x.to_string()).collect();
+        assert!(msgs.iter().any(|m| m.starts_with("models/bsm/ink_vs_area_rel_error regressed: baseline")), "{msgs:?}");
+        // A baseline model that changes fails too.
+        let changed = model_figures(ModelKind::Bsm.model(), &[("circle", &Narrow)], 24);
+        let msgs: Vec<String> = compare(&base, &changed).iter().map(|x| x.to_string()).collect();
+        assert!(msgs.iter().any(|m| m.starts_with("models/circle/")), "{msgs:?}");
+        let _ = PointMm::default();
+    }
+}
