@@ -12,6 +12,9 @@ use crate::rng::SplitMix;
 pub struct Inputs {
     /// An unpacked hanzi-writer-data package (`npm pack hanzi-writer-data`), if given.
     pub hanzi_data: Option<PathBuf>,
+    /// Generators that own several files (the photo set) write them when true, and compare
+    /// them when false (`--check`).
+    pub write_extra: bool,
 }
 
 /// One generated file.
@@ -41,6 +44,20 @@ fn all() -> Vec<Fixture> {
             needs_hanzi: false,
             needs_python: false,
             generate: |_| sample_measurements(),
+        },
+        Fixture {
+            path: "fixtures/photos/labels.csv",
+            about: "labels of the synthetic stroke photos (file,h_mm,alpha_deg,beta_deg)",
+            needs_hanzi: false,
+            needs_python: false,
+            generate: |_| Ok(photo_set()?.0),
+        },
+        Fixture {
+            path: "fixtures/photos/photos.sha",
+            about: "the synthetic stroke photos fixtures/photos/stroke_*.png (written alongside; this lists their sizes and FNV hashes)",
+            needs_hanzi: false,
+            needs_python: false,
+            generate: photo_set_files,
         },
         Fixture {
             path: "crates/trajectory/data/hanzi-subset.jsonl",
@@ -92,6 +109,58 @@ fn all() -> Vec<Fixture> {
             generate: |i| Ok(std::fs::read(hanzi_dir(i)?.join("ARPHICPL.TXT"))?),
         },
     ]
+}
+
+/// The synthetic calibration set: 12 pressed strokes of nominal pen1 on a grid of h × α (β
+/// alternating 0°/5°), photographed at 8 px/mm with blur, noise, an uneven background, specks,
+/// JPEG artefacts and a slight rotation, saved as PNG with their scale. Returns the labels CSV
+/// and the photos.
+fn photo_set() -> Result<(Vec<u8>, Vec<(String, Vec<u8>)>)> {
+    use stroke_fit::synth::{photo, png_with_scale, Degradation};
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let px = 8.0;
+    let mut labels = String::from("file,h_mm,alpha_deg,beta_deg\n");
+    let mut files = Vec::new();
+    let mut k = 0u64;
+    for h in [11.0, 14.0, 17.0, 20.0] {
+        for a in [0.0, 5.0, 10.0] {
+            let b = if k % 2 == 0 { 0.0 } else { 5.0 };
+            let press = Press::from_degrees(h, a, b);
+            let fp = pen1.predict(&press, Extrapolation::Refuse)?;
+            let turn = ((k as f64 * 0.37).sin() * 2.0).to_radians();
+            let beta = press.beta_rad + turn;
+            let side = ((fp.length_mm() + 10.0) * px).ceil() as u32;
+            let c = fp.placed_bounds(brush_model::PointMm::default(), beta).centre();
+            let half = side as f64 / px / 2.0;
+            let anchor = brush_model::PointMm::new(half - c.x_mm, half - c.y_mm);
+            let d = Degradation { blur_px: 1.0 + 0.1 * k as f64, noise: 0.03, gradient: 0.2 + 0.02 * k as f64, ..Degradation::default() };
+            let g = photo(&fp, anchor, beta, px, side, side, &d, 7000 + k);
+            let name = format!("stroke_{:02}.png", k + 1);
+            labels.push_str(&format!("{name},{h},{a},{b}\n"));
+            files.push((name, png_with_scale(&g, side, side, px)));
+            k += 1;
+        }
+    }
+    Ok((labels.into_bytes(), files))
+}
+
+/// Writes (or, under `--check`, compares) the photos themselves, and returns their listing.
+fn photo_set_files(inputs: &Inputs) -> Result<Vec<u8>> {
+    let (_, files) = photo_set()?;
+    let mut listing = String::new();
+    for (name, bytes) in &files {
+        let h = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ *b as u64).wrapping_mul(0x100_0000_01b3));
+        listing.push_str(&format!("{name} {} {h:016x}\n", bytes.len()));
+        let path = root().join("fixtures/photos").join(name);
+        if inputs.write_extra {
+            std::fs::create_dir_all(path.parent().expect("folder"))?;
+            std::fs::write(&path, bytes)?;
+        } else if std::fs::read(&path).ok().as_deref() != Some(bytes.as_slice()) {
+            println!("DIFFERS  fixtures/photos/{name}");
+            anyhow::bail!("fixtures/photos/{name} differs from what the generator produces now");
+        }
+    }
+    Ok(listing.into_bytes())
 }
 
 fn footprint_sheet() -> Result<Vec<u8>> {
@@ -168,7 +237,7 @@ pub fn root() -> PathBuf {
 
 pub fn run(args: &[String]) -> Result<()> {
     let mut check = false;
-    let mut inputs = Inputs { hanzi_data: None };
+    let mut inputs = Inputs { hanzi_data: None, write_extra: false };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -180,6 +249,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let root = root();
     let mut differ = Vec::new();
     let python = python_ready();
+    inputs.write_extra = !check;
     for f in all() {
         if f.needs_python && !python {
             println!("skipped  {}  (needs python3 with numpy, scikit-image, statsmodels)", f.path);

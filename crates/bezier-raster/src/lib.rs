@@ -13,6 +13,7 @@
 //!   the neural generator ([`StrokeCanvas`]).
 //! * [`batch`]: parallel rendering with rayon and the [`Compositor`] for many stamps.
 //! * [`dataset`]: deterministic random presses over a profile's range and their images.
+//! * [`binary`]: Otsu's threshold and connected components for binary analysis.
 //! * [`coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG.
 //!
 //! Pixel convention: x right, y down; pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in pixel
@@ -34,6 +35,7 @@
 //! ```
 
 pub mod batch;
+pub mod binary;
 pub mod canvas;
 pub mod coverage;
 pub mod dataset;

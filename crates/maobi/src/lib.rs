@@ -2,3 +2,4 @@
 //! (glyph → track → render → scores), shared by the binary and by `cargo xtask gates`.
 
 pub mod pipeline;
+pub mod plot;

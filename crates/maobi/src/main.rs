@@ -20,8 +20,10 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Fit a brush profile from footprint measurements (CSV).
+    /// Fit a brush profile from footprint measurements (CSV) or from stroke photos.
     Calibrate(cmd::calibrate::Args),
+    /// Fit a B-BSM footprint to one stroke photo.
+    FitStroke(cmd::fit_stroke::Args),
     /// Predict the footprint a press leaves.
     Footprint(cmd::footprint::Args),
     /// Render one footprint (PNG or SVG).
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Footprint(a) => cmd::footprint::run(a),
+        Command::FitStroke(a) => cmd::fit_stroke::run(a),
         Command::Stroke(a) => cmd::stroke::run(a),
         Command::Compare(a) => cmd::compare::run(a),
         Command::Dataset(a) => cmd::dataset::run(a),

@@ -41,7 +41,6 @@ use thiserror::Error;
 
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
 pub use graph::GraphOptions;
-pub use image_glyph::otsu_threshold;
 pub use track::{auto_char_mm, build_track, chamfer_pct, BuiltTrack, CharBox, Sizing, StrokePath, TrackOptions, DEFAULT_SPACING_MM};
 
 /// How centre lines are found.

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use brush_model::{load_measurements, BrushProfile, Form, PressRanges, Range};
 
 use crate::common::{load_brush, print_json, write_atomic};
@@ -11,7 +11,18 @@ use crate::common::{load_brush, print_json, write_atomic};
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Measurements CSV with columns h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm (any order).
-    measurements: PathBuf,
+    #[arg(required_unless_present = "images", conflicts_with = "images")]
+    measurements: Option<PathBuf>,
+    /// Calibrate from stroke photos in this folder instead (see --labels).
+    #[arg(long)]
+    images: Option<PathBuf>,
+    /// Labels of the photos: `file,h_mm,alpha_deg,beta_deg` (optional `px_per_mm`); default
+    /// `<images>/labels.csv`.
+    #[arg(long, requires = "images")]
+    labels: Option<PathBuf>,
+    /// Photos whose fit IoU is below this are listed and left out.
+    #[arg(long, default_value_t = 0.9, requires = "images")]
+    min_iou: f64,
     /// Regression form: `general` (Eq. 6, one model per length) or `paper` (Eq. 1–5).
     #[arg(long, value_enum, default_value_t = FormArg::General)]
     form: FormArg,
@@ -37,13 +48,19 @@ enum FormArg {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let rows = load_measurements(&args.measurements)?;
+    let (rows, source) = match (&args.measurements, &args.images) {
+        (Some(m), _) => (load_measurements(m)?, m.clone()),
+        (None, Some(dir)) => {
+            let out = args.output.as_ref().context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
+            (crate::cmd::calibrate_photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone())
+        }
+        (None, None) => bail!("give a measurements CSV or --images DIR"),
+    };
     let form = match args.form {
         FormArg::General => Form::General,
         FormArg::Paper => Form::Paper,
     };
-    let report = brush_model::fit(&rows, form)
-        .with_context(|| format!("{}: cannot fit", args.measurements.display()))?;
+    let report = brush_model::fit(&rows, form).with_context(|| format!("{}: cannot fit", source.display()))?;
     let brush = load_brush(&args.brush)?.brush;
     let span = |f: fn(&brush_model::Measurement) -> f64| {
         let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
@@ -55,15 +72,17 @@ pub fn run(args: Args) -> Result<()> {
         alpha_rad: span(|m| m.press.alpha_rad),
         beta_rad: span(|m| m.press.beta_rad),
     };
-    let name = args.name.clone().unwrap_or_else(|| {
-        args.measurements.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into())
-    });
+    let name = args.name.clone().unwrap_or_else(|| source.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into()));
     if let Some(out) = &args.output {
         let profile = BrushProfile::calibrated(&name, brush, ranges, report.clone());
         profile
             .validate(&out.display().to_string())
             .context("the fitted model is not a usable profile")?;
         write_atomic(out, profile.to_json().as_bytes())?;
+        if args.images.is_some() {
+            let plot = out.with_file_name("regression.png");
+            write_atomic(&plot, &maobi::plot::regression_png(&rows, &profile)?)?;
+        }
     }
     if args.json {
         print_json(&report)?;

@@ -1,9 +1,11 @@
 //! One module per subcommand.
 
 pub mod calibrate;
+pub mod calibrate_photos;
 pub mod compare;
 pub mod dataset;
 pub mod evaluate;
+pub mod fit_stroke;
 pub mod footprint;
 pub mod models;
 pub mod robot;

@@ -1,0 +1,118 @@
+//! Pictures of results: regression plots (the paper's Fig. 9) and training curves.
+
+use std::sync::Once;
+
+use anyhow::{anyhow, Result};
+use brush_model::{BrushProfile, Measurement};
+use plotters::prelude::*;
+
+static FONT: &[u8] = include_bytes!("../data/DejaVuSans-subset.ttf");
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The subset holds ASCII, °, ², α and β (DejaVu Sans, Bitstream Vera licence).
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+fn to_png(rgb: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>> {
+    let img = image::RgbImage::from_raw(w, h, rgb).ok_or_else(|| anyhow!("plot buffer has the wrong size"))?;
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)?;
+    Ok(out)
+}
+
+/// The regression plot: each of lt, lh, lr (rows) against h and against α (columns), the
+/// measurements as points and the fitted model as a line (the other inputs held at their mean).
+///
+/// # Errors
+/// When drawing or encoding fails.
+pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Vec<u8>> {
+    register_font();
+    let (w, h) = (1200u32, 900u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let cells = root.split_evenly((3, 2));
+        let n = rows.len().max(1) as f64;
+        let mean_h = rows.iter().map(|m| m.press.h_mm).sum::<f64>() / n;
+        let mean_a = rows.iter().map(|m| m.press.alpha_rad).sum::<f64>() / n;
+        let mean_b = rows.iter().map(|m| m.press.beta_rad).sum::<f64>() / n;
+        let outputs: [(&str, fn(&Measurement) -> f64, &brush_model::Terms); 3] = [
+            ("lt (mm)", |m| m.footprint.lt_mm, &profile.model.lt_mm),
+            ("lh (mm)", |m| m.footprint.lh_mm, &profile.model.lh_mm),
+            ("lr (mm)", |m| m.footprint.lr_mm, &profile.model.lr_mm),
+        ];
+        for (r, (label, get, terms)) in outputs.iter().enumerate() {
+            for c in 0..2 {
+                let area = &cells[r * 2 + c];
+                let xs: Vec<f64> = rows.iter().map(|m| if c == 0 { m.press.h_mm } else { m.press.alpha_rad.to_degrees() }).collect();
+                let ys: Vec<f64> = rows.iter().map(get).collect();
+                let (x0, x1) = (xs.iter().cloned().fold(f64::INFINITY, f64::min), xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+                let (y0, y1) = (ys.iter().cloned().fold(f64::INFINITY, f64::min), ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+                let (px, py) = (((x1 - x0) * 0.08).max(0.5), ((y1 - y0) * 0.1).max(0.1));
+                let xlabel = if c == 0 { "h (mm)" } else { "α (°)" };
+                let mut chart = ChartBuilder::on(area)
+                    .caption(format!("{} vs {}", label.split(' ').next().unwrap_or(label), if c == 0 { "h" } else { "α" }), ("sans-serif", 20))
+                    .margin(10)
+                    .x_label_area_size(35)
+                    .y_label_area_size(50)
+                    .build_cartesian_2d((x0 - px)..(x1 + px), (y0 - py)..(y1 + py))
+                    .map_err(|e| anyhow!("{e}"))?;
+                chart.configure_mesh().x_desc(xlabel).y_desc(*label).label_style(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+                chart
+                    .draw_series(xs.iter().zip(&ys).map(|(&x, &y)| Circle::new((x, y), 3, BLUE.mix(0.6).filled())))
+                    .map_err(|e| anyhow!("{e}"))?;
+                let line: Vec<(f64, f64)> = (0..=40)
+                    .map(|i| {
+                        let x = x0 + (x1 - x0) * i as f64 / 40.0;
+                        let y = if c == 0 { terms.eval(x, mean_a, mean_b) } else { terms.eval(mean_h, x.to_radians(), mean_b) };
+                        (x, y)
+                    })
+                    .collect();
+                chart.draw_series(LineSeries::new(line, RED.stroke_width(2))).map_err(|e| anyhow!("{e}"))?;
+            }
+        }
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    to_png(buf, w, h)
+}
+
+/// A training-curve plot: loss against step for each named series (log scale on the loss).
+///
+/// # Errors
+/// When drawing or encoding fails.
+pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
+    register_font();
+    let (w, h) = (900u32, 500u32);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.1.iter().copied()).filter(|p| p.1 > 0.0).collect();
+        let x1 = all.iter().map(|p| p.0).fold(1.0, f64::max);
+        let y0 = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min).max(1e-8);
+        let y1 = all.iter().map(|p| p.1).fold(0.0, f64::max).max(y0 * 10.0);
+        let mut chart = ChartBuilder::on(&root)
+            .caption("loss", ("sans-serif", 22))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..x1, (y0..y1).log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart.configure_mesh().x_desc("step").y_desc("MSE").label_style(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+        for (i, (name, pts)) in series.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied().filter(|p| p.1 > 0.0), colour.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?
+                .label(*name)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        }
+        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    to_png(buf, w, h)
+}

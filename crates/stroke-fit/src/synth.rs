@@ -1,0 +1,128 @@
+//! Synthetic stroke photos from known footprints, with what real scans have: blur, noise,
+//! uneven paper, ink bleed, specks, JPEG compression. For tests and the sample calibration set.
+
+use bezier_raster::{Bsm, Coverage, Rasterizer};
+use brush_model::{Footprint, PointMm};
+
+/// How to spoil a clean footprint image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Degradation {
+    /// Gaussian blur σ, px (0: none).
+    pub blur_px: f64,
+    /// Gaussian noise σ on grey levels (0…1).
+    pub noise: f64,
+    /// Paper brightness falls linearly by this much across the image (0: even).
+    pub gradient: f64,
+    /// Ink bleed: the outline grows by this many px.
+    pub bleed_px: f64,
+    /// Number of small specks (1–2 px) sprinkled on the paper.
+    pub specks: usize,
+    /// Re-encode as JPEG at this quality (None: lossless).
+    pub jpeg_quality: Option<u8>,
+}
+
+impl Default for Degradation {
+    fn default() -> Self {
+        Self { blur_px: 1.2, noise: 0.04, gradient: 0.25, bleed_px: 0.0, specks: 4, jpeg_quality: Some(85) }
+    }
+}
+
+/// A deterministic generator (splitmix64).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (u, v) = (self.next().max(1e-12), self.next());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+}
+
+/// A grey photo (`width × height`, 0 black … 1 white) of `fp` with its root at `anchor_mm`
+/// and direction `beta_rad`, at `px_per_mm`, spoiled by `d` with random `seed`.
+pub fn photo(fp: &Footprint, anchor_mm: PointMm, beta_rad: f64, px_per_mm: f64, width: u32, height: u32, d: &Degradation, seed: u64) -> Vec<f32> {
+    let mut cov = Coverage::new(width, height);
+    let grown = Footprint { lt_mm: fp.lt_mm + d.bleed_px / px_per_mm, lh_mm: fp.lh_mm + d.bleed_px / px_per_mm, lr_mm: fp.lr_mm + d.bleed_px / px_per_mm };
+    let anchor = PointMm::new(anchor_mm.x_mm - d.bleed_px / px_per_mm * beta_rad.cos(), anchor_mm.y_mm - d.bleed_px / px_per_mm * beta_rad.sin());
+    Rasterizer::new().render(&Bsm, if d.bleed_px > 0.0 { &grown } else { fp }, if d.bleed_px > 0.0 { anchor } else { anchor_mm }, beta_rad, px_per_mm, &mut cov);
+    let (w, h) = (width as usize, height as usize);
+    let mut ink: Vec<f64> = cov.data().iter().map(|&v| v as f64).collect();
+    let mut rng = Rng(seed);
+    for _ in 0..d.specks {
+        let (x, y) = ((rng.next() * w as f64) as usize, (rng.next() * h as f64) as usize);
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1)] {
+            if x + dx < w && y + dy < h {
+                ink[(y + dy) * w + x + dx] = 1.0;
+            }
+        }
+    }
+    if d.blur_px > 0.0 {
+        ink = blur(&ink, w, h, d.blur_px);
+    }
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let paper = 0.95 - d.gradient * (x as f64 / w as f64 * 0.7 + y as f64 / h as f64 * 0.3);
+            let v = paper * (1.0 - 0.9 * ink[y * w + x]) + d.noise * rng.normal();
+            out.push(v.clamp(0.0, 1.0) as f32);
+        }
+    }
+    if let Some(q) = d.jpeg_quality {
+        let bytes: Vec<u8> = out.iter().map(|v| (v * 255.0).round() as u8).collect();
+        let mut jpg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpg, q).encode(&bytes, width, height, image::ExtendedColorType::L8).expect("encodes");
+        let back = image::load_from_memory(&jpg).expect("decodes").to_luma8();
+        out = back.pixels().map(|p| p.0[0] as f32 / 255.0).collect();
+    }
+    out
+}
+
+fn blur(v: &[f64], w: usize, h: usize, sigma: f64) -> Vec<f64> {
+    let r = (3.0 * sigma).ceil() as isize;
+    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
+    let s: f64 = k.iter().sum();
+    let k: Vec<f64> = k.iter().map(|x| x / s).collect();
+    let mut tmp = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut a = 0.0;
+            for (j, kk) in k.iter().enumerate() {
+                let xx = (x as isize + j as isize - r).clamp(0, w as isize - 1) as usize;
+                a += kk * v[y * w + xx];
+            }
+            tmp[y * w + x] = a;
+        }
+    }
+    let mut out = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut a = 0.0;
+            for (j, kk) in k.iter().enumerate() {
+                let yy = (y as isize + j as isize - r).clamp(0, h as isize - 1) as usize;
+                a += kk * tmp[yy * w + x];
+            }
+            out[y * w + x] = a;
+        }
+    }
+    out
+}
+
+/// Encodes grey levels as an 8-bit PNG that records its scale (`pHYs`, pixels per metre).
+pub fn png_with_scale(gray: &[f32], width: u32, height: u32, px_per_mm: f64) -> Vec<u8> {
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, width, height);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_pixel_dims(Some(png::PixelDimensions { xppu: (px_per_mm * 1000.0).round() as u32, yppu: (px_per_mm * 1000.0).round() as u32, unit: png::Unit::Meter }));
+        let mut wr = enc.write_header().expect("header");
+        let bytes: Vec<u8> = gray.iter().map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect();
+        wr.write_image_data(&bytes).expect("data");
+    }
+    out
+}
