@@ -10,7 +10,7 @@ use anyhow::{bail, Context, Result};
 use crate::fixtures::root;
 
 /// Every criterion benchmark target: (package, bench).
-const BENCHES: &[(&str, &str)] = &[("stroke-metrics", "metrics"), ("bezier-raster", "raster"), ("trajectory", "track"), ("maobi", "write")];
+const BENCHES: &[(&str, &str)] = &[("stroke-metrics", "metrics"), ("bezier-raster", "raster"), ("trajectory", "track"), ("maobi", "write"), ("neural-gen", "generator")];
 
 /// (criterion id, label).
 const ROWS: &[(&str, &str)] = &[
@@ -25,6 +25,10 @@ const ROWS: &[(&str, &str)] = &[
     ("build_track_yong", "track building for 永"),
     ("write_yong_medians_512", "`write` 永 end to end, medians, 512²"),
     ("write_yong_skeleton_512", "`write` 永 end to end, skeleton, 512²"),
+    ("generator_inference/batch_1", "generator inference, batch 1 (per call)"),
+    ("generator_inference/batch_64", "generator inference, batch 64 (per call of 64)"),
+    ("generator_inference/analytic_64", "analytic B-BSM, 64 footprints (one thread)"),
+    ("generator_training/step_batch_64", "generator training step, batch 64 (incl. validation setup)"),
 ];
 
 fn estimate_ns(dir: &Path, id: &str) -> Option<f64> {
@@ -81,7 +85,6 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     table.push_str(&format!("| `maobi dataset --n 10000 --size 128` ({} threads) | {:.2} s, {:.0} images/s |\n", std::thread::available_parallelism().map_or(1, |n| n.get()), secs, 10000.0 / secs));
     let _ = std::fs::remove_dir_all(&out);
-    table.push_str("| generator inference / training step | not built yet (neural-gen) |\n");
     let path = root.join("target/bench-summary.md");
     std::fs::write(&path, format!("# maobi benchmarks\n\n{table}"))?;
     print!("{table}");

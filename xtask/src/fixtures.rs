@@ -247,6 +247,7 @@ pub fn run(args: &[String]) -> Result<()> {
         }
     }
     let root = root();
+    println!("skipped  fixtures/generator/pen1.safetensors  (made by `cargo xtask train-fixture`, tens of minutes; checked by the generator gates)");
     let mut differ = Vec::new();
     let python = python_ready();
     inputs.write_extra = !check;

@@ -169,6 +169,19 @@ pub fn character_figures() -> Result<Figures> {
     Ok(f)
 }
 
+/// Generator figures: the committed pen1 generator against the analytic B-BSM on 200 held-out
+/// presses (CSIM and SSIM mean and worst).
+pub fn generator_figures() -> Result<Figures> {
+    let g = maobi::generator::load_generator(None)?;
+    let (c, s) = neural_gen::eval::evaluate(&g, 200)?;
+    Ok(Figures::from([
+        ("generator/csim_mean".to_string(), fig(c.mean, 0.003, Better::Higher)),
+        ("generator/csim_worst".to_string(), fig(c.worst, 0.01, Better::Higher)),
+        ("generator/ssim_mean".to_string(), fig(s.mean, 0.003, Better::Higher)),
+        ("generator/ssim_worst".to_string(), fig(s.worst, 0.01, Better::Higher)),
+    ]))
+}
+
 fn baseline_path(group: &str) -> PathBuf {
     root().join(format!("fixtures/baselines/{group}.json"))
 }
@@ -184,6 +197,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let groups: Vec<(&str, Figures)> = vec![
         ("models", model_figures(ModelKind::Bsm.model(), &baselines, 300)),
         ("characters", character_figures()?),
+        ("generator", generator_figures()?),
     ];
     println!("{:<48} {:>12} {:>12} {:>10}  {}", "figure", "baseline", "now", "Δ", "");
     let mut failures = Vec::new();

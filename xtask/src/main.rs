@@ -5,6 +5,7 @@ use std::process::ExitCode;
 mod bench;
 mod fixtures;
 mod gates;
+mod train_fixture;
 mod rng;
 
 const HELP: &str = "\
@@ -16,6 +17,7 @@ Tasks:
                        regenerate every generated file under fixtures/ (or, with --check,
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json
+  train-fixture        train the committed pen1 generator (fixtures/generator/; tens of minutes)
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
                        (also target/bench-summary.md)
 ";
@@ -30,6 +32,7 @@ fn main() -> ExitCode {
         Some("fixtures") => fixtures::run(&args[1..]),
         Some("gates") => gates::run(&args[1..]),
         Some("bench") => bench::run(&args[1..]),
+        Some("train-fixture") => train_fixture::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };
     match result {

@@ -3,3 +3,4 @@
 
 pub mod pipeline;
 pub mod plot;
+pub mod generator;

@@ -39,6 +39,10 @@ enum Command {
     /// Robot arms: check, export, send, simulate.
     #[command(subcommand)]
     Robot(cmd::robot::RobotCmd),
+    /// The generator against the analytic B-BSM and the baselines (the paper's Table 3).
+    EvalGenerator(cmd::eval_generator::Args),
+    /// Train the neural footprint generator.
+    Train(cmd::train::Args),
     /// Score every stroke model against the B-BSM footprint (the paper's Table 2).
     Models(cmd::models::Args),
 }
@@ -66,6 +70,8 @@ fn main() -> ExitCode {
         Command::Models(a) => cmd::models::run(a),
         Command::Write(a) => cmd::write::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
+        Command::Train(a) => cmd::train::run(a),
+        Command::EvalGenerator(a) => cmd::eval_generator::run(a),
         Command::Robot(c) => cmd::robot::run(c),
     };
     match result {

@@ -41,10 +41,20 @@ pub struct Args {
     /// Print the footprint, scale and anchor as JSON.
     #[arg(long)]
     json: bool,
+    /// `analytic` (the stroke model) or `neural` (the trained generator; PNG only, the
+    /// generator's own size and scale, presses inside its brush's range).
+    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
+    renderer: String,
+    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
+    #[arg(long)]
+    generator: Option<PathBuf>,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    if args.renderer == "neural" {
+        return run_neural(&args);
+    }
     let profile = load_brush(&args.brush.brush)?;
     if !(8..=8192).contains(&args.size) {
         bail!("--size {}: expected a canvas side between 8 and 8192 px", args.size);
@@ -80,6 +90,36 @@ pub fn run(args: Args) -> Result<()> {
             "beta_rad": press.beta_rad,
             "size": args.size,
             "model": args.model.name(),
+        }))?;
+    }
+    Ok(())
+}
+
+fn run_neural(args: &Args) -> Result<()> {
+    let g = maobi::generator::load_generator(args.generator.as_deref())?;
+    if args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png") {
+        bail!("-o {}: the neural renderer writes PNG only", args.output.display());
+    }
+    if args.size != 128 && args.size != g.config.size {
+        bail!("--size {}: the generator draws {}² images", args.size, g.config.size);
+    }
+    if args.px_per_mm.is_some() {
+        bail!("--px-per-mm: the generator's scale is fixed ({:.4} px/mm)", g.config.px_per_mm);
+    }
+    let press = Press::from_degrees(args.h_mm, args.alpha_deg, args.beta_deg);
+    // The generator only knows its training range.
+    let fp = g.config.profile.predict(&press, Extrapolation::Refuse)?;
+    let img = g.render(&[press])?.remove(0);
+    write_atomic(&args.output, &img.encode_png()?)?;
+    if args.json {
+        let canvas = StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm);
+        print_json(&json!({
+            "footprint": fp,
+            "px_per_mm": g.config.px_per_mm,
+            "anchor_px": canvas.anchor_px(&fp, press.beta_rad),
+            "beta_rad": press.beta_rad,
+            "size": g.config.size,
+            "model": "b-bsmg",
         }))?;
     }
     Ok(())

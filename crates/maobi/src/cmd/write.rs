@@ -57,6 +57,13 @@ pub struct Args {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// `analytic` (the stroke model) or `neural` (the trained generator, batched along the
+    /// track; its brush must be the one written with).
+    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
+    renderer: String,
+    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
+    #[arg(long)]
+    generator: Option<PathBuf>,
 }
 
 fn parse_method(s: &str) -> std::result::Result<Method, String> {
@@ -125,6 +132,21 @@ pub fn run(args: Args) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     pb.finish_and_clear();
+    let mut results = results;
+    if args.renderer == "neural" {
+        let g = maobi::generator::load_generator(args.generator.as_deref())?;
+        if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
+            bail!("--renderer neural: the generator was trained for brush `{}`, not `{}`", g.config.profile.name, profile.name);
+        }
+        for r in results.iter_mut() {
+            let b = r.char_box;
+            let img = neural_gen::compose::render_track(&g, &r.track, brush_model::PointMm::new(b.x0_mm, b.y0_mm), args.size as f64 / b.size_mm, args.size, args.size, 64)?;
+            let sim = maobi::pipeline::similarity(&r.reference, &img)?;
+            (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+            r.report.model = "b-bsmg";
+            r.render = img;
+        }
+    }
     let single = results.len() == 1;
     for (i, r) in results.iter().enumerate() {
         let dir = if single { args.out.clone() } else { args.out.join(format!("{:02}-{}", i + 1, r.report.char)) };

@@ -1,0 +1,118 @@
+//! `maobi train`: train the neural footprint generator.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
+
+use crate::common::{load_brush, write_atomic, BrushArg};
+
+/// Arguments of `maobi train`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    brush: BrushArg,
+    /// Optimiser steps.
+    #[arg(long, default_value_t = 3000)]
+    steps: usize,
+    /// Batch size.
+    #[arg(long, default_value_t = 64)]
+    batch: usize,
+    /// Peak learning rate (AdamW, weight decay 0; warm-up then cosine decay).
+    #[arg(long, default_value_t = 2e-3)]
+    lr: f64,
+    /// Seed (weights and training presses).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Continue from this checkpoint's weights (optimiser state restarts).
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Architecture: `default` (128²) or `tiny` (32², for tests).
+    #[arg(long, default_value = "default", value_parser = ["default", "tiny"])]
+    arch: String,
+    /// Validate every N steps.
+    #[arg(long, default_value_t = 100)]
+    val_every: usize,
+    /// Held-out presses for the final metrics.
+    #[arg(long, default_value_t = 500)]
+    eval_n: usize,
+    /// Output weights (`.safetensors`); the config goes beside as `.json`, plus `loss.csv` and
+    /// `loss.png`.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    if args.steps == 0 || args.batch == 0 || !(args.lr.is_finite() && args.lr > 0.0) {
+        bail!("--steps, --batch and --lr must be positive");
+    }
+    if args.output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
+        bail!("-o {}: expected a .safetensors file name", args.output.display());
+    }
+    let profile = load_brush(&args.brush.brush)?;
+    let mut g = match &args.resume {
+        Some(p) => {
+            let g = Generator::load(p).with_context(|| format!("--resume {}", p.display()))?;
+            if g.config.profile != profile && args.brush.brush != "pen1" {
+                bail!("--resume {}: the checkpoint was trained for brush `{}`, not `{}`", p.display(), g.config.profile.name, profile.name);
+            }
+            g
+        }
+        None => {
+            let arch = if args.arch == "tiny" { Arch::tiny_32() } else { Arch::default_128() };
+            Generator::new(GeneratorConfig::new(profile, arch), args.seed)?
+        }
+    };
+    let a = &g.config.arch;
+    eprintln!("generator: {} parameters, {:.2} M multiply-adds per image, {}² output", a.parameter_count(), a.macs_per_image() as f64 / 1e6, g.config.size);
+    let pb = indicatif::ProgressBar::new(args.steps as u64);
+    pb.set_style(indicatif::ProgressStyle::with_template("train [{bar:40}] {pos}/{len} {msg} ({per_sec}, {eta})").expect("template").progress_chars("=> "));
+    let opts = TrainOptions { steps: args.steps, batch: args.batch, lr: args.lr, seed: args.seed, val_every: args.val_every, patience: 8, checkpoint: Some(args.output.clone()) };
+    let mut last_val = f64::NAN;
+    let report = neural_gen::train(&mut g, &opts, |p| {
+        if let Some(v) = p.val_mse {
+            last_val = v;
+        }
+        pb.set_message(format!("loss {:.5} val {:.5}", p.train_mse, last_val));
+        pb.inc(1);
+    })?;
+    pb.finish_and_clear();
+    let (csim, ssim) = neural_gen::eval::evaluate(&g, args.eval_n)?;
+    g.config.recipe = Some(Recipe {
+        steps: report.steps_run,
+        batch: args.batch,
+        lr: args.lr,
+        seed: args.seed,
+        loss: "mse".into(),
+        schedule: "linear warm-up over 5% of the steps, cosine decay to 5%".into(),
+        wall_seconds: report.wall_seconds,
+        threads: rayon::current_num_threads(),
+    });
+    g.config.metrics = Some(Metrics { n: args.eval_n, ssim_mean: ssim.mean, ssim_worst: ssim.worst, csim_mean: csim.mean, val_mse: report.best_val_mse });
+    g.save(&args.output)?;
+    let mut csv = String::from("step,train_mse,val_mse,lr\n");
+    for p in &report.history {
+        csv.push_str(&format!("{},{},{},{}\n", p.step, p.train_mse, p.val_mse.map_or(String::new(), |v| v.to_string()), p.lr));
+    }
+    let dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."));
+    write_atomic(&dir.join("loss.csv"), csv.as_bytes())?;
+    let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
+    let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
+    write_atomic(&dir.join("loss.png"), &maobi::plot::loss_png(&[("train", train), ("validation", val)])?)?;
+    println!(
+        "{} steps in {:.1} s ({:.3} s/step, data {:.1}%){}; best validation MSE {:.6} at step {}; held-out (n = {}): SSIM mean {:.4} worst {:.4}, CSIM mean {:.4}",
+        report.steps_run,
+        report.wall_seconds,
+        report.wall_seconds / report.steps_run as f64,
+        100.0 * report.data_seconds / report.wall_seconds,
+        if report.stopped_early { ", stopped early" } else { "" },
+        report.best_val_mse,
+        report.best_step,
+        args.eval_n,
+        ssim.mean,
+        ssim.worst,
+        csim.mean
+    );
+    Ok(())
+}

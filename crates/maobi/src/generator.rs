@@ -1,0 +1,21 @@
+//! The committed pen1 generator, compiled into the binary, and loading others.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use neural_gen::Generator;
+
+static WEIGHTS: &[u8] = include_bytes!("../../../fixtures/generator/pen1.safetensors");
+static CONFIG: &str = include_str!("../../../fixtures/generator/pen1.json");
+
+/// The generator at `path` (a `.safetensors` with its `.json` beside), or the committed pen1
+/// checkpoint when `None`.
+///
+/// # Errors
+/// When the files are unreadable, corrupted or do not match each other.
+pub fn load_generator(path: Option<&Path>) -> Result<Generator> {
+    match path {
+        Some(p) => Generator::load(p).with_context(|| format!("loading the generator {}", p.display())),
+        None => Ok(Generator::from_bytes(WEIGHTS, CONFIG, "embedded pen1.safetensors", "embedded pen1.json")?),
+    }
+}

@@ -1,0 +1,52 @@
+//! # neural-gen
+//!
+//! The B-BSMG generator: a small differentiable network (candle) from a press `(h, α, β)` to
+//! its footprint image, trained on the analytic B-BSM rendered on the fly by bezier-raster.
+//!
+//! * [`config`]: architecture, normalisation (the profile's calibrated ranges), canvas, recipe,
+//!   metrics: the JSON saved beside the weights.
+//! * [`model`]: [`Generator`]: forward pass, batched rendering in the `maobi stroke` canvas
+//!   convention, the vector–Jacobian product with respect to `(h, α, β)`, safetensors
+//!   checkpoints with consistency checks.
+//! * [`train`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
+//! * [`compose`]: a whole track rendered with the generator (batched along the track).
+//! * [`eval`]: CSIM/SSIM of the generator against the analytic footprints.
+
+pub mod compose;
+pub mod config;
+pub mod eval;
+pub mod model;
+pub mod train;
+
+use thiserror::Error;
+
+pub use config::{Arch, GeneratorConfig, Metrics, Recipe};
+pub use model::Generator;
+pub use train::{train, TrainOptions, TrainPoint, TrainReport};
+
+/// Errors of neural-gen.
+#[derive(Debug, Error)]
+pub enum NeuralGenError {
+    /// A file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// Why.
+        message: String,
+    },
+    /// A config or checkpoint is malformed or does not match.
+    #[error("{source_name}: {message}")]
+    Config {
+        /// File or part.
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A buffer has the wrong size.
+    #[error("{0}")]
+    Shape(String),
+    /// An error inside candle.
+    #[error("candle: {0}")]
+    Candle(String),
+}
