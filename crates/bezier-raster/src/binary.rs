@@ -70,6 +70,27 @@ pub fn components(mask: &[bool], w: usize, h: usize, value: bool) -> (Vec<u32>, 
     (label, sizes)
 }
 
+/// Fills holes: paper components of a `w × h` mask that do not touch the border and are smaller
+/// than `max_px` become ink (`usize::MAX`: every enclosed hole).
+pub fn fill_holes(mask: &mut [bool], w: usize, h: usize, max_px: usize) {
+    let (label, sizes) = components(mask, w, h, false);
+    let mut border = vec![false; sizes.len()];
+    for x in 0..w {
+        border[label[x] as usize] = true;
+        border[label[(h - 1) * w + x] as usize] = true;
+    }
+    for y in 0..h {
+        border[label[y * w] as usize] = true;
+        border[label[y * w + w - 1] as usize] = true;
+    }
+    for (i, v) in mask.iter_mut().enumerate() {
+        let l = label[i] as usize;
+        if !*v && !border[l] && sizes[l] < max_px {
+            *v = true;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

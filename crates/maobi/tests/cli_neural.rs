@@ -1,27 +1,12 @@
 //! The neural generator from the command line: train (tiny), evaluate, render.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn maobi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_maobi")).args(args).output().expect("maobi runs")
-}
+use common::{fails, maobi, ok, s};
 
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
-fn fails(o: &Output, needle: &str) {
-    assert_eq!(o.status.code(), Some(2), "expected exit 2: {}", String::from_utf8_lossy(&o.stderr));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(e.contains(needle), "stderr lacks {needle:?}: {e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-}
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+
 
 #[test]
 fn train_a_tiny_generator_and_use_it() {

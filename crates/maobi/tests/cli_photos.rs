@@ -1,27 +1,13 @@
 //! `maobi fit-stroke` and `maobi calibrate --images` on the committed synthetic photo set.
 
+mod common;
+
+use common::{fails, maobi, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn maobi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_maobi")).args(args).output().expect("maobi runs")
-}
 
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
-fn fails(o: &Output, needle: &str) {
-    assert_eq!(o.status.code(), Some(2), "expected exit 2: {}", String::from_utf8_lossy(&o.stderr));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(e.contains(needle), "stderr lacks {needle:?}: {e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-}
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn photos() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/photos")

@@ -1,33 +1,18 @@
 //! `maobi stroke`, `compare`, `dataset` and `models` end to end, with their bad-input paths.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn maobi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_maobi")).args(args).output().expect("maobi runs")
-}
+use common::{fails, maobi, ok_json, s};
 
-fn ok(o: &Output) -> serde_json::Value {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap_or(serde_json::Value::Null)
-}
 
-fn fails(o: &Output, needle: &str) {
-    assert_eq!(o.status.code(), Some(2), "expected exit 2: {}", String::from_utf8_lossy(&o.stderr));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(e.contains(needle), "stderr lacks {needle:?}: {e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-}
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+
 
 #[test]
 fn stroke_writes_the_footprint_described_by_its_json() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("f.png");
-    let j = ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--beta", "0", "-o", s(&png), "--json"]));
+    let j = ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--beta", "0", "-o", s(&png), "--json"]));
     assert_eq!(j["size"], 128);
     let (u, v) = (j["anchor_px"][0].as_f64().unwrap(), j["anchor_px"][1].as_f64().unwrap());
     let k = j["px_per_mm"].as_f64().unwrap();
@@ -48,7 +33,7 @@ fn stroke_writes_the_footprint_described_by_its_json() {
     assert!((tall - 2.0 * lr * k).abs() < 0.5, "{tall} vs {}", 2.0 * lr * k);
     // SVG too.
     let svg = dir.path().join("f.svg");
-    ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "ellipse", "-o", s(&svg)]));
+    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "ellipse", "-o", s(&svg)]));
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<path d=\"M"));
 }
 
@@ -56,13 +41,13 @@ fn stroke_writes_the_footprint_described_by_its_json() {
 fn compare_scores_identical_and_different_images() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
-    ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&a)]));
-    ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "circle", "-o", s(&b)]));
-    let same = ok(&maobi(&["compare", s(&a), s(&a), "--json"]));
+    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&a)]));
+    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "circle", "-o", s(&b)]));
+    let same = ok_json(&maobi(&["compare", s(&a), s(&a), "--json"]));
     assert_eq!(same["ssim"], 1.0);
     assert_eq!(same["csim"], 1.0);
     assert!(same["psnr"].is_null());
-    let diff = ok(&maobi(&["compare", s(&a), s(&b), "--json"]));
+    let diff = ok_json(&maobi(&["compare", s(&a), s(&b), "--json"]));
     for k in ["csim", "ssim", "iou"] {
         let v = diff[k].as_f64().unwrap();
         assert!(v > 0.2 && v < 0.99, "{k} = {v}");
@@ -74,8 +59,8 @@ fn compare_scores_identical_and_different_images() {
 fn compare_refuses_bad_inputs() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
-    ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&a)]));
-    ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--size", "64", "-o", s(&b)]));
+    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&a)]));
+    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--size", "64", "-o", s(&b)]));
     fails(&maobi(&["compare", s(&a), s(&b)]), "differ in size");
     let junk = dir.path().join("junk.png");
     std::fs::write(&junk, b"nope").unwrap();
@@ -99,8 +84,8 @@ fn stroke_refuses_bad_inputs_without_writing() {
 fn dataset_is_deterministic_and_labelled() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
-    ok(&maobi(&["dataset", "--n", "20", "--size", "64", "--seed", "5", "-o", s(&a)]));
-    ok(&maobi(&["dataset", "--n", "20", "--size", "64", "--seed", "5", "-o", s(&b)]));
+    ok_json(&maobi(&["dataset", "--n", "20", "--size", "64", "--seed", "5", "-o", s(&a)]));
+    ok_json(&maobi(&["dataset", "--n", "20", "--size", "64", "--seed", "5", "-o", s(&b)]));
     let la = std::fs::read_to_string(a.join("labels.csv")).unwrap();
     assert_eq!(la, std::fs::read_to_string(b.join("labels.csv")).unwrap());
     let lines: Vec<&str> = la.lines().collect();
@@ -118,7 +103,7 @@ fn dataset_is_deterministic_and_labelled() {
 
 #[test]
 fn models_table_ranks_the_baselines_below_identity() {
-    let j = ok(&maobi(&["models", "--n", "24", "--size", "64", "--json"]));
+    let j = ok_json(&maobi(&["models", "--n", "24", "--size", "64", "--json"]));
     assert_eq!(j["n"], 24);
     assert_eq!(j["reference"], "bsm");
     for m in ["circle", "ellipse", "line", "qbc"] {
@@ -138,11 +123,11 @@ fn models_against_reference_photos() {
     let mut labels = String::from("file,h_mm,alpha_deg,beta_deg\n");
     for (i, (h, a)) in [(12.0, 0.0), (16.0, 5.0), (19.0, 10.0)].iter().enumerate() {
         let f = format!("p{i}.png");
-        ok(&maobi(&["stroke", "--h", &h.to_string(), "--alpha", &a.to_string(), "--size", "64", "-o", s(&dir.path().join(&f))]));
+        ok_json(&maobi(&["stroke", "--h", &h.to_string(), "--alpha", &a.to_string(), "--size", "64", "-o", s(&dir.path().join(&f))]));
         labels.push_str(&format!("{f},{h},{a},0\n"));
     }
     std::fs::write(dir.path().join("labels.csv"), labels).unwrap();
-    let j = ok(&maobi(&["models", "--reference", s(dir.path()), "--json"]));
+    let j = ok_json(&maobi(&["models", "--reference", s(dir.path()), "--json"]));
     assert_eq!(j["n"], 3);
     assert!(j["models"]["bsm"]["ssim"]["worst"].as_f64().unwrap() > 0.999);
     assert!(j["models"]["line"]["ssim"]["mean"].as_f64().unwrap() < 0.95);

@@ -1,27 +1,14 @@
 //! `maobi robot` end to end: check, refusals, exports, and a run against the simulator process.
 
+mod common;
+
+use common::{fails, maobi, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
-fn maobi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_maobi")).args(args).output().expect("maobi runs")
-}
 
-fn ok(o: &Output) -> String {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
-fn fails(o: &Output, needle: &str) {
-    assert_eq!(o.status.code(), Some(2), "expected exit 2: {}", String::from_utf8_lossy(&o.stderr));
-    let e = String::from_utf8_lossy(&o.stderr);
-    assert!(e.contains(needle), "stderr lacks {needle:?}: {e}");
-    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
-}
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn paper() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")

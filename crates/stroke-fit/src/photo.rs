@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use bezier_raster::binary::{components, otsu_threshold};
+use bezier_raster::binary::{components, fill_holes, otsu_threshold};
 use thiserror::Error;
 
 /// Errors from reading and normalising a photo. Each names the file.
@@ -140,22 +140,8 @@ pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: &str) -> Result<
     for (i, v) in ink.iter_mut().enumerate() {
         *v = label[i] as usize == big;
     }
-    // Fill holes inside the blob (paper components not touching the border).
-    let (pl, psz) = components(&ink, w, h, false);
-    let mut border = vec![false; psz.len()];
-    for x in 0..w {
-        border[pl[x] as usize] = true;
-        border[pl[(h - 1) * w + x] as usize] = true;
-    }
-    for y in 0..h {
-        border[pl[y * w] as usize] = true;
-        border[pl[y * w + w - 1] as usize] = true;
-    }
-    for (i, v) in ink.iter_mut().enumerate() {
-        if !*v && !border[pl[i] as usize] {
-            *v = true;
-        }
-    }
+    // Fill holes inside the blob.
+    fill_holes(&mut ink, w, h, usize::MAX);
     Ok(InkMask { width: w, height: h, ink, gray })
 }
 

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use bezier_raster::binary::{components, otsu_threshold};
+use bezier_raster::binary::{components, fill_holes, otsu_threshold};
 
 use crate::glyph::GlyphError;
 
@@ -39,23 +39,8 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
             *v = false;
         }
     }
-    // Fill pinholes: paper components not touching the border, under 0.05 % of the image.
-    let (label, sizes) = components(&ink, w, h, false);
-    let mut touches = vec![false; sizes.len()];
-    for x in 0..w {
-        touches[label[x] as usize] = true;
-        touches[label[(h - 1) * w + x] as usize] = true;
-    }
-    for y in 0..h {
-        touches[label[y * w] as usize] = true;
-        touches[label[y * w + w - 1] as usize] = true;
-    }
-    for (i, v) in ink.iter_mut().enumerate() {
-        let l = label[i] as usize;
-        if !*v && !touches[l] && (sizes[l] as f64) < 0.0005 * (w * h) as f64 {
-            *v = true;
-        }
-    }
+    // Fill pinholes: enclosed paper under 0.05 % of the image.
+    fill_holes(&mut ink, w, h, (0.0005 * (w * h) as f64).ceil() as usize);
     if !ink.iter().any(|&b| b) {
         return Err(GlyphError::BadImage { path: name, message: "no ink left after removing specks".into() });
     }

@@ -62,6 +62,17 @@ impl Method {
     }
 }
 
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "medians" => Ok(Method::Medians),
+            "skeleton" => Ok(Method::Skeleton),
+            _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
+        }
+    }
+}
+
 /// Errors from centre-line extraction.
 #[derive(Debug, Error)]
 pub enum TrajectoryError {

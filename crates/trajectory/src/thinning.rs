@@ -1,11 +1,14 @@
 //! Zhang–Suen thinning of a binary image to a one-pixel-wide skeleton.
 
+/// The 8 neighbours of `(x, y)` clockwise from north (P2..P9); outside the image is paper.
+fn ring(m: &[bool], w: usize, h: usize, x: isize, y: isize) -> [bool; 8] {
+    let at = |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && m[y as usize * w + x as usize];
+    [at(x, y - 1), at(x + 1, y - 1), at(x + 1, y), at(x + 1, y + 1), at(x, y + 1), at(x - 1, y + 1), at(x - 1, y), at(x - 1, y - 1)]
+}
+
 /// Thins `mask` (`w × h`, true = ink) in place by Zhang–Suen's two-subiteration algorithm,
 /// until no pixel changes. Pixels on the image border are treated as having paper outside.
 pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
-    let at = |m: &[bool], x: isize, y: isize| -> bool {
-        x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && m[y as usize * w + x as usize]
-    };
     let mut remove = Vec::new();
     loop {
         let mut changed = false;
@@ -13,20 +16,11 @@ pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
             remove.clear();
             for y in 0..h as isize {
                 for x in 0..w as isize {
-                    if !at(mask, x, y) {
+                    if !mask[y as usize * w + x as usize] {
                         continue;
                     }
                     // Neighbours P2..P9, clockwise from north.
-                    let p = [
-                        at(mask, x, y - 1),
-                        at(mask, x + 1, y - 1),
-                        at(mask, x + 1, y),
-                        at(mask, x + 1, y + 1),
-                        at(mask, x, y + 1),
-                        at(mask, x - 1, y + 1),
-                        at(mask, x - 1, y),
-                        at(mask, x - 1, y - 1),
-                    ];
+                    let p = ring(mask, w, h, x, y);
                     let b = p.iter().filter(|&&v| v).count();
                     if !(2..=6).contains(&b) {
                         continue;
@@ -55,27 +49,15 @@ pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
 
 /// Removes the redundant corner pixels Zhang–Suen leaves on diagonal lines (4-connected
 /// staircases), so every line pixel has exactly two 8-neighbours: a pixel is removed when two of
-/// its 4-neighbours at right angles are set (a staircase corner) and removing it keeps its
-/// neighbours connected (one 0→1 transition around it).
+/// its 4-neighbours at right angles are set (a staircase corner), it has two or three
+/// neighbours, and those stay 8-connected without it.
 pub fn remove_staircases(mask: &mut [bool], w: usize, h: usize) {
-    let at = |m: &[bool], x: isize, y: isize| -> bool {
-        x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && m[y as usize * w + x as usize]
-    };
     for y in 0..h as isize {
         for x in 0..w as isize {
-            if !at(mask, x, y) {
+            if !mask[y as usize * w + x as usize] {
                 continue;
             }
-            let p = [
-                at(mask, x, y - 1),
-                at(mask, x + 1, y - 1),
-                at(mask, x + 1, y),
-                at(mask, x + 1, y + 1),
-                at(mask, x, y + 1),
-                at(mask, x - 1, y + 1),
-                at(mask, x - 1, y),
-                at(mask, x - 1, y - 1),
-            ];
+            let p = ring(mask, w, h, x, y);
             let (n, e, s, wst) = (p[0], p[2], p[4], p[6]);
             let corner = (n && e) || (e && s) || (s && wst) || (wst && n);
             let count = p.iter().filter(|&&b| b).count();

@@ -3,52 +3,18 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
-use brush_model::{Footprint, Measurement, Press};
+use anyhow::Result;
+use brush_model::{Footprint, Measurement};
 use rayon::prelude::*;
 
 use crate::cmd::fit_stroke::{fit_photo, scale_for};
-use crate::common::{progress, write_atomic};
-
-struct Label {
-    file: String,
-    press: Press,
-    px_per_mm: Option<f64>,
-}
-
-fn read_labels(path: &Path) -> Result<Vec<Label>> {
-    let name = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).from_path(path).with_context(|| format!("{name}: cannot read"))?;
-    let header = rdr.headers().with_context(|| format!("{name}: cannot read the header"))?.clone();
-    let col = |c: &str| header.iter().position(|h| h == c);
-    let need = |c: &'static str| col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"));
-    let (fi, hi, ai, bi) = (need("file")?, need("h_mm")?, need("alpha_deg")?, need("beta_deg")?);
-    let si = col("px_per_mm");
-    let mut out = Vec::new();
-    for rec in rdr.records() {
-        let rec = rec.with_context(|| format!("{name}: malformed CSV"))?;
-        let line = rec.position().map_or(0, |p| p.line());
-        let num = |i: usize, c: &str| -> Result<f64> {
-            let v = rec.get(i).unwrap_or("");
-            v.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
-        };
-        let px = match si {
-            Some(i) if !rec.get(i).unwrap_or("").is_empty() => Some(num(i, "px_per_mm")?),
-            _ => None,
-        };
-        out.push(Label { file: rec.get(fi).unwrap_or("").to_string(), press: Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?), px_per_mm: px });
-    }
-    if out.is_empty() {
-        bail!("{name}: no rows");
-    }
-    Ok(out)
-}
+use crate::common::{progress, read_stroke_labels, write_atomic};
 
 /// Fits every photo listed in the labels (in parallel, with a progress bar), lists and drops
 /// the poor fits, writes `measurements.csv` beside `profile_out`, and returns the measurements.
 pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Path) -> Result<Vec<Measurement>> {
     let labels_path = labels.map(Path::to_path_buf).unwrap_or_else(|| dir.join("labels.csv"));
-    let labels = read_labels(&labels_path)?;
+    let labels = read_stroke_labels(&labels_path)?;
     let pb = progress(labels.len() as u64, "fitting");
     let results: Vec<(usize, Result<stroke_fit::StrokeFit>)> = labels
         .par_iter()

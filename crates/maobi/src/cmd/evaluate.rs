@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{glyph, CharBox, Method};
 
-use crate::common::{load_brush, parse_model, print_json, progress, BrushArg};
+use crate::common::{parse_method, load_brush, parse_model, print_json, progress, BrushArg};
 
 /// Arguments of `maobi evaluate`.
 #[derive(clap::Args, Debug)]
@@ -37,13 +37,6 @@ pub struct Args {
     json: bool,
 }
 
-fn parse_method(s: &str) -> std::result::Result<Method, String> {
-    match s {
-        "medians" => Ok(Method::Medians),
-        "skeleton" => Ok(Method::Skeleton),
-        _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
-    }
-}
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {

@@ -1,22 +1,15 @@
 //! `maobi footprint`: the footprint a press leaves.
 
 use anyhow::Result;
-use brush_model::{Extrapolation, Press};
+use brush_model::Extrapolation;
 
-use crate::common::{load_brush, print_json};
+use crate::common::{PressArgs, load_brush, print_json};
 
 /// Arguments of `maobi footprint`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Press depth h, mm.
-    #[arg(long = "h", value_name = "MM", allow_negative_numbers = true)]
-    h_mm: f64,
-    /// Tilt α, degrees.
-    #[arg(long = "alpha", value_name = "DEG", allow_negative_numbers = true)]
-    alpha_deg: f64,
-    /// Rotation β, degrees.
-    #[arg(long = "beta", value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
-    beta_deg: f64,
+    #[command(flatten)]
+    press: PressArgs,
     /// Brush: pen1, pen2 or a profile JSON file.
     #[arg(long, default_value = "pen1")]
     brush: String,
@@ -31,7 +24,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush)?;
-    let press = Press::from_degrees(args.h_mm, args.alpha_deg, args.beta_deg);
+    let press = args.press.press();
     let extrapolation = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let fp = profile.predict(&press, extrapolation)?;
     if args.json {
@@ -41,9 +34,9 @@ pub fn run(args: Args) -> Result<()> {
             "{} ({}): h = {} mm, α = {}°, β = {}°\n  tip length  lt = {:.3} mm\n  root length lh = {:.3} mm\n  belly half-width lr = {:.3} mm (width {:.3} mm)\n  length lh + lt = {:.3} mm, area = {:.2} mm²",
             profile.name,
             match profile.source { brush_model::Source::Nominal => "nominal", brush_model::Source::Calibrated => "calibrated" },
-            args.h_mm,
-            args.alpha_deg,
-            args.beta_deg,
+            args.press.h_mm,
+            args.press.alpha_deg,
+            args.press.beta_deg,
             fp.lt_mm,
             fp.lh_mm,
             fp.lr_mm,

@@ -4,14 +4,14 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
 use brush_model::{Extrapolation, Press};
 use rayon::prelude::*;
 use serde::Serialize;
 use stroke_metrics::{csim, SsimWorkspace, Summary};
 
-use crate::common::{gray, load_brush, load_image, print_json, progress, BrushArg};
+use crate::common::{gray, load_brush, load_image, print_json, progress, read_stroke_labels, BrushArg};
 
 /// Arguments of `maobi models`.
 #[derive(clap::Args, Debug)]
@@ -145,28 +145,10 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn load_reference(dir: &Path, profile: &brush_model::BrushProfile) -> Result<(Vec<Target>, u32)> {
-    let labels = dir.join("labels.csv");
-    let name = labels.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(&labels)
-        .with_context(|| format!("{name}: cannot read"))?;
-    let header = rdr.headers().with_context(|| format!("{name}: cannot read the header"))?.clone();
-    let col = |c: &str| header.iter().position(|h| h == c);
-    let need = |c: &'static str| col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"));
-    let (fi, hi, ai, bi) = (need("file")?, need("h_mm")?, need("alpha_deg")?, need("beta_deg")?);
-    let si = col("px_per_mm");
     let mut targets = Vec::new();
     let mut size = None;
-    for rec in rdr.records() {
-        let rec = rec.with_context(|| format!("{name}: malformed CSV"))?;
-        let line = rec.position().map_or(0, |p| p.line());
-        let num = |i: usize, c: &str| -> Result<f64> {
-            let v = rec.get(i).unwrap_or("");
-            v.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
-        };
-        let press = Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?);
-        let file = dir.join(rec.get(fi).unwrap_or(""));
+    for l in read_stroke_labels(&dir.join("labels.csv"))? {
+        let file = dir.join(&l.file);
         let photo = load_image(&file)?;
         if photo.width() != photo.height() {
             bail!("{}: expected a square image registered to the stroke canvas, got {}×{}", file.display(), photo.width(), photo.height());
@@ -174,12 +156,8 @@ fn load_reference(dir: &Path, profile: &brush_model::BrushProfile) -> Result<(Ve
         if *size.get_or_insert(photo.width()) != photo.width() {
             bail!("{}: all reference images must have the same size", file.display());
         }
-        let px_per_mm = match si {
-            Some(i) => num(i, "px_per_mm")?,
-            None => StrokeCanvas::for_profile(profile, photo.width()).px_per_mm,
-        };
-        targets.push(Target { press, photo: Some(photo), px_per_mm });
+        let px_per_mm = l.px_per_mm.unwrap_or_else(|| StrokeCanvas::for_profile(profile, photo.width()).px_per_mm);
+        targets.push(Target { press: l.press, photo: Some(photo), px_per_mm });
     }
-    let size = size.with_context(|| format!("{name}: no rows"))?;
-    Ok((targets, size))
+    Ok((targets, size.expect("at least one row")))
 }

@@ -4,23 +4,16 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use bezier_raster::{coverage::svg_document, Coverage, ModelKind, Rasterizer, StrokeCanvas};
-use brush_model::{Extrapolation, Press};
+use brush_model::Extrapolation;
 use serde_json::json;
 
-use crate::common::{load_brush, parse_model, print_json, write_atomic, BrushArg};
+use crate::common::{PressArgs, load_brush, parse_model, print_json, write_atomic, BrushArg};
 
 /// Arguments of `maobi stroke`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Press depth h, mm.
-    #[arg(long = "h", value_name = "MM", allow_negative_numbers = true)]
-    h_mm: f64,
-    /// Tilt α, degrees.
-    #[arg(long = "alpha", value_name = "DEG", allow_negative_numbers = true)]
-    alpha_deg: f64,
-    /// Rotation β, degrees.
-    #[arg(long = "beta", value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
-    beta_deg: f64,
+    #[command(flatten)]
+    press: PressArgs,
     #[command(flatten)]
     brush: BrushArg,
     /// Stroke model: bsm, circle, ellipse, line or qbc.
@@ -64,7 +57,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(s) => bail!("--px-per-mm {s}: expected a positive scale"),
         None => StrokeCanvas::for_profile(&profile, args.size),
     };
-    let press = Press::from_degrees(args.h_mm, args.alpha_deg, args.beta_deg);
+    let press = args.press.press();
     let ex = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let fp = profile.predict(&press, ex)?;
     let anchor = canvas.anchor_mm(&fp, press.beta_rad);
@@ -106,7 +99,7 @@ fn run_neural(args: &Args) -> Result<()> {
     if args.px_per_mm.is_some() {
         bail!("--px-per-mm: the generator's scale is fixed ({:.4} px/mm)", g.config.px_per_mm);
     }
-    let press = Press::from_degrees(args.h_mm, args.alpha_deg, args.beta_deg);
+    let press = args.press.press();
     // The generator only knows its training range.
     let fp = g.config.profile.predict(&press, Extrapolation::Refuse)?;
     let img = g.render(&[press])?.remove(0);

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{glyph, CharBox, Method};
 
-use crate::common::{load_brush, parse_model, print_json, progress, write_atomic, BrushArg};
+use crate::common::{parse_method, load_brush, parse_model, print_json, progress, write_atomic, BrushArg};
 
 /// Arguments of `maobi write`.
 #[derive(clap::Args, Debug)]
@@ -66,13 +66,6 @@ pub struct Args {
     generator: Option<PathBuf>,
 }
 
-fn parse_method(s: &str) -> std::result::Result<Method, String> {
-    match s {
-        "medians" => Ok(Method::Medians),
-        "skeleton" => Ok(Method::Skeleton),
-        _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
-    }
-}
 
 fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
     Ok(if let Some(dir) = &args.hanzi_data {
