@@ -5,12 +5,18 @@ use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::fixtures::root;
 
 /// Every criterion benchmark target: (package, bench).
-const BENCHES: &[(&str, &str)] = &[("stroke-metrics", "metrics"), ("bezier-raster", "raster"), ("trajectory", "track"), ("maobi", "write"), ("neural-gen", "generator")];
+const BENCHES: &[(&str, &str)] = &[
+    ("stroke-metrics", "metrics"),
+    ("bezier-raster", "raster"),
+    ("trajectory", "track"),
+    ("maobi", "write"),
+    ("neural-gen", "generator"),
+];
 
 /// (criterion id, label).
 const ROWS: &[(&str, &str)] = &[
@@ -71,19 +77,28 @@ pub fn run(args: &[String]) -> Result<()> {
         table.push_str(&format!("| {label} | {cell} |\n"));
     }
     // Dataset throughput: the CLI end to end (process start, rendering, PNG writing).
-    let st = Command::new(env!("CARGO")).current_dir(&root).args(["build", "--release", "-q", "-p", "maobi"]).status()?;
+    let st =
+        Command::new(env!("CARGO")).current_dir(&root).args(["build", "--release", "-q", "-p", "maobi"]).status()?;
     if !st.success() {
         bail!("building maobi failed");
     }
     let out = root.join("target/bench-dataset");
     let _ = std::fs::remove_dir_all(&out);
     let t0 = Instant::now();
-    let st = Command::new(root.join("target/release/maobi")).args(["dataset", "--n", "10000", "--size", "128", "-o"]).arg(&out).status()?;
+    let st = Command::new(root.join("target/release/maobi"))
+        .args(["dataset", "--n", "10000", "--size", "128", "-o"])
+        .arg(&out)
+        .status()?;
     let secs = t0.elapsed().as_secs_f64();
     if !st.success() {
         bail!("maobi dataset failed");
     }
-    table.push_str(&format!("| `maobi dataset --n 10000 --size 128` ({} threads) | {:.2} s, {:.0} images/s |\n", std::thread::available_parallelism().map_or(1, |n| n.get()), secs, 10000.0 / secs));
+    table.push_str(&format!(
+        "| `maobi dataset --n 10000 --size 128` ({} threads) | {:.2} s, {:.0} images/s |\n",
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        secs,
+        10000.0 / secs
+    ));
     let _ = std::fs::remove_dir_all(&out);
     let path = root.join("target/bench-summary.md");
     std::fs::write(&path, format!("# maobi benchmarks\n\n{table}"))?;

@@ -116,7 +116,7 @@ fn all() -> Vec<Fixture> {
 /// JPEG artefacts and a slight rotation, saved as PNG with their scale. Returns the labels CSV
 /// and the photos.
 fn photo_set() -> Result<(Vec<u8>, Vec<(String, Vec<u8>)>)> {
-    use stroke_fit::synth::{photo, png_with_scale, Degradation};
+    use stroke_fit::synth::{Degradation, photo, png_with_scale};
     let pen1 = BrushProfile::builtin("pen1")?;
     let px = 8.0;
     let mut labels = String::from("file,h_mm,alpha_deg,beta_deg\n");
@@ -133,7 +133,12 @@ fn photo_set() -> Result<(Vec<u8>, Vec<(String, Vec<u8>)>)> {
             let c = fp.placed_bounds(brush_model::PointMm::default(), beta).centre();
             let half = side as f64 / px / 2.0;
             let anchor = brush_model::PointMm::new(half - c.x_mm, half - c.y_mm);
-            let d = Degradation { blur_px: 1.0 + 0.1 * k as f64, noise: 0.03, gradient: 0.2 + 0.02 * k as f64, ..Degradation::default() };
+            let d = Degradation {
+                blur_px: 1.0 + 0.1 * k as f64,
+                noise: 0.03,
+                gradient: 0.2 + 0.02 * k as f64,
+                ..Degradation::default()
+            };
             let g = photo(&fp, anchor, beta, px, side, side, &d, 7000 + k);
             let name = format!("stroke_{:02}.png", k + 1);
             labels.push_str(&format!("{name},{h},{a},{b}\n"));
@@ -179,7 +184,7 @@ fn footprint_sheet() -> Result<Vec<u8>> {
 }
 
 fn character_render(ch: char, method: trajectory::Method) -> Result<Vec<u8>> {
-    use maobi::pipeline::{prepare, write_char, WriteOptions};
+    use maobi::pipeline::{WriteOptions, prepare, write_char};
     let pen1 = BrushProfile::builtin("pen1")?;
     let p = prepare(trajectory::glyph::embedded(ch)?, Some(method))?;
     let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
@@ -196,7 +201,11 @@ fn python_ready() -> bool {
 }
 
 fn python_golden(dir: &str, script: &str) -> Result<Vec<u8>> {
-    let out = std::process::Command::new("python3").arg(script).current_dir(root().join(dir)).output().with_context(|| format!("running python3 {script}"))?;
+    let out = std::process::Command::new("python3")
+        .arg(script)
+        .current_dir(root().join(dir))
+        .output()
+        .with_context(|| format!("running python3 {script}"))?;
     if !out.status.success() {
         anyhow::bail!("python3 {script} failed: {}", String::from_utf8_lossy(&out.stderr));
     }
@@ -212,7 +221,8 @@ fn hanzi_dir(i: &Inputs) -> Result<&Path> {
 fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
     let dir = hanzi_dir(i)?;
     let freq = std::fs::read_to_string(root().join("fixtures/hanzi/frequency.txt"))?;
-    let mut chars: Vec<char> = freq.lines().filter(|l| !l.starts_with('#')).filter_map(|l| l.chars().next()).take(1000).collect();
+    let mut chars: Vec<char> =
+        freq.lines().filter(|l| !l.starts_with('#')).filter_map(|l| l.chars().next()).take(1000).collect();
     for c in EXTRA_CHARS.chars() {
         if !chars.contains(&c) {
             chars.push(c);
@@ -222,7 +232,8 @@ fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
     for c in chars {
         let path = dir.join(format!("{c}.json"));
         let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        let v: serde_json::Value =
+            serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
         let line = serde_json::json!({"c": c.to_string(), "strokes": v["strokes"], "medians": v["medians"]});
         out.push_str(&serde_json::to_string(&line)?);
         out.push('\n');
@@ -247,7 +258,9 @@ pub fn run(args: &[String]) -> Result<()> {
         }
     }
     let root = root();
-    println!("skipped  fixtures/generator/pen1.safetensors  (made by `cargo xtask train-fixture`, tens of minutes; checked by the generator gates)");
+    println!(
+        "skipped  fixtures/generator/pen1.safetensors  (made by `cargo xtask train-fixture`, tens of minutes; checked by the generator gates)"
+    );
     let mut differ = Vec::new();
     let python = python_ready();
     inputs.write_extra = !check;

@@ -7,14 +7,14 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeModel};
 use brush_model::BrushProfile;
-use maobi::pipeline::{prepare, write_char, WriteOptions};
+use maobi::pipeline::{WriteOptions, prepare, write_char};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
-use trajectory::{glyph, CharBox, Method};
+use trajectory::{CharBox, Method, glyph};
 
 use crate::fixtures::root;
 
@@ -60,7 +60,11 @@ pub struct Regression {
 
 impl std::fmt::Display for Regression {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} regressed: baseline {:.6}, now {:.6} (tolerance {})", self.name, self.baseline, self.value, self.tolerance)
+        write!(
+            f,
+            "{} regressed: baseline {:.6}, now {:.6} (tolerance {})",
+            self.name, self.baseline, self.value, self.tolerance
+        )
     }
 }
 
@@ -70,7 +74,12 @@ pub fn compare(baseline: &Figures, now: &Figures) -> Vec<Regression> {
     let mut out = Vec::new();
     for (name, b) in baseline {
         let Some(n) = now.get(name) else {
-            out.push(Regression { name: format!("{name} (missing)"), baseline: b.value, value: f64::NAN, tolerance: b.tolerance });
+            out.push(Regression {
+                name: format!("{name} (missing)"),
+                baseline: b.value,
+                value: f64::NAN,
+                tolerance: b.tolerance,
+            });
             continue;
         };
         let worse = match b.better {
@@ -110,7 +119,10 @@ pub fn model_figures(reference: &dyn StrokeModel, models: &[(&str, &dyn StrokeMo
                     .iter()
                     .map(|(_, m)| {
                         spec.render(&s, *m, r, img);
-                        (stroke_metrics::csim(gray(truth), gray(img)).expect("same size"), ws.ssim(gray(truth), gray(img)).expect("same size"))
+                        (
+                            stroke_metrics::csim(gray(truth), gray(img)).expect("same size"),
+                            ws.ssim(gray(truth), gray(img)).expect("same size"),
+                        )
                     })
                     .collect();
                 (area_err, scores)
@@ -118,7 +130,10 @@ pub fn model_figures(reference: &dyn StrokeModel, models: &[(&str, &dyn StrokeMo
         )
         .collect();
     let mut f = Figures::new();
-    f.insert("models/bsm/ink_vs_area_rel_error".into(), fig(rows.iter().map(|r| r.0).sum::<f64>() / n as f64, 0.002, Better::Lower));
+    f.insert(
+        "models/bsm/ink_vs_area_rel_error".into(),
+        fig(rows.iter().map(|r| r.0).sum::<f64>() / n as f64, 0.002, Better::Lower),
+    );
     for (k, (name, _)) in models.iter().enumerate() {
         for (metric, idx) in [("csim", 0), ("ssim", 1)] {
             let s = Summary::of(rows.iter().map(|r| if idx == 0 { r.1[k].0 } else { r.1[k].1 }));
@@ -140,10 +155,8 @@ pub fn character_figures() -> Result<Figures> {
     let chars: Vec<char> = GATE_CHARS.chars().collect();
     let mut f = Figures::new();
     for method in [Method::Medians, Method::Skeleton] {
-        let prepared = chars
-            .par_iter()
-            .map(|&c| prepare(glyph::embedded(c)?, Some(method)))
-            .collect::<Result<Vec<_>>>()?;
+        let prepared =
+            chars.par_iter().map(|&c| prepare(glyph::embedded(c)?, Some(method))).collect::<Result<Vec<_>>>()?;
         for model in ModelKind::ALL {
             let opts = WriteOptions { model, size: 256, upper_bound: false, ..WriteOptions::default() };
             let reports = prepared
@@ -203,14 +216,20 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut failures = Vec::new();
     for (group, now) in &groups {
         let path = baseline_path(group);
-        let base: Option<Figures> = std::fs::read_to_string(&path).ok().map(|t| serde_json::from_str(&t)).transpose().with_context(|| format!("{}: not a baseline file", path.display()))?;
+        let base: Option<Figures> = std::fs::read_to_string(&path)
+            .ok()
+            .map(|t| serde_json::from_str(&t))
+            .transpose()
+            .with_context(|| format!("{}: not a baseline file", path.display()))?;
         for (name, n) in now {
             let b = base.as_ref().and_then(|b| b.get(name));
             let (bs, d) = match b {
                 Some(b) => (format!("{:.6}", b.value), format!("{:+.6}", n.value - b.value)),
                 None => ("—".into(), "new".into()),
             };
-            let regressed = b.is_some_and(|b| !compare(&BTreeMap::from([(name.clone(), *b)]), &BTreeMap::from([(name.clone(), *n)])).is_empty());
+            let regressed = b.is_some_and(|b| {
+                !compare(&BTreeMap::from([(name.clone(), *b)]), &BTreeMap::from([(name.clone(), *n)])).is_empty()
+            });
             println!("{name:<48} {bs:>12} {:>12.6} {d:>10}  {}", n.value, if regressed { "FAIL" } else { "ok" });
         }
         match (&base, update) {
@@ -220,7 +239,12 @@ pub fn run(args: &[String]) -> Result<()> {
                 println!("updated {}", path.display());
             }
             (Some(b), false) => failures.extend(compare(b, now)),
-            (None, false) => failures.push(Regression { name: format!("{group} (no baseline file {})", path.display()), baseline: f64::NAN, value: f64::NAN, tolerance: 0.0 }),
+            (None, false) => failures.push(Regression {
+                name: format!("{group} (no baseline file {})", path.display()),
+                baseline: f64::NAN,
+                value: f64::NAN,
+                tolerance: 0.0,
+            }),
         }
     }
     println!("gates ran in {:.1} s", t0.elapsed().as_secs_f64());
@@ -228,7 +252,10 @@ pub fn run(args: &[String]) -> Result<()> {
         for f in &failures {
             eprintln!("gate: {f}");
         }
-        bail!("{} figure(s) regressed; if the change is intended, run `cargo xtask gates --update` and explain it in the commit", failures.len());
+        bail!(
+            "{} figure(s) regressed; if the change is intended, run `cargo xtask gates --update` and explain it in the commit",
+            failures.len()
+        );
     }
     Ok(())
 }
@@ -253,10 +280,13 @@ mod tests {
 
     #[test]
     fn comparison_is_directional_with_tolerance() {
-        let base = Figures::from([("a".into(), fig(0.9, 0.01, Better::Higher)), ("d".into(), fig(1.0, 0.1, Better::Lower))]);
-        let ok = Figures::from([("a".into(), fig(0.895, 0.01, Better::Higher)), ("d".into(), fig(0.5, 0.1, Better::Lower))]);
+        let base =
+            Figures::from([("a".into(), fig(0.9, 0.01, Better::Higher)), ("d".into(), fig(1.0, 0.1, Better::Lower))]);
+        let ok =
+            Figures::from([("a".into(), fig(0.895, 0.01, Better::Higher)), ("d".into(), fig(0.5, 0.1, Better::Lower))]);
         assert!(compare(&base, &ok).is_empty());
-        let bad = Figures::from([("a".into(), fig(0.85, 0.01, Better::Higher)), ("d".into(), fig(1.2, 0.1, Better::Lower))]);
+        let bad =
+            Figures::from([("a".into(), fig(0.85, 0.01, Better::Higher)), ("d".into(), fig(1.2, 0.1, Better::Lower))]);
         let r = compare(&base, &bad);
         assert_eq!(r.len(), 2);
         assert_eq!(r[0].to_string(), "a regressed: baseline 0.900000, now 0.850000 (tolerance 0.01)");

@@ -5,8 +5,8 @@ use std::process::ExitCode;
 mod bench;
 mod fixtures;
 mod gates;
-mod train_fixture;
 mod rng;
+mod train_fixture;
 
 const HELP: &str = "\
 cargo xtask <task>

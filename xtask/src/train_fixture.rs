@@ -2,12 +2,13 @@
 
 use std::process::Command;
 
-use anyhow::{bail, Result};
+use anyhow::{Result, bail};
 
 use crate::fixtures::root;
 
 /// The recipe of `fixtures/generator/pen1.safetensors`.
-pub const RECIPE: &[&str] = &["--brush", "pen1", "--steps", "2500", "--batch", "64", "--lr", "2e-3", "--seed", "1", "--eval-n", "500"];
+pub const RECIPE: &[&str] =
+    &["--brush", "pen1", "--steps", "2500", "--batch", "64", "--lr", "2e-3", "--seed", "1", "--eval-n", "500"];
 
 /// Builds `maobi` in release and trains.
 pub fn run(args: &[String]) -> Result<()> {
@@ -15,14 +16,22 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("train-fixture: unexpected argument `{a}`");
     }
     let root = root();
-    let st = Command::new(env!("CARGO")).current_dir(&root).args(["build", "--release", "-q", "-p", "maobi"]).status()?;
+    let st =
+        Command::new(env!("CARGO")).current_dir(&root).args(["build", "--release", "-q", "-p", "maobi"]).status()?;
     if !st.success() {
         bail!("building maobi failed");
     }
-    let st = Command::new(root.join("target/release/maobi")).current_dir(&root).arg("train").args(RECIPE).args(["-o", "fixtures/generator/pen1.safetensors"]).status()?;
+    let st = Command::new(root.join("target/release/maobi"))
+        .current_dir(&root)
+        .arg("train")
+        .args(RECIPE)
+        .args(["-o", "fixtures/generator/pen1.safetensors"])
+        .status()?;
     if !st.success() {
         bail!("training failed");
     }
-    println!("trained fixtures/generator/pen1.safetensors (+ .json, loss.csv, loss.png); rebuild maobi to embed it, then `cargo xtask gates --update` if its figures moved");
+    println!(
+        "trained fixtures/generator/pen1.safetensors (+ .json, loss.csv, loss.png); rebuild maobi to embed it, then `cargo xtask gates --update` if its figures moved"
+    );
     Ok(())
 }

@@ -1,8 +1,8 @@
 //! Footprint rendering speed (`cargo bench -p bezier-raster`).
 
-use bezier_raster::{render_batch, Bsm, Compositor, Coverage, DatasetSpec, ModelKind, Rasterizer, Stamp};
+use bezier_raster::{Bsm, Compositor, Coverage, DatasetSpec, ModelKind, Rasterizer, Stamp, render_batch};
 use brush_model::{BrushProfile, PointMm};
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
@@ -26,7 +26,11 @@ fn bench(c: &mut Criterion) {
 
     let stamps: Vec<Stamp> = samples
         .iter()
-        .map(|s| Stamp { footprint: s.footprint, anchor: spec.canvas.anchor_mm(&s.footprint, s.press.beta_rad), beta_rad: s.press.beta_rad })
+        .map(|s| Stamp {
+            footprint: s.footprint,
+            anchor: spec.canvas.anchor_mm(&s.footprint, s.press.beta_rad),
+            beta_rad: s.press.beta_rad,
+        })
         .collect();
     let mut g = c.benchmark_group("batch_128");
     g.throughput(Throughput::Elements(stamps.len() as u64));
@@ -36,7 +40,11 @@ fn bench(c: &mut Criterion) {
     // A character-sized job: 400 stamps along a line into a 512² image.
     let fp = samples[0].footprint;
     let line: Vec<Stamp> = (0..400)
-        .map(|i| Stamp { footprint: fp, anchor: PointMm::new(5.0 + i as f64 * 0.2, 40.0 + (i as f64 * 0.05).sin() * 20.0), beta_rad: 0.3 })
+        .map(|i| Stamp {
+            footprint: fp,
+            anchor: PointMm::new(5.0 + i as f64 * 0.2, 40.0 + (i as f64 * 0.05).sin() * 20.0),
+            beta_rad: 0.3,
+        })
         .collect();
     c.bench_function("composite_400_stamps_512", |b| {
         b.iter(|| {

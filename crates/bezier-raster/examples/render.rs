@@ -15,7 +15,11 @@ fn main() {
     let mut before = 0.0;
     for (i, m) in ModelKind::ALL.iter().enumerate() {
         let a = canvas.anchor_mm(&fp, press.beta_rad);
-        let stamp = Stamp { footprint: fp, anchor: PointMm::new(a.x_mm + i as f64 * cell_mm, a.y_mm), beta_rad: press.beta_rad };
+        let stamp = Stamp {
+            footprint: fp,
+            anchor: PointMm::new(a.x_mm + i as f64 * cell_mm, a.y_mm),
+            beta_rad: press.beta_rad,
+        };
         sheet.stamp(m.model(), &stamp);
         let ink = sheet.image().ink();
         println!("{:<8} ink {:.1} px", m.name(), ink - before);

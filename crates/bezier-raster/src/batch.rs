@@ -20,7 +20,13 @@ pub struct Stamp {
 
 /// Renders each stamp into its own `width × height` image, in parallel on rayon's pool (one
 /// [`Rasterizer`] per worker).
-pub fn render_batch(model: &dyn StrokeModel, stamps: &[Stamp], width: u32, height: u32, px_per_mm: f64) -> Vec<Coverage> {
+pub fn render_batch(
+    model: &dyn StrokeModel,
+    stamps: &[Stamp],
+    width: u32,
+    height: u32,
+    px_per_mm: f64,
+) -> Vec<Coverage> {
     stamps
         .par_iter()
         .map_init(Rasterizer::new, |r, s| {
@@ -75,11 +81,19 @@ impl Compositor {
 ///
 /// # Errors
 /// [`ProfileError`] for the first point the profile refuses.
-pub fn track_stamps(track: &Track, profile: &BrushProfile, extrapolation: Extrapolation) -> Result<Vec<Stamp>, ProfileError> {
+pub fn track_stamps(
+    track: &Track,
+    profile: &BrushProfile,
+    extrapolation: Extrapolation,
+) -> Result<Vec<Stamp>, ProfileError> {
     track
         .points()
         .map(|p| {
-            Ok(Stamp { footprint: profile.predict_oriented(&p.press(), extrapolation)?, anchor: p.anchor(), beta_rad: p.beta_rad })
+            Ok(Stamp {
+                footprint: profile.predict_oriented(&p.press(), extrapolation)?,
+                anchor: p.anchor(),
+                beta_rad: p.beta_rad,
+            })
         })
         .collect()
 }
@@ -102,7 +116,8 @@ pub fn render_track(
 ) -> Result<Coverage, ProfileError> {
     let mut c = Compositor::new(width, height, px_per_mm);
     for s in track_stamps(track, profile, extrapolation)? {
-        let shifted = Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..s };
+        let shifted =
+            Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..s };
         c.stamp(model, &shifted);
     }
     Ok(c.into_image())

@@ -146,7 +146,8 @@ pub enum ModelKind {
 
 impl ModelKind {
     /// Every model, B-BSM first.
-    pub const ALL: [ModelKind; 5] = [ModelKind::Bsm, ModelKind::Circle, ModelKind::Ellipse, ModelKind::Line, ModelKind::Qbc];
+    pub const ALL: [ModelKind; 5] =
+        [ModelKind::Bsm, ModelKind::Circle, ModelKind::Ellipse, ModelKind::Line, ModelKind::Qbc];
     /// The baselines (every model but B-BSM).
     pub const BASELINES: [ModelKind; 4] = [ModelKind::Circle, ModelKind::Ellipse, ModelKind::Line, ModelKind::Qbc];
 

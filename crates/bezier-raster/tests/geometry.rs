@@ -1,7 +1,7 @@
 //! Rendered footprints against the analytic invariants, the compositor, I/O and datasets.
 
 use bezier_raster::{
-    render_batch, Bsm, Compositor, Coverage, DatasetSpec, ModelKind, Rasterizer, Stamp, StrokeCanvas, StrokeModel,
+    Bsm, Compositor, Coverage, DatasetSpec, ModelKind, Rasterizer, Stamp, StrokeCanvas, StrokeModel, render_batch,
 };
 use brush_model::{BrushProfile, Extrapolation, Footprint, PointMm, Press};
 use proptest::prelude::*;
@@ -136,7 +136,11 @@ fn batch_equals_one_by_one() {
     let stamps: Vec<Stamp> = (0..40)
         .map(|i| {
             let s = spec.sample(i).unwrap();
-            Stamp { footprint: s.footprint, anchor: spec.canvas.anchor_mm(&s.footprint, s.press.beta_rad), beta_rad: s.press.beta_rad }
+            Stamp {
+                footprint: s.footprint,
+                anchor: spec.canvas.anchor_mm(&s.footprint, s.press.beta_rad),
+                beta_rad: s.press.beta_rad,
+            }
         })
         .collect();
     let batch = render_batch(&Bsm, &stamps, 64, 64, spec.canvas.px_per_mm);
@@ -160,7 +164,11 @@ fn datasets_are_deterministic_and_inside_the_range() {
         assert_eq!(sa, sb);
         assert_ne!(sa.press, c.sample(i).unwrap().press);
         let r = p.ranges;
-        assert!(r.h_mm.contains(sa.press.h_mm) && r.alpha_rad.contains(sa.press.alpha_rad) && r.beta_rad.contains(sa.press.beta_rad));
+        assert!(
+            r.h_mm.contains(sa.press.h_mm)
+                && r.alpha_rad.contains(sa.press.alpha_rad)
+                && r.beta_rad.contains(sa.press.beta_rad)
+        );
         distinct.insert(sa.press.h_mm.to_bits());
     }
     assert_eq!(distinct.len(), 200);

@@ -3,7 +3,7 @@
 //!
 //! `cargo run -p brush-model --example footprint`
 
-use brush_model::{fit_general, BrushProfile, Extrapolation, Footprint, Measurement, PointMm, Press};
+use brush_model::{BrushProfile, Extrapolation, Footprint, Measurement, PointMm, Press, fit_general};
 
 fn main() {
     let pen1 = BrushProfile::builtin("pen1").expect("built-in");

@@ -164,10 +164,7 @@ impl Footprint {
     /// The closed outline placed on the paper: rotated by `beta_rad` (from +x towards +y) about
     /// the root end, which is put at `anchor` (mm).
     pub fn outline(&self, anchor: PointMm, beta_rad: f64) -> Outline {
-        Outline {
-            upper: self.upper().placed(anchor, beta_rad),
-            lower: self.lower().placed(anchor, beta_rad),
-        }
+        Outline { upper: self.upper().placed(anchor, beta_rad), lower: self.lower().placed(anchor, beta_rad) }
     }
 
     /// Half-width of the outline at parameter `t` of the upper curve: `4·lr·t·(1 − t)`, mm.
@@ -207,12 +204,8 @@ impl Outline {
     /// Exact axis-aligned bounds of both curves (extremes at the end points and at the roots of
     /// each coordinate's derivative).
     pub fn bounds(&self) -> BoundsMm {
-        let mut b = BoundsMm {
-            min_x: f64::INFINITY,
-            min_y: f64::INFINITY,
-            max_x: f64::NEG_INFINITY,
-            max_y: f64::NEG_INFINITY,
-        };
+        let mut b =
+            BoundsMm { min_x: f64::INFINITY, min_y: f64::INFINITY, max_x: f64::NEG_INFINITY, max_y: f64::NEG_INFINITY };
         for c in [self.upper, self.lower] {
             let mut ts = vec![0.0, 1.0];
             let xs = c.points.map(|p| p.x_mm);

@@ -28,7 +28,7 @@ pub mod regression;
 pub mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
-pub use measurements::{load_measurements, read_measurements, Measurement, MeasurementError};
+pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements};
 pub use profile::{BrushProfile, Clamp, Extrapolation, InverseH, PressRanges, ProfileError, Range, Source};
-pub use regression::{fit, fit_general, fit_paper, FitError, FitReport, Form, LinearModel, OutputFit, Terms};
-pub use units::{deg_to_rad, rad_to_deg, Brush, PointMm, Press, Stroke, Track, TrackPoint};
+pub use regression::{FitError, FitReport, Form, LinearModel, OutputFit, Terms, fit, fit_general, fit_paper};
+pub use units::{Brush, PointMm, Press, Stroke, Track, TrackPoint, deg_to_rad, rad_to_deg};

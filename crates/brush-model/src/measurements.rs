@@ -76,8 +76,7 @@ pub enum MeasurementError {
 /// [`MeasurementError`] naming the file, line and column of the first problem.
 pub fn load_measurements(path: &Path) -> Result<Vec<Measurement>, MeasurementError> {
     let name = path.display().to_string();
-    let file = std::fs::File::open(path)
-        .map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?;
+    let file = std::fs::File::open(path).map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?;
     read_measurements(file, &name)
 }
 
@@ -85,10 +84,7 @@ pub fn load_measurements(path: &Path) -> Result<Vec<Measurement>, MeasurementErr
 ///
 /// # Errors
 /// [`MeasurementError`] naming the source, line and column of the first problem.
-pub fn read_measurements(
-    reader: impl Read,
-    source_name: &str,
-) -> Result<Vec<Measurement>, MeasurementError> {
+pub fn read_measurements(reader: impl Read, source_name: &str) -> Result<Vec<Measurement>, MeasurementError> {
     let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(reader);
     let csv_err = |e: csv::Error| MeasurementError::Csv {
         source_name: source_name.to_string(),
@@ -98,10 +94,10 @@ pub fn read_measurements(
     let header = rdr.headers().map_err(csv_err)?.clone();
     let mut idx = [0usize; 6];
     for (k, col) in REQUIRED_COLUMNS.iter().enumerate() {
-        idx[k] = header.iter().position(|h| h == *col).ok_or(MeasurementError::MissingColumn {
-            source_name: source_name.to_string(),
-            column: col,
-        })?;
+        idx[k] = header
+            .iter()
+            .position(|h| h == *col)
+            .ok_or(MeasurementError::MissingColumn { source_name: source_name.to_string(), column: col })?;
     }
     let mut out = Vec::new();
     for rec in rdr.records() {

@@ -47,7 +47,9 @@ pub enum ProfileError {
         reason: String,
     },
     /// A press lies outside the calibrated range and extrapolation was not allowed.
-    #[error("{quantity} = {value:.4} is outside the calibrated range [{min:.4}, {max:.4}] of profile `{profile}` (allow extrapolation to use it anyway)")]
+    #[error(
+        "{quantity} = {value:.4} is outside the calibrated range [{min:.4}, {max:.4}] of profile `{profile}` (allow extrapolation to use it anyway)"
+    )]
     OutOfRange {
         /// The profile's name.
         profile: String,
@@ -215,11 +217,7 @@ impl BrushProfile {
                 // The paper keeps the press under half the bundle length; scale pen1's h range by
                 // the length ratio 32/48.
                 let k = 32.0 / 48.0;
-                Ok(Self::nominal(
-                    "pen2",
-                    Brush { length_mm: 32.0, radius_mm: 4.5 },
-                    Range::new(11.0 * k, 20.0 * k),
-                ))
+                Ok(Self::nominal("pen2", Brush { length_mm: 32.0, radius_mm: 4.5 }, Range::new(11.0 * k, 20.0 * k)))
             }
             other => Err(ProfileError::UnknownBuiltin(other.to_string())),
         }
@@ -305,7 +303,10 @@ impl BrushProfile {
             reason,
         };
         if self.version != PROFILE_VERSION {
-            return Err(bad("version", format!("unsupported version {} (this build reads {PROFILE_VERSION})", self.version)));
+            return Err(bad(
+                "version",
+                format!("unsupported version {} (this build reads {PROFILE_VERSION})", self.version),
+            ));
         }
         if self.name.trim().is_empty() {
             return Err(bad("name", "must not be empty".into()));
@@ -330,7 +331,9 @@ impl BrushProfile {
         if self.ranges.h_mm.min < 0.0 {
             return Err(bad("ranges.h_mm", "press depth cannot be negative".into()));
         }
-        for (f, t) in [("model.lt_mm", self.model.lt_mm), ("model.lh_mm", self.model.lh_mm), ("model.lr_mm", self.model.lr_mm)] {
+        for (f, t) in
+            [("model.lt_mm", self.model.lt_mm), ("model.lh_mm", self.model.lh_mm), ("model.lr_mm", self.model.lr_mm)]
+        {
             let vals = [Some(t.intercept), t.h_mm, t.alpha_rad, t.beta_rad];
             if vals.iter().flatten().any(|v| !v.is_finite()) {
                 return Err(bad(f, "coefficients must be finite".into()));
@@ -342,7 +345,10 @@ impl BrushProfile {
                 if v <= 0.0 {
                     return Err(bad(
                         f,
-                        format!("predicts {v:.4} mm at the range corner h={} α={} β={}; lengths must be positive", c.h_mm, c.alpha_rad, c.beta_rad),
+                        format!(
+                            "predicts {v:.4} mm at the range corner h={} α={} β={}; lengths must be positive",
+                            c.h_mm, c.alpha_rad, c.beta_rad
+                        ),
                     ));
                 }
             }
@@ -357,11 +363,9 @@ impl BrushProfile {
 
     fn check_range(&self, p: &Press) -> Result<(), ProfileError> {
         let r = &self.ranges;
-        for (quantity, value, range) in [
-            ("h_mm", p.h_mm, r.h_mm),
-            ("alpha_rad", p.alpha_rad, r.alpha_rad),
-            ("beta_rad", p.beta_rad, r.beta_rad),
-        ] {
+        for (quantity, value, range) in
+            [("h_mm", p.h_mm, r.h_mm), ("alpha_rad", p.alpha_rad, r.alpha_rad), ("beta_rad", p.beta_rad, r.beta_rad)]
+        {
             if !range.contains(value) {
                 return Err(ProfileError::OutOfRange {
                     profile: self.name.clone(),

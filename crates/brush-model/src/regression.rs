@@ -34,7 +34,9 @@ pub enum FitError {
         needed: usize,
     },
     /// The varying regressors are linearly dependent.
-    #[error("regressors {columns:?} are collinear in the data (condition number {condition:.3e}); vary them independently")]
+    #[error(
+        "regressors {columns:?} are collinear in the data (condition number {condition:.3e}); vary them independently"
+    )]
     Collinear {
         /// The regressors kept in the design.
         columns: Vec<String>,
@@ -317,7 +319,15 @@ impl Design {
         let t: Vec<f64> = beta
             .iter()
             .zip(&se)
-            .map(|(b, e)| if *e > 0.0 { b / e } else if *b == 0.0 { 0.0 } else { b.signum() * f64::MAX })
+            .map(|(b, e)| {
+                if *e > 0.0 {
+                    b / e
+                } else if *b == 0.0 {
+                    0.0
+                } else {
+                    b.signum() * f64::MAX
+                }
+            })
             .collect();
         let r2 = if sst > 0.0 { 1.0 - ssr / sst } else { 1.0 };
         let adj_r2 = 1.0 - (1.0 - r2) * ((n - 1) as f64) / df_resid;
@@ -339,11 +349,8 @@ impl Design {
 pub fn fit_general(rows: &[Measurement]) -> Result<FitReport, FitError> {
     let design = Design::new(rows, Form::General)?;
     let mut outputs = BTreeMap::new();
-    let pick: [(&str, fn(&Measurement) -> f64); 3] = [
-        ("lt_mm", |m| m.footprint.lt_mm),
-        ("lh_mm", |m| m.footprint.lh_mm),
-        ("lr_mm", |m| m.footprint.lr_mm),
-    ];
+    let pick: [(&str, fn(&Measurement) -> f64); 3] =
+        [("lt_mm", |m| m.footprint.lt_mm), ("lh_mm", |m| m.footprint.lh_mm), ("lr_mm", |m| m.footprint.lr_mm)];
     for (name, f) in pick {
         let y = DVector::from_iterator(rows.len(), rows.iter().map(f));
         outputs.insert(name.to_string(), design.fit(&y));
@@ -368,10 +375,7 @@ pub fn fit_general(rows: &[Measurement]) -> Result<FitReport, FitError> {
 /// As [`fit_general`], plus [`FitError::ZeroTipLength`] when every `lt` is zero.
 pub fn fit_paper(rows: &[Measurement]) -> Result<FitReport, FitError> {
     let design = Design::new(rows, Form::Paper)?;
-    let y = DVector::from_iterator(
-        rows.len(),
-        rows.iter().map(|m| m.footprint.lt_mm + m.footprint.lh_mm),
-    );
+    let y = DVector::from_iterator(rows.len(), rows.iter().map(|m| m.footprint.lt_mm + m.footprint.lh_mm));
     let mut outputs = BTreeMap::new();
     outputs.insert("sum_mm".to_string(), design.fit(&y));
     let (k4, k4_se) = ratio_through_origin(rows, |m| m.footprint.lh_mm)?;
@@ -401,10 +405,7 @@ pub fn fit(rows: &[Measurement], form: Form) -> Result<FitReport, FitError> {
 }
 
 /// `k = Σ lt·y / Σ lt²` and its standard error `sqrt(s² / Σ lt²)` with `s² = SSR/(n − 1)`.
-fn ratio_through_origin(
-    rows: &[Measurement],
-    y: impl Fn(&Measurement) -> f64,
-) -> Result<(f64, f64), FitError> {
+fn ratio_through_origin(rows: &[Measurement], y: impl Fn(&Measurement) -> f64) -> Result<(f64, f64), FitError> {
     let sxx: f64 = rows.iter().map(|m| m.footprint.lt_mm.powi(2)).sum();
     if sxx <= 0.0 {
         return Err(FitError::ZeroTipLength);
@@ -418,25 +419,13 @@ fn ratio_through_origin(
 
 impl fmt::Display for FitReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "{} form, n = {}, condition number = {:.4e}",
-            self.form, self.n, self.condition_number
-        )?;
+        writeln!(f, "{} form, n = {}, condition number = {:.4e}", self.form, self.n, self.condition_number)?;
         if !self.unidentifiable.is_empty() {
-            writeln!(
-                f,
-                "unidentifiable (constant in the data, left out): {}",
-                self.unidentifiable.join(", ")
-            )?;
+            writeln!(f, "unidentifiable (constant in the data, left out): {}", self.unidentifiable.join(", "))?;
         }
         for (name, o) in &self.outputs {
             writeln!(f)?;
-            writeln!(
-                f,
-                "{name}: R² = {:.5}  adj. R² = {:.5}  resid. SE = {:.5} mm",
-                o.r2, o.adj_r2, o.resid_se
-            )?;
+            writeln!(f, "{name}: R² = {:.5}  adj. R² = {:.5}  resid. SE = {:.5} mm", o.r2, o.adj_r2, o.resid_se)?;
             writeln!(f, "  {:<10} {:>14} {:>12} {:>10}", "term", "coef", "std err", "t")?;
             let rows = [
                 ("intercept", Some(o.coef.intercept), Some(o.std_err.intercept), Some(o.t.intercept)),
@@ -450,9 +439,7 @@ impl fmt::Display for FitReport {
                 }
             }
         }
-        if let (Some(k4), Some(k4se), Some(k5), Some(k5se)) =
-            (self.k4, self.k4_std_err, self.k5, self.k5_std_err)
-        {
+        if let (Some(k4), Some(k4se), Some(k5), Some(k5se)) = (self.k4, self.k4_std_err, self.k5, self.k5_std_err) {
             writeln!(f)?;
             writeln!(f, "k4 = lh/lt = {k4:.6} (std err {k4se:.6})")?;
             writeln!(f, "k5 = lr/lt = {k5:.6} (std err {k5se:.6})")?;

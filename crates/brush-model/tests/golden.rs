@@ -1,6 +1,6 @@
 //! The regression agrees with statsmodels on a committed table (see `golden/gen_regression.py`).
 
-use brush_model::{fit_general, fit_paper, read_measurements, OutputFit, Terms};
+use brush_model::{OutputFit, Terms, fit_general, fit_paper, read_measurements};
 use serde_json::Value;
 
 fn close(a: f64, b: f64, what: &str) {

@@ -28,7 +28,9 @@ fn refuses_presses_outside_the_range_unless_asked() {
     let e = p.predict(&deep, Extrapolation::Refuse).unwrap_err();
     assert!(e.to_string().contains("h_mm") && e.to_string().contains("outside"), "{e}");
     let f = p.predict(&deep, Extrapolation::Allow).unwrap();
-    assert!(f.length_mm() > p.predict(&Press::from_degrees(20.0, 5.0, 0.0), Extrapolation::Refuse).unwrap().length_mm());
+    assert!(
+        f.length_mm() > p.predict(&Press::from_degrees(20.0, 5.0, 0.0), Extrapolation::Refuse).unwrap().length_mm()
+    );
     let tilted = Press::from_degrees(15.0, 20.0, 0.0);
     assert!(p.predict(&tilted, Extrapolation::Refuse).unwrap_err().to_string().contains("alpha_rad"));
 }

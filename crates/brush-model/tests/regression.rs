@@ -1,8 +1,6 @@
 //! The fits recover known coefficients and handle degenerate designs honestly.
 
-use brush_model::{
-    fit_general, fit_paper, BrushProfile, Extrapolation, FitError, Footprint, Measurement, Press,
-};
+use brush_model::{BrushProfile, Extrapolation, FitError, Footprint, Measurement, Press, fit_general, fit_paper};
 
 /// A small deterministic generator (splitmix64 → Box–Muller) so the test needs no RNG crate.
 struct Noise(u64);
@@ -51,15 +49,12 @@ fn synthetic(n_per_cell: usize, sigma: f64, beta_values: &[f64], seed: u64) -> V
 fn recovers_known_coefficients_within_standard_errors() {
     let rows = synthetic(10, 0.2, &[0.0, 5.0], 7);
     let fit = fit_general(&rows).unwrap();
-    let truth = [
-        ("lt_mm", [0.5, 0.9, 12.0, 4.0]),
-        ("lh_mm", [0.2, 0.35, 3.0, -2.0]),
-        ("lr_mm", [0.1, 0.2, 0.6, 1.0]),
-    ];
+    let truth = [("lt_mm", [0.5, 0.9, 12.0, 4.0]), ("lh_mm", [0.2, 0.35, 3.0, -2.0]), ("lr_mm", [0.1, 0.2, 0.6, 1.0])];
     for (name, t) in truth {
         let o = &fit.outputs[name];
         let c = [o.coef.intercept, o.coef.h_mm.unwrap(), o.coef.alpha_rad.unwrap(), o.coef.beta_rad.unwrap()];
-        let se = [o.std_err.intercept, o.std_err.h_mm.unwrap(), o.std_err.alpha_rad.unwrap(), o.std_err.beta_rad.unwrap()];
+        let se =
+            [o.std_err.intercept, o.std_err.h_mm.unwrap(), o.std_err.alpha_rad.unwrap(), o.std_err.beta_rad.unwrap()];
         for k in 0..4 {
             // 4 standard errors: a false failure has probability ~6e-5 per coefficient.
             assert!((c[k] - t[k]).abs() < 4.0 * se[k], "{name}[{k}]: {} vs {} (se {})", c[k], t[k], se[k]);

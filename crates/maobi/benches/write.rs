@@ -2,10 +2,10 @@
 //! (`cargo bench -p maobi`).
 
 use brush_model::BrushProfile;
-use criterion::{criterion_group, criterion_main, Criterion};
-use maobi::pipeline::{prepare, write_char, WriteOptions};
+use criterion::{Criterion, criterion_group, criterion_main};
+use maobi::pipeline::{WriteOptions, prepare, write_char};
 use std::hint::black_box;
-use trajectory::{glyph, CharBox, Method};
+use trajectory::{CharBox, Method, glyph};
 
 fn bench(c: &mut Criterion) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();

@@ -117,10 +117,15 @@ pub struct StrokeLabel {
 /// file, line and column.
 pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
     let name = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).from_path(path).with_context(|| format!("{name}: cannot read"))?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{name}: cannot read"))?;
     let header = rdr.headers().with_context(|| format!("{name}: cannot read the header"))?.clone();
     let col = |c: &str| header.iter().position(|h| h == c);
-    let need = |c: &'static str| col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"));
+    let need = |c: &'static str| {
+        col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"))
+    };
     let (fi, hi, ai, bi) = (need("file")?, need("h_mm")?, need("alpha_deg")?, need("beta_deg")?);
     let si = col("px_per_mm");
     let mut out = Vec::new();
@@ -129,13 +134,20 @@ pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
         let line = rec.position().map_or(0, |p| p.line());
         let num = |i: usize, c: &str| -> Result<f64> {
             let v = rec.get(i).unwrap_or("");
-            v.parse::<f64>().ok().filter(|x| x.is_finite()).with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
         };
         let px = match si {
             Some(i) if !rec.get(i).unwrap_or("").is_empty() => Some(num(i, "px_per_mm")?),
             _ => None,
         };
-        out.push(StrokeLabel { file: rec.get(fi).unwrap_or("").to_string(), press: brush_model::Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?), px_per_mm: px });
+        out.push(StrokeLabel {
+            file: rec.get(fi).unwrap_or("").to_string(),
+            press: brush_model::Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?),
+            px_per_mm: px,
+        });
     }
     if out.is_empty() {
         anyhow::bail!("{name}: no rows");

@@ -3,11 +3,14 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use bezier_raster::{render_track, Coverage, ModelKind};
+use bezier_raster::{Coverage, ModelKind, render_track};
 use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
 use serde::Serialize;
 use stroke_metrics::GrayRef;
-use trajectory::{build_track, centre_lines, chamfer_pct, raster::render_glyph, CharBox, Glyph, Method, Sizing, StrokePath, TrackOptions};
+use trajectory::{
+    CharBox, Glyph, Method, Sizing, StrokePath, TrackOptions, build_track, centre_lines, chamfer_pct,
+    raster::render_glyph,
+};
 
 /// Analysis raster for widths and skeletons, px per em box.
 pub const ANALYSIS_PX: u32 = 256;
@@ -65,7 +68,8 @@ pub fn similarity(reference: &Coverage, render: &Coverage) -> Result<Similarity>
 
 /// Wraps a coverage image for the metrics crate.
 pub fn gray(c: &Coverage) -> GrayRef<'_> {
-    GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("coverage buffers have width × height values")
+    GrayRef::new(c.data(), c.width() as usize, c.height() as usize)
+        .expect("coverage buffers have width × height values")
 }
 
 /// A glyph with its centre lines, ready to be placed.
@@ -144,8 +148,24 @@ pub struct CharResult {
 ///
 /// # Errors
 /// When the profile refuses a point.
-pub fn render_char(track: &Track, profile: &BrushProfile, model: ModelKind, ex: Extrapolation, b: &CharBox, size: u32) -> Result<Coverage> {
-    Ok(render_track(track, profile, model.model(), ex, PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)?)
+pub fn render_char(
+    track: &Track,
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Result<Coverage> {
+    Ok(render_track(
+        track,
+        profile,
+        model.model(),
+        ex,
+        PointMm::new(b.x0_mm, b.y0_mm),
+        size as f64 / b.size_mm,
+        size,
+        size,
+    )?)
 }
 
 /// Builds, renders and scores one prepared character placed at `char_box`.
@@ -154,7 +174,8 @@ pub fn render_char(track: &Track, profile: &BrushProfile, model: ModelKind, ex: 
 /// When the profile refuses the track or the images cannot be scored.
 pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts: &WriteOptions) -> Result<CharResult> {
     let t0 = Instant::now();
-    let topts = TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
+    let topts =
+        TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let built = build_track(&p.paths, profile, &topts)?;
     let render = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
     let reference = render_glyph(&p.glyph, opts.size);

@@ -2,7 +2,7 @@
 
 use std::sync::Once;
 
-use anyhow::{anyhow, Result};
+use anyhow::{Result, anyhow};
 use brush_model::{BrushProfile, Measurement};
 use plotters::prelude::*;
 
@@ -48,27 +48,47 @@ pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Ve
         for (r, (label, get, terms)) in outputs.iter().enumerate() {
             for c in 0..2 {
                 let area = &cells[r * 2 + c];
-                let xs: Vec<f64> = rows.iter().map(|m| if c == 0 { m.press.h_mm } else { m.press.alpha_rad.to_degrees() }).collect();
+                let xs: Vec<f64> =
+                    rows.iter().map(|m| if c == 0 { m.press.h_mm } else { m.press.alpha_rad.to_degrees() }).collect();
                 let ys: Vec<f64> = rows.iter().map(get).collect();
-                let (x0, x1) = (xs.iter().cloned().fold(f64::INFINITY, f64::min), xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
-                let (y0, y1) = (ys.iter().cloned().fold(f64::INFINITY, f64::min), ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max));
+                let (x0, x1) = (
+                    xs.iter().cloned().fold(f64::INFINITY, f64::min),
+                    xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+                );
+                let (y0, y1) = (
+                    ys.iter().cloned().fold(f64::INFINITY, f64::min),
+                    ys.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+                );
                 let (px, py) = (((x1 - x0) * 0.08).max(0.5), ((y1 - y0) * 0.1).max(0.1));
                 let xlabel = if c == 0 { "h (mm)" } else { "α (°)" };
                 let mut chart = ChartBuilder::on(area)
-                    .caption(format!("{} vs {}", label.split(' ').next().unwrap_or(label), if c == 0 { "h" } else { "α" }), ("sans-serif", 20))
+                    .caption(
+                        format!("{} vs {}", label.split(' ').next().unwrap_or(label), if c == 0 { "h" } else { "α" }),
+                        ("sans-serif", 20),
+                    )
                     .margin(10)
                     .x_label_area_size(35)
                     .y_label_area_size(50)
                     .build_cartesian_2d((x0 - px)..(x1 + px), (y0 - py)..(y1 + py))
                     .map_err(|e| anyhow!("{e}"))?;
-                chart.configure_mesh().x_desc(xlabel).y_desc(*label).label_style(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+                chart
+                    .configure_mesh()
+                    .x_desc(xlabel)
+                    .y_desc(*label)
+                    .label_style(("sans-serif", 14))
+                    .draw()
+                    .map_err(|e| anyhow!("{e}"))?;
                 chart
                     .draw_series(xs.iter().zip(&ys).map(|(&x, &y)| Circle::new((x, y), 3, BLUE.mix(0.6).filled())))
                     .map_err(|e| anyhow!("{e}"))?;
                 let line: Vec<(f64, f64)> = (0..=40)
                     .map(|i| {
                         let x = x0 + (x1 - x0) * i as f64 / 40.0;
-                        let y = if c == 0 { terms.eval(x, mean_a, mean_b) } else { terms.eval(mean_h, x.to_radians(), mean_b) };
+                        let y = if c == 0 {
+                            terms.eval(x, mean_a, mean_b)
+                        } else {
+                            terms.eval(mean_h, x.to_radians(), mean_b)
+                        };
                         (x, y)
                     })
                     .collect();
@@ -102,7 +122,13 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..x1, (y0..y1).log_scale())
             .map_err(|e| anyhow!("{e}"))?;
-        chart.configure_mesh().x_desc("step").y_desc("MSE").label_style(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("step")
+            .y_desc("MSE")
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
         for (i, (name, pts)) in series.iter().enumerate() {
             let colour = Palette99::pick(i).to_rgba();
             chart
@@ -111,7 +137,13 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
                 .label(*name)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 14)).draw().map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     to_png(buf, w, h)

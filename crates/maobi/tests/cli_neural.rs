@@ -4,29 +4,55 @@ mod common;
 
 use common::{fails, maobi, ok, s};
 
-
-
-
-
 #[test]
 fn train_a_tiny_generator_and_use_it() {
     let dir = tempfile::tempdir().unwrap();
     let m = dir.path().join("g/tiny.safetensors");
-    let out = ok(&maobi(&["train", "--arch", "tiny", "--steps", "30", "--batch", "16", "--val-every", "10", "--eval-n", "16", "-o", s(&m)]));
+    let out = ok(&maobi(&[
+        "train",
+        "--arch",
+        "tiny",
+        "--steps",
+        "30",
+        "--batch",
+        "16",
+        "--val-every",
+        "10",
+        "--eval-n",
+        "16",
+        "-o",
+        s(&m),
+    ]));
     assert!(out.contains("30 steps"), "{out}");
     for f in ["tiny.safetensors", "tiny.json", "loss.csv", "loss.png"] {
         assert!(dir.path().join("g").join(f).is_file(), "{f}");
     }
     let csv = std::fs::read_to_string(dir.path().join("g/loss.csv")).unwrap();
     assert!(csv.starts_with("step,train_mse,val_mse,lr\n") && csv.lines().count() == 31);
-    let cfg: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("g/tiny.json")).unwrap()).unwrap();
+    let cfg: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("g/tiny.json")).unwrap()).unwrap();
     assert_eq!(cfg["recipe"]["steps"], 30);
     assert!(cfg["metrics"]["ssim_mean"].as_f64().is_some());
-    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["eval-generator", "--model", s(&m), "--n", "16", "--json"]))).unwrap();
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["eval-generator", "--model", s(&m), "--n", "16", "--json"]))).unwrap();
     assert_eq!(j["n"], 16);
     assert!(j["models"]["b-bsmg"]["csim"]["mean"].as_f64().unwrap() > 0.0);
     // Resume continues from the checkpoint.
-    ok(&maobi(&["train", "--resume", s(&m), "--steps", "5", "--batch", "8", "--val-every", "5", "--eval-n", "8", "-o", s(&dir.path().join("g/more.safetensors"))]));
+    ok(&maobi(&[
+        "train",
+        "--resume",
+        s(&m),
+        "--steps",
+        "5",
+        "--batch",
+        "8",
+        "--val-every",
+        "5",
+        "--eval-n",
+        "8",
+        "-o",
+        s(&dir.path().join("g/more.safetensors")),
+    ]));
     // A corrupted checkpoint is a clear error.
     std::fs::write(&m, b"not weights").unwrap();
     fails(&maobi(&["eval-generator", "--model", s(&m), "--n", "4"]), "safetensors");
@@ -38,20 +64,41 @@ fn train_a_tiny_generator_and_use_it() {
 fn the_committed_generator_renders_strokes_and_characters() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("n.png");
-    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--renderer", "neural", "-o", s(&png), "--json"]))).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&[
+        "stroke",
+        "--h",
+        "15",
+        "--alpha",
+        "5",
+        "--renderer",
+        "neural",
+        "-o",
+        s(&png),
+        "--json",
+    ])))
+    .unwrap();
     assert_eq!(j["size"], 128);
     let a = dir.path().join("a.png");
     ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&a)]));
     let c: serde_json::Value = serde_json::from_str(&ok(&maobi(&["compare", s(&a), s(&png), "--json"]))).unwrap();
     assert!(c["csim"].as_f64().unwrap() > 0.85, "{c}");
-    fails(&maobi(&["stroke", "--h", "25", "--alpha", "5", "--renderer", "neural", "-o", s(&png)]), "outside the calibrated range");
-    fails(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--renderer", "neural", "-o", s(&dir.path().join("n.svg"))]), "PNG only");
+    fails(
+        &maobi(&["stroke", "--h", "25", "--alpha", "5", "--renderer", "neural", "-o", s(&png)]),
+        "outside the calibrated range",
+    );
+    fails(
+        &maobi(&["stroke", "--h", "15", "--alpha", "5", "--renderer", "neural", "-o", s(&dir.path().join("n.svg"))]),
+        "PNG only",
+    );
     let w = dir.path().join("w");
     ok(&maobi(&["write", "十", "--renderer", "neural", "--size", "128", "--out", s(&w)]));
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(w.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["model"], "b-bsmg");
     assert!(r["csim"].as_f64().unwrap() > 0.7, "{r}");
-    fails(&maobi(&["write", "十", "--renderer", "neural", "--brush", "pen2", "--out", s(&dir.path().join("x"))]), "trained for brush `pen1`");
+    fails(
+        &maobi(&["write", "十", "--renderer", "neural", "--brush", "pen2", "--out", s(&dir.path().join("x"))]),
+        "trained for brush `pen1`",
+    );
     let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["eval-generator", "--n", "20", "--json"]))).unwrap();
     for m in ["b-bsmg", "circle", "ellipse", "line", "qbc"] {
         assert!(j["models"][m]["ssim"]["mean"].as_f64().unwrap() > 0.5, "{m}");

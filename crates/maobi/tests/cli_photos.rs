@@ -5,10 +5,6 @@ mod common;
 use common::{fails, maobi, ok, s};
 use std::path::{Path, PathBuf};
 
-
-
-
-
 fn photos() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/photos")
 }
@@ -17,7 +13,14 @@ fn photos() -> PathBuf {
 fn fit_stroke_reads_the_scale_and_draws_the_overlay() {
     let dir = tempfile::tempdir().unwrap();
     let ov = dir.path().join("ov.png");
-    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["fit-stroke", s(&photos().join("stroke_01.png")), "--json", "--overlay", s(&ov)]))).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&[
+        "fit-stroke",
+        s(&photos().join("stroke_01.png")),
+        "--json",
+        "--overlay",
+        s(&ov),
+    ])))
+    .unwrap();
     // stroke_01: pen1 at h = 11 mm, α = 0: lt 9.9, lh 3.85, lr 2.2 mm.
     for (k, want) in [("lt_mm", 9.9), ("lh_mm", 3.85), ("lr_mm", 2.2)] {
         let got = j[k].as_f64().unwrap();

@@ -4,10 +4,6 @@ mod common;
 
 use common::{fails, maobi, ok_json, s};
 
-
-
-
-
 #[test]
 fn stroke_writes_the_footprint_described_by_its_json() {
     let dir = tempfile::tempdir().unwrap();
@@ -108,7 +104,8 @@ fn models_table_ranks_the_baselines_below_identity() {
     assert_eq!(j["reference"], "bsm");
     for m in ["circle", "ellipse", "line", "qbc"] {
         let c = &j["models"][m]["csim"];
-        let (best, worst, mean) = (c["best"].as_f64().unwrap(), c["worst"].as_f64().unwrap(), c["mean"].as_f64().unwrap());
+        let (best, worst, mean) =
+            (c["best"].as_f64().unwrap(), c["worst"].as_f64().unwrap(), c["mean"].as_f64().unwrap());
         assert!(worst <= mean && mean <= best && best < 0.99 && worst > 0.3, "{m}: {c}");
     }
     // The circle ignores the footprint's length: it is the worst by CSIM.
@@ -123,7 +120,17 @@ fn models_against_reference_photos() {
     let mut labels = String::from("file,h_mm,alpha_deg,beta_deg\n");
     for (i, (h, a)) in [(12.0, 0.0), (16.0, 5.0), (19.0, 10.0)].iter().enumerate() {
         let f = format!("p{i}.png");
-        ok_json(&maobi(&["stroke", "--h", &h.to_string(), "--alpha", &a.to_string(), "--size", "64", "-o", s(&dir.path().join(&f))]));
+        ok_json(&maobi(&[
+            "stroke",
+            "--h",
+            &h.to_string(),
+            "--alpha",
+            &a.to_string(),
+            "--size",
+            "64",
+            "-o",
+            s(&dir.path().join(&f)),
+        ]));
         labels.push_str(&format!("{f},{h},{a},0\n"));
     }
     std::fs::write(dir.path().join("labels.csv"), labels).unwrap();

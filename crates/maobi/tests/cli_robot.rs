@@ -6,10 +6,6 @@ use common::{fails, maobi, ok, s};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-
-
-
-
 fn paper() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")
 }
@@ -24,7 +20,8 @@ fn written(dir: &Path) -> PathBuf {
 fn check_and_export_a_written_character() {
     let dir = tempfile::tempdir().unwrap();
     let track = written(dir.path());
-    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
     assert_eq!(j["strokes"], 2);
     assert!(j["max_press_mm"].as_f64().unwrap() <= 20.0);
     for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
@@ -44,20 +41,33 @@ fn refusals_name_the_problem_and_write_nothing() {
     let track = written(dir.path());
     // A sheet too small for the character.
     let small = dir.path().join("small.json");
-    std::fs::write(&small, std::fs::read_to_string(paper()).unwrap().replace("\"size_mm\": [300, 300]", "\"size_mm\": [20, 20]")).unwrap();
+    std::fs::write(
+        &small,
+        std::fs::read_to_string(paper()).unwrap().replace("\"size_mm\": [300, 300]", "\"size_mm\": [20, 20]"),
+    )
+    .unwrap();
     let out = dir.path().join("p.lua");
-    fails(&maobi(&["robot", "export", s(&track), "--paper", s(&small), "--format", "aubo-lua", "-o", s(&out)]), "outside the paper");
+    fails(
+        &maobi(&["robot", "export", s(&track), "--paper", s(&small), "--format", "aubo-lua", "-o", s(&out)]),
+        "outside the paper",
+    );
     assert!(!out.exists());
     // A press deeper than the brush's range.
     let mut t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&track).unwrap()).unwrap();
     t["strokes"][0][3]["h_mm"] = serde_json::json!(26.0);
     let deep = dir.path().join("deep.json");
     std::fs::write(&deep, t.to_string()).unwrap();
-    fails(&maobi(&["robot", "check", s(&deep), "--paper", s(&paper())]), "stroke 1, point 4: press h = 26.000 mm is deeper");
+    fails(
+        &maobi(&["robot", "check", s(&deep), "--paper", s(&paper())]),
+        "stroke 1, point 4: press h = 26.000 mm is deeper",
+    );
     // Robot config over the limits, collinear paper points, malformed files.
     let fast = dir.path().join("robot.json");
     std::fs::write(&fast, r#"{"travel_speed_m_s": 1.0}"#).unwrap();
-    fails(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--robot", s(&fast)]), "travel_speed_m_s = 1 exceeds the limit");
+    fails(
+        &maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--robot", s(&fast)]),
+        "travel_speed_m_s = 1 exceeds the limit",
+    );
     let line = dir.path().join("line.json");
     std::fs::write(&line, r#"{"touch_points": [{"paper_mm": [0, 0], "robot_m": [0.3, 0.2, 0.05]}, {"paper_mm": [100, 0], "robot_m": [0.4, 0.2, 0.05]}, {"paper_mm": [200, 0], "robot_m": [0.5, 0.2, 0.05]}]}"#).unwrap();
     fails(&maobi(&["robot", "check", s(&track), "--paper", s(&line)]), "collinear");
@@ -88,7 +98,19 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     assert!(up, "simulator did not start");
-    let o = maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "127.0.0.1", "--port", &port.to_string(), "--timeout-ms", "1000"]);
+    let o = maobi(&[
+        "robot",
+        "send",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--host",
+        "127.0.0.1",
+        "--port",
+        &port.to_string(),
+        "--timeout-ms",
+        "1000",
+    ]);
     let out = ok(&o);
     assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");
     std::thread::sleep(std::time::Duration::from_millis(300));
@@ -96,7 +118,19 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     let _ = sim.wait();
     // The executed path renders back to (nearly) the planned image.
     let img = dir.path().join("trace.png");
-    ok(&maobi(&["robot", "render-trace", s(&trace), "--track", s(&track), "--paper", s(&paper()), "--size", "96", "-o", s(&img)]));
+    ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "96",
+        "-o",
+        s(&img),
+    ]));
     let render = track.parent().unwrap().join("render.png");
     let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["compare", s(&render), s(&img), "--json"]))).unwrap();
     assert!(j["csim"].as_f64().unwrap() > 0.85, "{j}");

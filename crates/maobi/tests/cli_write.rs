@@ -7,10 +7,6 @@ use std::path::{Path, PathBuf};
 
 use brush_model::Track;
 
-
-
-
-
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures")
 }
@@ -47,7 +43,9 @@ fn one_character_gets_all_five_outputs() {
     assert_eq!(track.point_count() as u64, r["points"].as_u64().unwrap());
     let pen1 = brush_model::BrushProfile::builtin("pen1").unwrap();
     for p in track.points() {
-        assert!(p.x_mm >= b[0] - 1.0 && p.x_mm <= b[0] + b[2] + 1.0 && p.y_mm >= b[1] - 1.0 && p.y_mm <= b[1] + b[2] + 1.0);
+        assert!(
+            p.x_mm >= b[0] - 1.0 && p.x_mm <= b[0] + b[2] + 1.0 && p.y_mm >= b[1] - 1.0 && p.y_mm <= b[1] + b[2] + 1.0
+        );
         assert!(pen1.ranges.h_mm.contains(p.h_mm), "h {}", p.h_mm);
     }
     assert_eq!(t["brush"]["name"], "pen1");

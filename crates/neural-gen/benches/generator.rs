@@ -3,7 +3,7 @@
 
 use bezier_raster::{Bsm, Coverage, DatasetSpec, Rasterizer};
 use brush_model::{BrushProfile, Press};
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 use std::hint::black_box;
 
@@ -32,7 +32,9 @@ fn bench(c: &mut Criterion) {
     let mut grp = c.benchmark_group("generator_training");
     grp.sample_size(10);
     grp.bench_function("step_batch_64", |b| {
-        let mut g = Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1).unwrap();
+        let mut g =
+            Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1)
+                .unwrap();
         let opts = TrainOptions { steps: 1, batch: 64, val_every: 1_000_000, ..TrainOptions::default() };
         b.iter(|| neural_gen::train(&mut g, &opts, |_| {}).unwrap())
     });

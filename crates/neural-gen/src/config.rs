@@ -31,7 +31,12 @@ impl Arch {
     /// The default for 128² on 2 CPU cores: FC 3→128→512→16·8·8, then stages 16→64, 16→32,
     /// 8→32, 8→4 (8² → 16² → 32² → 64² → 128²).
     pub fn default_128() -> Self {
-        Self { hidden: vec![128, 512], seed_channels: 16, seed_side: 8, stages: vec![(16, 64), (16, 32), (8, 32), (8, 4)] }
+        Self {
+            hidden: vec![128, 512],
+            seed_channels: 16,
+            seed_side: 8,
+            stages: vec![(16, 64), (16, 32), (8, 32), (8, 4)],
+        }
     }
 
     /// A tiny network for 32² images, for tests.
@@ -168,12 +173,23 @@ impl GeneratorConfig {
     pub fn new(profile: BrushProfile, arch: Arch) -> Self {
         let size = arch.output_side() as u32;
         let canvas = bezier_raster::StrokeCanvas::for_profile(&profile, size);
-        Self { version: CONFIG_VERSION, ranges: profile.ranges, arch, size, px_per_mm: canvas.px_per_mm, profile, recipe: None, metrics: None }
+        Self {
+            version: CONFIG_VERSION,
+            ranges: profile.ranges,
+            arch,
+            size,
+            px_per_mm: canvas.px_per_mm,
+            profile,
+            recipe: None,
+            metrics: None,
+        }
     }
 
     /// The press normalised to [−1, 1] per input (0 for a degenerate range).
     pub fn normalise(&self, p: &Press) -> [f32; 3] {
-        let n = |v: f64, r: brush_model::Range| if r.max > r.min { (2.0 * (v - r.min) / (r.max - r.min) - 1.0) as f32 } else { 0.0 };
+        let n = |v: f64, r: brush_model::Range| {
+            if r.max > r.min { (2.0 * (v - r.min) / (r.max - r.min) - 1.0) as f32 } else { 0.0 }
+        };
         [n(p.h_mm, self.ranges.h_mm), n(p.alpha_rad, self.ranges.alpha_rad), n(p.beta_rad, self.ranges.beta_rad)]
     }
 

@@ -8,7 +8,7 @@
 //! * [`model`]: [`Generator`]: forward pass, batched rendering in the `maobi stroke` canvas
 //!   convention, the vector–Jacobian product with respect to `(h, α, β)`, safetensors
 //!   checkpoints with consistency checks.
-//! * [`train`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
+//! * [`mod@train`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
 //! * [`compose`]: a whole track rendered with the generator (batched along the track).
 //! * [`eval`]: CSIM/SSIM of the generator against the analytic footprints.
 
@@ -22,7 +22,7 @@ use thiserror::Error;
 
 pub use config::{Arch, GeneratorConfig, Metrics, Recipe};
 pub use model::Generator;
-pub use train::{train, TrainOptions, TrainPoint, TrainReport};
+pub use train::{TrainOptions, TrainPoint, TrainReport, train};
 
 /// Errors of neural-gen.
 #[derive(Debug, Error)]

@@ -9,8 +9,8 @@ use candle_nn::{Conv2d, Conv2dConfig, Linear, VarBuilder, VarMap};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::config::{GeneratorConfig, CONFIG_VERSION};
 use crate::NeuralGenError;
+use crate::config::{CONFIG_VERSION, GeneratorConfig};
 
 /// A generator: the network and its configuration.
 pub struct Generator {
@@ -34,7 +34,10 @@ impl Generator {
     /// # Errors
     /// [`NeuralGenError::Config`] for an inconsistent architecture.
     pub fn new(config: GeneratorConfig, seed: u64) -> Result<Self, NeuralGenError> {
-        config.arch.validate().map_err(|m| NeuralGenError::Config { source_name: "architecture".into(), message: m })?;
+        config
+            .arch
+            .validate()
+            .map_err(|m| NeuralGenError::Config { source_name: "architecture".into(), message: m })?;
         let device = Device::Cpu;
         let varmap = VarMap::new();
         let vb = VarBuilder::from_varmap(&varmap, DType::F32, &device);
@@ -133,17 +136,29 @@ impl Generator {
     pub fn image_and_vjp(&self, press: &Press, upstream: &[f32]) -> Result<(Coverage, [f64; 3]), NeuralGenError> {
         let s = self.config.size as usize;
         if upstream.len() != s * s {
-            return Err(NeuralGenError::Shape(format!("upstream gradient has {} values, expected {}", upstream.len(), s * s)));
+            return Err(NeuralGenError::Shape(format!(
+                "upstream gradient has {} values, expected {}",
+                upstream.len(),
+                s * s
+            )));
         }
         let x = Var::from_tensor(&self.inputs(std::slice::from_ref(press))?).map_err(cerr)?;
         let y = self.forward(x.as_tensor())?;
         let w = Tensor::from_vec(upstream.to_vec(), (1, 1, s, s), &self.device).map_err(cerr)?;
         let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
         let grads = l.backward().map_err(cerr)?;
-        let gx: Vec<f32> = grads.get(x.as_tensor()).ok_or_else(|| NeuralGenError::Candle("no gradient for the input".into()))?.flatten_all().and_then(|t| t.to_vec1()).map_err(cerr)?;
+        let gx: Vec<f32> = grads
+            .get(x.as_tensor())
+            .ok_or_else(|| NeuralGenError::Candle("no gradient for the input".into()))?
+            .flatten_all()
+            .and_then(|t| t.to_vec1())
+            .map_err(cerr)?;
         let k = self.config.normalise_slopes();
         let img: Vec<f32> = y.flatten_all().and_then(|t| t.to_vec1()).map_err(cerr)?;
-        Ok((Coverage::from_vec(s as u32, s as u32, img).expect("sized"), [gx[0] as f64 * k[0], gx[1] as f64 * k[1], gx[2] as f64 * k[2]]))
+        Ok((
+            Coverage::from_vec(s as u32, s as u32, img).expect("sized"),
+            [gx[0] as f64 * k[0], gx[1] as f64 * k[1], gx[2] as f64 * k[2]],
+        ))
     }
 
     /// Saves the weights (`path`, safetensors) and the config (`path` with extension `.json`),
@@ -166,7 +181,8 @@ impl Generator {
         }
         let cfg = config_path(path);
         let tmp = cfg.with_extension("json.tmp");
-        std::fs::write(&tmp, serde_json::to_string_pretty(&self.config).expect("serialises")).map_err(|e| io(e.to_string()))?;
+        std::fs::write(&tmp, serde_json::to_string_pretty(&self.config).expect("serialises"))
+            .map_err(|e| io(e.to_string()))?;
         std::fs::rename(&tmp, &cfg).map_err(|e| io(e.to_string()))?;
         Ok(())
     }
@@ -179,8 +195,10 @@ impl Generator {
     pub fn load(path: &Path) -> Result<Self, NeuralGenError> {
         let cfg_path = config_path(path);
         let name = cfg_path.display().to_string();
-        let text = std::fs::read_to_string(&cfg_path).map_err(|e| NeuralGenError::Io { path: name.clone(), message: e.to_string() })?;
-        let bytes = std::fs::read(path).map_err(|e| NeuralGenError::Io { path: path.display().to_string(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(&cfg_path)
+            .map_err(|e| NeuralGenError::Io { path: name.clone(), message: e.to_string() })?;
+        let bytes = std::fs::read(path)
+            .map_err(|e| NeuralGenError::Io { path: path.display().to_string(), message: e.to_string() })?;
         Self::from_bytes(&bytes, &text, &path.display().to_string(), &name)
     }
 
@@ -189,29 +207,65 @@ impl Generator {
     ///
     /// # Errors
     /// As [`Generator::load`].
-    pub fn from_bytes(weights: &[u8], config_json: &str, weights_name: &str, config_name: &str) -> Result<Self, NeuralGenError> {
+    pub fn from_bytes(
+        weights: &[u8],
+        config_json: &str,
+        weights_name: &str,
+        config_name: &str,
+    ) -> Result<Self, NeuralGenError> {
         let name = config_name.to_string();
         let text = config_json;
-        let config: GeneratorConfig = serde_json::from_str(&text).map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
+        let config: GeneratorConfig = serde_json::from_str(&text)
+            .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
         if config.version != CONFIG_VERSION {
-            return Err(NeuralGenError::Config { source_name: name, message: format!("version {} (this build reads {CONFIG_VERSION})", config.version) });
+            return Err(NeuralGenError::Config {
+                source_name: name,
+                message: format!("version {} (this build reads {CONFIG_VERSION})", config.version),
+            });
         }
         if config.arch.output_side() as u32 != config.size {
-            return Err(NeuralGenError::Config { source_name: name, message: format!("size {} does not match the architecture's output {}", config.size, config.arch.output_side()) });
+            return Err(NeuralGenError::Config {
+                source_name: name,
+                message: format!(
+                    "size {} does not match the architecture's output {}",
+                    config.size,
+                    config.arch.output_side()
+                ),
+            });
         }
-        config.profile.validate(&name).map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
+        config
+            .profile
+            .validate(&name)
+            .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
         let g = Generator::new(config, 0)?;
         let wname = weights_name.to_string();
-        let tensors = candle_core::safetensors::load_buffer(weights, &g.device).map_err(|e| NeuralGenError::Config { source_name: wname.clone(), message: format!("not a readable safetensors file: {e}") })?;
+        let tensors =
+            candle_core::safetensors::load_buffer(weights, &g.device).map_err(|e| NeuralGenError::Config {
+                source_name: wname.clone(),
+                message: format!("not a readable safetensors file: {e}"),
+            })?;
         {
             let data = g.varmap.data().lock().expect("varmap");
             if tensors.len() != data.len() {
-                return Err(NeuralGenError::Config { source_name: wname, message: format!("{} tensors, the architecture has {}", tensors.len(), data.len()) });
+                return Err(NeuralGenError::Config {
+                    source_name: wname,
+                    message: format!("{} tensors, the architecture has {}", tensors.len(), data.len()),
+                });
             }
             for (k, var) in data.iter() {
-                let t = tensors.get(k).ok_or_else(|| NeuralGenError::Config { source_name: wname.clone(), message: format!("tensor `{k}` missing") })?;
+                let t = tensors.get(k).ok_or_else(|| NeuralGenError::Config {
+                    source_name: wname.clone(),
+                    message: format!("tensor `{k}` missing"),
+                })?;
                 if t.shape() != var.shape() {
-                    return Err(NeuralGenError::Config { source_name: wname.clone(), message: format!("tensor `{k}` has shape {:?}, the architecture needs {:?}", t.dims(), var.dims()) });
+                    return Err(NeuralGenError::Config {
+                        source_name: wname.clone(),
+                        message: format!(
+                            "tensor `{k}` has shape {:?}, the architecture needs {:?}",
+                            t.dims(),
+                            var.dims()
+                        ),
+                    });
                 }
                 var.set(t).map_err(cerr)?;
             }
@@ -233,8 +287,17 @@ fn build(config: &GeneratorConfig, vb: &VarBuilder<'_>) -> candle_core::Result<(
         fcs.push(candle_nn::linear(w, h, vb.pp(format!("fc{i}")))?);
         w = h;
     }
-    fcs.push(candle_nn::linear(w, a.seed_channels * a.seed_side * a.seed_side, vb.pp(format!("fc{}", a.hidden.len())))?);
+    fcs.push(candle_nn::linear(
+        w,
+        a.seed_channels * a.seed_side * a.seed_side,
+        vb.pp(format!("fc{}", a.hidden.len())),
+    )?);
     let cfg = Conv2dConfig { padding: 1, ..Default::default() };
-    let convs = a.stages.iter().enumerate().map(|(i, &(cin, cout))| candle_nn::conv2d(cin, cout, 3, cfg, vb.pp(format!("conv{i}")))).collect::<candle_core::Result<_>>()?;
+    let convs = a
+        .stages
+        .iter()
+        .enumerate()
+        .map(|(i, &(cin, cout))| candle_nn::conv2d(cin, cout, 3, cfg, vb.pp(format!("conv{i}"))))
+        .collect::<candle_core::Result<_>>()?;
     Ok((fcs, convs))
 }

@@ -10,8 +10,8 @@ use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::model::Generator;
 use crate::NeuralGenError;
+use crate::model::Generator;
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e.to_string())
@@ -81,7 +81,11 @@ pub fn validation_presses(g: &Generator) -> Vec<Press> {
     for i in 0..6 {
         for j in 0..4 {
             for k in 0..2 {
-                v.push(Press::new(r.h_mm.lerp((i as f64 + 0.5) / 6.0), r.alpha_rad.lerp((j as f64 + 0.5) / 4.0), r.beta_rad.lerp((k as f64 + 0.5) / 2.0)));
+                v.push(Press::new(
+                    r.h_mm.lerp((i as f64 + 0.5) / 6.0),
+                    r.alpha_rad.lerp((j as f64 + 0.5) / 4.0),
+                    r.beta_rad.lerp((k as f64 + 0.5) / 2.0),
+                ));
             }
         }
     }
@@ -102,7 +106,9 @@ pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenErro
         .map_init(
             || (Rasterizer::new(), Coverage::new(s, s)),
             |(r, img), p| -> Result<Vec<f32>, NeuralGenError> {
-                let fp = profile.predict(p, brush_model::Extrapolation::Allow).map_err(|e| NeuralGenError::Config { source_name: "profile".into(), message: e.to_string() })?;
+                let fp = profile
+                    .predict(p, brush_model::Extrapolation::Allow)
+                    .map_err(|e| NeuralGenError::Config { source_name: "profile".into(), message: e.to_string() })?;
                 r.render(&Bsm, &fp, canvas.anchor_mm(&fp, p.beta_rad), p.beta_rad, canvas.px_per_mm, img);
                 Ok(img.data().to_vec())
             },
@@ -128,12 +134,21 @@ fn lr_at(step: usize, total: usize, peak: f64) -> f64 {
 ///
 /// # Errors
 /// [`NeuralGenError`] from candle or from saving checkpoints.
-pub fn train(g: &mut Generator, opts: &TrainOptions, mut on_step: impl FnMut(&TrainPoint)) -> Result<TrainReport, NeuralGenError> {
+pub fn train(
+    g: &mut Generator,
+    opts: &TrainOptions,
+    mut on_step: impl FnMut(&TrainPoint),
+) -> Result<TrainReport, NeuralGenError> {
     let t0 = Instant::now();
-    let spec = DatasetSpec { profile: g.config.profile.clone(), canvas: StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm), seed: opts.seed };
+    let spec = DatasetSpec {
+        profile: g.config.profile.clone(),
+        canvas: StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm),
+        seed: opts.seed,
+    };
     let val_p = validation_presses(g);
     let (val_x, val_y) = (g.inputs(&val_p)?, targets(g, &val_p)?);
-    let mut opt = AdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() }).map_err(cerr)?;
+    let mut opt = AdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() })
+        .map_err(cerr)?;
     let mut history = Vec::with_capacity(opts.steps);
     let (mut best, mut best_step, mut since) = (f64::INFINITY, 0, 0);
     let mut best_weights: Option<Vec<(String, Tensor)>> = None;
@@ -152,14 +167,19 @@ pub fn train(g: &mut Generator, opts: &TrainOptions, mut on_step: impl FnMut(&Tr
         let train_mse = loss.to_scalar::<f32>().map_err(cerr)? as f64;
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
-            let v = (g.forward(&val_x)? - &val_y).and_then(|d| d.sqr()).and_then(|d| d.mean_all()).and_then(|d| d.to_scalar::<f32>()).map_err(cerr)? as f64;
+            let v = (g.forward(&val_x)? - &val_y)
+                .and_then(|d| d.sqr())
+                .and_then(|d| d.mean_all())
+                .and_then(|d| d.to_scalar::<f32>())
+                .map_err(cerr)? as f64;
             point.val_mse = Some(v);
             if v < best * 0.999 {
                 best = v;
                 best_step = step + 1;
                 since = 0;
                 let data = g.varmap.data().lock().expect("varmap");
-                best_weights = Some(data.iter().map(|(k, var)| (k.clone(), var.as_tensor().copy().expect("copy"))).collect());
+                best_weights =
+                    Some(data.iter().map(|(k, var)| (k.clone(), var.as_tensor().copy().expect("copy"))).collect());
                 drop(data);
                 if let Some(p) = &opts.checkpoint {
                     g.save(p)?;
@@ -181,5 +201,13 @@ pub fn train(g: &mut Generator, opts: &TrainOptions, mut on_step: impl FnMut(&Tr
             data[&k].set(&t).map_err(cerr)?;
         }
     }
-    Ok(TrainReport { steps_run: history.len(), history, best_val_mse: best, best_step, stopped_early, wall_seconds: t0.elapsed().as_secs_f64(), data_seconds })
+    Ok(TrainReport {
+        steps_run: history.len(),
+        history,
+        best_val_mse: best,
+        best_step,
+        stopped_early,
+        wall_seconds: t0.elapsed().as_secs_f64(),
+        data_seconds,
+    })
 }

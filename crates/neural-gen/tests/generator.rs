@@ -85,7 +85,9 @@ fn gradients_match_finite_differences() {
     let s = g.config.size as usize;
     // A fixed, uneven upstream gradient: L = Σ w · image.
     let w: Vec<f32> = (0..s * s).map(|i| ((i * 7919) % 101) as f32 / 101.0 - 0.3).collect();
-    let loss = |p: &Press| -> f64 { g.render(&[*p]).unwrap()[0].data().iter().zip(&w).map(|(a, b)| (*a as f64) * (*b as f64)).sum() };
+    let loss = |p: &Press| -> f64 {
+        g.render(&[*p]).unwrap()[0].data().iter().zip(&w).map(|(a, b)| (*a as f64) * (*b as f64)).sum()
+    };
     let p = Press::from_degrees(15.0, 4.0, 2.0);
     let (img, grad) = g.image_and_vjp(&p, &w).unwrap();
     assert_eq!(img, g.render(&[p]).unwrap()[0]);

@@ -6,9 +6,9 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::aubo::{run_program, RunOptions};
+use robot_io::aubo::{RunOptions, run_program};
 use robot_io::frame::PaperFrame;
-use robot_io::program::{build_program, RobotConfig};
+use robot_io::program::{RobotConfig, build_program};
 use robot_io::sim::{Faults, Simulator};
 
 fn main() {
@@ -17,7 +17,9 @@ fn main() {
     let track = Track {
         strokes: vec![
             Stroke { points: (0..=20).map(|i| pt(40.0 + 3.0 * i as f64, 80.0, std::f64::consts::PI)).collect() },
-            Stroke { points: (0..=20).map(|i| pt(70.0, 50.0 + 3.0 * i as f64, -std::f64::consts::FRAC_PI_2)).collect() },
+            Stroke {
+                points: (0..=20).map(|i| pt(70.0, 50.0 + 3.0 * i as f64, -std::f64::consts::FRAC_PI_2)).collect(),
+            },
         ],
     };
     let paper = PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0]);
@@ -25,7 +27,16 @@ fn main() {
     println!("check: {check:?}");
     let sim = Simulator::start("127.0.0.1:0", Faults { drop_after_moves: Some(30), ..Faults::default() }).expect("sim");
     let stop = AtomicBool::new(false);
-    let opts = RunOptions { timeout: Duration::from_millis(500), max_reconnects: 3, backoff: Duration::from_millis(20), lift_m: 0.02, stop: &stop };
-    let report = run_program(&sim.addr.to_string(), &program, None, &opts, |r| println!("  {} strokes done", r.strokes_completed.len())).expect("runs");
+    let opts = RunOptions {
+        timeout: Duration::from_millis(500),
+        max_reconnects: 3,
+        backoff: Duration::from_millis(20),
+        lift_m: 0.02,
+        stop: &stop,
+    };
+    let report = run_program(&sim.addr.to_string(), &program, None, &opts, |r| {
+        println!("  {} strokes done", r.strokes_completed.len())
+    })
+    .expect("runs");
     println!("run: {report:?}; {} moves executed", sim.trace().len());
 }

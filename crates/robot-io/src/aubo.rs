@@ -5,11 +5,11 @@ use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 
+use crate::RobotError;
 use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
-use crate::RobotError;
 
 /// The controller's JSON-RPC port.
 pub const RPC_PORT: u16 = 30004;
@@ -34,7 +34,8 @@ impl AuboClient {
     /// # Errors
     /// [`RobotError::Io`] if the address does not resolve or the connection fails.
     pub fn connect(addr: &str, timeout: Duration) -> Result<Self, RobotError> {
-        let addrs: Vec<SocketAddr> = addr.to_socket_addrs().map_err(|e| RobotError::Io(format!("{addr}: {e}")))?.collect();
+        let addrs: Vec<SocketAddr> =
+            addr.to_socket_addrs().map_err(|e| RobotError::Io(format!("{addr}: {e}")))?.collect();
         let mut last = None;
         for a in addrs {
             match TcpStream::connect_timeout(&a, timeout) {
@@ -75,7 +76,10 @@ impl AuboClient {
                     message: err.get("message").and_then(Value::as_str).unwrap_or("").to_string(),
                 });
             }
-            return v.get("result").cloned().ok_or_else(|| RobotError::Protocol(format!("{method}: answer has neither result nor error")));
+            return v
+                .get("result")
+                .cloned()
+                .ok_or_else(|| RobotError::Protocol(format!("{method}: answer has neither result nor error")));
         }
     }
 
@@ -92,7 +96,9 @@ impl AuboClient {
                         return Ok(v);
                     }
                     Some(Err(e)) if e.is_eof() => {}
-                    Some(Err(e)) => return Err(RobotError::Protocol(format!("{method}: malformed JSON from the controller: {e}"))),
+                    Some(Err(e)) => {
+                        return Err(RobotError::Protocol(format!("{method}: malformed JSON from the controller: {e}")));
+                    }
                     None => {}
                 }
             }
@@ -115,7 +121,8 @@ impl AuboClient {
     /// As [`AuboClient::call`], plus [`RobotError::Controller`] for a negative code.
     pub fn call_status(&mut self, method: &str, params: Value) -> Result<i64, RobotError> {
         let r = self.call(method, params)?;
-        let code = r.as_i64().ok_or_else(|| RobotError::Protocol(format!("{method}: expected an integer result, got {r}")))?;
+        let code =
+            r.as_i64().ok_or_else(|| RobotError::Protocol(format!("{method}: expected an integer result, got {r}")))?;
         if code < 0 {
             return Err(RobotError::Controller { method: method.to_string(), code });
         }
@@ -160,7 +167,9 @@ impl AuboClient {
     pub fn send_move(&mut self, robot: &str, m: &Move) -> Result<(), RobotError> {
         let (method, params) = match m {
             Move::Joint { q, a, v } => (format!("{robot}.MotionControl.moveJoint"), json!([q, a, v, 0.0, 0.0])),
-            Move::Line { pose, a, v, blend_m } => (format!("{robot}.MotionControl.moveLine"), json!([pose.0, a, v, blend_m, 0.0])),
+            Move::Line { pose, a, v, blend_m } => {
+                (format!("{robot}.MotionControl.moveLine"), json!([pose.0, a, v, blend_m, 0.0]))
+            }
         };
         for attempt in 0..200 {
             match self.call_status(&method, params.clone())? {
@@ -243,10 +252,18 @@ fn open(addr: &str, program: &Program, opts: &RunOptions<'_>, robot_name: Option
     let names = client.robot_names()?;
     let robot = match robot_name {
         Some(n) if names.iter().any(|x| x == n) => n.to_string(),
-        Some(n) => return Err(RobotError::Config { file: "robot.json".into(), message: format!("robot `{n}` is not on the controller (it has {names:?})") }),
+        Some(n) => {
+            return Err(RobotError::Config {
+                file: "robot.json".into(),
+                message: format!("robot `{n}` is not on the controller (it has {names:?})"),
+            });
+        }
         None => names.first().cloned().ok_or_else(|| RobotError::Protocol("getRobotNames: no robots".into()))?,
     };
-    client.call_status(&format!("{robot}.RobotConfig.setTcpOffset"), json!([[0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0]]))?;
+    client.call_status(
+        &format!("{robot}.RobotConfig.setTcpOffset"),
+        json!([[0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0]]),
+    )?;
     client.call_status(&format!("{robot}.MotionControl.setSpeedFraction"), json!([program.speed_fraction]))?;
     Ok(Session { client, robot })
 }

@@ -18,7 +18,11 @@ fn list(v: &[f64]) -> String {
 /// fraction and runs every move.
 pub fn aubo_lua(program: &Program, title: &str) -> String {
     let mut s = String::new();
-    s.push_str(&format!("-- maobi writing program: {title}\n-- {} strokes, {} moves. Generated; do not edit by hand.\n", program.strokes.len(), program.move_count()));
+    s.push_str(&format!(
+        "-- maobi writing program: {title}\n-- {} strokes, {} moves. Generated; do not edit by hand.\n",
+        program.strokes.len(),
+        program.move_count()
+    ));
     s.push_str("return function(api)\n");
     s.push_str("  local robot_name = api:getRobotNames()[1]\n");
     s.push_str("  local robot = api:getRobotInterface(robot_name)\n");
@@ -26,8 +30,12 @@ pub fn aubo_lua(program: &Program, title: &str) -> String {
     s.push_str("  local mc = robot:getMotionControl()\n");
     s.push_str(&format!("  mc:setSpeedFraction({})\n", f(program.speed_fraction)));
     let emit = |s: &mut String, m: &Move| match m {
-        Move::Joint { q, a, v } => s.push_str(&format!("  mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", list(q), f(*a), f(*v))),
-        Move::Line { pose, a, v, blend_m } => s.push_str(&format!("  mc:moveLine({{{}}}, {}, {}, {}, 0)\n", list(&pose.0), f(*a), f(*v), f(*blend_m))),
+        Move::Joint { q, a, v } => {
+            s.push_str(&format!("  mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", list(q), f(*a), f(*v)))
+        }
+        Move::Line { pose, a, v, blend_m } => {
+            s.push_str(&format!("  mc:moveLine({{{}}}, {}, {}, {}, 0)\n", list(&pose.0), f(*a), f(*v), f(*blend_m)))
+        }
     };
     emit(&mut s, &program.start);
     for st in &program.strokes {
@@ -49,7 +57,14 @@ pub fn urscript(program: &Program, title: &str) -> String {
         Move::Line { pose, a, v, blend_m } => {
             let p = pose.position();
             let r = pose.rotation_vector();
-            s.push_str(&format!("  movel(p[{}, {}], a={}, v={}, r={})\n", list(&p), list(&r), f(*a), f(*v), f(*blend_m)));
+            s.push_str(&format!(
+                "  movel(p[{}, {}], a={}, v={}, r={})\n",
+                list(&p),
+                list(&r),
+                f(*a),
+                f(*v),
+                f(*blend_m)
+            ));
         }
     };
     emit(&mut s, &program.start);

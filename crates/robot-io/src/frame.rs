@@ -52,8 +52,10 @@ impl PaperFrame {
     /// points, or a residual above the tolerance.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let file: PaperFile = serde_json::from_str(&text).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let file: PaperFile = serde_json::from_str(&text)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
         Self::fit(&file).map_err(|e| match e {
             RobotError::Config { message, .. } => RobotError::Config { file: name, message },
             other => other,
@@ -74,7 +76,8 @@ impl PaperFrame {
         if tp.iter().any(|t| t.paper_mm.iter().chain(t.robot_m.iter()).any(|v| !v.is_finite())) {
             return Err(bad("touch_points: every coordinate must be a finite number".into()));
         }
-        let p: Vec<Vector3<f64>> = tp.iter().map(|t| Vector3::new(t.paper_mm[0] / 1000.0, t.paper_mm[1] / 1000.0, 0.0)).collect();
+        let p: Vec<Vector3<f64>> =
+            tp.iter().map(|t| Vector3::new(t.paper_mm[0] / 1000.0, t.paper_mm[1] / 1000.0, 0.0)).collect();
         let q: Vec<Vector3<f64>> = tp.iter().map(|t| Vector3::from(t.robot_m)).collect();
         let n = tp.len() as f64;
         let pc = p.iter().sum::<Vector3<f64>>() / n;
@@ -105,10 +108,16 @@ impl PaperFrame {
         let rot = Rotation3::from_matrix_unchecked(r);
         let t = qc - r * pc;
         let iso = Isometry3::from_parts(Translation3::from(t), UnitQuaternion::from_rotation_matrix(&rot));
-        let residual_mm = (p.iter().zip(&q).map(|(a, b)| (iso * Point3::from(*a) - Point3::from(*b)).norm_squared()).sum::<f64>() / n).sqrt() * 1000.0;
+        let residual_mm =
+            (p.iter().zip(&q).map(|(a, b)| (iso * Point3::from(*a) - Point3::from(*b)).norm_squared()).sum::<f64>()
+                / n)
+                .sqrt()
+                * 1000.0;
         let tol = file.max_residual_mm.unwrap_or(1.0);
         if residual_mm > tol {
-            return Err(bad(format!("fit residual {residual_mm:.3} mm exceeds the tolerance {tol} mm: re-touch the points")));
+            return Err(bad(format!(
+                "fit residual {residual_mm:.3} mm exceeds the tolerance {tol} mm: re-touch the points"
+            )));
         }
         let bounds_mm = match file.size_mm {
             Some([w, hh]) if w > 0.0 && hh > 0.0 => [0.0, 0.0, w, hh],
@@ -130,8 +139,14 @@ impl PaperFrame {
     /// A level sheet whose paper x is the base +x, paper y the base −y (so the paper normal,
     /// into the paper, is base −z), with its origin at `origin_m`. For tests and simulators.
     pub fn level(origin_m: [f64; 3], size_mm: [f64; 2]) -> Self {
-        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0)));
-        PaperFrame { iso: Isometry3::from_parts(Translation3::new(origin_m[0], origin_m[1], origin_m[2]), rot), residual_mm: 0.0, bounds_mm: [0.0, 0.0, size_mm[0], size_mm[1]] }
+        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(Matrix3::new(
+            1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0,
+        )));
+        PaperFrame {
+            iso: Isometry3::from_parts(Translation3::new(origin_m[0], origin_m[1], origin_m[2]), rot),
+            residual_mm: 0.0,
+            bounds_mm: [0.0, 0.0, size_mm[0], size_mm[1]],
+        }
     }
 
     /// Whether a paper point (mm) lies on the usable sheet.

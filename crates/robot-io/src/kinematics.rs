@@ -30,7 +30,8 @@ pub fn forward(q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
     for (i, &(alpha, a, d, off)) in AUBO_I5_MDH.iter().enumerate() {
         let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), alpha);
         let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + off);
-        t = t * Isometry3::from_parts(Translation3::identity(), rx)
+        t = t
+            * Isometry3::from_parts(Translation3::identity(), rx)
             * Isometry3::from_parts(Translation3::new(a, 0.0, 0.0), UnitQuaternion::identity())
             * Isometry3::from_parts(Translation3::identity(), rz)
             * Isometry3::from_parts(Translation3::new(0.0, 0.0, d), UnitQuaternion::identity());

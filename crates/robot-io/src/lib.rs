@@ -107,8 +107,10 @@ impl TrackFile {
     /// [`RobotError::Config`] naming the file.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let t: TrackFile = serde_json::from_str(&text).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let t: TrackFile = serde_json::from_str(&text)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
         t.brush.validate(&name).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
         Ok(t)
     }

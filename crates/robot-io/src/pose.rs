@@ -59,7 +59,9 @@ impl Pose {
 pub fn brush_rotation_in_paper(alpha_rad: f64, beta_rad: f64) -> Rotation3<f64> {
     let z = Vector3::z_axis();
     let y = Vector3::y_axis();
-    Rotation3::from_axis_angle(&z, beta_rad) * Rotation3::from_axis_angle(&y, alpha_rad) * Rotation3::from_axis_angle(&z, -beta_rad)
+    Rotation3::from_axis_angle(&z, beta_rad)
+        * Rotation3::from_axis_angle(&y, alpha_rad)
+        * Rotation3::from_axis_angle(&z, -beta_rad)
 }
 
 /// The TCP pose (the brush tip, the tool offset being the brush length) for a track point: at
@@ -68,7 +70,8 @@ pub fn brush_rotation_in_paper(alpha_rad: f64, beta_rad: f64) -> Rotation3<f64> 
 pub fn brush_pose(frame: &PaperFrame, p: &TrackPoint) -> Pose {
     let local = Point3::new(p.x_mm / 1000.0, p.y_mm / 1000.0, p.h_mm / 1000.0);
     let pos = frame.iso * local;
-    let rot = frame.iso.rotation * UnitQuaternion::from_rotation_matrix(&brush_rotation_in_paper(p.alpha_rad, p.beta_rad));
+    let rot =
+        frame.iso.rotation * UnitQuaternion::from_rotation_matrix(&brush_rotation_in_paper(p.alpha_rad, p.beta_rad));
     Pose::from_iso(&Isometry3::from_parts(Translation3::from(pos.coords), rot))
 }
 

@@ -7,10 +7,10 @@ use brush_model::{BrushProfile, Track};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use serde::{Deserialize, Serialize};
 
+use crate::RobotError;
 use crate::frame::PaperFrame;
 use crate::kinematics;
-use crate::pose::{brush_pose, lifted_pose, Pose};
-use crate::RobotError;
+use crate::pose::{Pose, brush_pose, lifted_pose};
 
 /// An ink-dipping station.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -98,8 +98,10 @@ impl RobotConfig {
     /// [`RobotError::Config`] naming the file and field.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let c: RobotConfig = serde_json::from_str(&text).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let c: RobotConfig = serde_json::from_str(&text)
+            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
         c.validate().map_err(|m| RobotError::Config { file: name, message: m })?;
         Ok(c)
     }
@@ -146,7 +148,10 @@ impl RobotConfig {
             }
         }
         if let Some(d) = &self.dip {
-            if d.every_strokes == 0 || !(d.depth_mm.is_finite() && d.depth_mm > 0.0) || d.pose.iter().any(|v| !v.is_finite()) {
+            if d.every_strokes == 0
+                || !(d.depth_mm.is_finite() && d.depth_mm > 0.0)
+                || d.pose.iter().any(|v| !v.is_finite())
+            {
                 return Err("dip: every_strokes ≥ 1, depth_mm > 0 and a finite pose are required".into());
             }
         }
@@ -256,7 +261,12 @@ pub struct CheckReport {
 ///
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first offending stroke and point and why.
-pub fn build_program(track: &Track, profile: &BrushProfile, frame: &PaperFrame, cfg: &RobotConfig) -> Result<(Program, CheckReport), RobotError> {
+pub fn build_program(
+    track: &Track,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+) -> Result<(Program, CheckReport), RobotError> {
     cfg.validate().map_err(|m| RobotError::Unsafe { stroke: None, point: None, reason: format!("robot.json: {m}") })?;
     if track.strokes.is_empty() || track.point_count() == 0 {
         return Err(RobotError::Unsafe { stroke: None, point: None, reason: "the track has no points".into() });
@@ -270,7 +280,10 @@ pub fn build_program(track: &Track, profile: &BrushProfile, frame: &PaperFrame, 
         let q = kinematics::inverse(pose, &tcp, seed.as_ref()).ok_or_else(|| RobotError::Unsafe {
             stroke: Some(si),
             point: Some(pi),
-            reason: format!("{what} pose {:?} is not reachable by the AUBO-i5 with this brush orientation", pose.0.map(|v| (v * 1e4).round() / 1e4)),
+            reason: format!(
+                "{what} pose {:?} is not reachable by the AUBO-i5 with this brush orientation",
+                pose.0.map(|v| (v * 1e4).round() / 1e4)
+            ),
         })?;
         seed = Some(q);
         Ok(q)
@@ -289,14 +302,20 @@ pub fn build_program(track: &Track, profile: &BrushProfile, frame: &PaperFrame, 
                 return Err(unsafe_at("a value is not finite".into()));
             }
             if p.h_mm > hmax + 1e-9 {
-                return Err(unsafe_at(format!("press h = {:.3} mm is deeper than the profile's range (max {hmax} mm)", p.h_mm)));
+                return Err(unsafe_at(format!(
+                    "press h = {:.3} mm is deeper than the profile's range (max {hmax} mm)",
+                    p.h_mm
+                )));
             }
             if p.h_mm < 0.0 {
                 return Err(unsafe_at(format!("press h = {:.3} mm is above the paper", p.h_mm)));
             }
             if !frame.contains(p.x_mm, p.y_mm) {
                 let b = frame.bounds_mm;
-                return Err(unsafe_at(format!("point ({:.1}, {:.1}) mm lies outside the paper [{}, {}]–[{}, {}] mm", p.x_mm, p.y_mm, b[0], b[1], b[2], b[3])));
+                return Err(unsafe_at(format!(
+                    "point ({:.1}, {:.1}) mm lies outside the paper [{}, {}]–[{}, {}] mm",
+                    p.x_mm, p.y_mm, b[0], b[1], b[2], b[3]
+                )));
             }
             max_press = max_press.max(p.h_mm);
         }
@@ -355,14 +374,20 @@ pub fn build_program(track: &Track, profile: &BrushProfile, frame: &PaperFrame, 
         });
         last_up = Some(end_up);
     }
-    let program = Program { tcp_offset_m, speed_fraction: cfg.speed_fraction, start: start.expect("at least one stroke"), strokes };
+    let program = Program {
+        tcp_offset_m,
+        speed_fraction: cfg.speed_fraction,
+        start: start.expect("at least one stroke"),
+        strokes,
+    };
     let report = CheckReport {
         strokes: program.strokes.len(),
         points: track.point_count(),
         moves: program.move_count(),
         max_press_mm: max_press,
         frame_residual_mm: frame.residual_mm,
-        estimated_seconds: path_m / cfg.write_speed_m_s + (travel_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s,
+        estimated_seconds: path_m / cfg.write_speed_m_s
+            + (travel_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s,
     };
     Ok((program, report))
 }

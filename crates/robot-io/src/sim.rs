@@ -8,12 +8,12 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 
+use crate::RobotError;
 use crate::kinematics;
 use crate::pose::Pose;
 use crate::program::tcp_iso;
-use crate::RobotError;
 
 /// Faults to inject.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -152,7 +152,10 @@ fn serve(mut stream: TcpStream, state: Arc<Mutex<State>>, stop: Arc<AtomicBool>)
                 }
                 Some(Err(e)) if e.is_eof() => break,
                 _ => {
-                    let _ = write_json(&mut stream, &json!({"jsonrpc": "2.0", "id": null, "error": {"code": -32700, "message": "parse error"}}));
+                    let _ = write_json(
+                        &mut stream,
+                        &json!({"jsonrpc": "2.0", "id": null, "error": {"code": -32700, "message": "parse error"}}),
+                    );
                     return;
                 }
             };
@@ -215,7 +218,10 @@ const UNREACHABLE: i64 = -10;
 
 fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     let id = v.get("id").cloned().unwrap_or(Value::Null);
-    if v.get("jsonrpc") != Some(&json!("2.0")) || !v.get("method").is_some_and(Value::is_string) || v.get("id").is_none() {
+    if v.get("jsonrpc") != Some(&json!("2.0"))
+        || !v.get("method").is_some_and(Value::is_string)
+        || v.get("id").is_none()
+    {
         return err(&id, -32600, "invalid request: need jsonrpc \"2.0\", a method and an id");
     }
     let Some(params) = v.get("params").and_then(Value::as_array) else {
@@ -305,7 +311,11 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
 /// at the executed path point one footprint length behind (`footprint_len(h)`, mm), or at the
 /// stroke's first point when the stroke is shorter, and forward for a stroke's first point.
 /// Consecutive presses form a stroke; any pose at or above the paper ends it.
-pub fn trace_to_track(trace: &[TraceEntry], frame: &crate::frame::PaperFrame, footprint_len: impl Fn(f64) -> f64) -> brush_model::Track {
+pub fn trace_to_track(
+    trace: &[TraceEntry],
+    frame: &crate::frame::PaperFrame,
+    footprint_len: impl Fn(f64) -> f64,
+) -> brush_model::Track {
     use brush_model::{Stroke, Track, TrackPoint};
     let mut strokes: Vec<Stroke> = Vec::new();
     let mut cur: Vec<TrackPoint> = Vec::new();

@@ -6,14 +6,14 @@ use std::time::Duration;
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use nalgebra::{Rotation3, Vector3};
-use robot_io::aubo::{run_program, RunOptions};
+use robot_io::RobotError;
+use robot_io::aubo::{RunOptions, run_program};
 use robot_io::export::{aubo_lua, gcode, urscript};
 use robot_io::frame::{PaperFile, PaperFrame, TouchPoint};
 use robot_io::kinematics::{forward, inverse};
-use robot_io::pose::{brush_pose, Pose};
-use robot_io::program::{build_program, tcp_iso, RobotConfig};
+use robot_io::pose::{Pose, brush_pose};
+use robot_io::program::{RobotConfig, build_program, tcp_iso};
 use robot_io::sim::{Faults, Simulator, TraceKind};
-use robot_io::RobotError;
 
 fn pen1() -> BrushProfile {
     BrushProfile::builtin("pen1").unwrap()
@@ -26,7 +26,10 @@ fn paper() -> PaperFrame {
 /// Two short strokes: a horizontal and a vertical, pressed at 15 mm.
 fn small_track() -> Track {
     let line = |pts: &[(f64, f64)], beta: f64| Stroke {
-        points: pts.iter().map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta }).collect(),
+        points: pts
+            .iter()
+            .map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta })
+            .collect(),
     };
     Track {
         strokes: vec![
@@ -68,12 +71,17 @@ fn tilt_leans_the_tool_towards_the_footprint() {
     let z = pose.to_iso().rotation * Vector3::z();
     assert!((z - Vector3::new(a.sin(), 0.0, -a.cos())).norm() < 1e-12, "{z}");
     // β = 90° is paper +y, which is base −y on this sheet.
-    let pose = brush_pose(&f, &TrackPoint { x_mm: 0.0, y_mm: 0.0, h_mm: 0.0, alpha_rad: a, beta_rad: std::f64::consts::FRAC_PI_2 });
+    let pose = brush_pose(
+        &f,
+        &TrackPoint { x_mm: 0.0, y_mm: 0.0, h_mm: 0.0, alpha_rad: a, beta_rad: std::f64::consts::FRAC_PI_2 },
+    );
     let z = pose.to_iso().rotation * Vector3::z();
     assert!((z - Vector3::new(0.0, -a.sin(), -a.cos())).norm() < 1e-12, "{z}");
     // Euler convention: R = Rz(rz)·Ry(ry)·Rx(rx).
     let [_, _, _, rx, ry, rz] = pose.0;
-    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), rz) * Rotation3::from_axis_angle(&Vector3::y_axis(), ry) * Rotation3::from_axis_angle(&Vector3::x_axis(), rx);
+    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), rz)
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), ry)
+        * Rotation3::from_axis_angle(&Vector3::x_axis(), rx);
     assert!((r.matrix() - pose.to_iso().rotation.to_rotation_matrix().matrix()).norm() < 1e-12);
 }
 
@@ -84,14 +92,22 @@ fn kabsch_recovers_a_tilted_sheet_and_refuses_bad_ones() {
         let q = truth * nalgebra::Point3::new(u / 1000.0, v / 1000.0, 0.0);
         TouchPoint { paper_mm: [u, v], robot_m: [q.x, q.y, q.z] }
     };
-    let file = PaperFile { touch_points: vec![touch(0.0, 0.0), touch(200.0, 0.0), touch(0.0, 150.0), touch(180.0, 140.0)], size_mm: Some([210.0, 297.0]), max_residual_mm: None };
+    let file = PaperFile {
+        touch_points: vec![touch(0.0, 0.0), touch(200.0, 0.0), touch(0.0, 150.0), touch(180.0, 140.0)],
+        size_mm: Some([210.0, 297.0]),
+        max_residual_mm: None,
+    };
     let f = PaperFrame::fit(&file).unwrap();
     assert!(f.residual_mm < 1e-9);
     assert!((f.iso.translation.vector - truth.translation.vector).norm() < 1e-12);
     assert!(f.iso.rotation.angle_to(&truth.rotation) < 1e-12);
     let back = f.to_paper([truth.translation.vector.x, truth.translation.vector.y, truth.translation.vector.z]);
     assert!(back.iter().all(|v| v.abs() < 1e-9));
-    let collinear = PaperFile { touch_points: vec![touch(0.0, 0.0), touch(100.0, 0.0), touch(200.0, 0.0)], size_mm: None, max_residual_mm: None };
+    let collinear = PaperFile {
+        touch_points: vec![touch(0.0, 0.0), touch(100.0, 0.0), touch(200.0, 0.0)],
+        size_mm: None,
+        max_residual_mm: None,
+    };
     assert!(PaperFrame::fit(&collinear).unwrap_err().to_string().contains("collinear"));
     let mut noisy = file.clone();
     noisy.touch_points[3].robot_m[2] += 0.01;
@@ -167,7 +183,13 @@ fn exports_follow_the_documented_forms() {
 
 fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::aubo::RunReport, RobotError> {
     let stop = AtomicBool::new(false);
-    let opts = RunOptions { timeout: Duration::from_millis(500), max_reconnects: 3, backoff: Duration::from_millis(10), lift_m: 0.02, stop: &stop };
+    let opts = RunOptions {
+        timeout: Duration::from_millis(500),
+        max_reconnects: 3,
+        backoff: Duration::from_millis(10),
+        lift_m: 0.02,
+        stop: &stop,
+    };
     run_program(&sim.addr.to_string(), prog, None, &opts, |_| {})
 }
 
@@ -181,7 +203,8 @@ fn a_full_run_on_the_simulator_follows_the_track() {
     let trace = sim.trace();
     assert_eq!(trace[0].kind, TraceKind::Joint);
     // Every pressed pose of the program was executed, in order.
-    let pressed: Vec<Pose> = trace.iter().filter(|t| t.kind == TraceKind::Line).map(|t| t.pose).filter(|p| p.0[2] < 0.05 - 0.01).collect();
+    let pressed: Vec<Pose> =
+        trace.iter().filter(|t| t.kind == TraceKind::Line).map(|t| t.pose).filter(|p| p.0[2] < 0.05 - 0.01).collect();
     assert_eq!(pressed.len(), 8);
     let f = paper();
     let first = f.to_paper(pressed[0].position());
@@ -203,10 +226,13 @@ fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
     // Stroke 1's first pressed point was written exactly once; stroke 2's first point twice
     // (before the drop and on resumption), with a lift in between.
     let count_at = |x: f64, y: f64| {
-        trace.iter().filter(|t| {
-            let p = f.to_paper(t.pose.position());
-            (p[0] - x).abs() < 1e-6 && (p[1] - y).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
-        }).count()
+        trace
+            .iter()
+            .filter(|t| {
+                let p = f.to_paper(t.pose.position());
+                (p[0] - x).abs() < 1e-6 && (p[1] - y).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
+            })
+            .count()
     };
     assert_eq!(count_at(40.0, 60.0), 1);
     assert_eq!(count_at(70.0, 62.0), 1);
@@ -214,10 +240,13 @@ fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
     assert_eq!(count_at(55.0, 55.0), 2);
     assert_eq!(count_at(55.0, 70.0), 1);
     assert_eq!(count_at(55.5, 85.0), 1);
-    let i_resume = trace.iter().rposition(|t| {
-        let p = f.to_paper(t.pose.position());
-        (p[0] - 55.0).abs() < 1e-6 && (p[1] - 40.0).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
-    }).unwrap();
+    let i_resume = trace
+        .iter()
+        .rposition(|t| {
+            let p = f.to_paper(t.pose.position());
+            (p[0] - 55.0).abs() < 1e-6 && (p[1] - 40.0).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
+        })
+        .unwrap();
     // Before resuming, the brush went up to the safe height.
     assert!(trace[..i_resume].iter().rev().take(3).any(|t| f.to_paper(t.pose.position())[2] < -10.0));
 }
@@ -229,11 +258,23 @@ fn the_simulator_validates_requests() {
     assert_eq!(c.robot_names().unwrap(), vec!["rob1".to_string()]);
     let e = c.call("rob9.MotionControl.getExecId", serde_json::json!([])).unwrap_err();
     assert!(matches!(e, RobotError::Rpc { code: -32601, .. }), "{e}");
-    let bad = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0], 0.5, 0.1, 0.0, 0.0])).unwrap_err();
+    let bad = c
+        .call_status("rob1.MotionControl.moveLine", serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0], 0.5, 0.1, 0.0, 0.0]))
+        .unwrap_err();
     assert!(matches!(bad, RobotError::Controller { code: -5, .. }), "{bad}");
-    let far = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[3.0, 0.0, 0.1, 3.14, 0.0, 0.0], 0.5, 0.1, 0.0, 0.0])).unwrap_err();
+    let far = c
+        .call_status(
+            "rob1.MotionControl.moveLine",
+            serde_json::json!([[3.0, 0.0, 0.1, 3.14, 0.0, 0.0], 0.5, 0.1, 0.0, 0.0]),
+        )
+        .unwrap_err();
     assert!(matches!(far, RobotError::Controller { code: -10, .. }), "{far}");
-    let fast = c.call_status("rob1.MotionControl.moveLine", serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0, 0.0], 0.5, 9.0, 0.0, 0.0])).unwrap_err();
+    let fast = c
+        .call_status(
+            "rob1.MotionControl.moveLine",
+            serde_json::json!([[0.4, 0.1, 0.1, 3.14, 0.0, 0.0], 0.5, 9.0, 0.0, 0.0]),
+        )
+        .unwrap_err();
     assert!(matches!(fast, RobotError::Controller { code: -5, .. }));
     assert_eq!(c.exec_id("rob1").unwrap(), -1);
     // A slow controller times out.

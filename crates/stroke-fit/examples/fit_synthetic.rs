@@ -3,7 +3,7 @@
 //! `cargo run -p stroke-fit --example fit_synthetic`
 
 use brush_model::{BrushProfile, Extrapolation, PointMm, Press};
-use stroke_fit::synth::{photo, Degradation};
+use stroke_fit::synth::{Degradation, photo};
 use stroke_fit::{fit_footprint, mask_from_gray};
 
 fn main() {

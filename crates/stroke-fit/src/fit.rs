@@ -130,7 +130,13 @@ fn nelder_mead(f: &mut impl FnMut(&[f64; 6]) -> f64, start: [f64; 6], step: [f64
         } else if fr < pts[5].1 {
             pts[6] = (r, fr);
         } else {
-            let (cp, fc) = if fr < pts[6].1 { let q = along(-0.5); (q, f(&q)) } else { let q = along(0.5); (q, f(&q)) };
+            let (cp, fc) = if fr < pts[6].1 {
+                let q = along(-0.5);
+                (q, f(&q))
+            } else {
+                let q = along(0.5);
+                (q, f(&q))
+            };
             if fc < pts[6].1.min(fr) {
                 pts[6] = (cp, fc);
             } else {
@@ -151,7 +157,8 @@ fn nelder_mead(f: &mut impl FnMut(&[f64; 6]) -> f64, start: [f64; 6], step: [f64
 /// Fits the footprint to the mask; lengths are returned in mm using `px_per_mm`.
 pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     let (w, h) = (mask.width, mask.height);
-    let pts: Vec<(f64, f64)> = (0..w * h).filter(|&i| mask.ink[i]).map(|i| ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)).collect();
+    let pts: Vec<(f64, f64)> =
+        (0..w * h).filter(|&i| mask.ink[i]).map(|i| ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)).collect();
     let n = pts.len() as f64;
     let (cx, cy) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
     let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
@@ -162,7 +169,8 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     }
     let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
     let (ux, uy) = (theta.cos(), theta.sin());
-    let proj: Vec<(f64, f64)> = pts.iter().map(|&(x, y)| ((x - cx) * ux + (y - cy) * uy, -(x - cx) * uy + (y - cy) * ux)).collect();
+    let proj: Vec<(f64, f64)> =
+        pts.iter().map(|&(x, y)| ((x - cx) * ux + (y - cy) * uy, -(x - cx) * uy + (y - cy) * ux)).collect();
     let tmin = proj.iter().map(|p| p.0).fold(f64::INFINITY, f64::min) - 0.5;
     let tmax = proj.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max) + 0.5;
     const BINS: usize = 48;
@@ -173,7 +181,10 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
         lo[b] = lo[b].min(s);
         hi[b] = hi[b].max(s);
     }
-    let (belly_bin, half) = (0..BINS).filter(|&b| hi[b] >= lo[b]).map(|b| (b, 0.5 * (hi[b] - lo[b] + 1.0))).fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    let (belly_bin, half) = (0..BINS)
+        .filter(|&b| hi[b] >= lo[b])
+        .map(|b| (b, 0.5 * (hi[b] - lo[b] + 1.0)))
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
     let t_belly = tmin + (belly_bin as f64 + 0.5) / BINS as f64 * (tmax - tmin);
     // Crop: the ink's bounding box with a margin of a quarter of its size.
     let (mut bx0, mut by0, mut bx1, mut by1) = (w, h, 0, 0);
@@ -186,14 +197,23 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     let m = ((bx1 - bx0).max(by1 - by0) / 4).max(4);
     let (x0, y0) = (bx0.saturating_sub(m), by0.saturating_sub(m));
     let (x1, y1) = ((bx1 + m + 1).min(w), (by1 + m + 1).min(h));
-    let mut prob = Problem { mask, x0, y0, w: x1 - x0, h: y1 - y0, raster: Rasterizer::new(), img: Coverage::new((x1 - x0) as u32, (y1 - y0) as u32) };
+    let mut prob = Problem {
+        mask,
+        x0,
+        y0,
+        w: x1 - x0,
+        h: y1 - y0,
+        raster: Rasterizer::new(),
+        img: Coverage::new((x1 - x0) as u32, (y1 - y0) as u32),
+    };
     let len = tmax - tmin;
     let mut best: Option<([f64; 6], f64)> = None;
     for root_at_min in [true, false] {
         let (t_root, dir) = if root_at_min { (tmin, 1.0) } else { (tmax, -1.0) };
         let lh = ((t_belly - t_root) * dir).clamp(0.05 * len, 0.95 * len);
         let lt = (len - lh).max(0.05 * len);
-        let start = [cx + t_root * ux, cy + t_root * uy, (dir * uy).atan2(dir * ux), lt.ln(), lh.ln(), half.max(0.5).ln()];
+        let start =
+            [cx + t_root * ux, cy + t_root * uy, (dir * uy).atan2(dir * ux), lt.ln(), lh.ln(), half.max(0.5).ln()];
         let step = [0.05 * len, 0.05 * len, 0.05, 0.1, 0.2, 0.1];
         let mut f = |p: &[f64; 6]| 1.0 - prob.soft_iou(p);
         let (mut p, mut v) = nelder_mead(&mut f, start, step, 400);

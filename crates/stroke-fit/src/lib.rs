@@ -12,5 +12,5 @@ pub mod fit;
 pub mod photo;
 pub mod synth;
 
-pub use fit::{fit_footprint, StrokeFit};
-pub use photo::{load_ink, mask_from_gray, scale_from_metadata, InkMask, PhotoError};
+pub use fit::{StrokeFit, fit_footprint};
+pub use photo::{InkMask, PhotoError, load_ink, mask_from_gray, scale_from_metadata};

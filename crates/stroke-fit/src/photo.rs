@@ -32,7 +32,9 @@ pub enum PhotoError {
         percent: f64,
     },
     /// More than one large ink blob.
-    #[error("{path}: {count} large ink blobs (the second is {ratio:.0}% of the largest); expected one stroke per image")]
+    #[error(
+        "{path}: {count} large ink blobs (the second is {ratio:.0}% of the largest); expected one stroke per image"
+    )]
     SeveralBlobs {
         /// The file.
         path: String,
@@ -117,7 +119,11 @@ pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: &str) -> Result<
     if hi - lo < 0.15 {
         // No contrast: blank paper, or all ink.
         let mean = gray.iter().sum::<f32>() / gray.len() as f32;
-        return Err(if mean < 0.3 { PhotoError::AllInk { path: name.into(), percent: 100.0 } } else { PhotoError::NoInk { path: name.into() } });
+        return Err(if mean < 0.3 {
+            PhotoError::AllInk { path: name.into(), percent: 100.0 }
+        } else {
+            PhotoError::NoInk { path: name.into() }
+        });
     }
     let q: Vec<u8> = flat.iter().map(|v| (((v - lo) / (hi - lo)) * 255.0).round() as u8).collect();
     let t = otsu_threshold(&q);
@@ -135,7 +141,11 @@ pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: &str) -> Result<
     }
     let large = order.iter().filter(|&&i| sizes[i] as f64 >= 0.2 * sizes[big] as f64).count();
     if large > 1 {
-        return Err(PhotoError::SeveralBlobs { path: name.into(), count: large, ratio: 100.0 * sizes[order[1]] as f64 / sizes[big] as f64 });
+        return Err(PhotoError::SeveralBlobs {
+            path: name.into(),
+            count: large,
+            ratio: 100.0 * sizes[order[1]] as f64 / sizes[big] as f64,
+        });
     }
     for (i, v) in ink.iter_mut().enumerate() {
         *v = label[i] as usize == big;
@@ -193,7 +203,8 @@ fn flatten_background(g: &[f32], w: usize, h: usize) -> Vec<f32> {
 /// Solves a 3×3 system by Cramer's rule; `None` when singular.
 fn solve3(m: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
     let det = |a: [[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
     };
     let d = det(m);
     if d.abs() < 1e-12 * (1.0 + m[0][0].abs()).powi(3) {

@@ -45,11 +45,34 @@ impl Rng {
 
 /// A grey photo (`width × height`, 0 black … 1 white) of `fp` with its root at `anchor_mm`
 /// and direction `beta_rad`, at `px_per_mm`, spoiled by `d` with random `seed`.
-pub fn photo(fp: &Footprint, anchor_mm: PointMm, beta_rad: f64, px_per_mm: f64, width: u32, height: u32, d: &Degradation, seed: u64) -> Vec<f32> {
+pub fn photo(
+    fp: &Footprint,
+    anchor_mm: PointMm,
+    beta_rad: f64,
+    px_per_mm: f64,
+    width: u32,
+    height: u32,
+    d: &Degradation,
+    seed: u64,
+) -> Vec<f32> {
     let mut cov = Coverage::new(width, height);
-    let grown = Footprint { lt_mm: fp.lt_mm + d.bleed_px / px_per_mm, lh_mm: fp.lh_mm + d.bleed_px / px_per_mm, lr_mm: fp.lr_mm + d.bleed_px / px_per_mm };
-    let anchor = PointMm::new(anchor_mm.x_mm - d.bleed_px / px_per_mm * beta_rad.cos(), anchor_mm.y_mm - d.bleed_px / px_per_mm * beta_rad.sin());
-    Rasterizer::new().render(&Bsm, if d.bleed_px > 0.0 { &grown } else { fp }, if d.bleed_px > 0.0 { anchor } else { anchor_mm }, beta_rad, px_per_mm, &mut cov);
+    let grown = Footprint {
+        lt_mm: fp.lt_mm + d.bleed_px / px_per_mm,
+        lh_mm: fp.lh_mm + d.bleed_px / px_per_mm,
+        lr_mm: fp.lr_mm + d.bleed_px / px_per_mm,
+    };
+    let anchor = PointMm::new(
+        anchor_mm.x_mm - d.bleed_px / px_per_mm * beta_rad.cos(),
+        anchor_mm.y_mm - d.bleed_px / px_per_mm * beta_rad.sin(),
+    );
+    Rasterizer::new().render(
+        &Bsm,
+        if d.bleed_px > 0.0 { &grown } else { fp },
+        if d.bleed_px > 0.0 { anchor } else { anchor_mm },
+        beta_rad,
+        px_per_mm,
+        &mut cov,
+    );
     let (w, h) = (width as usize, height as usize);
     let mut ink: Vec<f64> = cov.data().iter().map(|&v| v as f64).collect();
     let mut rng = Rng(seed);
@@ -75,7 +98,9 @@ pub fn photo(fp: &Footprint, anchor_mm: PointMm, beta_rad: f64, px_per_mm: f64, 
     if let Some(q) = d.jpeg_quality {
         let bytes: Vec<u8> = out.iter().map(|v| (v * 255.0).round() as u8).collect();
         let mut jpg = Vec::new();
-        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpg, q).encode(&bytes, width, height, image::ExtendedColorType::L8).expect("encodes");
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpg, q)
+            .encode(&bytes, width, height, image::ExtendedColorType::L8)
+            .expect("encodes");
         let back = image::load_from_memory(&jpg).expect("decodes").to_luma8();
         out = back.pixels().map(|p| p.0[0] as f32 / 255.0).collect();
     }
@@ -119,7 +144,11 @@ pub fn png_with_scale(gray: &[f32], width: u32, height: u32, px_per_mm: f64) -> 
         let mut enc = png::Encoder::new(&mut out, width, height);
         enc.set_color(png::ColorType::Grayscale);
         enc.set_depth(png::BitDepth::Eight);
-        enc.set_pixel_dims(Some(png::PixelDimensions { xppu: (px_per_mm * 1000.0).round() as u32, yppu: (px_per_mm * 1000.0).round() as u32, unit: png::Unit::Meter }));
+        enc.set_pixel_dims(Some(png::PixelDimensions {
+            xppu: (px_per_mm * 1000.0).round() as u32,
+            yppu: (px_per_mm * 1000.0).round() as u32,
+            unit: png::Unit::Meter,
+        }));
         let mut wr = enc.write_header().expect("header");
         let bytes: Vec<u8> = gray.iter().map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8).collect();
         wr.write_image_data(&bytes).expect("data");

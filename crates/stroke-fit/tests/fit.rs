@@ -1,8 +1,8 @@
 //! Fitting recovers known footprints from synthetic photos with real-scan defects.
 
 use brush_model::{BrushProfile, Extrapolation, PointMm, Press};
-use stroke_fit::synth::{photo, png_with_scale, Degradation};
-use stroke_fit::{fit_footprint, load_ink, mask_from_gray, scale_from_metadata, PhotoError};
+use stroke_fit::synth::{Degradation, photo, png_with_scale};
+use stroke_fit::{PhotoError, fit_footprint, load_ink, mask_from_gray, scale_from_metadata};
 
 struct Case {
     press: Press,
@@ -15,10 +15,30 @@ fn cases() -> Vec<Case> {
     let base = Degradation::default();
     vec![
         Case { press: Press::from_degrees(11.0, 0.0, 0.0), rotation_deg: 0.0, px_per_mm: 10.0, d: base },
-        Case { press: Press::from_degrees(15.0, 5.0, 5.0), rotation_deg: 2.0, px_per_mm: 9.0, d: Degradation { blur_px: 2.0, ..base } },
-        Case { press: Press::from_degrees(20.0, 10.0, 0.0), rotation_deg: -3.0, px_per_mm: 11.0, d: Degradation { noise: 0.08, jpeg_quality: Some(70), ..base } },
-        Case { press: Press::from_degrees(13.0, 10.0, 5.0), rotation_deg: 1.0, px_per_mm: 10.0, d: Degradation { gradient: 0.4, specks: 12, ..base } },
-        Case { press: Press::from_degrees(17.0, 0.0, 5.0), rotation_deg: -1.5, px_per_mm: 10.5, d: Degradation { bleed_px: 0.5, ..base } },
+        Case {
+            press: Press::from_degrees(15.0, 5.0, 5.0),
+            rotation_deg: 2.0,
+            px_per_mm: 9.0,
+            d: Degradation { blur_px: 2.0, ..base },
+        },
+        Case {
+            press: Press::from_degrees(20.0, 10.0, 0.0),
+            rotation_deg: -3.0,
+            px_per_mm: 11.0,
+            d: Degradation { noise: 0.08, jpeg_quality: Some(70), ..base },
+        },
+        Case {
+            press: Press::from_degrees(13.0, 10.0, 5.0),
+            rotation_deg: 1.0,
+            px_per_mm: 10.0,
+            d: Degradation { gradient: 0.4, specks: 12, ..base },
+        },
+        Case {
+            press: Press::from_degrees(17.0, 0.0, 5.0),
+            rotation_deg: -1.5,
+            px_per_mm: 10.5,
+            d: Degradation { bleed_px: 0.5, ..base },
+        },
         Case { press: Press::from_degrees(19.0, 5.0, 0.0), rotation_deg: 178.0, px_per_mm: 10.0, d: base },
     ]
 }
@@ -41,18 +61,34 @@ fn recovers_lengths_within_3_percent_and_direction_within_1_degree() {
         let grow = c.d.bleed_px / c.px_per_mm;
         let rel = |a: f64, b: f64| (a - b).abs() / b;
         let errs = [rel(f.lt_mm, fp.lt_mm + grow), rel(f.lh_mm, fp.lh_mm + grow), rel(f.lr_mm, fp.lr_mm + grow)];
-        let dbeta = ((f.beta_rad - beta + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI).abs().to_degrees();
-        println!("case {i}: lt {:.3}/{:.3} lh {:.3}/{:.3} lr {:.3}/{:.3} β err {dbeta:.3}° IoU {:.4}", f.lt_mm, fp.lt_mm, f.lh_mm, fp.lh_mm, f.lr_mm, fp.lr_mm, f.iou);
+        let dbeta = ((f.beta_rad - beta + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI)
+            .abs()
+            .to_degrees();
+        println!(
+            "case {i}: lt {:.3}/{:.3} lh {:.3}/{:.3} lr {:.3}/{:.3} β err {dbeta:.3}° IoU {:.4}",
+            f.lt_mm, fp.lt_mm, f.lh_mm, fp.lh_mm, f.lr_mm, fp.lr_mm, f.iou
+        );
         for k in 0..3 {
             worst[k] = worst[k].max(errs[k]);
         }
         worst[3] = worst[3].max(dbeta);
         assert!(errs.iter().all(|e| *e < 0.03), "case {i}: relative errors {errs:?}");
         assert!(dbeta < 1.0, "case {i}: β off by {dbeta}°");
-        assert!((f.anchor_mm[0] - anchor.x_mm).hypot(f.anchor_mm[1] - anchor.y_mm) < 0.5, "case {i}: anchor {:?} vs {anchor:?}", f.anchor_mm);
+        assert!(
+            (f.anchor_mm[0] - anchor.x_mm).hypot(f.anchor_mm[1] - anchor.y_mm) < 0.5,
+            "case {i}: anchor {:?} vs {anchor:?}",
+            f.anchor_mm
+        );
         assert!(f.iou > 0.9);
     }
-    println!("worst: lt {:.2}% lh {:.2}% lr {:.2}% β {:.3}°", 100.0 * worst[0], 100.0 * worst[1], 100.0 * worst[2], worst[3]);
+    println!(
+        "worst: lt {:.2}% lh {:.2}% lr {:.2}% β {:.3}°",
+        100.0 * worst[0],
+        100.0 * worst[1],
+        100.0 * worst[2],
+        worst[3]
+    );
 }
 
 #[test]

@@ -1,8 +1,8 @@
 //! SSIM and CSIM speed at 128² and 512² (`cargo bench -p stroke-metrics`).
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use stroke_metrics::{csim, GrayRef, SsimWorkspace};
+use stroke_metrics::{GrayRef, SsimWorkspace, csim};
 
 fn image(n: usize, phase: f32) -> Vec<f32> {
     (0..n * n).map(|i| (((i % n) as f32 * 0.05 + phase).sin() * ((i / n) as f32 * 0.03).cos()).abs()).collect()

@@ -2,7 +2,7 @@
 //!
 //! `cargo run -p stroke-metrics --example compare`
 
-use stroke_metrics::{compare, GrayRef, Summary};
+use stroke_metrics::{GrayRef, Summary, compare};
 
 fn disc(n: usize, cx: f32, r: f32) -> Vec<f32> {
     (0..n * n)

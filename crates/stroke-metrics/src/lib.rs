@@ -29,7 +29,7 @@ mod summary;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use ssim::{ssim, SsimWorkspace, SSIM_RADIUS};
+pub use ssim::{SSIM_RADIUS, SsimWorkspace, ssim};
 pub use summary::Summary;
 
 /// Errors from the metrics.

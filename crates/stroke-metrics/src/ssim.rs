@@ -5,7 +5,7 @@
 //! we filter just the kept region and never touch the border handling: the result is the same to
 //! rounding. Filtering and statistics are in `f64`, as scikit-image does.
 
-use crate::{same_size, GrayRef, MetricsError};
+use crate::{GrayRef, MetricsError, same_size};
 
 /// Radius of the Gaussian window: `int(3.5·σ + 0.5)` = 5 for σ = 1.5 (scikit-image's truncate
 /// of 3.5), so the window is 11×11 and 5 px are cropped from each border.

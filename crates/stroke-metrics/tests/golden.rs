@@ -1,12 +1,10 @@
 //! Every metric agrees with scikit-image / numpy on committed image pairs
 //! (`golden/gen_metrics.py` made them), plus the analytic checks.
 
-use stroke_metrics::{compare, csim, iou, mse, psnr, ssim, GrayRef, MetricsError, SsimWorkspace};
+use stroke_metrics::{GrayRef, MetricsError, SsimWorkspace, compare, csim, iou, mse, psnr, ssim};
 
 fn decode(hex: &str) -> Vec<f32> {
-    (0..hex.len() / 2)
-        .map(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).unwrap() as f32 / 255.0)
-        .collect()
+    (0..hex.len() / 2).map(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).unwrap() as f32 / 255.0).collect()
 }
 
 #[test]
@@ -24,7 +22,8 @@ fn matches_scikit_image_to_1e_minus_6() {
         assert!((s - want).abs() < 1e-6, "{name}: ssim {s} vs skimage {want}");
         // In fact the agreement is to rounding.
         assert!((s - want).abs() < 1e-12, "{name}: ssim {s} vs skimage {want}");
-        for (metric, ours) in [("csim", csim(a, b).unwrap()), ("iou", iou(a, b).unwrap()), ("mse", mse(a, b).unwrap())] {
+        for (metric, ours) in [("csim", csim(a, b).unwrap()), ("iou", iou(a, b).unwrap()), ("mse", mse(a, b).unwrap())]
+        {
             let want = case[metric].as_f64().unwrap();
             assert!((ours - want).abs() < 1e-12, "{name}: {metric} {ours} vs {want}");
         }

@@ -1,15 +1,19 @@
 //! Track extraction speed per character (`cargo bench -p trajectory`).
 
 use brush_model::BrushProfile;
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use trajectory::{build_track, centre_lines, glyph, CharBox, Method, Sizing, TrackOptions, DEFAULT_SPACING_MM};
+use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, glyph};
 
 fn bench(c: &mut Criterion) {
     let g = glyph::embedded('永').unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
-    c.bench_function("centre_lines_medians_yong", |b| b.iter(|| centre_lines(black_box(&g), Method::Medians, 256).unwrap()));
-    c.bench_function("centre_lines_skeleton_yong", |b| b.iter(|| centre_lines(black_box(&g), Method::Skeleton, 256).unwrap()));
+    c.bench_function("centre_lines_medians_yong", |b| {
+        b.iter(|| centre_lines(black_box(&g), Method::Medians, 256).unwrap())
+    });
+    c.bench_function("centre_lines_skeleton_yong", |b| {
+        b.iter(|| centre_lines(black_box(&g), Method::Skeleton, 256).unwrap())
+    });
     let paths = centre_lines(&g, Method::Medians, 256).unwrap();
     let opts = TrackOptions {
         char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&paths, &pen1, 0.0) },

@@ -1,7 +1,7 @@
 //! Prints the skeleton strokes found for a character (debugging aid).
 //!
 //! `cargo run -p trajectory --example skeleton_debug -- 永`
-use trajectory::{centre_lines, glyph, Method};
+use trajectory::{Method, centre_lines, glyph};
 
 fn main() {
     let ch = std::env::args().nth(1).and_then(|s| s.chars().next()).unwrap_or('永');

@@ -149,7 +149,13 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
         }
         medians.push(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect());
     }
-    Ok(Glyph { ch, source, shape: Shape::Outlines(outlines.clone()), stroke_outlines: Some(outlines), medians: Some(medians) })
+    Ok(Glyph {
+        ch,
+        source,
+        shape: Shape::Outlines(outlines.clone()),
+        stroke_outlines: Some(outlines),
+        medians: Some(medians),
+    })
 }
 
 fn embedded_index() -> &'static HashMap<char, &'static str> {
@@ -243,8 +249,10 @@ impl ttf_parser::OutlineBuilder for OutlineSink {
 pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     let name = path.display().to_string();
     let data = std::fs::read(path).map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?;
-    let face = ttf_parser::Face::parse(&data, 0)
-        .map_err(|e| GlyphError::Malformed { source_name: name.clone(), message: format!("not a TrueType/OpenType font: {e}") })?;
+    let face = ttf_parser::Face::parse(&data, 0).map_err(|e| GlyphError::Malformed {
+        source_name: name.clone(),
+        message: format!("not a TrueType/OpenType font: {e}"),
+    })?;
     let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: name.clone() };
     let gid = face.glyph_index(ch).ok_or_else(unknown)?;
     let mut sink = OutlineSink { path: BezPath::new(), scale: EM / face.units_per_em() as f64 };

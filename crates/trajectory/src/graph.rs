@@ -74,7 +74,9 @@ struct Graph {
 }
 
 fn build_graph(skel: &[bool], dt: &[f32], n: usize) -> Graph {
-    let on = |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < n && (y as usize) < n && skel[y as usize * n + x as usize];
+    let on = |x: isize, y: isize| {
+        x >= 0 && y >= 0 && (x as usize) < n && (y as usize) < n && skel[y as usize * n + x as usize]
+    };
     let centre = |i: usize| Point::new((i % n) as f64 + 0.5, (i / n) as f64 + 0.5);
     // Branch count: 0→1 transitions around the 8-neighbourhood (robust to staircases).
     let branches = |i: usize| {
@@ -126,7 +128,13 @@ fn build_graph(skel: &[bool], dt: &[f32], n: usize) -> Graph {
     }
     let mut visited = vec![false; n * n];
     let mut edges = Vec::new();
-    let trace = |start_node: usize, from: usize, first: usize, visited: &mut Vec<bool>, node_of: &Vec<usize>, nodes: &Vec<Node>| -> Result<Edge, (Vec<Point>, usize)> {
+    let trace = |start_node: usize,
+                 from: usize,
+                 first: usize,
+                 visited: &mut Vec<bool>,
+                 node_of: &Vec<usize>,
+                 nodes: &Vec<Node>|
+     -> Result<Edge, (Vec<Point>, usize)> {
         let mut pts = vec![nodes[start_node].pos, centre(first)];
         let (mut prev, mut cur) = (from, first);
         visited[cur] = true;

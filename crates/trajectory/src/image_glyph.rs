@@ -14,11 +14,17 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
         .map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?
         .decode()
         .map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?;
-    let img = if img.width().max(img.height()) > 1024 { img.resize(1024, 1024, image::imageops::FilterType::Triangle) } else { img };
+    let img = if img.width().max(img.height()) > 1024 {
+        img.resize(1024, 1024, image::imageops::FilterType::Triangle)
+    } else {
+        img
+    };
     let gray = img.to_luma8();
     let (w, h) = (gray.width() as usize, gray.height() as usize);
     if w < 16 || h < 16 {
-        return Err(GlyphError::BadImage { path: name, message: format!("image is {w}×{h} px; need at least 16×16") });
+        return Err(GlyphError::BadImage {
+            path: name, message: format!("image is {w}×{h} px; need at least 16×16")
+        });
     }
     let raw = gray.into_raw();
     let (lo, hi) = (raw.iter().min().copied().unwrap_or(0), raw.iter().max().copied().unwrap_or(0));
@@ -29,7 +35,10 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     let mut ink: Vec<bool> = raw.iter().map(|&v| v <= t).collect();
     let frac = ink.iter().filter(|&&b| b).count() as f64 / (w * h) as f64;
     if frac > 0.6 {
-        return Err(GlyphError::BadImage { path: name, message: format!("{:.0}% of the image is ink; expected dark ink on light paper", 100.0 * frac) });
+        return Err(GlyphError::BadImage {
+            path: name,
+            message: format!("{:.0}% of the image is ink; expected dark ink on light paper", 100.0 * frac),
+        });
     }
     // Remove specks: ink components under 0.5 % of all ink.
     let total: usize = ink.iter().filter(|&&b| b).count();
@@ -57,4 +66,3 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     }
     Ok((side as u32, out))
 }
-

@@ -41,7 +41,9 @@ use thiserror::Error;
 
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
 pub use graph::GraphOptions;
-pub use track::{auto_char_mm, build_track, chamfer_pct, BuiltTrack, CharBox, Sizing, StrokePath, TrackOptions, DEFAULT_SPACING_MM};
+pub use track::{
+    BuiltTrack, CharBox, DEFAULT_SPACING_MM, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, chamfer_pct,
+};
 
 /// How centre lines are found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,7 +129,10 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
                 .into_iter()
                 .map(|p| {
                     let half_widths = p.iter().map(|q| distance::sample(&dt, n, n, q.x, q.y) * px_to_em).collect();
-                    StrokePath { points: p.iter().map(|q| Point::new(q.x * px_to_em, q.y * px_to_em)).collect(), half_widths }
+                    StrokePath {
+                        points: p.iter().map(|q| Point::new(q.x * px_to_em, q.y * px_to_em)).collect(),
+                        half_widths,
+                    }
                 })
                 .collect())
         }

@@ -3,7 +3,7 @@
 use bezier_raster::{Coverage, Rasterizer};
 use kurbo::BezPath;
 
-use crate::glyph::{Glyph, Shape, EM};
+use crate::glyph::{EM, Glyph, Shape};
 
 /// Renders outlines (em frame) into a `size × size` coverage image of the em box: pixel
 /// `x = x'·size/1024`, `y = y'·size/1024`. Each outline is filled on its own (nonzero) and

@@ -2,8 +2,18 @@
 
 /// The 8 neighbours of `(x, y)` clockwise from north (P2..P9); outside the image is paper.
 fn ring(m: &[bool], w: usize, h: usize, x: isize, y: isize) -> [bool; 8] {
-    let at = |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && m[y as usize * w + x as usize];
-    [at(x, y - 1), at(x + 1, y - 1), at(x + 1, y), at(x + 1, y + 1), at(x, y + 1), at(x - 1, y + 1), at(x - 1, y), at(x - 1, y - 1)]
+    let at =
+        |x: isize, y: isize| x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && m[y as usize * w + x as usize];
+    [
+        at(x, y - 1),
+        at(x + 1, y - 1),
+        at(x + 1, y),
+        at(x + 1, y + 1),
+        at(x, y + 1),
+        at(x - 1, y + 1),
+        at(x - 1, y),
+        at(x - 1, y - 1),
+    ]
 }
 
 /// Thins `mask` (`w × h`, true = ink) in place by Zhang–Suen's two-subiteration algorithm,
@@ -30,7 +40,11 @@ pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
                         continue;
                     }
                     let (p2, p4, p6, p8) = (p[0], p[2], p[4], p[6]);
-                    let ok = if step == 0 { !(p2 && p4 && p6) && !(p4 && p6 && p8) } else { !(p2 && p4 && p8) && !(p2 && p6 && p8) };
+                    let ok = if step == 0 {
+                        !(p2 && p4 && p6) && !(p4 && p6 && p8)
+                    } else {
+                        !(p2 && p4 && p8) && !(p2 && p6 && p8)
+                    };
                     if ok {
                         remove.push(y as usize * w + x as usize);
                     }

@@ -139,7 +139,11 @@ pub const CORNER_REACH_EM: f64 = 50.0;
 ///
 /// # Errors
 /// [`ProfileError`] if the profile cannot be inverted or predicts degenerate footprints.
-pub fn build_track(paths: &[StrokePath], profile: &BrushProfile, opts: &TrackOptions) -> Result<BuiltTrack, ProfileError> {
+pub fn build_track(
+    paths: &[StrokePath],
+    profile: &BrushProfile,
+    opts: &TrackOptions,
+) -> Result<BuiltTrack, ProfileError> {
     let placer = Placer::new(profile, opts);
     let k = opts.char_box.mm_per_em();
     let mut counts = (0usize, 0usize);
@@ -170,7 +174,8 @@ fn split_at_corners(pts: &[PointMm], widths: &[f64], spacing: f64, mm_per_em: f6
     let total = s[s.len() - 1];
     let d = CORNER_REACH_EM * mm_per_em;
     let turn = |t: f64| {
-        let (a, p, b) = (point_at(&s, pts, (t - d).max(0.0)), point_at(&s, pts, t), point_at(&s, pts, (t + d).min(total)));
+        let (a, p, b) =
+            (point_at(&s, pts, (t - d).max(0.0)), point_at(&s, pts, t), point_at(&s, pts, (t + d).min(total)));
         let (u, v) = ((p.x_mm - a.x_mm, p.y_mm - a.y_mm), (b.x_mm - p.x_mm, b.y_mm - p.y_mm));
         let (nu, nv) = (u.0.hypot(u.1), v.0.hypot(v.1));
         if nu < 1e-9 || nv < 1e-9 {
@@ -278,7 +283,12 @@ impl<'a> Placer<'a> {
         Ok(out)
     }
 
-    fn piece(&self, pts: &[PointMm], widths: &[f64], counts: &mut (usize, usize)) -> Result<Vec<TrackPoint>, ProfileError> {
+    fn piece(
+        &self,
+        pts: &[PointMm],
+        widths: &[f64],
+        counts: &mut (usize, usize),
+    ) -> Result<Vec<TrackPoint>, ProfileError> {
         let (alpha, step) = (self.opts.alpha_rad, self.opts.spacing_mm);
         let s = arc_lengths(pts);
         let total = s[s.len() - 1];
@@ -290,7 +300,11 @@ impl<'a> Placer<'a> {
             h0 = self.h_for_length(total).max(self.lowest).min(h0);
         }
         let ahead = self.chord_point(&s, pts, 0.0, self.length(h0), 1.0).unwrap_or(pts[pts.len() - 1]);
-        let beta0 = if ahead.distance(pts[0]) > 1e-9 { (ahead.y_mm - pts[0].y_mm).atan2(ahead.x_mm - pts[0].x_mm) } else { PI / 2.0 };
+        let beta0 = if ahead.distance(pts[0]) > 1e-9 {
+            (ahead.y_mm - pts[0].y_mm).atan2(ahead.x_mm - pts[0].x_mm)
+        } else {
+            PI / 2.0
+        };
         points.push(TrackPoint { x_mm: pts[0].x_mm, y_mm: pts[0].y_mm, h_mm: h0, alpha_rad: alpha, beta_rad: beta0 });
         let n = (total / step).floor() as usize;
         let mut stations: Vec<f64> = (1..=n).map(|i| i as f64 * step).collect();
@@ -323,7 +337,13 @@ impl<'a> Placer<'a> {
                 }
             };
             let beta = (target.y_mm - p.y_mm).atan2(target.x_mm - p.x_mm);
-            points.push(TrackPoint { x_mm: p.x_mm, y_mm: p.y_mm, h_mm: h.max(self.lowest), alpha_rad: alpha, beta_rad: beta });
+            points.push(TrackPoint {
+                x_mm: p.x_mm,
+                y_mm: p.y_mm,
+                h_mm: h.max(self.lowest),
+                alpha_rad: alpha,
+                beta_rad: beta,
+            });
         }
         Ok(points)
     }
@@ -347,7 +367,6 @@ impl<'a> Placer<'a> {
         }
     }
 }
-
 
 /// The default char box size for a set of centre lines: the em scale that maps the glyphs'
 /// typical half-widths (20th to 80th percentile over all points) onto the brush's belly
@@ -388,7 +407,8 @@ pub fn chamfer_pct(track: &Track, char_box: &CharBox, medians: &[Vec<Point>]) ->
         return 100.0;
     }
     let mean_nn = |from: &[Point], to: &[Point]| {
-        from.iter().map(|p| to.iter().map(|q| p.distance(*q)).fold(f64::INFINITY, f64::min)).sum::<f64>() / from.len() as f64
+        from.iter().map(|p| to.iter().map(|q| p.distance(*q)).fold(f64::INFINITY, f64::min)).sum::<f64>()
+            / from.len() as f64
     };
     0.5 * (mean_nn(&a, &b) + mean_nn(&b, &a)) / EM * 100.0
 }

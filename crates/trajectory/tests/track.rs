@@ -1,9 +1,11 @@
 //! Track building on synthetic glyphs with known geometry, and on embedded characters.
 
-use bezier_raster::{render_track, ModelKind};
+use bezier_raster::{ModelKind, render_track};
 use brush_model::{BrushProfile, Extrapolation, PointMm};
 use kurbo::{BezPath, Point, Rect, Shape as _};
-use trajectory::{build_track, centre_lines, glyph, raster, CharBox, Glyph, GlyphSource, Method, Shape, Sizing, TrackOptions};
+use trajectory::{
+    CharBox, Glyph, GlyphSource, Method, Shape, Sizing, TrackOptions, build_track, centre_lines, glyph, raster,
+};
 
 fn bar_glyph(x0: f64, x1: f64, y0: f64, y1: f64) -> Glyph {
     let outline: BezPath = Rect::new(x0, y0, x1, y1).to_path(0.1);
@@ -38,7 +40,17 @@ fn a_bar_is_written_at_its_own_width() {
     let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
     let opts = TrackOptions { char_box: b, spacing_mm: 0.25, alpha_rad: 0.0, sizing: Sizing::Brush };
     let built = build_track(&paths, &pen1, &opts).unwrap();
-    let img = render_track(&built.track, &pen1, ModelKind::Bsm.model(), Extrapolation::Refuse, PointMm::new(0.0, 0.0), 512.0 / size_mm, 512, 512).unwrap();
+    let img = render_track(
+        &built.track,
+        &pen1,
+        ModelKind::Bsm.model(),
+        Extrapolation::Refuse,
+        PointMm::new(0.0, 0.0),
+        512.0 / size_mm,
+        512,
+        512,
+    )
+    .unwrap();
     // Column through the middle of the bar: ink height ≈ 100 em = 50 px.
     let ink: f64 = (0..512).map(|y| img.get(256, y) as f64).sum();
     assert!((ink - 50.0).abs() < 3.0, "column ink {ink}");
@@ -79,7 +91,17 @@ fn halving_the_spacing_changes_the_render_by_under_half_a_percent() {
         let render = |spacing: f64| {
             let opts = TrackOptions { char_box: b, spacing_mm: spacing, alpha_rad: 0.0, sizing: Sizing::Brush };
             let t = build_track(&paths, &pen1, &opts).unwrap().track;
-            render_track(&t, &pen1, ModelKind::Bsm.model(), Extrapolation::Refuse, PointMm::new(0.0, 0.0), 512.0 / mm, 512, 512).unwrap()
+            render_track(
+                &t,
+                &pen1,
+                ModelKind::Bsm.model(),
+                Extrapolation::Refuse,
+                PointMm::new(0.0, 0.0),
+                512.0 / mm,
+                512,
+                512,
+            )
+            .unwrap()
         };
         let (a, b2) = (render(trajectory::DEFAULT_SPACING_MM), render(trajectory::DEFAULT_SPACING_MM / 2.0));
         let iou = stroke_metrics::iou(
@@ -113,7 +135,8 @@ fn hanzi_folders_and_malformed_data() {
 fn em_frame_follows_the_design_notes() {
     // Make Me a Hanzi's (x, y) with y up maps to (x, 900 − y).
     let g = glyph::embedded('十').unwrap();
-    let raw: serde_json::Value = serde_json::from_str(glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap()).unwrap();
+    let raw: serde_json::Value =
+        serde_json::from_str(glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap()).unwrap();
     let (x, y) = (raw["medians"][0][0][0].as_f64().unwrap(), raw["medians"][0][0][1].as_f64().unwrap());
     let p = g.medians.unwrap()[0][0];
     assert_eq!((p.x, p.y), (x, 900.0 - y));

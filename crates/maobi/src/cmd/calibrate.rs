@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
-use brush_model::{load_measurements, BrushProfile, Form, PressRanges, Range};
+use anyhow::{Context, Result, bail};
+use brush_model::{BrushProfile, Form, PressRanges, Range, load_measurements};
 
 use crate::common::{load_brush, print_json, write_atomic};
 
@@ -51,7 +51,10 @@ pub fn run(args: Args) -> Result<()> {
     let (rows, source) = match (&args.measurements, &args.images) {
         (Some(m), _) => (load_measurements(m)?, m.clone()),
         (None, Some(dir)) => {
-            let out = args.output.as_ref().context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
+            let out = args
+                .output
+                .as_ref()
+                .context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
             (crate::cmd::calibrate_photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone())
         }
         (None, None) => bail!("give a measurements CSV or --images DIR"),
@@ -72,12 +75,12 @@ pub fn run(args: Args) -> Result<()> {
         alpha_rad: span(|m| m.press.alpha_rad),
         beta_rad: span(|m| m.press.beta_rad),
     };
-    let name = args.name.clone().unwrap_or_else(|| source.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into()));
+    let name = args.name.clone().unwrap_or_else(|| {
+        source.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into())
+    });
     if let Some(out) = &args.output {
         let profile = BrushProfile::calibrated(&name, brush, ranges, report.clone());
-        profile
-            .validate(&out.display().to_string())
-            .context("the fitted model is not a usable profile")?;
+        profile.validate(&out.display().to_string()).context("the fitted model is not a usable profile")?;
         write_atomic(out, profile.to_json().as_bytes())?;
         if args.images.is_some() {
             let plot = out.with_file_name("regression.png");

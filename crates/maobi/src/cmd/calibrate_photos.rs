@@ -57,7 +57,10 @@ pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Pa
         if f.iou < min_iou {
             poor.push(format!("{} (IoU {:.3})", l.file, f.iou));
         } else {
-            rows.push(Measurement { press: l.press, footprint: Footprint { lt_mm: f.lt_mm, lh_mm: f.lh_mm, lr_mm: f.lr_mm } });
+            rows.push(Measurement {
+                press: l.press,
+                footprint: Footprint { lt_mm: f.lt_mm, lh_mm: f.lh_mm, lr_mm: f.lr_mm },
+            });
         }
     }
     write_atomic(&profile_out.with_file_name("measurements.csv"), csv.as_bytes())?;

@@ -3,11 +3,11 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer};
 use rayon::prelude::*;
 
-use crate::common::{load_brush, parse_model, progress, write_atomic, BrushArg};
+use crate::common::{BrushArg, load_brush, parse_model, progress, write_atomic};
 
 /// Arguments of `maobi dataset`.
 #[derive(clap::Args, Debug)]

@@ -8,7 +8,7 @@ use anyhow::Result;
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
 use rayon::prelude::*;
 use serde_json::json;
-use stroke_metrics::{csim, SsimWorkspace, Summary};
+use stroke_metrics::{SsimWorkspace, Summary, csim};
 
 use crate::common::{gray, print_json};
 
@@ -33,7 +33,11 @@ pub fn run(args: Args) -> Result<()> {
     let (gc, gs) = neural_gen::eval::evaluate(&g, args.n)?;
     let secs = t0.elapsed().as_secs_f64();
     let s = g.config.size;
-    let spec = DatasetSpec { profile: g.config.profile.clone(), canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm), seed: neural_gen::eval::HELD_OUT_SEED };
+    let spec = DatasetSpec {
+        profile: g.config.profile.clone(),
+        canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm),
+        seed: neural_gen::eval::HELD_OUT_SEED,
+    };
     let rows: Vec<Vec<(f64, f64)>> = (0..args.n as u64)
         .into_par_iter()
         .map_init(
@@ -45,7 +49,10 @@ pub fn run(args: Args) -> Result<()> {
                     .iter()
                     .map(|m| {
                         spec.render(&smp, m.model(), r, img);
-                        (csim(gray(truth), gray(img)).expect("same size"), ws.ssim(gray(truth), gray(img)).expect("same size"))
+                        (
+                            csim(gray(truth), gray(img)).expect("same size"),
+                            ws.ssim(gray(truth), gray(img)).expect("same size"),
+                        )
                     })
                     .collect()
             },
@@ -54,17 +61,36 @@ pub fn run(args: Args) -> Result<()> {
     let mut table: BTreeMap<String, (Summary, Summary)> = BTreeMap::new();
     table.insert("b-bsmg".into(), (gc, gs));
     for (k, m) in ModelKind::BASELINES.iter().enumerate() {
-        table.insert(m.name().into(), (Summary::of(rows.iter().map(|r| r[k].0)), Summary::of(rows.iter().map(|r| r[k].1))));
+        table.insert(
+            m.name().into(),
+            (Summary::of(rows.iter().map(|r| r[k].0)), Summary::of(rows.iter().map(|r| r[k].1))),
+        );
     }
     if args.json {
-        let models: BTreeMap<_, _> = table.iter().map(|(k, (c, s))| (k.clone(), json!({"csim": c, "ssim": s}))).collect();
+        let models: BTreeMap<_, _> =
+            table.iter().map(|(k, (c, s))| (k.clone(), json!({"csim": c, "ssim": s}))).collect();
         print_json(&json!({"n": args.n, "reference": "analytic b-bsm", "generator_seconds": secs, "models": models}))?;
     } else {
-        println!("{} held-out presses of {}, each model against the analytic B-BSM (%):", args.n, g.config.profile.name);
-        println!("{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}", "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean");
+        println!(
+            "{} held-out presses of {}, each model against the analytic B-BSM (%):",
+            args.n, g.config.profile.name
+        );
+        println!(
+            "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
+            "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean"
+        );
         for name in ["b-bsmg", "circle", "ellipse", "line", "qbc"] {
             let (c, s) = table[name];
-            println!("{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}", name, 100.0 * c.best, 100.0 * c.worst, 100.0 * c.mean, 100.0 * s.best, 100.0 * s.worst, 100.0 * s.mean);
+            println!(
+                "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
+                name,
+                100.0 * c.best,
+                100.0 * c.worst,
+                100.0 * c.mean,
+                100.0 * s.best,
+                100.0 * s.worst,
+                100.0 * s.mean
+            );
         }
     }
     Ok(())

@@ -1,13 +1,13 @@
 //! `maobi evaluate`: the write pipeline over many characters, in parallel, with mean scores.
 
-use anyhow::{bail, Result};
+use anyhow::{Result, bail};
 use bezier_raster::ModelKind;
-use maobi::pipeline::{prepare, write_char, CharReport, WriteOptions};
+use maobi::pipeline::{CharReport, WriteOptions, prepare, write_char};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{glyph, CharBox, Method};
+use trajectory::{CharBox, Method, glyph};
 
-use crate::common::{parse_method, load_brush, parse_model, print_json, progress, BrushArg};
+use crate::common::{BrushArg, load_brush, parse_method, parse_model, print_json, progress};
 
 /// Arguments of `maobi evaluate`.
 #[derive(clap::Args, Debug)]
@@ -37,7 +37,6 @@ pub struct Args {
     json: bool,
 }
 
-
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush.brush)?;
@@ -66,9 +65,17 @@ pub fn run(args: Args) -> Result<()> {
     pb.finish_and_clear();
     let summary = summarize(&reports);
     if args.json {
-        print_json(&json!({"method": args.method.name(), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}))?;
+        print_json(
+            &json!({"method": args.method.name(), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
+        )?;
     } else {
-        println!("{} characters, {} via {}, brush {}:", reports.len(), args.model.name(), args.method.name(), profile.name);
+        println!(
+            "{} characters, {} via {}, brush {}:",
+            reports.len(),
+            args.model.name(),
+            args.method.name(),
+            profile.name
+        );
         println!("{}", serde_json::to_string_pretty(&summary)?);
     }
     Ok(())

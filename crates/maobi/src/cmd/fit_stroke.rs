@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use bezier_raster::{Bsm, StrokeModel};
 use serde_json::json;
-use stroke_fit::{fit_footprint, load_ink, scale_from_metadata, PhotoError, StrokeFit};
+use stroke_fit::{PhotoError, StrokeFit, fit_footprint, load_ink, scale_from_metadata};
 
 use crate::common::{print_json, write_atomic};
 
@@ -30,7 +30,9 @@ pub fn scale_for(photo: &Path, given: Option<f64>) -> Result<f64> {
     match given {
         Some(s) if s.is_finite() && s > 0.0 => Ok(s),
         Some(s) => anyhow::bail!("--px-per-mm {s}: expected a positive scale"),
-        None => scale_from_metadata(photo).ok_or_else(|| PhotoError::NoScale { path: photo.display().to_string() }.into()),
+        None => {
+            scale_from_metadata(photo).ok_or_else(|| PhotoError::NoScale { path: photo.display().to_string() }.into())
+        }
     }
 }
 
@@ -48,11 +50,19 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(out, &overlay(&mask, &fit, scale).with_context(|| format!("drawing {}", out.display()))?)?;
     }
     if args.json {
-        print_json(&json!({"lt_mm": fit.lt_mm, "lh_mm": fit.lh_mm, "lr_mm": fit.lr_mm, "anchor_mm": fit.anchor_mm, "beta_rad": fit.beta_rad, "iou": fit.iou}))?;
+        print_json(
+            &json!({"lt_mm": fit.lt_mm, "lh_mm": fit.lh_mm, "lr_mm": fit.lr_mm, "anchor_mm": fit.anchor_mm, "beta_rad": fit.beta_rad, "iou": fit.iou}),
+        )?;
     } else {
         println!(
             "lt = {:.3} mm, lh = {:.3} mm, lr = {:.3} mm, root at ({:.2}, {:.2}) mm, β = {:.2}°, IoU {:.4} (scale {scale} px/mm)",
-            fit.lt_mm, fit.lh_mm, fit.lr_mm, fit.anchor_mm[0], fit.anchor_mm[1], fit.beta_rad.to_degrees(), fit.iou
+            fit.lt_mm,
+            fit.lh_mm,
+            fit.lr_mm,
+            fit.anchor_mm[0],
+            fit.anchor_mm[1],
+            fit.beta_rad.to_degrees(),
+            fit.iou
         );
     }
     Ok(())
@@ -61,7 +71,8 @@ pub fn run(args: Args) -> Result<()> {
 /// The photo in grey with the fitted outline in red (the paper's Fig. 8).
 pub fn overlay(mask: &stroke_fit::InkMask, fit: &StrokeFit, scale: f64) -> Result<Vec<u8>> {
     let (w, h) = (mask.width as u32, mask.height as u32);
-    let path = Bsm.outline(&fit.footprint(), brush_model::PointMm::new(fit.anchor_mm[0], fit.anchor_mm[1]), fit.beta_rad);
+    let path =
+        Bsm.outline(&fit.footprint(), brush_model::PointMm::new(fit.anchor_mm[0], fit.anchor_mm[1]), fit.beta_rad);
     let mut img = image::RgbImage::from_fn(w, h, |x, y| {
         let g = (mask.gray[(y * w + x) as usize].clamp(0.0, 1.0) * 255.0) as u8;
         image::Rgb([g, g, g])

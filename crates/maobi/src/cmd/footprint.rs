@@ -33,7 +33,10 @@ pub fn run(args: Args) -> Result<()> {
         println!(
             "{} ({}): h = {} mm, α = {}°, β = {}°\n  tip length  lt = {:.3} mm\n  root length lh = {:.3} mm\n  belly half-width lr = {:.3} mm (width {:.3} mm)\n  length lh + lt = {:.3} mm, area = {:.2} mm²",
             profile.name,
-            match profile.source { brush_model::Source::Nominal => "nominal", brush_model::Source::Calibrated => "calibrated" },
+            match profile.source {
+                brush_model::Source::Nominal => "nominal",
+                brush_model::Source::Calibrated => "calibrated",
+            },
             args.press.h_mm,
             args.press.alpha_deg,
             args.press.beta_deg,

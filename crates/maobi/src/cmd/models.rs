@@ -4,14 +4,14 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Result};
+use anyhow::{Result, bail};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
 use brush_model::{Extrapolation, Press};
 use rayon::prelude::*;
 use serde::Serialize;
-use stroke_metrics::{csim, SsimWorkspace, Summary};
+use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{gray, load_brush, load_image, print_json, progress, read_stroke_labels, BrushArg};
+use crate::common::{BrushArg, gray, load_brush, load_image, print_json, progress, read_stroke_labels};
 
 /// Arguments of `maobi models`.
 #[derive(clap::Args, Debug)]
@@ -71,7 +71,9 @@ pub fn run(args: Args) -> Result<()> {
                 bail!("--n 0: expected at least one press");
             }
             let spec = DatasetSpec::new(profile.clone(), args.size, args.seed);
-            let t = (0..args.n).map(|i| Target { press: spec.press(i), photo: None, px_per_mm: spec.canvas.px_per_mm }).collect();
+            let t = (0..args.n)
+                .map(|i| Target { press: spec.press(i), photo: None, px_per_mm: spec.canvas.px_per_mm })
+                .collect();
             (t, args.size, ModelKind::BASELINES.to_vec(), "bsm".to_string())
         }
         Some(dir) => {
@@ -122,11 +124,11 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&report)?;
     } else {
+        println!("{} presses of {} at {size}², each model against {} (%):", report.n, report.brush, report.reference);
         println!(
-            "{} presses of {} at {size}², each model against {} (%):",
-            report.n, report.brush, report.reference
+            "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
+            "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean"
         );
-        println!("{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}", "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean");
         for m in &models {
             let s = report.models[m.name()];
             println!(
@@ -151,7 +153,12 @@ fn load_reference(dir: &Path, profile: &brush_model::BrushProfile) -> Result<(Ve
         let file = dir.join(&l.file);
         let photo = load_image(&file)?;
         if photo.width() != photo.height() {
-            bail!("{}: expected a square image registered to the stroke canvas, got {}×{}", file.display(), photo.width(), photo.height());
+            bail!(
+                "{}: expected a square image registered to the stroke canvas, got {}×{}",
+                file.display(),
+                photo.width(),
+                photo.height()
+            );
         }
         if *size.get_or_insert(photo.width()) != photo.width() {
             bail!("{}: all reference images must have the same size", file.display());

@@ -1,16 +1,16 @@
 //! `maobi robot`: check, export, send and simulate writing programs.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use anyhow::{bail, Context, Result};
-use robot_io::aubo::{run_program, RunOptions, RPC_PORT};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{build_program, RobotConfig};
-use robot_io::sim::{Faults, Simulator};
+use anyhow::{Context, Result, bail};
 use robot_io::TrackFile;
+use robot_io::aubo::{RPC_PORT, RunOptions, run_program};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{RobotConfig, build_program};
+use robot_io::sim::{Faults, Simulator};
 
 use crate::common::{print_json, progress, write_atomic};
 
@@ -156,7 +156,13 @@ fn check(a: CheckArgs) -> Result<()> {
     } else {
         println!(
             "safe: {} strokes, {} points, {} moves; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
-            report.strokes, report.points, report.moves, report.max_press_mm, l.track.brush.ranges.h_mm.max, report.frame_residual_mm, report.estimated_seconds
+            report.strokes,
+            report.points,
+            report.moves,
+            report.max_press_mm,
+            l.track.brush.ranges.h_mm.max,
+            report.frame_residual_mm,
+            report.estimated_seconds
         );
     }
     Ok(())
@@ -185,16 +191,27 @@ fn send(a: SendArgs) -> Result<()> {
     let l = load(&a.program)?;
     let (program, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
     if a.dry_run {
-        println!("dry run: {} strokes, {} moves would be sent to {}:{}; nothing connected", report.strokes, report.moves, a.host, a.port);
+        println!(
+            "dry run: {} strokes, {} moves would be sent to {}:{}; nothing connected",
+            report.strokes, report.moves, a.host, a.port
+        );
         return Ok(());
     }
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
     let pb = progress(program.strokes.len() as u64, "strokes");
-    let opts = RunOptions { timeout: Duration::from_millis(a.timeout_ms), max_reconnects: 5, backoff: Duration::from_millis(200), lift_m: l.cfg.lift_mm / 1000.0, stop: &stop };
+    let opts = RunOptions {
+        timeout: Duration::from_millis(a.timeout_ms),
+        max_reconnects: 5,
+        backoff: Duration::from_millis(200),
+        lift_m: l.cfg.lift_mm / 1000.0,
+        stop: &stop,
+    };
     let addr = format!("{}:{}", a.host, a.port);
-    let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| pb.set_position(r.strokes_completed.len() as u64));
+    let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| {
+        pb.set_position(r.strokes_completed.len() as u64)
+    });
     pb.finish_and_clear();
     let r = result.with_context(|| format!("running on {addr}"))?;
     println!(
@@ -243,15 +260,17 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     let name = a.track.display().to_string();
     let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
     let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;
-    let b: Vec<f64> = serde_json::from_value(v["char_box_mm"].clone()).with_context(|| format!("{name}: field `char_box_mm` must be [x0, y0, size]"))?;
+    let b: Vec<f64> = serde_json::from_value(v["char_box_mm"].clone())
+        .with_context(|| format!("{name}: field `char_box_mm` must be [x0, y0, size]"))?;
     if b.len() != 3 || b[2] <= 0.0 {
         bail!("{name}: field `char_box_mm` must be [x0, y0, size] with size > 0");
     }
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let tname = a.trace.display().to_string();
-    let trace: Vec<robot_io::sim::TraceEntry> = serde_json::from_str(&std::fs::read_to_string(&a.trace).with_context(|| format!("{tname}: cannot read"))?)
-        .with_context(|| format!("{tname}: not a simulator trace"))?;
+    let trace: Vec<robot_io::sim::TraceEntry> =
+        serde_json::from_str(&std::fs::read_to_string(&a.trace).with_context(|| format!("{tname}: cannot read"))?)
+            .with_context(|| format!("{tname}: not a simulator trace"))?;
     let brush = tf.brush.clone();
     let track = robot_io::sim::trace_to_track(&trace, &frame, |h| {
         brush
@@ -270,6 +289,11 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
         a.size,
     )?;
     write_atomic(&a.output, &img.encode_png()?)?;
-    println!("{} strokes, {} pressed points rendered to {}", track.strokes.len(), track.point_count(), a.output.display());
+    println!(
+        "{} strokes, {} pressed points rendered to {}",
+        track.strokes.len(),
+        track.point_count(),
+        a.output.display()
+    );
     Ok(())
 }

@@ -2,12 +2,12 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
-use bezier_raster::{coverage::svg_document, Coverage, ModelKind, Rasterizer, StrokeCanvas};
+use anyhow::{Result, bail};
+use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, coverage::svg_document};
 use brush_model::Extrapolation;
 use serde_json::json;
 
-use crate::common::{PressArgs, load_brush, parse_model, print_json, write_atomic, BrushArg};
+use crate::common::{BrushArg, PressArgs, load_brush, parse_model, print_json, write_atomic};
 
 /// Arguments of `maobi stroke`.
 #[derive(clap::Args, Debug)]

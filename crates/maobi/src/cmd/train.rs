@@ -2,10 +2,10 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
 
-use crate::common::{load_brush, write_atomic, BrushArg};
+use crate::common::{BrushArg, load_brush, write_atomic};
 
 /// Arguments of `maobi train`.
 #[derive(clap::Args, Debug)]
@@ -55,7 +55,12 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => {
             let g = Generator::load(p).with_context(|| format!("--resume {}", p.display()))?;
             if g.config.profile != profile && args.brush.brush != "pen1" {
-                bail!("--resume {}: the checkpoint was trained for brush `{}`, not `{}`", p.display(), g.config.profile.name, profile.name);
+                bail!(
+                    "--resume {}: the checkpoint was trained for brush `{}`, not `{}`",
+                    p.display(),
+                    g.config.profile.name,
+                    profile.name
+                );
             }
             g
         }
@@ -65,10 +70,27 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let a = &g.config.arch;
-    eprintln!("generator: {} parameters, {:.2} M multiply-adds per image, {}² output", a.parameter_count(), a.macs_per_image() as f64 / 1e6, g.config.size);
+    eprintln!(
+        "generator: {} parameters, {:.2} M multiply-adds per image, {}² output",
+        a.parameter_count(),
+        a.macs_per_image() as f64 / 1e6,
+        g.config.size
+    );
     let pb = indicatif::ProgressBar::new(args.steps as u64);
-    pb.set_style(indicatif::ProgressStyle::with_template("train [{bar:40}] {pos}/{len} {msg} ({per_sec}, {eta})").expect("template").progress_chars("=> "));
-    let opts = TrainOptions { steps: args.steps, batch: args.batch, lr: args.lr, seed: args.seed, val_every: args.val_every, patience: 8, checkpoint: Some(args.output.clone()) };
+    pb.set_style(
+        indicatif::ProgressStyle::with_template("train [{bar:40}] {pos}/{len} {msg} ({per_sec}, {eta})")
+            .expect("template")
+            .progress_chars("=> "),
+    );
+    let opts = TrainOptions {
+        steps: args.steps,
+        batch: args.batch,
+        lr: args.lr,
+        seed: args.seed,
+        val_every: args.val_every,
+        patience: 8,
+        checkpoint: Some(args.output.clone()),
+    };
     let mut last_val = f64::NAN;
     let report = neural_gen::train(&mut g, &opts, |p| {
         if let Some(v) = p.val_mse {
@@ -89,13 +111,30 @@ pub fn run(args: Args) -> Result<()> {
         wall_seconds: report.wall_seconds,
         threads: rayon::current_num_threads(),
     });
-    g.config.metrics = Some(Metrics { n: args.eval_n, ssim_mean: ssim.mean, ssim_worst: ssim.worst, csim_mean: csim.mean, val_mse: report.best_val_mse });
+    g.config.metrics = Some(Metrics {
+        n: args.eval_n,
+        ssim_mean: ssim.mean,
+        ssim_worst: ssim.worst,
+        csim_mean: csim.mean,
+        val_mse: report.best_val_mse,
+    });
     g.save(&args.output)?;
     let mut csv = String::from("step,train_mse,val_mse,lr\n");
     for p in &report.history {
-        csv.push_str(&format!("{},{},{},{}\n", p.step, p.train_mse, p.val_mse.map_or(String::new(), |v| v.to_string()), p.lr));
+        csv.push_str(&format!(
+            "{},{},{},{}\n",
+            p.step,
+            p.train_mse,
+            p.val_mse.map_or(String::new(), |v| v.to_string()),
+            p.lr
+        ));
     }
-    let dir = args.output.parent().filter(|d| !d.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."));
+    let dir = args
+        .output
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("."));
     write_atomic(&dir.join("loss.csv"), csv.as_bytes())?;
     let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
     let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();

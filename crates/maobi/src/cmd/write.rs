@@ -2,15 +2,15 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
-use bezier_raster::{coverage::overlay_png, ModelKind};
+use anyhow::{Context, Result, bail};
+use bezier_raster::{ModelKind, coverage::overlay_png};
 use brush_model::{BrushProfile, Extrapolation, Track};
-use maobi::pipeline::{prepare, write_char, CharReport, CharResult, Prepared, WriteOptions};
+use maobi::pipeline::{CharReport, CharResult, Prepared, WriteOptions, prepare, write_char};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{glyph, CharBox, Method};
+use trajectory::{CharBox, Method, glyph};
 
-use crate::common::{parse_method, load_brush, parse_model, print_json, progress, write_atomic, BrushArg};
+use crate::common::{BrushArg, load_brush, parse_method, parse_model, print_json, progress, write_atomic};
 
 /// Arguments of `maobi write`.
 #[derive(clap::Args, Debug)]
@@ -66,7 +66,6 @@ pub struct Args {
     generator: Option<PathBuf>,
 }
 
-
 fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
     Ok(if let Some(dir) = &args.hanzi_data {
         glyph::from_hanzi_dir(dir, ch)?
@@ -97,13 +96,16 @@ pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush.brush)?;
     let alpha_rad = args.alpha.to_radians();
     if !profile.ranges.alpha_rad.contains(alpha_rad) {
-        bail!("--alpha {}: outside the brush's calibrated tilt range {:.1}–{:.1}°", args.alpha, profile.ranges.alpha_rad.min.to_degrees(), profile.ranges.alpha_rad.max.to_degrees());
+        bail!(
+            "--alpha {}: outside the brush's calibrated tilt range {:.1}–{:.1}°",
+            args.alpha,
+            profile.ranges.alpha_rad.min.to_degrees(),
+            profile.ranges.alpha_rad.max.to_degrees()
+        );
     }
     // Load and analyse every glyph before writing anything.
-    let prepared: Vec<Prepared> = chars
-        .par_iter()
-        .map(|&c| prepare(load_glyph(&args, c)?, args.method))
-        .collect::<Result<_>>()?;
+    let prepared: Vec<Prepared> =
+        chars.par_iter().map(|&c| prepare(load_glyph(&args, c)?, args.method)).collect::<Result<_>>()?;
     let char_mm = match args.char_mm {
         Some(v) if v.is_finite() && v > 0.0 => v,
         Some(v) => bail!("--char-mm {v}: expected a positive size in mm"),
@@ -129,11 +131,23 @@ pub fn run(args: Args) -> Result<()> {
     if args.renderer == "neural" {
         let g = maobi::generator::load_generator(args.generator.as_deref())?;
         if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
-            bail!("--renderer neural: the generator was trained for brush `{}`, not `{}`", g.config.profile.name, profile.name);
+            bail!(
+                "--renderer neural: the generator was trained for brush `{}`, not `{}`",
+                g.config.profile.name,
+                profile.name
+            );
         }
         for r in results.iter_mut() {
             let b = r.char_box;
-            let img = neural_gen::compose::render_track(&g, &r.track, brush_model::PointMm::new(b.x0_mm, b.y0_mm), args.size as f64 / b.size_mm, args.size, args.size, 64)?;
+            let img = neural_gen::compose::render_track(
+                &g,
+                &r.track,
+                brush_model::PointMm::new(b.x0_mm, b.y0_mm),
+                args.size as f64 / b.size_mm,
+                args.size,
+                args.size,
+                64,
+            )?;
             let sim = maobi::pipeline::similarity(&r.reference, &img)?;
             (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
             r.report.model = "b-bsmg";
@@ -200,7 +214,13 @@ fn layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Vec<CharBox> {
         .collect()
 }
 
-fn sheet_image(results: &[CharResult], profile: &BrushProfile, model: ModelKind, char_mm: f64, size: u32) -> Result<bezier_raster::Coverage> {
+fn sheet_image(
+    results: &[CharResult],
+    profile: &BrushProfile,
+    model: ModelKind,
+    char_mm: f64,
+    size: u32,
+) -> Result<bezier_raster::Coverage> {
     let (mut w, mut h) = (0.0f64, 0.0f64);
     let mut all = Track::default();
     for r in results {
@@ -211,7 +231,16 @@ fn sheet_image(results: &[CharResult], profile: &BrushProfile, model: ModelKind,
     let gap = 0.1 * char_mm;
     let px_per_mm = size as f64 / char_mm;
     let (wp, hp) = (((w + gap) * px_per_mm).ceil() as u32, ((h + gap) * px_per_mm).ceil() as u32);
-    Ok(bezier_raster::render_track(&all, profile, model.model(), Extrapolation::Refuse, brush_model::PointMm::new(0.0, 0.0), px_per_mm, wp, hp)?)
+    Ok(bezier_raster::render_track(
+        &all,
+        profile,
+        model.model(),
+        Extrapolation::Refuse,
+        brush_model::PointMm::new(0.0, 0.0),
+        px_per_mm,
+        wp,
+        hp,
+    )?)
 }
 
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<()> {
