@@ -134,6 +134,19 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     let render = track.parent().unwrap().join("render.png");
     let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["compare", s(&render), s(&img), "--json"]))).unwrap();
     assert!(j["csim"].as_f64().unwrap() > 0.85, "{j}");
+    // The Lua script goes to the script port framed by \r\n\r\n.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let reader = std::thread::spawn(move || {
+        use std::io::Read;
+        let (mut c, _) = listener.accept().unwrap();
+        let mut buf = String::new();
+        c.read_to_string(&mut buf).unwrap();
+        buf
+    });
+    ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", "aubo-lua", "--send-script", &addr]));
+    let got = reader.join().unwrap();
+    assert!(got.starts_with("-- maobi") && got.ends_with("end\n\r\n\r\n"), "{}", &got[got.len() - 20..]);
     // Dry run connects to nothing.
     ok(&maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "192.0.2.1", "--dry-run"]));
 }

@@ -80,8 +80,12 @@ pub struct ExportArgs {
     #[arg(long, value_parser = ["aubo-lua", "urscript", "gcode"])]
     format: String,
     /// Output file.
-    #[arg(short, long)]
-    output: PathBuf,
+    #[arg(short, long, required_unless_present = "send_script")]
+    output: Option<PathBuf>,
+    /// Send the aubo-lua script to this controller's script port instead (HOST or HOST:PORT,
+    /// default port 30002), framed by `\r\n\r\n`.
+    #[arg(long)]
+    send_script: Option<String>,
 }
 
 /// Arguments of `maobi robot send`.
@@ -184,7 +188,19 @@ fn export(a: ExportArgs) -> Result<()> {
             g
         }
     };
-    write_atomic(&a.output, text.as_bytes())
+    if let Some(host) = &a.send_script {
+        if a.format != "aubo-lua" {
+            bail!("--send-script sends ARCS Lua scripts: use --format aubo-lua");
+        }
+        let addr = if host.contains(':') { host.clone() } else { format!("{host}:{}", robot_io::aubo::SCRIPT_PORT) };
+        robot_io::aubo::send_script(&addr, &text, Duration::from_secs(5))
+            .with_context(|| format!("sending the script to {addr}"))?;
+        println!("script of {} moves sent to {addr}", program.move_count());
+    }
+    if let Some(out) = &a.output {
+        write_atomic(out, text.as_bytes())?;
+    }
+    Ok(())
 }
 
 fn send(a: SendArgs) -> Result<()> {
