@@ -111,6 +111,7 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
                     None => whole_dt.clone(),
                 };
                 let (pts, half_widths) = centre_on_ridge(&densify(m, 8.0), &dt, n, px_to_em);
+                let (pts, half_widths) = extend_ends(pts, half_widths, &dt, n, px_to_em);
                 out.push(StrokePath { points: pts, half_widths });
             }
             Ok(out)
@@ -194,4 +195,48 @@ fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Poi
         out.push(p[i] + kurbo::Vec2::new(-d.y / len, d.x / len) * off);
     }
     (out, widths)
+}
+
+/// Where a stroke's centre line should end, as a fraction of the local half-width left: hand-drawn
+/// medians stop well inside the stroke's end cap, so each end is continued along its direction
+/// until the distance to the outline falls to this fraction of the half-width at the old end.
+pub const END_CAP_FRACTION: f64 = 0.5;
+
+/// Continues both ends of a centre line outward (see [`END_CAP_FRACTION`]), one em unit at a time.
+fn extend_ends(mut p: Vec<Point>, mut w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
+    if p.len() < 2 {
+        return (p, w);
+    }
+    let at = |q: Point| distance::sample(dt, n, n, q.x / px_to_em, q.y / px_to_em) * px_to_em;
+    let march = |end: Point, before: Point, w_end: f64| -> Vec<(Point, f64)> {
+        let d = end - before;
+        let len = d.hypot();
+        if len < 1e-9 || w_end <= 0.0 {
+            return Vec::new();
+        }
+        let u = d / len;
+        let mut out = Vec::new();
+        let mut q = end;
+        for _ in 0..(3.0 * w_end).ceil() as usize {
+            q += u;
+            let v = at(q);
+            if v <= END_CAP_FRACTION * w_end {
+                break;
+            }
+            out.push((q, v));
+        }
+        out
+    };
+    let k = (p.len() - 1).min(3);
+    let tail = march(p[p.len() - 1], p[p.len() - 1 - k], w[w.len() - 1]);
+    for (q, v) in tail {
+        p.push(q);
+        w.push(v);
+    }
+    let head = march(p[0], p[k], w[0]);
+    for (q, v) in head {
+        p.insert(0, q);
+        w.insert(0, v);
+    }
+    (p, w)
 }
