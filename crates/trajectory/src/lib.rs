@@ -130,10 +130,10 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
                 .into_iter()
                 .map(|p| {
                     let half_widths = p.iter().map(|q| distance::sample(&dt, n, n, q.x, q.y) * px_to_em).collect();
-                    StrokePath {
-                        points: p.iter().map(|q| Point::new(q.x * px_to_em, q.y * px_to_em)).collect(),
-                        half_widths,
-                    }
+                    let pts = p.iter().map(|q| Point::new(q.x * px_to_em, q.y * px_to_em)).collect();
+                    // Thinning stops short of the stroke ends too.
+                    let (points, half_widths) = extend_ends(pts, half_widths, &dt, n, px_to_em);
+                    StrokePath { points, half_widths }
                 })
                 .collect())
         }
