@@ -147,6 +147,23 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", "aubo-lua", "--send-script", &addr]));
     let got = reader.join().unwrap();
     assert!(got.starts_with("-- maobi") && got.ends_with("end\n\r\n\r\n"), "{}", &got[got.len() - 20..]);
+    // A file that is not a trace is refused, naming it.
+    let bad = dir.path().join("bad-trace.json");
+    std::fs::write(&bad, "{}").unwrap();
+    fails(
+        &maobi(&[
+            "robot",
+            "render-trace",
+            s(&bad),
+            "--track",
+            s(&track),
+            "--paper",
+            s(&paper()),
+            "-o",
+            s(&dir.path().join("t.png")),
+        ]),
+        "bad-trace.json: not a simulator trace",
+    );
     // Dry run connects to nothing.
     ok(&maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "192.0.2.1", "--dry-run"]));
 }

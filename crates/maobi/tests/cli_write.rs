@@ -124,3 +124,15 @@ fn bad_input_fails_cleanly_without_output() {
     fails(&maobi(&["write", "永", "--font", s(&font), "--hanzi-data", "x", "--out", s(&out)]), "cannot be used with");
     assert!(!out.exists(), "nothing may be written on error");
 }
+
+#[test]
+fn evaluate_reports_means_and_refuses_unknown_characters() {
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["evaluate", "--chars", "十口", "--size", "128", "--json"]))).unwrap();
+    assert_eq!(j["summary"]["count"], 2);
+    let mean = (j["chars"][0]["csim"].as_f64().unwrap() + j["chars"][1]["csim"].as_f64().unwrap()) / 2.0;
+    assert!((j["summary"]["csim"].as_f64().unwrap() - mean).abs() < 1e-12);
+    assert_eq!(j["summary"]["strokes_match_fraction"], 1.0);
+    fails(&maobi(&["evaluate", "--chars", "十𪚥"]), "not in the embedded subset");
+    fails(&maobi(&["evaluate", "--chars", "十", "--from", "bones"]), "unknown method");
+}
