@@ -200,7 +200,7 @@ fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Poi
 /// Where a stroke's centre line should end, as a fraction of the local half-width left: hand-drawn
 /// medians stop well inside the stroke's end cap, so each end is continued along its direction
 /// until the distance to the outline falls to this fraction of the half-width at the old end.
-pub const END_CAP_FRACTION: f64 = 0.5;
+pub const END_CAP_FRACTION: f64 = 0.65;
 
 /// Continues both ends of a centre line outward (see [`END_CAP_FRACTION`]), one em unit at a time.
 fn extend_ends(mut p: Vec<Point>, mut w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
