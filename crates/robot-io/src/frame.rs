@@ -52,10 +52,7 @@ impl PaperFrame {
     /// points, or a residual above the tolerance.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let file: PaperFile = serde_json::from_str(&text)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let file: PaperFile = crate::load_json(path)?;
         Self::fit(&file).map_err(|e| match e {
             RobotError::Config { message, .. } => RobotError::Config { file: name, message },
             other => other,

@@ -87,6 +87,14 @@ pub enum RobotError {
     },
 }
 
+/// Reads and parses a JSON file; errors are [`RobotError::Config`] naming the file (serde's
+/// message names the field, line and column).
+pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RobotError> {
+    let config = |message: String| RobotError::Config { file: path.display().to_string(), message };
+    let text = std::fs::read_to_string(path).map_err(|e| config(e.to_string()))?;
+    serde_json::from_str(&text).map_err(|e| config(e.to_string()))
+}
+
 /// `track.json` as `maobi write` writes it: the brush profile and the strokes (other fields
 /// ignored).
 #[derive(Debug, Deserialize)]
@@ -107,10 +115,7 @@ impl TrackFile {
     /// [`RobotError::Config`] naming the file.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let t: TrackFile = serde_json::from_str(&text)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let t: TrackFile = load_json(path)?;
         t.brush.validate(&name).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
         Ok(t)
     }

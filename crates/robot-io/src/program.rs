@@ -98,10 +98,7 @@ impl RobotConfig {
     /// [`RobotError::Config`] naming the file and field.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
-        let c: RobotConfig = serde_json::from_str(&text)
-            .map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        let c: RobotConfig = crate::load_json(path)?;
         c.validate().map_err(|m| RobotError::Config { file: name, message: m })?;
         Ok(c)
     }

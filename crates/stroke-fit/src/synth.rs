@@ -112,24 +112,22 @@ fn blur(v: &[f64], w: usize, h: usize, sigma: f64) -> Vec<f64> {
     let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
     let s: f64 = k.iter().sum();
     let k: Vec<f64> = k.iter().map(|x| x / s).collect();
-    let mut tmp = vec![0.0; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let mut a = 0.0;
-            for (j, kk) in k.iter().enumerate() {
-                let xx = (x as isize + j as isize - r).clamp(0, w as isize - 1) as usize;
-                a += kk * v[y * w + xx];
-            }
-            tmp[y * w + x] = a;
-        }
-    }
+    let rows = blur_pass(v, w, h, &k, true);
+    blur_pass(&rows, w, h, &k, false)
+}
+
+/// One pass of the kernel `k` along rows (`horizontal`) or columns, edges clamped.
+fn blur_pass(v: &[f64], w: usize, h: usize, k: &[f64], horizontal: bool) -> Vec<f64> {
+    let r = (k.len() / 2) as isize;
     let mut out = vec![0.0; w * h];
     for y in 0..h {
         for x in 0..w {
+            let (pos, len) = if horizontal { (x as isize, w as isize) } else { (y as isize, h as isize) };
             let mut a = 0.0;
             for (j, kk) in k.iter().enumerate() {
-                let yy = (y as isize + j as isize - r).clamp(0, h as isize - 1) as usize;
-                a += kk * tmp[yy * w + x];
+                let q = (pos + j as isize - r).clamp(0, len - 1);
+                let idx = if horizontal { y * w + q as usize } else { q as usize * w + x };
+                a += kk * v[idx];
             }
             out[y * w + x] = a;
         }
