@@ -263,7 +263,7 @@ pub fn run(args: &[String]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use brush_model::{Footprint, PointMm};
+    use brush_model::Footprint;
     use kurbo::BezPath;
 
     /// The B-BSM with its belly narrowed by 15 %: a plausible bug.
@@ -309,6 +309,5 @@ mod tests {
         let changed = model_figures(ModelKind::Bsm.model(), &[("circle", &Narrow)], 24);
         let msgs: Vec<String> = compare(&base, &changed).iter().map(|x| x.to_string()).collect();
         assert!(msgs.iter().any(|m| m.starts_with("models/circle/")), "{msgs:?}");
-        let _ = PointMm::default();
     }
 }

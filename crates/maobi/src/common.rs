@@ -154,3 +154,28 @@ pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
     }
     Ok(out)
 }
+
+/// `--renderer analytic|neural` and `--generator`, shared by `stroke` and `write`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RendererArgs {
+    /// `analytic` (the stroke model) or `neural` (the trained generator; for `stroke` PNG only,
+    /// at the generator's own size and scale; for `write` batched along the track, and its brush
+    /// must be the one written with).
+    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
+    pub renderer: String,
+    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
+    #[arg(long)]
+    pub generator: Option<std::path::PathBuf>,
+}
+
+impl RendererArgs {
+    /// Whether the neural generator draws.
+    pub fn neural(&self) -> bool {
+        self.renderer == "neural"
+    }
+
+    /// The generator asked for (or the committed pen1 model).
+    pub fn generator(&self) -> Result<neural_gen::Generator> {
+        maobi::generator::load_generator(self.generator.as_deref())
+    }
+}

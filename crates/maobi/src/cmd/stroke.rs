@@ -7,7 +7,7 @@ use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, coverage::svg
 use brush_model::Extrapolation;
 use serde_json::json;
 
-use crate::common::{BrushArg, PressArgs, load_brush, parse_model, print_json, write_atomic};
+use crate::common::{BrushArg, PressArgs, RendererArgs, load_brush, parse_model, print_json, write_atomic};
 
 /// Arguments of `maobi stroke`.
 #[derive(clap::Args, Debug)]
@@ -34,18 +34,13 @@ pub struct Args {
     /// Print the footprint, scale and anchor as JSON.
     #[arg(long)]
     json: bool,
-    /// `analytic` (the stroke model) or `neural` (the trained generator; PNG only, the
-    /// generator's own size and scale, presses inside its brush's range).
-    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
-    renderer: String,
-    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
-    #[arg(long)]
-    generator: Option<PathBuf>,
+    #[command(flatten)]
+    renderer: RendererArgs,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    if args.renderer == "neural" {
+    if args.renderer.neural() {
         return run_neural(&args);
     }
     let profile = load_brush(&args.brush.brush)?;
@@ -89,7 +84,7 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn run_neural(args: &Args) -> Result<()> {
-    let g = maobi::generator::load_generator(args.generator.as_deref())?;
+    let g = args.renderer.generator()?;
     if args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png") {
         bail!("-o {}: the neural renderer writes PNG only", args.output.display());
     }

@@ -10,7 +10,9 @@ use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
 
-use crate::common::{BrushArg, load_brush, parse_method, parse_model, print_json, progress, write_atomic};
+use crate::common::{
+    BrushArg, RendererArgs, load_brush, parse_method, parse_model, print_json, progress, write_atomic,
+};
 
 /// Arguments of `maobi write`.
 #[derive(clap::Args, Debug)]
@@ -57,13 +59,8 @@ pub struct Args {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// `analytic` (the stroke model) or `neural` (the trained generator, batched along the
-    /// track; its brush must be the one written with).
-    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
-    renderer: String,
-    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
-    #[arg(long)]
-    generator: Option<PathBuf>,
+    #[command(flatten)]
+    renderer: RendererArgs,
 }
 
 fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
@@ -128,8 +125,8 @@ pub fn run(args: Args) -> Result<()> {
         .collect::<Result<_>>()?;
     pb.finish_and_clear();
     let mut results = results;
-    if args.renderer == "neural" {
-        let g = maobi::generator::load_generator(args.generator.as_deref())?;
+    if args.renderer.neural() {
+        let g = args.renderer.generator()?;
         if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
             bail!(
                 "--renderer neural: the generator was trained for brush `{}`, not `{}`",
