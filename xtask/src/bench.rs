@@ -16,6 +16,7 @@ const BENCHES: &[(&str, &str)] = &[
     ("trajectory", "track"),
     ("maobi", "write"),
     ("neural-gen", "generator"),
+    ("neural-gen", "ltp"),
 ];
 
 /// (criterion id, label).
@@ -35,6 +36,12 @@ const ROWS: &[(&str, &str)] = &[
     ("generator_inference/batch_64", "generator inference, batch 64 (per call of 64)"),
     ("generator_inference/analytic_64", "analytic B-BSM, 64 footprints (one thread)"),
     ("generator_training/step_batch_64", "generator training step, batch 64 (incl. validation setup)"),
+    ("ltp_training/step_batch_64_maobi", "LearningToPaint-size net, Adam step, batch 64, maobi kernels"),
+    ("ltp_training/step_batch_64_candle", "LearningToPaint-size net, Adam step, batch 64, stock candle"),
+    ("ltp_inference/batch_1_maobi", "LearningToPaint-size net, inference batch 1, maobi kernels"),
+    ("ltp_inference/batch_64_maobi", "LearningToPaint-size net, inference batch 64, maobi kernels"),
+    ("ltp_inference/batch_1_candle", "LearningToPaint-size net, inference batch 1, stock candle"),
+    ("ltp_inference/batch_64_candle", "LearningToPaint-size net, inference batch 64, stock candle"),
 ];
 
 fn estimate_ns(dir: &Path, id: &str) -> Option<f64> {
@@ -100,9 +107,33 @@ pub fn run(args: &[String]) -> Result<()> {
         10000.0 / secs
     ));
     let _ = std::fs::remove_dir_all(&out);
+    table.push_str(&torch_rows(&root));
     let path = root.join("target/bench-summary.md");
     std::fs::write(&path, format!("# maobi benchmarks\n\n{table}"))?;
     print!("{table}");
     println!("written to {}", path.display());
     Ok(())
+}
+
+/// The PyTorch reference for the LearningToPaint-size network (`benches/ltp_torch.py`, 2
+/// threads), when python3 with torch is installed; one row saying so otherwise.
+fn torch_rows(root: &Path) -> String {
+    let script = root.join("crates/neural-gen/benches/ltp_torch.py");
+    let out = Command::new("python3").arg(&script).args(["--threads", "2", "--steps", "10", "--json"]).output();
+    let parsed = out
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| serde_json::from_slice::<serde_json::Value>(&o.stdout).ok());
+    let Some(v) = parsed else {
+        return "| LearningToPaint-size net in PyTorch | not run (python3 with torch not found) |\n".to_string();
+    };
+    let num = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+    format!(
+        "| LearningToPaint-size net, Adam step, batch 64, PyTorch {} CPU (2 threads) | {} |\n\
+         | LearningToPaint-size net, inference, PyTorch | {:.0} img/s at batch 1, {:.0} img/s at batch 64 |\n",
+        v["torch"].as_str().unwrap_or("?"),
+        human(num("step_s") * 1e9),
+        num("inference_b1_img_per_s"),
+        num("inference_b64_img_per_s"),
+    )
 }

@@ -10,6 +10,12 @@ use clap::{Parser, Subcommand};
 mod cmd;
 mod common;
 
+// Training and rendering create and drop large buffers all the time; glibc hands allocations
+// above its mmap threshold back to the OS on every free, so each new tensor pays a page fault
+// per 4 KiB. mimalloc keeps and reuses them (generator training step: see docs/neural-gen.md).
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 /// Robotic Chinese calligraphy: brush models, footprints, tracks and robots.
 #[derive(Parser, Debug)]
 #[command(name = "maobi", version, about, long_about = None)]

@@ -7,6 +7,10 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 use std::hint::black_box;
 
+// As in the `maobi` binary: an allocator that reuses freed large buffers.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn bench(c: &mut Criterion) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     let g = Generator::new(GeneratorConfig::new(pen1.clone(), Arch::default_128()), 1).unwrap();

@@ -11,10 +11,16 @@
 //! * [`mod@train`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
 //! * [`compose`]: a whole track rendered with the generator (batched along the track).
 //! * [`eval`]: CSIM/SSIM of the generator against the analytic footprints.
+//! * [`adam`]: a fused AdamW (one in-place pass per variable).
+//! * [`conv`]: a faster CPU convolution for candle (im2col + gemm in forward and backward).
+//! * [`ltp`]: the LearningToPaint-sized renderer network, kept as a speed reference.
 
+pub mod adam;
 pub mod compose;
 pub mod config;
+pub mod conv;
 pub mod eval;
+pub mod ltp;
 pub mod model;
 pub mod train;
 

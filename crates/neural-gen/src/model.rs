@@ -5,12 +5,13 @@ use std::path::{Path, PathBuf};
 use bezier_raster::Coverage;
 use brush_model::Press;
 use candle_core::{DType, Device, Module, Tensor, Var};
-use candle_nn::{Conv2d, Conv2dConfig, Linear, VarBuilder, VarMap};
+use candle_nn::{Conv2dConfig, Linear, VarBuilder, VarMap};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::NeuralGenError;
 use crate::config::{CONFIG_VERSION, GeneratorConfig};
+use crate::conv::{self, Conv2d};
 
 /// A generator: the network and its configuration.
 pub struct Generator {
@@ -92,12 +93,9 @@ impl Generator {
         }
         let b = x.dim(0)?;
         let mut h = h.reshape((b, a.seed_channels, a.seed_side, a.seed_side))?;
-        for (i, conv) in self.convs.iter().enumerate() {
-            h = conv.forward(&h)?;
-            if i + 1 < self.convs.len() {
-                h = h.relu()?;
-            }
-            h = candle_nn::ops::pixel_shuffle(&h, 2)?;
+        // Each convolution (ReLU fused in, except the last) is followed by a ×2 pixel shuffle.
+        for conv in &self.convs {
+            h = conv::pixel_shuffle(&conv.forward(&h)?, 2)?;
         }
         candle_nn::ops::sigmoid(&h)
     }
@@ -293,11 +291,15 @@ fn build(config: &GeneratorConfig, vb: &VarBuilder<'_>) -> candle_core::Result<(
         vb.pp(format!("fc{}", a.hidden.len())),
     )?);
     let cfg = Conv2dConfig { padding: 1, ..Default::default() };
+    let n = a.stages.len();
     let convs = a
         .stages
         .iter()
         .enumerate()
-        .map(|(i, &(cin, cout))| candle_nn::conv2d(cin, cout, 3, cfg, vb.pp(format!("conv{i}"))))
+        .map(|(i, &(cin, cout))| {
+            let c = Conv2d::from_candle(&candle_nn::conv2d(cin, cout, 3, cfg, vb.pp(format!("conv{i}")))?)?;
+            Ok(if i + 1 < n { c.with_relu() } else { c })
+        })
         .collect::<candle_core::Result<_>>()?;
     Ok((fcs, convs))
 }

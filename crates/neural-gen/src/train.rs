@@ -6,7 +6,9 @@ use std::time::Instant;
 use bezier_raster::{Bsm, Coverage, DatasetSpec, Rasterizer, StrokeCanvas};
 use brush_model::Press;
 use candle_core::Tensor;
-use candle_nn::{AdamW, Optimizer, ParamsAdamW};
+use candle_nn::{Optimizer, ParamsAdamW};
+
+use crate::adam::FusedAdamW;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -147,8 +149,9 @@ pub fn train(
     };
     let val_p = validation_presses(g);
     let (val_x, val_y) = (g.inputs(&val_p)?, targets(g, &val_p)?);
-    let mut opt = AdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() })
-        .map_err(cerr)?;
+    let mut opt =
+        FusedAdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() })
+            .map_err(cerr)?;
     let mut history = Vec::with_capacity(opts.steps);
     let (mut best, mut best_step, mut since) = (f64::INFINITY, 0, 0);
     let mut best_weights: Option<Vec<(String, Tensor)>> = None;

@@ -1,0 +1,40 @@
+//! The LearningToPaint-sized network (`neural_gen::ltp`): one Adam training step at batch 64 and
+//! inference at batch 1 and 64, with stock candle kernels and with maobi's (direct convolution
+//! with fused bias/ReLU, pixel shuffle, fused AdamW). `cargo bench -p neural-gen --bench ltp`;
+//! the PyTorch reference is `python3 crates/neural-gen/benches/ltp_torch.py`.
+
+use candle_core::{Device, Tensor};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use neural_gen::ltp::{Kernels, Ltp};
+use std::hint::black_box;
+
+// As in the `maobi` binary: an allocator that reuses freed large buffers.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+fn bench(c: &mut Criterion) {
+    let dev = Device::Cpu;
+    let x = Tensor::rand(0f32, 1f32, (64, 3), &dev).unwrap();
+    let target = Tensor::rand(0f32, 1f32, (64, 1, 128, 128), &dev).unwrap();
+    let mut grp = c.benchmark_group("ltp_training");
+    grp.sample_size(10);
+    for (name, kernels) in [("step_batch_64_maobi", Kernels::Maobi), ("step_batch_64_candle", Kernels::Candle)] {
+        let mut net = Ltp::new(kernels, 1e-4).unwrap();
+        grp.bench_function(name, |b| b.iter(|| net.step(black_box(&x), &target).unwrap()));
+    }
+    grp.finish();
+    let mut grp = c.benchmark_group("ltp_inference");
+    for (name, kernels) in [("maobi", Kernels::Maobi), ("candle", Kernels::Candle)] {
+        let net = Ltp::new(kernels, 1e-4).unwrap();
+        grp.throughput(Throughput::Elements(1));
+        grp.bench_function(format!("batch_1_{name}"), |b| {
+            b.iter(|| net.forward(black_box(&x.narrow(0, 0, 1).unwrap())).unwrap())
+        });
+        grp.throughput(Throughput::Elements(64));
+        grp.bench_function(format!("batch_64_{name}"), |b| b.iter(|| net.forward(black_box(&x)).unwrap()));
+    }
+    grp.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
