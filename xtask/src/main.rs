@@ -17,7 +17,7 @@ Tasks:
                        regenerate every generated file under fixtures/ (or, with --check,
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json
-  train-fixture        train the committed pen1 generator (fixtures/generator/; tens of minutes)
+  train-fixture        train the committed pen1 generator (fixtures/generator/; about 5 minutes)
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
                        (also target/bench-summary.md)
 ";

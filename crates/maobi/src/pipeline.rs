@@ -13,7 +13,7 @@ use trajectory::{
 };
 
 /// Analysis raster for widths and skeletons, px per em box.
-pub const ANALYSIS_PX: u32 = 256;
+pub const ANALYSIS_PX: u32 = 512;
 
 /// Options of [`write_char`].
 #[derive(Clone, Copy, Debug)]

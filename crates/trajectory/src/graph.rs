@@ -17,11 +17,24 @@ pub struct GraphOptions {
     /// At a junction, two branches continue each other if the angle between them exceeds this
     /// (radians; π = perfectly straight).
     pub straight_min_rad: f64,
+    /// A chain that turns by more than this (radians, measured over about a stroke width each
+    /// way) has a corner there; see [`GraphOptions::split_box_corners`] for which corners
+    /// end a stroke.
+    pub corner_rad: f64,
+    /// On a closed chain (a box), split where a vertical leg turns right (竖折): the lower left
+    /// corner of 口 or 日, whose bottom is a stroke of its own. Open chains keep 竖折 (山, 出).
+    pub split_box_corners: bool,
 }
 
 impl Default for GraphOptions {
     fn default() -> Self {
-        Self { spur_factor: 2.0, merge_factor: 1.5, straight_min_rad: 125f64.to_radians() }
+        Self {
+            spur_factor: 2.0,
+            merge_factor: 1.5,
+            straight_min_rad: 125f64.to_radians(),
+            corner_rad: 50f64.to_radians(),
+            split_box_corners: true,
+        }
     }
 }
 
@@ -64,7 +77,8 @@ pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions
             eprintln!("edge {} - {} len {:.1}", e.a, e.b, length(&e.pts));
         }
     }
-    let strokes = pair_and_chain(&g, opts);
+    let strokes: Vec<Vec<Point>> =
+        pair_and_chain(&g, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts)).collect();
     order_strokes(strokes.into_iter().filter(|s| length(s) > 1.5).collect())
 }
 
@@ -403,6 +417,158 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
     strokes.into_iter().map(|s| smooth(&s)).collect()
 }
 
+/// A chain's end leg no longer than this many local half-widths can be a hook (钩) of the
+/// stroke it turns from rather than a stroke of its own...
+const HOOK_WIDTHS: f64 = 8.0;
+/// ... when it is shorter than this fraction of that stroke's leg, or rises away from the corner.
+const HOOK_RATIO: f64 = 0.4;
+/// How far each way the turn at a chain point is measured, in local half-widths (a skeleton
+/// corner is rounded over about one width).
+const CORNER_REACH: f64 = 2.5;
+
+/// The direction a line of direction `v` (either sign; raster y down) is written in: rightward
+/// if it is nearly horizontal, otherwise downward (撇 and 捺 both go down; 提, the rising
+/// stroke, is short and rarely meets another at a corner).
+fn writing_direction(v: Vec2) -> Vec2 {
+    let flip = if v.y.abs() <= 0.6 * v.x.abs() { v.x < 0.0 } else { v.y < 0.0 };
+    if flip { -v } else { v }
+}
+
+/// Splits a chain at corners that cannot be inside one written stroke.
+///
+/// A corner is a point where the chain turns by more than `corner_rad`, measured between the
+/// points [`CORNER_REACH`] local half-widths before and after it (a local maximum of the turn). With
+/// the chain's two legs oriented as the chain runs, one stroke can turn there only if both legs
+/// run the way they are written ([`writing_direction`]) or both against it; otherwise the
+/// corner joins the starts of two strokes (the upper left of 口) or their ends (the lower
+/// right); a leg rising to the right out of a downward one is 提 and stays (竖提). On a closed
+/// chain, vertical-into-rightward corners split too when `split_box_corners` is set. Legs
+/// shorter than two half-widths never split, nor do hooks at a chain's ends ([`HOOK_WIDTHS`],
+/// [`HOOK_RATIO`]). A closed chain (a box drawn as one loop) is cut at its splitting corners.
+fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+    let m = p.len();
+    if m < 5 {
+        return vec![p.to_vec()];
+    }
+    let closed = p[0].distance(p[m - 1]) < 1.5;
+    // Arc length, with the closing segment for loops.
+    let mut s = vec![0.0; m];
+    for i in 1..m {
+        s[i] = s[i - 1] + p[i - 1].distance(p[i]);
+    }
+    let total = s[m - 1] + if closed { p[m - 1].distance(p[0]) } else { 0.0 };
+    let width = |q: Point| -> f64 {
+        let (x, y) = (q.x.floor().clamp(0.0, (n - 1) as f64) as usize, q.y.floor().clamp(0.0, (n - 1) as f64) as usize);
+        f64::from(dt[y * n + x]).max(1.0)
+    };
+    // The point at arc length `t` (wrapping for loops; clamped otherwise).
+    let at = |t: f64| -> Point {
+        let t = if closed { t.rem_euclid(total) } else { t.clamp(0.0, s[m - 1]) };
+        let i = s.partition_point(|&x| x <= t).clamp(1, m) - 1;
+        p[i]
+    };
+    let reach: Vec<f64> = p.iter().map(|&q| (CORNER_REACH * width(q)).max(3.0)).collect();
+    let turn: Vec<f64> = (0..m)
+        .map(|i| {
+            if !closed && (s[i] < reach[i] || s[m - 1] - s[i] < reach[i]) {
+                return 0.0;
+            }
+            let (a, b) = (p[i] - at(s[i] - reach[i]), at(s[i] + reach[i]) - p[i]);
+            if a.hypot() < 1e-9 || b.hypot() < 1e-9 {
+                return 0.0;
+            }
+            (a.dot(b) / (a.hypot() * b.hypot())).clamp(-1.0, 1.0).acos()
+        })
+        .collect();
+    // Corners: local maxima of the turn above the threshold, one per neighbourhood.
+    let mut corners: Vec<usize> = Vec::new();
+    for i in 0..m {
+        if turn[i] <= opts.corner_rad {
+            continue;
+        }
+        let near = |j: usize| {
+            let d = (s[j] - s[i]).abs();
+            if closed { d.min(total - d) } else { d }
+        };
+        let is_max = (0..m).all(|j| near(j) > reach[i] || turn[j] < turn[i] || (turn[j] == turn[i] && j >= i));
+        if is_max {
+            corners.push(i);
+        }
+    }
+    let splits: Vec<usize> = corners
+        .iter()
+        .copied()
+        .filter(|&i| {
+            let d_in = p[i] - at(s[i] - reach[i]);
+            let d_out = at(s[i] + reach[i]) - p[i];
+            let (w_in, w_out) = (writing_direction(d_in), writing_direction(d_out));
+            let forward_in = w_in.dot(d_in) > 0.0;
+            let forward_out = w_out.dot(d_out) > 0.0;
+            // The legs up to the neighbouring corners (or the chain's ends).
+            let prev =
+                corners.iter().rev().find(|&&c| c < i).map_or(if closed { None } else { Some(0.0) }, |&c| Some(s[c]));
+            let next =
+                corners.iter().find(|&&c| c > i).map_or(if closed { None } else { Some(s[m - 1]) }, |&c| Some(s[c]));
+            let min_leg = 2.0 * width(p[i]);
+            let long = prev.is_none_or(|a| s[i] - a >= min_leg) && next.is_none_or(|b| b - s[i] >= min_leg);
+            if !long {
+                return false;
+            }
+            // A hook: a chain's first or last leg that is much shorter than the leg it turns
+            // from, or short and rising away from the corner (every 钩 points up).
+            if !closed {
+                let (len_in, len_out) = (s[i] - prev.unwrap_or(0.0), next.unwrap_or(s[m - 1]) - s[i]);
+                let w = width(p[i]);
+                let hook = |len: f64, other: f64, outward: Vec2| {
+                    len < HOOK_WIDTHS * w && (len < HOOK_RATIO * other || outward.y < -0.2 * outward.hypot())
+                };
+                let first = corners.first() == Some(&i);
+                let last = corners.last() == Some(&i);
+                if (first && hook(len_in, len_out, -d_in)) || (last && hook(len_out, len_in, d_out)) {
+                    return false;
+                }
+            }
+            // 提 rises to the right out of a downward leg (竖提, 横折提): one stroke, whichever
+            // way the chain runs.
+            let down = |v: Vec2| v.y > 0.6 * v.x.abs();
+            let rising = |v: Vec2| v.x > 0.0 && v.y < -0.2 * v.x;
+            if (down(d_in) && rising(d_out)) || (down(-d_out) && rising(-d_in)) {
+                return false;
+            }
+            if forward_in != forward_out {
+                return true;
+            }
+            // As written: which leg comes first. A vertical leg turning right is a box corner.
+            let (first, second) = if forward_in { (d_in, d_out) } else { (-d_out, -d_in) };
+            let vertical = |v: Vec2| v.y > 2.0 * v.x.abs();
+            let right = |v: Vec2| v.x > 0.0 && v.y.abs() <= 0.6 * v.x;
+            opts.split_box_corners && closed && vertical(first) && right(second)
+        })
+        .collect();
+    if splits.is_empty() {
+        return vec![p.to_vec()];
+    }
+    let mut out = Vec::new();
+    if closed {
+        // Rotate the loop to start at the first split, then cut at the others.
+        let start = splits[0];
+        let ring: Vec<Point> = p[start..m - 1].iter().chain(&p[..=start]).copied().collect();
+        let cuts: Vec<usize> = splits.iter().map(|&c| (c + (m - 1) - start) % (m - 1)).collect();
+        let mut from = 0;
+        for &c in cuts.iter().skip(1).chain(std::iter::once(&(ring.len() - 1))) {
+            out.push(ring[from..=c].to_vec());
+            from = c;
+        }
+    } else {
+        let mut from = 0;
+        for &c in splits.iter().chain(std::iter::once(&(m - 1))) {
+            out.push(p[from..=c].to_vec());
+            from = c;
+        }
+    }
+    out
+}
+
 /// A light moving average (window 5) that keeps the end points.
 fn smooth(p: &[Point]) -> Vec<Point> {
     if p.len() < 5 {
@@ -525,6 +691,66 @@ mod tests {
         assert!(is_horizontal(&s[0]) && !is_horizontal(&s[1]));
         let stem = &s[1];
         assert!(stem[stem.len() - 1].y > 80.0 && stem[0].y < 26.0);
+    }
+
+    /// A thick segment from `a` to `b` (pixel units), half-width `r`.
+    fn line(m: &mut [bool], n: usize, a: (f64, f64), b: (f64, f64), r: f64) {
+        let (a, b) = (Point::new(a.0, a.1), Point::new(b.0, b.1));
+        for y in 0..n {
+            for x in 0..n {
+                let q = Point::new(x as f64 + 0.5, y as f64 + 0.5);
+                let t = ((q - a).dot(b - a) / (b - a).hypot2()).clamp(0.0, 1.0);
+                if q.distance(a + (b - a) * t) <= r {
+                    m[y * n + x] = true;
+                }
+            }
+        }
+    }
+
+    fn shape(n: usize, segments: &[((f64, f64), (f64, f64))]) -> Vec<Vec<Point>> {
+        let mut m = vec![false; n * n];
+        for &(a, b) in segments {
+            line(&mut m, n, a, b, 4.0);
+        }
+        strokes_of(m, n)
+    }
+
+    #[test]
+    fn a_box_is_three_strokes_like_kou() {
+        // 口: left side, top + right side (横折), bottom.
+        let s = shape(
+            100,
+            &[
+                ((20.0, 20.0), (20.0, 80.0)),
+                ((20.0, 20.0), (80.0, 20.0)),
+                ((80.0, 20.0), (80.0, 80.0)),
+                ((20.0, 80.0), (80.0, 80.0)),
+            ],
+        );
+        assert_eq!(s.len(), 3, "{s:?}");
+        // One of them turns: starts at the upper left going right, ends at the lower right.
+        let hengzhe = s.iter().find(|p| {
+            let (a, b) = (p[0], p[p.len() - 1]);
+            a.x < 35.0 && a.y < 30.0 && b.x > 70.0 && b.y > 65.0
+        });
+        assert!(hengzhe.is_some(), "{s:?}");
+    }
+
+    #[test]
+    fn a_corner_where_two_strokes_start_is_split() {
+        // 厂's corner: a bar going right and a bar going down both start at the upper left.
+        let s = shape(100, &[((20.0, 20.0), (85.0, 20.0)), ((20.0, 20.0), (20.0, 85.0))]);
+        assert_eq!(s.len(), 2, "{s:?}");
+    }
+
+    #[test]
+    fn a_turn_written_in_one_go_stays_whole() {
+        // 横折: right, then down.
+        assert_eq!(shape(100, &[((15.0, 20.0), (80.0, 20.0)), ((80.0, 20.0), (80.0, 85.0))]).len(), 1);
+        // 竖提: down, then rising to the right.
+        assert_eq!(shape(100, &[((20.0, 10.0), (20.0, 85.0)), ((20.0, 85.0), (88.0, 30.0))]).len(), 1);
+        // A vertical with a short hook to the left at its foot (竖钩).
+        assert_eq!(shape(100, &[((50.0, 10.0), (50.0, 85.0)), ((50.0, 85.0), (34.0, 78.0))]).len(), 1);
     }
 
     #[test]
