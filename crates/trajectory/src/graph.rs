@@ -66,6 +66,7 @@ const N8: [(isize, isize); 8] = [(0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 
 /// usual writing rules.
 pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
     let mut g = build_graph(skel, dt, n);
+    attach_loose_ends(&mut g, LOOSE_END_EM * n as f64 / 1024.0);
     prune_spurs(&mut g, opts);
     merge_junctions(&mut g, opts);
     prune_spurs(&mut g, opts);
@@ -238,6 +239,41 @@ fn build_graph(skel: &[bool], dt: &[f32], n: usize) -> Graph {
     Graph { nodes, edges }
 }
 
+/// How near a junction (em units) an end point is taken to belong to it.
+const LOOSE_END_EM: f64 = 9.0;
+
+/// Thinning sometimes leaves a branch a pixel or two short of the junction it leaves (an end
+/// point right beside a junction cluster, typically where two strokes cross): an end within
+/// `radius` px of a junction it is not already joined to is joined to it.
+fn attach_loose_ends(g: &mut Graph, radius: f64) {
+    for v in 0..g.nodes.len() {
+        if !g.nodes[v].alive || degree(g, v) != 1 {
+            continue;
+        }
+        let pos = g.nodes[v].pos;
+        let near = (0..g.nodes.len())
+            .filter(|&u| u != v && g.nodes[u].alive && degree(g, u) >= 3)
+            .filter(|&u| !g.edges.iter().any(|e| e.alive && ((e.a == u && e.b == v) || (e.a == v && e.b == u))))
+            .map(|u| (g.nodes[u].pos.distance(pos), u))
+            .filter(|&(d, _)| d <= radius)
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, u)) = near {
+            let upos = g.nodes[u].pos;
+            for e in g.edges.iter_mut().filter(|e| e.alive) {
+                if e.a == v {
+                    e.a = u;
+                    e.pts.insert(0, upos);
+                }
+                if e.b == v {
+                    e.b = u;
+                    e.pts.push(upos);
+                }
+            }
+            g.nodes[v].alive = false;
+        }
+    }
+}
+
 fn degree(g: &Graph, v: usize) -> usize {
     g.edges.iter().filter(|e| e.alive).map(|e| (e.a == v) as usize + (e.b == v) as usize).sum()
 }
@@ -322,17 +358,25 @@ fn merge_junctions(g: &mut Graph, opts: &GraphOptions) {
 fn leaving(g: &Graph, e: &Edge, at_a: bool) -> Vec2 {
     let pts: Vec<Point> = if at_a { e.pts.clone() } else { e.pts.iter().rev().copied().collect() };
     let v = if at_a { e.a } else { e.b };
-    let reach = (2.5 * g.nodes[v].width).max(4.0);
+    // From half a width out (past the junction blob) to three widths out.
+    let reach = (3.0 * g.nodes[v].width).max(4.0);
+    let skip = 0.5 * g.nodes[v].width;
     let mut acc = 0.0;
     let mut target = *pts.last().expect("non-empty");
+    let mut origin = pts[0];
+    let mut set_origin = skip <= 0.0;
     for w in pts.windows(2) {
         acc += w[0].distance(w[1]);
+        if !set_origin && acc >= skip {
+            origin = w[1];
+            set_origin = true;
+        }
         if acc >= reach {
             target = w[1];
             break;
         }
     }
-    let d = target - pts[0];
+    let d = target - origin;
     if d.hypot() > 0.0 { d / d.hypot() } else { Vec2::ZERO }
 }
 
@@ -419,7 +463,7 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
 
 /// A chain's end leg no longer than this many local half-widths can be a hook (钩) of the
 /// stroke it turns from rather than a stroke of its own...
-const HOOK_WIDTHS: f64 = 8.0;
+const HOOK_WIDTHS: f64 = 5.0;
 /// ... when it is shorter than this fraction of that stroke's leg, or rises away from the corner.
 const HOOK_RATIO: f64 = 0.4;
 /// How far each way the turn at a chain point is measured, in local half-widths (a skeleton
@@ -751,6 +795,32 @@ mod tests {
         assert_eq!(shape(100, &[((20.0, 10.0), (20.0, 85.0)), ((20.0, 85.0), (88.0, 30.0))]).len(), 1);
         // A vertical with a short hook to the left at its foot (竖钩).
         assert_eq!(shape(100, &[((50.0, 10.0), (50.0, 85.0)), ((50.0, 85.0), (34.0, 78.0))]).len(), 1);
+    }
+
+    #[test]
+    fn an_end_beside_a_junction_is_joined_to_it() {
+        let node = |x: f64, y: f64| Node { pos: Point::new(x, y), width: 5.0, alive: true };
+        let edge = |a: usize, b: usize, g: &[Node]| Edge { a, b, pts: vec![g[a].pos, g[b].pos], alive: true };
+        // A junction at (50, 50) with three branches, a loose end 2 px from it with its own
+        // branch, and a far end point that must stay free.
+        let nodes = vec![
+            node(50.0, 50.0),
+            node(10.0, 50.0),
+            node(90.0, 50.0),
+            node(50.0, 10.0),
+            node(51.0, 52.0),
+            node(80.0, 90.0),
+            node(57.0, 50.0),
+        ];
+        let edges = vec![edge(0, 1, &nodes), edge(0, 2, &nodes), edge(0, 3, &nodes), edge(4, 5, &nodes)];
+        let mut g = Graph { nodes, edges };
+        attach_loose_ends(&mut g, 4.5);
+        assert!(!g.nodes[4].alive);
+        assert_eq!(degree(&g, 0), 4);
+        assert_eq!((g.edges[3].a, g.edges[3].b), (0, 5));
+        assert_eq!(g.edges[3].pts[0], Point::new(50.0, 50.0));
+        // Ends already joined to the junction, or too far from it, are left alone.
+        assert!(g.nodes[1].alive && g.nodes[5].alive && g.nodes[6].alive);
     }
 
     #[test]
