@@ -27,7 +27,7 @@ const ROWS: &[(&str, &str)] = &[
     ("composite_400_stamps_512", "400 stamps composed into 512²"),
     ("ssim/128x128", "SSIM 128²"),
     ("ssim/512x512", "SSIM 512²"),
-    ("centre_lines_medians_yong", "centre lines of 永, medians (256² analysis)"),
+    ("centre_lines_medians_yong", "centre lines of 永, medians (512² analysis)"),
     ("centre_lines_skeleton_yong", "centre lines of 永, skeleton"),
     ("build_track_yong", "track building for 永"),
     ("write_yong_medians_512", "`write` 永 end to end, medians, 512²"),
