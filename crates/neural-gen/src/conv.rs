@@ -310,10 +310,10 @@ impl CustomOp3 for DirectConv {
         let (xv, wv, rv, dv) =
             (cpu_f32(&xs, xl, op)?, cpu_f32(&ws, wl, op)?, cpu_f32(&rs, rl, op)?, cpu_f32(&ds, dl, op)?);
         // The gradient at the pre-activation: ReLU passes it where the output is positive.
-        let g: Vec<f32> = if self.relu {
-            dv.par_iter().zip(rv).map(|(&d, &r)| if r > 0.0 { d } else { 0.0 }).collect()
+        let g: std::borrow::Cow<'_, [f32]> = if self.relu {
+            dv.par_iter().zip(rv).map(|(&d, &r)| if r > 0.0 { d } else { 0.0 }).collect::<Vec<_>>().into()
         } else {
-            dv.to_vec()
+            dv.into()
         };
         let plane = ho * wo;
         let mut db = vec![0f32; o];

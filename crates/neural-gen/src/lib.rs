@@ -12,7 +12,8 @@
 //! * [`compose`]: a whole track rendered with the generator (batched along the track).
 //! * [`eval`]: CSIM/SSIM of the generator against the analytic footprints.
 //! * [`adam`]: a fused AdamW (one in-place pass per variable).
-//! * [`conv`]: a faster CPU convolution for candle (im2col + gemm in forward and backward).
+//! * [`conv`]: a faster CPU convolution for candle (direct, with bias and ReLU fused in, forward
+//!   and backward) and a pixel shuffle with a direct backward.
 //! * [`ltp`]: the LearningToPaint-sized renderer network, kept as a speed reference.
 
 pub mod adam;
