@@ -141,3 +141,75 @@ fn em_frame_follows_the_design_notes() {
     let p = g.medians.unwrap()[0][0];
     assert_eq!((p.x, p.y), (x, 900.0 - y));
 }
+
+/// A 横折 (one stroke: right, then down) with a square outer corner at (600, 200).
+fn corner_glyph() -> Glyph {
+    let mut outline = Rect::new(100.0, 200.0, 600.0, 280.0).to_path(0.1);
+    outline.extend(Rect::new(520.0, 200.0, 600.0, 800.0).to_path(0.1));
+    Glyph {
+        ch: '㇕',
+        source: GlyphSource::Embedded,
+        shape: Shape::Outlines(vec![outline.clone()]),
+        stroke_outlines: Some(vec![outline]),
+        medians: Some(vec![vec![Point::new(120.0, 240.0), Point::new(560.0, 240.0), Point::new(560.0, 780.0)]]),
+    }
+}
+
+#[test]
+fn corners_are_found_on_sharp_turns_only() {
+    let line = |pts: &[(f64, f64)]| -> Vec<Point> {
+        let mut out = Vec::new();
+        for w in pts.windows(2) {
+            for i in 0..25 {
+                let t = i as f64 / 25.0;
+                out.push(Point::new(w[0].0 + t * (w[1].0 - w[0].0), w[0].1 + t * (w[1].1 - w[0].1)));
+            }
+        }
+        out.push(Point::new(pts[pts.len() - 1].0, pts[pts.len() - 1].1));
+        out
+    };
+    let l = line(&[(0.0, 0.0), (400.0, 0.0), (400.0, 400.0)]);
+    assert_eq!(trajectory::find_corners(&l), vec![25], "one corner, at the bend");
+    assert!(trajectory::find_corners(&line(&[(0.0, 0.0), (800.0, 0.0)])).is_empty());
+    // A gentle bend (20°) is not a corner.
+    let gentle = line(&[(0.0, 0.0), (400.0, 0.0), (776.0, 137.0)]);
+    assert!(trajectory::find_corners(&gentle).is_empty());
+}
+
+#[test]
+fn corner_knobs_reach_into_the_outer_corner() {
+    let g = corner_glyph();
+    let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+    let p = &paths[0];
+    assert_eq!(p.corners.len(), 1, "corners {:?}", p.corners);
+    let tip = p.points[p.corners[0]];
+    // The centre-line corner is near (560, 240); the knob runs out towards (600, 200) and stays
+    // inside the glyph.
+    assert!(tip.x > 568.0 && tip.y < 232.0, "knob tip {tip:?}");
+    assert!(tip.x < 600.0 && tip.y > 200.0, "knob tip {tip:?} left the glyph");
+    // The stroke is written as two pieces: the second starts at the tip with an entry press.
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 6.0 / 80.0 * 1024.0 };
+    let opts = TrackOptions { char_box: b, spacing_mm: 0.25, alpha_rad: 0.0, sizing: Sizing::Brush };
+    let t = build_track(&paths, &pen1, &opts).unwrap().track;
+    let starts = t.strokes[0].points.iter().filter(|q| b.to_em(q.anchor()).distance(tip) < 1e-6).count();
+    assert_eq!(starts, 2, "the first piece ends and the second starts at the knob tip");
+}
+
+#[test]
+fn the_entry_stage_presses_forward_at_full_width() {
+    let g = bar_glyph(100.0, 900.0, 440.0, 540.0);
+    let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 6.0 / 100.0 * 1024.0 };
+    let opts = TrackOptions { char_box: b, spacing_mm: 0.25, alpha_rad: 0.0, sizing: Sizing::Brush };
+    let pts = &build_track(&paths, &pen1, &opts).unwrap().track.strokes[0].points;
+    let body_h = pts[pts.len() / 2].h_mm;
+    // Written left to right: first the tip points ahead (β ≈ 0), then it trails (β ≈ π).
+    let forward: Vec<_> = pts.iter().take_while(|q| q.beta_rad.cos() > 0.9).collect();
+    assert!(forward.len() > 10, "{} forward presses", forward.len());
+    assert!(pts[pts.len() / 2].beta_rad.cos() < -0.9, "the body trails");
+    for q in &forward[1..forward.len() - 1] {
+        assert!((q.h_mm - body_h).abs() < 0.05 * body_h, "entry stage pressed at {} (body {body_h})", q.h_mm);
+    }
+}
