@@ -12,6 +12,11 @@ pub struct GraphOptions {
     /// A branch from a junction to a free end shorter than `spur_factor · w` is a spur and is
     /// removed (thinning leaves them at blunt stroke ends and corners).
     pub spur_factor: f64,
+    /// The same for a branch off a corner (the junction's two other branches turn rather than
+    /// continue each other, and the branch points away from both by more than
+    /// [`CORNER_SPUR_AWAY_RAD`]): thinning leaves the pressed outer corner of 折, 钩 and 提 as
+    /// such a branch, longer than ordinary spurs.
+    pub corner_spur_factor: f64,
     /// Junctions closer than `merge_factor · w` are one crossing.
     pub merge_factor: f64,
     /// At a junction, two branches continue each other if the angle between them exceeds this
@@ -30,6 +35,7 @@ impl Default for GraphOptions {
     fn default() -> Self {
         Self {
             spur_factor: 2.0,
+            corner_spur_factor: 3.0,
             merge_factor: 1.5,
             straight_min_rad: 125f64.to_radians(),
             corner_rad: 50f64.to_radians(),
@@ -80,7 +86,39 @@ pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions
     }
     let strokes: Vec<Vec<Point>> =
         pair_and_chain(&g, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts)).collect();
-    order_strokes(strokes.into_iter().filter(|s| length(s) > 1.5).collect())
+    let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > 1.5).collect();
+    let strokes = drop_covered(strokes, dt, n);
+    order_strokes(strokes)
+}
+
+/// A piece no longer than this many half-widths, all of whose points lie within one local
+/// half-width of another stroke's centre line, is dropped by [`drop_covered`].
+const COVERED_MAX_WIDTHS: f64 = 3.0;
+
+/// Drops short pieces that lie wholly inside the ink of other strokes (a crossing that thinning
+/// drew as two junctions leaves such a piece between them): they add no ink of their own, and
+/// counted as strokes they would be wrong.
+fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize) -> Vec<Vec<Point>> {
+    let k = COVERED_MAX_WIDTHS;
+    let width = |p: Point| crate::distance::sample(dt, n, n, p.x, p.y).max(1.0);
+    let near = |p: Point, s: &[Point]| {
+        s.windows(2).map(|w| kurbo::ParamCurveNearest::nearest(&kurbo::Line::new(w[0], w[1]), p, 1e-6).distance_sq.sqrt()).fold(f64::INFINITY, f64::min)
+    };
+    let mut keep = vec![true; strokes.len()];
+    for i in 0..strokes.len() {
+        let s = &strokes[i];
+        let w = s.iter().map(|&p| width(p)).fold(0.0, f64::max);
+        if length(s) > k * w {
+            continue;
+        }
+        let covered = s.iter().all(|&p| {
+            (0..strokes.len()).any(|j| j != i && keep[j] && strokes[j].len() > 1 && near(p, &strokes[j]) < width(p))
+        });
+        if covered {
+            keep[i] = false;
+        }
+    }
+    strokes.into_iter().zip(keep).filter_map(|(s, k)| k.then_some(s)).collect()
 }
 
 struct Graph {
@@ -294,7 +332,8 @@ fn prune_spurs(g: &mut Graph, opts: &GraphOptions) {
             } else {
                 continue;
             };
-            if length(&g.edges[k].pts) < opts.spur_factor * g.nodes[junction].width.max(1.0) {
+            let factor = if corner_spur(g, k, junction, opts) { opts.corner_spur_factor } else { opts.spur_factor };
+            if length(&g.edges[k].pts) < factor * g.nodes[junction].width.max(1.0) {
                 g.edges[k].alive = false;
                 g.nodes[free].alive = false;
                 changed = true;
@@ -304,6 +343,38 @@ fn prune_spurs(g: &mut Graph, opts: &GraphOptions) {
             break;
         }
     }
+}
+
+/// A corner spur points away from both legs of its corner by more than this (radians).
+pub const CORNER_SPUR_AWAY_RAD: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
+
+/// Whether edge `k`, a free branch off `junction`, sits on a corner: the junction has exactly
+/// two other branches, they do not continue each other, and the branch points away from both
+/// (thinning leaves the blunt outer corner of 折 and 钩 as such a branch).
+fn corner_spur(g: &Graph, k: usize, junction: usize, opts: &GraphOptions) -> bool {
+    let others: Vec<Vec2> = g
+        .edges
+        .iter()
+        .enumerate()
+        .filter(|&(j, e)| j != k && e.alive)
+        .flat_map(|(_, e)| {
+            let mut v = Vec::new();
+            if e.a == junction {
+                v.push(leaving(g, e, true));
+            }
+            if e.b == junction {
+                v.push(leaving(g, e, false));
+            }
+            v
+        })
+        .collect();
+    if others.len() != 2 || others[0].dot(others[1]) <= opts.straight_min_rad.cos() {
+        return false;
+    }
+    let e = &g.edges[k];
+    let s = leaving(g, e, e.a == junction);
+    let lim = CORNER_SPUR_AWAY_RAD.cos();
+    s.dot(others[0]) < lim && s.dot(others[1]) < lim
 }
 
 fn merge_junctions(g: &mut Graph, opts: &GraphOptions) {
@@ -831,5 +902,41 @@ mod tests {
         bar(&mut m, n, 10, 70, 62, 70);
         let s = strokes_of(m, n);
         assert_eq!(s.len(), 1, "{s:?}");
+    }
+
+    #[test]
+    fn a_stub_off_a_hook_corner_is_pruned() {
+        // 竖提: down, then up to the right; the thinned blunt corner leaves a stub pointing down.
+        let n = 128;
+        let mut m = vec![false; n * n];
+        line(&mut m, n, (40.0, 10.0), (40.0, 90.0), 6.0);
+        line(&mut m, n, (40.0, 90.0), (80.0, 52.0), 6.0);
+        line(&mut m, n, (40.0, 90.0), (40.0, 106.0), 6.0);
+        let dt = distance_to_background(&m, n, n);
+        let mut skel = m;
+        zhang_suen(&mut skel, n, n);
+        crate::thinning::remove_staircases(&mut skel, n, n);
+        let with = skeleton_strokes(&skel, &dt, n, &GraphOptions::default());
+        assert_eq!(with.len(), 1, "{with:?}");
+        // Pruned only by the corner rule: as an ordinary spur the stub would stay.
+        let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..GraphOptions::default() };
+        assert!(skeleton_strokes(&skel, &dt, n, &plain).len() > 1);
+    }
+
+    #[test]
+    fn pieces_inside_other_strokes_are_dropped() {
+        let n = 100;
+        let dt = vec![4.0f32; n * n];
+        let pl = |pts: &[(f64, f64)]| pts.iter().map(|&(x, y)| Point::new(x, y)).collect::<Vec<_>>();
+        let strokes = vec![
+            pl(&[(10.0, 50.0), (90.0, 50.0)]), // horizontal
+            pl(&[(50.0, 10.0), (50.0, 90.0)]), // vertical
+            pl(&[(47.0, 51.0), (55.0, 52.0)]), // a piece inside the crossing
+            pl(&[(20.0, 20.0), (26.0, 24.0)]), // a dot on its own
+            pl(&[(70.0, 50.0), (72.0, 58.0)]), // short, but leaves the horizontal's ink
+        ];
+        let kept = drop_covered(strokes.clone(), &dt, n);
+        assert_eq!(kept.len(), 4);
+        assert!(!kept.contains(&strokes[2]));
     }
 }
