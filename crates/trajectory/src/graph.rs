@@ -102,7 +102,9 @@ fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize) -> Vec<Vec<Point
     let k = COVERED_MAX_WIDTHS;
     let width = |p: Point| crate::distance::sample(dt, n, n, p.x, p.y).max(1.0);
     let near = |p: Point, s: &[Point]| {
-        s.windows(2).map(|w| kurbo::ParamCurveNearest::nearest(&kurbo::Line::new(w[0], w[1]), p, 1e-6).distance_sq.sqrt()).fold(f64::INFINITY, f64::min)
+        s.windows(2)
+            .map(|w| kurbo::ParamCurveNearest::nearest(&kurbo::Line::new(w[0], w[1]), p, 1e-6).distance_sq.sqrt())
+            .fold(f64::INFINITY, f64::min)
     };
     let mut keep = vec![true; strokes.len()];
     for i in 0..strokes.len() {

@@ -10,7 +10,8 @@
 //!    skeleton of the glyph image ([`Method::Skeleton`]: Zhang–Suen thinning, spur pruning,
 //!    junction merging, a graph search that goes straight through crossings, stroke ordering).
 //!    Each point carries the glyph's local half-width from a Euclidean distance transform (of
-//!    the stroke's own outline when the source has one).
+//!    the stroke's own outline when the source has one); ends run out into the end caps and
+//!    sharp corners out into their pressed knobs, which become the [`StrokePath::corners`].
 //! 3. **Track** ([`build_track`]): footprints that trail the motion, sized through the brush
 //!    profile's inverse model, placed on the paper by a [`CharBox`].
 //!

@@ -161,24 +161,37 @@ fn arc_lengths(p: &[PointMm]) -> Vec<f64> {
     s
 }
 
+/// The segment of the ascending arc lengths `s` holding `t` and the fraction along it, clamped
+/// to the ends (binary search).
+fn locate(s: &[f64], t: f64) -> (usize, f64) {
+    if t <= s[0] {
+        return (0, 0.0);
+    }
+    let last = s.len() - 1;
+    if t >= s[last] {
+        return (last.saturating_sub(1), if last == 0 { 0.0 } else { 1.0 });
+    }
+    // First index with s[i] ≥ t (≥ 1 here).
+    let i = s.partition_point(|&x| x < t);
+    let f = if s[i] > s[i - 1] { (t - s[i - 1]) / (s[i] - s[i - 1]) } else { 0.0 };
+    (i - 1, f)
+}
+
 /// Linear interpolation of `(s, v)` samples at `t`.
 fn interp(s: &[f64], v: &[f64], t: f64) -> f64 {
-    if t <= s[0] {
-        return v[0];
+    let (i, f) = locate(s, t);
+    if i + 1 >= v.len() {
+        return v[v.len() - 1];
     }
-    for i in 1..s.len() {
-        if t <= s[i] {
-            let f = if s[i] > s[i - 1] { (t - s[i - 1]) / (s[i] - s[i - 1]) } else { 0.0 };
-            return v[i - 1] + f * (v[i] - v[i - 1]);
-        }
-    }
-    v[v.len() - 1]
+    v[i] + f * (v[i + 1] - v[i])
 }
 
 fn point_at(s: &[f64], p: &[PointMm], t: f64) -> PointMm {
-    let xs: Vec<f64> = p.iter().map(|q| q.x_mm).collect();
-    let ys: Vec<f64> = p.iter().map(|q| q.y_mm).collect();
-    PointMm::new(interp(s, &xs, t), interp(s, &ys, t))
+    let (i, f) = locate(s, t);
+    if i + 1 >= p.len() {
+        return p[p.len() - 1];
+    }
+    PointMm::new(p[i].x_mm + f * (p[i + 1].x_mm - p[i].x_mm), p[i].y_mm + f * (p[i + 1].y_mm - p[i].y_mm))
 }
 
 /// The footprint length `lh + lt` as a linear function of h at fixed α: `(slope, offset)`.
@@ -192,7 +205,6 @@ fn length_model(profile: &BrushProfile, alpha: f64, beta: f64) -> (f64, f64) {
 /// straight-line distance). On the ten test characters: 0.35 → CSIM 0.875, 0.5 → 0.889,
 /// 0.6 → 0.891, 0.7 → 0.889, 1.0 → 0.862.
 pub const TRAIL_REACH: f64 = 0.4;
-
 
 /// Builds the brush track of a character from its stroke centre lines.
 ///
