@@ -354,22 +354,7 @@ pub const CORNER_SPUR_AWAY_RAD: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 /// two other branches, they do not continue each other, and the branch points away from both
 /// (thinning leaves the blunt outer corner of 折 and 钩 as such a branch).
 fn corner_spur(g: &Graph, k: usize, junction: usize, opts: &GraphOptions) -> bool {
-    let others: Vec<Vec2> = g
-        .edges
-        .iter()
-        .enumerate()
-        .filter(|&(j, e)| j != k && e.alive)
-        .flat_map(|(_, e)| {
-            let mut v = Vec::new();
-            if e.a == junction {
-                v.push(leaving(g, e, true));
-            }
-            if e.b == junction {
-                v.push(leaving(g, e, false));
-            }
-            v
-        })
-        .collect();
+    let others: Vec<Vec2> = ends_at(g, junction).into_iter().filter(|&(end, _)| end / 2 != k).map(|(_, d)| d).collect();
     if others.len() != 2 || others[0].dot(others[1]) <= opts.straight_min_rad.cos() {
         return false;
     }
@@ -453,6 +438,21 @@ fn leaving(g: &Graph, e: &Edge, at_a: bool) -> Vec2 {
     if d.hypot() > 0.0 { d / d.hypot() } else { Vec2::ZERO }
 }
 
+/// The live branch ends at node `v`: end id (2k for edge k's end a, 2k+1 for its end b) and the
+/// direction the branch leaves in (see [`leaving`]).
+fn ends_at(g: &Graph, v: usize) -> Vec<(usize, Vec2)> {
+    let mut out = Vec::new();
+    for (k, e) in g.edges.iter().enumerate().filter(|(_, e)| e.alive) {
+        if e.a == v {
+            out.push((2 * k, leaving(g, e, true)));
+        }
+        if e.b == v {
+            out.push((2 * k + 1, leaving(g, e, false)));
+        }
+    }
+    out
+}
+
 fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
     let live: Vec<usize> = (0..g.edges.len()).filter(|&k| g.edges[k].alive).collect();
     // End id: 2k (end a) or 2k+1 (end b) of edge k.
@@ -461,20 +461,7 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
         if !g.nodes[v].alive {
             continue;
         }
-        let ends: Vec<(usize, Vec2)> = live
-            .iter()
-            .flat_map(|&k| {
-                let e = &g.edges[k];
-                let mut out = Vec::new();
-                if e.a == v {
-                    out.push((2 * k, leaving(g, e, true)));
-                }
-                if e.b == v {
-                    out.push((2 * k + 1, leaving(g, e, false)));
-                }
-                out
-            })
-            .collect();
+        let ends = ends_at(g, v);
         if ends.len() < 2 {
             continue;
         }
