@@ -13,7 +13,7 @@ use trajectory::{
 };
 
 /// Analysis raster for widths and skeletons, px per em box.
-pub const ANALYSIS_PX: u32 = 512;
+pub const ANALYSIS_PX: u32 = trajectory::DEFAULT_ANALYSIS_PX;
 
 /// Options of [`write_char`].
 #[derive(Clone, Copy, Debug)]

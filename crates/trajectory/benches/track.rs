@@ -9,12 +9,12 @@ fn bench(c: &mut Criterion) {
     let g = glyph::embedded('永').unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     c.bench_function("centre_lines_medians_yong", |b| {
-        b.iter(|| centre_lines(black_box(&g), Method::Medians, 512).unwrap())
+        b.iter(|| centre_lines(black_box(&g), Method::Medians, trajectory::DEFAULT_ANALYSIS_PX).unwrap())
     });
     c.bench_function("centre_lines_skeleton_yong", |b| {
-        b.iter(|| centre_lines(black_box(&g), Method::Skeleton, 512).unwrap())
+        b.iter(|| centre_lines(black_box(&g), Method::Skeleton, trajectory::DEFAULT_ANALYSIS_PX).unwrap())
     });
-    let paths = centre_lines(&g, Method::Medians, 512).unwrap();
+    let paths = centre_lines(&g, Method::Medians, trajectory::DEFAULT_ANALYSIS_PX).unwrap();
     let opts = TrackOptions {
         char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&paths, &pen1, 0.0) },
         spacing_mm: DEFAULT_SPACING_MM,

@@ -114,7 +114,8 @@ fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize) -> Vec<Vec<Point
             continue;
         }
         let covered = s.iter().all(|&p| {
-            (0..strokes.len()).any(|j| j != i && keep[j] && strokes[j].len() > 1 && near(p, &strokes[j]) < width(p))
+            let wp = width(p);
+            (0..strokes.len()).any(|j| j != i && keep[j] && strokes[j].len() > 1 && near(p, &strokes[j]) < wp)
         });
         if covered {
             keep[i] = false;
@@ -755,11 +756,15 @@ mod tests {
     use crate::thinning::zhang_suen;
 
     fn strokes_of(mask: Vec<bool>, n: usize) -> Vec<Vec<Point>> {
+        strokes_with(mask, n, &GraphOptions::default())
+    }
+
+    fn strokes_with(mask: Vec<bool>, n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
         let dt = distance_to_background(&mask, n, n);
         let mut skel = mask;
         zhang_suen(&mut skel, n, n);
         crate::thinning::remove_staircases(&mut skel, n, n);
-        skeleton_strokes(&skel, &dt, n, &GraphOptions::default())
+        skeleton_strokes(&skel, &dt, n, opts)
     }
 
     fn bar(m: &mut [bool], n: usize, x0: usize, x1: usize, y0: usize, y1: usize) {
@@ -901,15 +906,11 @@ mod tests {
         line(&mut m, n, (40.0, 10.0), (40.0, 90.0), 6.0);
         line(&mut m, n, (40.0, 90.0), (80.0, 52.0), 6.0);
         line(&mut m, n, (40.0, 90.0), (40.0, 106.0), 6.0);
-        let dt = distance_to_background(&m, n, n);
-        let mut skel = m;
-        zhang_suen(&mut skel, n, n);
-        crate::thinning::remove_staircases(&mut skel, n, n);
-        let with = skeleton_strokes(&skel, &dt, n, &GraphOptions::default());
+        let with = strokes_of(m.clone(), n);
         assert_eq!(with.len(), 1, "{with:?}");
         // Pruned only by the corner rule: as an ordinary spur the stub would stay.
         let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..GraphOptions::default() };
-        assert!(skeleton_strokes(&skel, &dt, n, &plain).len() > 1);
+        assert!(strokes_with(m, n, &plain).len() > 1);
     }
 
     #[test]
