@@ -29,10 +29,8 @@ fn main() {
     let stop = AtomicBool::new(false);
     let opts = RunOptions {
         timeout: Duration::from_millis(500),
-        max_reconnects: 3,
         backoff: Duration::from_millis(20),
-        lift_m: 0.02,
-        stop: &stop,
+        ..RunOptions::new(&stop)
     };
     let report = run_program(&sim.addr.to_string(), &program, None, &opts, |r| {
         println!("  {} strokes done", r.strokes_completed.len())

@@ -217,14 +217,41 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
 pub struct RunOptions<'a> {
     /// Per-call timeout.
     pub timeout: Duration,
-    /// Reconnection attempts after a fault before giving up.
+    /// Connection attempts after one fault before giving up.
     pub max_reconnects: usize,
-    /// First backoff between reconnection attempts (doubles each time).
+    /// Faults tolerated while one stroke runs (each restarts it from its first point) before
+    /// giving up.
+    pub max_retries_per_stroke: usize,
+    /// Faults tolerated over the whole run before giving up.
+    pub max_retries_total: usize,
+    /// First wait before reconnecting (doubles with every fault on the same stroke and every
+    /// failed attempt, up to `max_backoff`).
     pub backoff: Duration,
-    /// Safe height to lift to after a fault, m.
+    /// Longest wait before reconnecting.
+    pub max_backoff: Duration,
+    /// Safe height above the paper to lift to after a fault or a stop, m.
     pub lift_m: f64,
-    /// Set (for example by Ctrl-C) to stop: the runner lifts the brush and returns.
+    /// Set (for example by Ctrl-C) to stop: the runner sends no further stroke, waits for the
+    /// controller to finish what it queued, lifts the brush and returns
+    /// [`RobotError::Interrupted`] inside [`RobotError::RunStopped`].
     pub stop: &'a AtomicBool,
+}
+
+impl<'a> RunOptions<'a> {
+    /// The defaults `maobi robot send` uses: 2 s per call, 5 connection attempts per fault,
+    /// 3 faults per stroke, 10 per run, backoff 200 ms doubling to 5 s, lift 20 mm.
+    pub fn new(stop: &'a AtomicBool) -> Self {
+        Self {
+            timeout: Duration::from_secs(2),
+            max_reconnects: 5,
+            max_retries_per_stroke: 3,
+            max_retries_total: 10,
+            backoff: Duration::from_millis(200),
+            max_backoff: Duration::from_secs(5),
+            lift_m: 0.02,
+            stop,
+        }
+    }
 }
 
 /// What a run did.
@@ -238,8 +265,8 @@ pub struct RunReport {
     pub reconnects: usize,
     /// Strokes restarted from their first point after a fault.
     pub strokes_resumed: usize,
-    /// Whether the run was stopped on request.
-    pub stopped: bool,
+    /// Faults met (dropped connections, timeouts).
+    pub faults: usize,
 }
 
 struct Session {
@@ -268,14 +295,44 @@ fn open(addr: &str, program: &Program, opts: &RunOptions<'_>, robot_name: Option
     Ok(Session { client, robot })
 }
 
-fn lift(s: &mut Session, lift_m: f64, timeout: Duration) -> Result<(), RobotError> {
+/// Lifts the brush straight out of the paper (along its normal) to `lift_m` above it, unless
+/// it is there already. Returns what it did, in words.
+fn lift(s: &mut Session, program: &Program, lift_m: f64, idle_limit: Duration) -> Result<String, RobotError> {
     let here = s.client.tcp_pose(&s.robot)?;
-    s.client.send_move(&s.robot, &Move::Line { pose: here.raised(lift_m), a: 0.5, v: 0.05, blend_m: 0.0 })?;
-    s.client.wait_idle(&s.robot, timeout * 20)
+    let depth_mm = program.depth_mm(here.position());
+    if depth_mm <= -lift_m * 1000.0 + 0.5 {
+        return Ok(format!("the brush is at the safe height ({:.1} mm above the paper)", -depth_mm));
+    }
+    let pose = program.lifted_out(&here, lift_m);
+    let m = Move::Line { pose, a: program.retreat_acc_m_s2, v: program.retreat_speed_m_s, blend_m: 0.0 };
+    s.client.send_move(&s.robot, &m)?;
+    s.client.wait_idle(&s.robot, idle_limit)?;
+    Ok(format!(
+        "brush lifted from {depth_mm:.1} mm below the paper to the safe height ({:.1} mm above it)",
+        lift_m * 1000.0
+    ))
 }
 
-fn run_stroke(s: &mut Session, st: &StrokeProgram, idle_limit: Duration) -> Result<(), RobotError> {
+/// Sleeps `d`, waking early when `stop` is set.
+fn sleep_unless(d: Duration, stop: &AtomicBool) {
+    let end = Instant::now() + d;
+    while !stop.load(Ordering::SeqCst) {
+        let now = Instant::now();
+        if now >= end {
+            return;
+        }
+        std::thread::sleep((end - now).min(Duration::from_millis(20)));
+    }
+}
+
+/// Sends a stroke's moves, stopping early (after the move in flight) when `stop` is set, then
+/// waits until the controller has executed what it was sent.
+fn run_stroke(s: &mut Session, st: &StrokeProgram, idle_limit: Duration, stop: &AtomicBool) -> Result<(), RobotError> {
     for m in st.moves() {
+        if stop.load(Ordering::SeqCst) {
+            s.client.wait_idle(&s.robot, idle_limit)?;
+            return Err(RobotError::Interrupted);
+        }
         s.client.send_move(&s.robot, m)?;
     }
     s.client.wait_idle(&s.robot, idle_limit)
@@ -287,14 +344,20 @@ fn is_fault(e: &RobotError) -> bool {
 
 /// Runs a program on a controller (or the simulator) at `addr`, stroke by stroke.
 ///
-/// On a dropped connection or a timeout it reconnects (bounded, with doubling backoff), lifts
-/// the brush to the safe height first, and restarts the interrupted stroke from its first point;
-/// a stroke whose lift already finished (the TCP is at its end pose) counts as done and is never
-/// written twice. When `opts.stop` is set it lifts the brush and returns.
+/// On a dropped connection or a timeout it reconnects (at most `max_reconnects` attempts per
+/// fault, waiting `backoff`, doubling up to `max_backoff`), lifts the brush to the safe height
+/// first, and restarts the interrupted stroke from its first point; a stroke whose lift already
+/// finished (the TCP is at its end pose) counts as done and is never written twice. At most
+/// `max_retries_per_stroke` faults per stroke and `max_retries_total` in the run are tolerated,
+/// so a flaky link ends in bounded time.
 ///
 /// # Errors
-/// The last fault once reconnection attempts are exhausted, or any non-fault error (a
-/// controller error code, a JSON-RPC error) at once.
+/// Before anything moved (connecting, the robot name, setting the tool): the error as it is.
+/// After that, any error (a controller error code, a JSON-RPC error, a spent retry budget,
+/// [`RobotError::GaveUp`]; `opts.stop` set, [`RobotError::Interrupted`]) first lifts the brush
+/// straight out of the paper to `opts.lift_m` above it if the link allows (reconnecting once if
+/// it is down), then returns [`RobotError::RunStopped`] with the cause, the strokes completed
+/// and whether the brush was lifted.
 pub fn run_program(
     addr: &str,
     program: &Program,
@@ -304,58 +367,136 @@ pub fn run_program(
 ) -> Result<RunReport, RobotError> {
     let mut report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
     let idle_limit = opts.timeout * 100;
-    let mut session = open(addr, program, opts, robot_name)?;
-    session.client.send_move(&session.robot, &program.start)?;
-    session.client.wait_idle(&session.robot, idle_limit)?;
+    let session = open(addr, program, opts, robot_name)?;
+    let mut session = Some(session);
+    match drive(addr, program, robot_name, opts, &mut session, &mut report, &mut progress, idle_limit) {
+        Ok(()) => Ok(report),
+        Err(cause) => {
+            // Lift on the open link; if it is down (or fails), reconnect once and lift.
+            let mut outcome = match session.as_mut() {
+                Some(s) => lift(s, program, opts.lift_m, idle_limit),
+                None => Err(RobotError::Io("not connected".into())),
+            };
+            if outcome.as_ref().is_err_and(is_fault) {
+                outcome = open(addr, program, opts, robot_name)
+                    .and_then(|mut s| lift(&mut s, program, opts.lift_m, idle_limit));
+            }
+            let (lifted, lift) = match outcome {
+                Ok(words) => (true, words),
+                Err(e) => (false, format!("could not lift the brush ({e}): it may still touch the paper")),
+            };
+            Err(RobotError::RunStopped {
+                cause: Box::new(cause),
+                completed: report.strokes_completed.len(),
+                total: report.strokes_total,
+                reconnects: report.reconnects,
+                lifted,
+                lift,
+            })
+        }
+    }
+}
+
+/// The run after the connection is open; any error returned leaves the retreat to the caller.
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    addr: &str,
+    program: &Program,
+    robot_name: Option<&str>,
+    opts: &RunOptions<'_>,
+    session: &mut Option<Session>,
+    report: &mut RunReport,
+    progress: &mut impl FnMut(&RunReport),
+    idle_limit: Duration,
+) -> Result<(), RobotError> {
+    {
+        let s = session.as_mut().expect("open");
+        s.client.send_move(&s.robot, &program.start)?;
+        s.client.wait_idle(&s.robot, idle_limit)?;
+    }
     let mut k = 0;
+    let mut faults_stroke = 0;
+    let mut backoff = opts.backoff;
+    let mut fault: Option<RobotError> = None;
     while k < program.strokes.len() {
         if opts.stop.load(Ordering::SeqCst) {
-            lift(&mut session, opts.lift_m, opts.timeout)?;
-            report.stopped = true;
-            return Ok(report);
+            return Err(RobotError::Interrupted);
         }
         let st = &program.strokes[k];
-        match run_stroke(&mut session, st, idle_limit) {
-            Ok(()) => {
-                report.strokes_completed.push(st.index);
-                progress(&report);
-                k += 1;
-            }
-            Err(e) if is_fault(&e) => {
+        let result = match fault.take() {
+            // Recover from the last fault: reconnect, then see where the brush is.
+            Some(e) => {
+                report.faults += 1;
+                faults_stroke += 1;
+                *session = None;
+                if faults_stroke > opts.max_retries_per_stroke || report.faults > opts.max_retries_total {
+                    return Err(RobotError::GaveUp {
+                        stroke: st.index,
+                        faults_stroke,
+                        max_stroke: opts.max_retries_per_stroke,
+                        faults_total: report.faults,
+                        max_total: opts.max_retries_total,
+                        last: Box::new(e),
+                    });
+                }
                 let mut attempt = 0;
-                let mut backoff = opts.backoff;
-                loop {
-                    if attempt >= opts.max_reconnects {
-                        return Err(e);
+                let s = loop {
+                    sleep_unless(backoff, opts.stop);
+                    backoff = (backoff * 2).min(opts.max_backoff);
+                    if opts.stop.load(Ordering::SeqCst) {
+                        return Err(RobotError::Interrupted);
                     }
                     attempt += 1;
-                    std::thread::sleep(backoff);
-                    backoff *= 2;
                     match open(addr, program, opts, robot_name) {
-                        Ok(s) => {
-                            session = s;
-                            break;
+                        Ok(s) => break s,
+                        Err(e2) if is_fault(&e2) && attempt < opts.max_reconnects => continue,
+                        Err(e2) if is_fault(&e2) => {
+                            return Err(RobotError::GaveUp {
+                                stroke: st.index,
+                                faults_stroke,
+                                max_stroke: opts.max_retries_per_stroke,
+                                faults_total: report.faults,
+                                max_total: opts.max_retries_total,
+                                last: Box::new(RobotError::Io(format!(
+                                    "{attempt} connection attempt(s) failed, the last: {e2}"
+                                ))),
+                            });
                         }
-                        Err(e2) if is_fault(&e2) => continue,
                         Err(e2) => return Err(e2),
                     }
-                }
+                };
                 report.reconnects += 1;
+                let s = session.insert(s);
                 // Did the stroke finish before the fault? Then its lift pose is where we are.
-                let here = session.client.tcp_pose(&session.robot)?;
-                let Move::Line { pose: end, .. } = st.lift else { unreachable!("lift is a line move") };
-                let done = here.position().iter().zip(end.position()).all(|(a, b)| (a - b).abs() < 1e-6);
-                if done {
-                    report.strokes_completed.push(st.index);
-                    progress(&report);
-                    k += 1;
-                } else {
-                    lift(&mut session, opts.lift_m, opts.timeout)?;
-                    report.strokes_resumed += 1;
-                }
+                s.client.tcp_pose(&s.robot).and_then(|here| {
+                    let Move::Line { pose: end, .. } = st.lift else { unreachable!("lift is a line move") };
+                    let done = here.position().iter().zip(end.position()).all(|(a, b)| (a - b).abs() < 1e-6);
+                    if done {
+                        Ok(true)
+                    } else {
+                        lift(s, program, opts.lift_m, idle_limit)?;
+                        report.strokes_resumed += 1;
+                        Ok(false)
+                    }
+                })
             }
+            None => {
+                let s = session.as_mut().expect("connected");
+                run_stroke(s, st, idle_limit, opts.stop).map(|()| true)
+            }
+        };
+        match result {
+            Ok(true) => {
+                report.strokes_completed.push(st.index);
+                progress(report);
+                k += 1;
+                faults_stroke = 0;
+                backoff = opts.backoff;
+            }
+            Ok(false) => {} // recovered: run the stroke again
+            Err(e) if is_fault(&e) => fault = Some(e),
             Err(e) => return Err(e),
         }
     }
-    Ok(report)
+    Ok(())
 }

@@ -85,6 +85,45 @@ pub enum RobotError {
         /// The status.
         code: i64,
     },
+    /// The run was stopped on request (Ctrl-C).
+    #[error("interrupted (Ctrl-C)")]
+    Interrupted,
+    /// The link kept failing: the retry budget per stroke or for the whole run is spent.
+    #[error(
+        "gave up on the flaky link at stroke {}: {faults_stroke} fault(s) on this stroke (at most {max_stroke}), {faults_total} in the run (at most {max_total}); last fault: {last}",
+        stroke + 1
+    )]
+    GaveUp {
+        /// Zero-based index of the stroke that could not be finished.
+        stroke: usize,
+        /// Faults while that stroke ran.
+        faults_stroke: usize,
+        /// The per-stroke budget.
+        max_stroke: usize,
+        /// Faults in the whole run.
+        faults_total: usize,
+        /// The budget for the whole run.
+        max_total: usize,
+        /// The last fault.
+        last: Box<RobotError>,
+    },
+    /// A run on the controller ended before the program finished, after the brush may have
+    /// moved; says why, how far it got and whether the brush was lifted to the safe height.
+    #[error("{cause}; stopped after {completed} of {total} strokes ({reconnects} reconnect(s)); {lift}")]
+    RunStopped {
+        /// Why the run stopped.
+        cause: Box<RobotError>,
+        /// Strokes completed.
+        completed: usize,
+        /// Strokes in the program.
+        total: usize,
+        /// Reconnections made.
+        reconnects: usize,
+        /// Whether the brush is known to be at the safe height above the paper.
+        lifted: bool,
+        /// What the retreat did, in words.
+        lift: String,
+    },
 }
 
 /// Reads and parses a JSON file; errors are [`RobotError::Config`] naming the file (serde's

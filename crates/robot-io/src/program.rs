@@ -3,14 +3,29 @@
 
 use std::path::Path;
 
-use brush_model::{BrushProfile, Track};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use brush_model::{BrushProfile, Track, TrackPoint};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::RobotError;
 use crate::frame::PaperFrame;
 use crate::kinematics;
 use crate::pose::{Pose, brush_pose, lifted_pose};
+
+/// The largest acceleration the controller accepts in `moveLine`/`moveJoint`, m/s² (or rad/s²).
+pub const CONTROLLER_MAX_ACC: f64 = 20.0;
+/// The largest speed the controller accepts in `moveLine`/`moveJoint`, m/s (or rad/s).
+pub const CONTROLLER_MAX_SPEED: f64 = 3.2;
+/// The largest blend radius the controller accepts, m (the smallest is 0).
+pub const CONTROLLER_MAX_BLEND_M: f64 = 0.1;
+/// The tool offset along the flange z the controller accepts: `0 ≤ z <` this, m.
+pub const CONTROLLER_MAX_TCP_OFFSET_M: f64 = 0.5;
+/// The speed fraction the controller accepts: `0 < f ≤` this.
+pub const CONTROLLER_MAX_SPEED_FRACTION: f64 = 1.0;
+
+/// A move shorter than this (mm, TCP path) is a turn in place: its speed does not set its
+/// duration, so no rate per mm or per second is computed for it.
+pub const IN_PLACE_MM: f64 = 1e-3;
 
 /// An ink-dipping station.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -24,7 +39,28 @@ pub struct DipStation {
     pub every_strokes: usize,
 }
 
-/// Hard limits the program must respect.
+/// Where the brush comes from: the paper's into-paper normal (paper z = x × y) must point
+/// within `max_angle_rad` of `into_paper_base`, or the frame is refused (a mirrored or upside
+/// down `paper.json`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Approach {
+    /// The expected into-paper direction in the base frame (any length > 0); default base −z
+    /// (the brush comes from above).
+    pub into_paper_base: [f64; 3],
+    /// Largest angle between the fitted into-paper normal and `into_paper_base`, rad (0, π/2];
+    /// default π/3 (60°).
+    pub max_angle_rad: f64,
+}
+
+impl Default for Approach {
+    fn default() -> Self {
+        Self { into_paper_base: [0.0, 0.0, -1.0], max_angle_rad: std::f64::consts::FRAC_PI_3 }
+    }
+}
+
+/// Hard limits the program must respect (`robot.json` → `limits`; every field optional). How
+/// each default was chosen is in docs/robot.md, "Safety checks".
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Limits {
@@ -34,11 +70,42 @@ pub struct Limits {
     pub max_linear_acc_m_s2: f64,
     /// Largest joint speed, rad/s.
     pub max_joint_speed_rad_s: f64,
+    /// Largest joint acceleration, rad/s².
+    pub max_joint_acc_rad_s2: f64,
+    /// Largest blend radius, mm.
+    pub max_blend_mm: f64,
+    /// Smallest safe height above the paper for travel, mm.
+    pub min_lift_mm: f64,
+    /// Largest tilt α of the brush from the paper normal, rad.
+    pub max_tilt_rad: f64,
+    /// How far α may leave the brush profile's calibrated α range, rad.
+    pub alpha_tolerance_rad: f64,
+    /// Largest orientation change of the tool per mm of TCP travel while pressed (both ends of
+    /// a move deeper than the surface), rad/mm.
+    pub max_turn_rad_per_mm: f64,
+    /// Largest orientation change per second of a move at its commanded speed (write speed on
+    /// the paper, travel speed in the air), rad/s.
+    pub max_wrist_rate_rad_s: f64,
+    /// Largest change of press depth per mm of travel along the paper while pressed, mm/mm
+    /// (moves in place, straight down or up, are exempt).
+    pub max_depth_change_per_mm: f64,
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Self { max_linear_speed_m_s: 0.25, max_linear_acc_m_s2: 2.0, max_joint_speed_rad_s: 1.5 }
+        Self {
+            max_linear_speed_m_s: 0.25,
+            max_linear_acc_m_s2: 2.0,
+            max_joint_speed_rad_s: 1.5,
+            max_joint_acc_rad_s2: 3.0,
+            max_blend_mm: 2.0,
+            min_lift_mm: 5.0,
+            max_tilt_rad: 30f64.to_radians(),
+            alpha_tolerance_rad: 2f64.to_radians(),
+            max_turn_rad_per_mm: 1.0,
+            max_wrist_rate_rad_s: 20.0,
+            max_depth_change_per_mm: 40.0,
+        }
     }
 }
 
@@ -68,6 +135,8 @@ pub struct RobotConfig {
     pub speed_fraction: f64,
     /// Optional ink dipping.
     pub dip: Option<DipStation>,
+    /// The side of the paper the brush comes from.
+    pub approach: Approach,
     /// Limits.
     pub limits: Limits,
 }
@@ -86,6 +155,7 @@ impl Default for RobotConfig {
             blend_mm: 0.5,
             speed_fraction: 1.0,
             dip: None,
+            approach: Approach::default(),
             limits: Limits::default(),
         }
     }
@@ -103,46 +173,90 @@ impl RobotConfig {
         Ok(c)
     }
 
-    /// Checks every value; the message names the field.
+    /// Checks every value against the range the controller accepts (the `CONTROLLER_*`
+    /// constants) and against [`Limits`]; the message names the field, the value and the limit.
     ///
     /// # Errors
     /// A one-line description of the first bad field.
     pub fn validate(&self) -> Result<(), String> {
-        let pos = [
-            ("write_speed_m_s", self.write_speed_m_s),
-            ("write_acc_m_s2", self.write_acc_m_s2),
-            ("travel_speed_m_s", self.travel_speed_m_s),
-            ("travel_acc_m_s2", self.travel_acc_m_s2),
-            ("joint_speed_rad_s", self.joint_speed_rad_s),
-            ("joint_acc_rad_s2", self.joint_acc_rad_s2),
-            ("lift_mm", self.lift_mm),
-            ("speed_fraction", self.speed_fraction),
-            ("limits.max_linear_speed_m_s", self.limits.max_linear_speed_m_s),
-            ("limits.max_linear_acc_m_s2", self.limits.max_linear_acc_m_s2),
-            ("limits.max_joint_speed_rad_s", self.limits.max_joint_speed_rad_s),
+        let l = &self.limits;
+        // (field, value, controller's upper bound, unit)
+        let positive = [
+            ("write_speed_m_s", self.write_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
+            ("write_acc_m_s2", self.write_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
+            ("travel_speed_m_s", self.travel_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
+            ("travel_acc_m_s2", self.travel_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
+            ("joint_speed_rad_s", self.joint_speed_rad_s, CONTROLLER_MAX_SPEED, "rad/s"),
+            ("joint_acc_rad_s2", self.joint_acc_rad_s2, CONTROLLER_MAX_ACC, "rad/s²"),
+            ("speed_fraction", self.speed_fraction, CONTROLLER_MAX_SPEED_FRACTION, ""),
+            ("limits.max_linear_speed_m_s", l.max_linear_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
+            ("limits.max_linear_acc_m_s2", l.max_linear_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
+            ("limits.max_joint_speed_rad_s", l.max_joint_speed_rad_s, CONTROLLER_MAX_SPEED, "rad/s"),
+            ("limits.max_joint_acc_rad_s2", l.max_joint_acc_rad_s2, CONTROLLER_MAX_ACC, "rad/s²"),
+            ("limits.max_blend_mm", l.max_blend_mm, CONTROLLER_MAX_BLEND_M * 1000.0, "mm"),
         ];
-        for (f, v) in pos {
+        for (f, v, max, unit) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{f} must be a positive number, got {v}"));
+            }
+            if v > max {
+                return Err(format!("{f} = {v} is beyond what the controller accepts (at most {max} {unit})"));
+            }
+        }
+        let free = [
+            ("lift_mm", self.lift_mm),
+            ("limits.min_lift_mm", l.min_lift_mm),
+            ("limits.max_tilt_rad", l.max_tilt_rad),
+            ("limits.max_turn_rad_per_mm", l.max_turn_rad_per_mm),
+            ("limits.max_wrist_rate_rad_s", l.max_wrist_rate_rad_s),
+            ("limits.max_depth_change_per_mm", l.max_depth_change_per_mm),
+        ];
+        for (f, v) in free {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("{f} must be a positive number, got {v}"));
             }
         }
+        if !(l.alpha_tolerance_rad.is_finite() && l.alpha_tolerance_rad >= 0.0) {
+            return Err(format!("limits.alpha_tolerance_rad must be ≥ 0, got {}", l.alpha_tolerance_rad));
+        }
+        if l.max_tilt_rad >= std::f64::consts::FRAC_PI_2 {
+            return Err(format!(
+                "limits.max_tilt_rad = {} must be below π/2 (the brush would lie flat on the paper)",
+                l.max_tilt_rad
+            ));
+        }
         if !(self.blend_mm.is_finite() && self.blend_mm >= 0.0) {
             return Err(format!("blend_mm must be ≥ 0, got {}", self.blend_mm));
         }
-        if self.speed_fraction > 1.0 {
-            return Err(format!("speed_fraction must be in (0, 1], got {}", self.speed_fraction));
-        }
-        let l = &self.limits;
-        for (f, v, max) in [
-            ("write_speed_m_s", self.write_speed_m_s, l.max_linear_speed_m_s),
-            ("travel_speed_m_s", self.travel_speed_m_s, l.max_linear_speed_m_s),
-            ("write_acc_m_s2", self.write_acc_m_s2, l.max_linear_acc_m_s2),
-            ("travel_acc_m_s2", self.travel_acc_m_s2, l.max_linear_acc_m_s2),
-            ("joint_speed_rad_s", self.joint_speed_rad_s, l.max_joint_speed_rad_s),
+        for (f, v, max, limit) in [
+            ("write_speed_m_s", self.write_speed_m_s, l.max_linear_speed_m_s, "max_linear_speed_m_s"),
+            ("travel_speed_m_s", self.travel_speed_m_s, l.max_linear_speed_m_s, "max_linear_speed_m_s"),
+            ("write_acc_m_s2", self.write_acc_m_s2, l.max_linear_acc_m_s2, "max_linear_acc_m_s2"),
+            ("travel_acc_m_s2", self.travel_acc_m_s2, l.max_linear_acc_m_s2, "max_linear_acc_m_s2"),
+            ("joint_speed_rad_s", self.joint_speed_rad_s, l.max_joint_speed_rad_s, "max_joint_speed_rad_s"),
+            ("joint_acc_rad_s2", self.joint_acc_rad_s2, l.max_joint_acc_rad_s2, "max_joint_acc_rad_s2"),
+            ("blend_mm", self.blend_mm, l.max_blend_mm, "max_blend_mm"),
         ] {
             if v > max {
-                return Err(format!("{f} = {v} exceeds the limit {max}"));
+                return Err(format!("{f} = {v} exceeds the limit {max} (limits.{limit})"));
             }
+        }
+        if self.lift_mm < l.min_lift_mm {
+            return Err(format!("lift_mm = {} is below the limit min_lift_mm = {}", self.lift_mm, l.min_lift_mm));
+        }
+        if self.robot_name.as_deref().is_some_and(|n| n.trim().is_empty()) {
+            return Err("robot_name must not be empty (omit it to use the controller's first robot)".into());
+        }
+        let a = &self.approach;
+        let n = Vector3::from(a.into_paper_base);
+        if !(n.iter().all(|v| v.is_finite()) && n.norm() > 1e-9) {
+            return Err(format!(
+                "approach.into_paper_base must be a non-zero finite vector, got {:?}",
+                a.into_paper_base
+            ));
+        }
+        if !(a.max_angle_rad.is_finite() && a.max_angle_rad > 0.0 && a.max_angle_rad <= std::f64::consts::FRAC_PI_2) {
+            return Err(format!("approach.max_angle_rad must be in (0, π/2], got {}", a.max_angle_rad));
         }
         if let Some(d) = &self.dip {
             if d.every_strokes == 0
@@ -215,6 +329,14 @@ pub struct Program {
     pub start: Move,
     /// Strokes in writing order.
     pub strokes: Vec<StrokeProgram>,
+    /// The paper frame the program was built for: paper (m, z into the paper) → base (m). The
+    /// runner uses it to lift the brush straight out of the paper after a fault.
+    #[serde(skip)]
+    pub paper_to_base: Isometry3<f64>,
+    /// Speed of a retreat (lifting after a fault or a stop), m/s: the travel speed.
+    pub retreat_speed_m_s: f64,
+    /// Acceleration of a retreat, m/s²: the travel acceleration.
+    pub retreat_acc_m_s2: f64,
 }
 
 impl Program {
@@ -225,6 +347,18 @@ impl Program {
     /// Number of motion commands.
     pub fn move_count(&self) -> usize {
         1 + self.strokes.iter().map(|s| s.moves().count()).sum::<usize>()
+    }
+    /// How deep a base-frame position lies below the paper surface, mm (negative: above it).
+    pub fn depth_mm(&self, position_m: [f64; 3]) -> f64 {
+        (self.paper_to_base.inverse() * nalgebra::Point3::from(position_m)).z * 1000.0
+    }
+    /// The pose `lift_m` above the paper, straight out of the paper from `pose` (along the
+    /// paper normal), same orientation.
+    pub fn lifted_out(&self, pose: &Pose, lift_m: f64) -> Pose {
+        let mut local = self.paper_to_base.inverse() * nalgebra::Point3::from(pose.position());
+        local.z = -lift_m;
+        let p = self.paper_to_base * local;
+        Pose([p.x, p.y, p.z, pose.0[3], pose.0[4], pose.0[5]])
     }
 }
 
@@ -246,18 +380,188 @@ pub struct CheckReport {
     pub max_press_mm: f64,
     /// Paper frame fit residual, mm.
     pub frame_residual_mm: f64,
+    /// Angle between the paper's into-paper normal and the expected approach direction, rad.
+    pub paper_normal_angle_rad: f64,
+    /// Largest tilt α, rad.
+    pub max_tilt_rad: f64,
+    /// Largest orientation change per mm of travel while pressed, rad/mm.
+    pub max_turn_rad_per_mm: f64,
+    /// Largest orientation change per second of a move at its commanded speed, rad/s.
+    pub max_wrist_rate_rad_s: f64,
+    /// Largest depth change per mm of travel along the paper while pressed, mm/mm.
+    pub max_depth_change_per_mm: f64,
     /// Estimated writing time at the configured speeds, s (path length / speed, accelerations
     /// ignored).
     pub estimated_seconds: f64,
 }
 
-/// Builds the program for a track and checks the whole safety envelope before anything moves:
-/// every press within the profile's h range, every point on the sheet, speeds within the limits,
-/// and every pose (pressed and lifted) reachable by the AUBO-i5 with the brush orientation asked
-/// for.
+fn unsafe_at(stroke: usize, point: Option<usize>, reason: String) -> RobotError {
+    RobotError::Unsafe { stroke: Some(stroke), point, reason }
+}
+
+/// Refuses a paper frame whose into-paper normal (paper z = x × y, mapped to the base frame)
+/// points more than `approach.max_angle_rad` away from `approach.into_paper_base`: touch points
+/// that are mirrored (a reflection cannot be fitted by a rotation, so Kabsch turns the sheet
+/// upside down instead) or a sheet the brush would reach from below. Returns the angle, rad.
 ///
 /// # Errors
-/// [`RobotError::Unsafe`] naming the first offending stroke and point and why.
+/// [`RobotError::Unsafe`] naming both directions and the angle.
+pub fn check_approach(frame: &PaperFrame, approach: &Approach) -> Result<f64, RobotError> {
+    let n = frame.iso.rotation * Vector3::z();
+    let want = Vector3::from(approach.into_paper_base).normalize();
+    let angle = n.dot(&want).clamp(-1.0, 1.0).acos();
+    if !(angle <= approach.max_angle_rad) {
+        return Err(RobotError::Unsafe {
+            stroke: None,
+            point: None,
+            reason: format!(
+                "paper.json: the touch points put the paper's into-paper normal (z = x × y) along ({:.3}, {:.3}, {:.3}) in the base frame, {:.1}° from the approach direction ({:.3}, {:.3}, {:.3}) (robot.json approach.max_angle_rad = {:.4}, {:.0}°): the paper axes are mirrored or the sheet faces away from the brush; check the order and signs of paper_mm and robot_m",
+                n.x,
+                n.y,
+                n.z,
+                angle.to_degrees(),
+                want.x,
+                want.y,
+                want.z,
+                approach.max_angle_rad,
+                approach.max_angle_rad.to_degrees()
+            ),
+        });
+    }
+    Ok(angle)
+}
+
+/// One commanded line move with what the envelope allows there.
+struct Checked {
+    stroke: usize,
+    point: Option<usize>,
+    what: &'static str,
+    pose: Pose,
+    v_m_s: f64,
+    /// Deepest the pose may lie below the paper surface, mm (`None`: off the sheet, free).
+    max_depth_mm: Option<f64>,
+}
+
+fn check_point(
+    p: &TrackPoint,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+    at: impl Fn(String) -> RobotError,
+) -> Result<(), RobotError> {
+    if ![p.x_mm, p.y_mm, p.h_mm, p.alpha_rad, p.beta_rad].iter().all(|v| v.is_finite()) {
+        return Err(at("a value is not finite".into()));
+    }
+    let hmax = profile.ranges.h_mm.max;
+    if p.h_mm > hmax + 1e-9 {
+        return Err(at(format!("press h = {:.3} mm is deeper than the profile's range (max {hmax} mm)", p.h_mm)));
+    }
+    if p.h_mm < 0.0 {
+        return Err(at(format!("press h = {:.3} mm is above the paper", p.h_mm)));
+    }
+    let l = &cfg.limits;
+    let a = p.alpha_rad;
+    if a.abs() > l.max_tilt_rad {
+        return Err(at(format!(
+            "tilt α = {a:.4} rad ({:.1}°) is beyond limits.max_tilt_rad = {:.4} rad ({:.1}°)",
+            a.to_degrees(),
+            l.max_tilt_rad,
+            l.max_tilt_rad.to_degrees()
+        )));
+    }
+    let r = profile.ranges.alpha_rad;
+    let tol = l.alpha_tolerance_rad;
+    if a < r.min - tol - 1e-12 || a > r.max + tol + 1e-12 {
+        return Err(at(format!(
+            "tilt α = {a:.4} rad ({:.1}°) is outside the brush profile's calibrated range [{:.4}, {:.4}] rad ([{:.1}°, {:.1}°]) widened by limits.alpha_tolerance_rad = {tol:.4} rad",
+            a.to_degrees(),
+            r.min,
+            r.max,
+            r.min.to_degrees(),
+            r.max.to_degrees()
+        )));
+    }
+    if !frame.contains(p.x_mm, p.y_mm) {
+        let b = frame.bounds_mm;
+        return Err(at(format!(
+            "point ({:.1}, {:.1}) mm lies outside the paper [{}, {}]–[{}, {}] mm",
+            p.x_mm, p.y_mm, b[0], b[1], b[2], b[3]
+        )));
+    }
+    Ok(())
+}
+
+/// Maxima over the checked moves, for the report.
+#[derive(Default)]
+struct Peaks {
+    tilt: f64,
+    turn_per_mm: f64,
+    wrist: f64,
+    depth_per_mm: f64,
+}
+
+/// Checks the pressed moves between consecutive track points: no turn in place while pressed,
+/// orientation change per mm and depth change per mm while pressed.
+fn check_segment(
+    a: &TrackPoint,
+    b: &TrackPoint,
+    pa: &Pose,
+    pb: &Pose,
+    l: &Limits,
+    peaks: &mut Peaks,
+    at: impl Fn(String) -> RobotError,
+) -> Result<(), RobotError> {
+    let pressed = a.h_mm > 0.0 && b.h_mm > 0.0;
+    if !pressed {
+        return Ok(());
+    }
+    let len_mm = dist(pa, pb) * 1000.0;
+    let turn = pa.to_iso().rotation.angle_to(&pb.to_iso().rotation);
+    if len_mm < IN_PLACE_MM {
+        if turn > 1e-6 {
+            return Err(at(format!(
+                "the brush turns {turn:.4} rad ({:.1}°) in place while pressed (h = {:.3} mm): lift it to the surface (h = 0) to turn",
+                turn.to_degrees(),
+                b.h_mm
+            )));
+        }
+        return Ok(());
+    }
+    let per_mm = turn / len_mm;
+    peaks.turn_per_mm = peaks.turn_per_mm.max(per_mm);
+    if per_mm > l.max_turn_rad_per_mm {
+        return Err(at(format!(
+            "the brush turns {turn:.4} rad ({:.1}°) over {len_mm:.3} mm while pressed: {per_mm:.3} rad/mm, beyond limits.max_turn_rad_per_mm = {}",
+            turn.to_degrees(),
+            l.max_turn_rad_per_mm
+        )));
+    }
+    let dxy = (b.x_mm - a.x_mm).hypot(b.y_mm - a.y_mm);
+    if dxy >= IN_PLACE_MM {
+        let dh = (b.h_mm - a.h_mm).abs();
+        let per_mm = dh / dxy;
+        peaks.depth_per_mm = peaks.depth_per_mm.max(per_mm);
+        if per_mm > l.max_depth_change_per_mm {
+            return Err(at(format!(
+                "the press depth changes {dh:.3} mm over {dxy:.3} mm of travel while pressed: {per_mm:.2} mm/mm, beyond limits.max_depth_change_per_mm = {}",
+                l.max_depth_change_per_mm
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Builds the program for a track and checks the whole safety envelope before anything moves
+/// (the list, with the defaults, is in docs/robot.md, "Safety checks"): every setting within
+/// what the controller accepts and within [`Limits`]; the paper facing the brush
+/// ([`check_approach`]); every press within the profile's h range, α within the profile's range
+/// and the tilt limit, every point on the sheet; orientation change per mm and depth change per
+/// mm while pressed, orientation change per second of every move; every commanded pose no
+/// deeper than the track asks there (travel, approach, lift and dip above the paper); and every
+/// pose reachable by the AUBO-i5 with the brush orientation asked for.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] naming the first offending stroke and point, the value and the limit.
 pub fn build_program(
     track: &Track,
     profile: &BrushProfile,
@@ -269,9 +573,20 @@ pub fn build_program(
         return Err(RobotError::Unsafe { stroke: None, point: None, reason: "the track has no points".into() });
     }
     let tcp_offset_m = profile.brush.length_mm / 1000.0;
+    if !(tcp_offset_m.is_finite() && (0.0..CONTROLLER_MAX_TCP_OFFSET_M).contains(&tcp_offset_m)) {
+        return Err(RobotError::Unsafe {
+            stroke: None,
+            point: None,
+            reason: format!(
+                "the brush length {} mm (the tool offset) is beyond what the controller accepts (0 ≤ offset < {} mm)",
+                profile.brush.length_mm,
+                CONTROLLER_MAX_TCP_OFFSET_M * 1000.0
+            ),
+        });
+    }
+    let normal_angle = check_approach(frame, &cfg.approach)?;
     let tcp = tcp_iso(tcp_offset_m);
     let lift_m = cfg.lift_mm / 1000.0;
-    let hmax = profile.ranges.h_mm.max;
     let mut seed: Option<[f64; 6]> = None;
     let mut reach = |pose: &Pose, si: usize, pi: usize, what: &str| -> Result<[f64; 6], RobotError> {
         let q = kinematics::inverse(pose, &tcp, seed.as_ref()).ok_or_else(|| RobotError::Unsafe {
@@ -286,41 +601,27 @@ pub fn build_program(
         Ok(q)
     };
     let mut strokes = Vec::with_capacity(track.strokes.len());
+    let mut checked: Vec<Checked> = Vec::new();
     let mut start = None;
+    let mut start_pose = None;
     let (mut max_press, mut path_m, mut travel_m) = (0.0f64, 0.0f64, 0.0f64);
+    let mut peaks = Peaks::default();
     let mut last_up: Option<Pose> = None;
     for (si, stroke) in track.strokes.iter().enumerate() {
         if stroke.points.is_empty() {
             continue;
         }
         for (pi, p) in stroke.points.iter().enumerate() {
-            let unsafe_at = |reason: String| RobotError::Unsafe { stroke: Some(si), point: Some(pi), reason };
-            if ![p.x_mm, p.y_mm, p.h_mm, p.alpha_rad, p.beta_rad].iter().all(|v| v.is_finite()) {
-                return Err(unsafe_at("a value is not finite".into()));
-            }
-            if p.h_mm > hmax + 1e-9 {
-                return Err(unsafe_at(format!(
-                    "press h = {:.3} mm is deeper than the profile's range (max {hmax} mm)",
-                    p.h_mm
-                )));
-            }
-            if p.h_mm < 0.0 {
-                return Err(unsafe_at(format!("press h = {:.3} mm is above the paper", p.h_mm)));
-            }
-            if !frame.contains(p.x_mm, p.y_mm) {
-                let b = frame.bounds_mm;
-                return Err(unsafe_at(format!(
-                    "point ({:.1}, {:.1}) mm lies outside the paper [{}, {}]–[{}, {}] mm",
-                    p.x_mm, p.y_mm, b[0], b[1], b[2], b[3]
-                )));
-            }
+            check_point(p, profile, frame, cfg, |reason| unsafe_at(si, Some(pi), reason))?;
             max_press = max_press.max(p.h_mm);
+            peaks.tilt = peaks.tilt.max(p.alpha_rad.abs());
         }
         let first = &stroke.points[0];
         let up = lifted_pose(frame, first, lift_m);
         let q_up = reach(&up, si, 0, "approach")?;
         if start.is_none() {
             start = Some(Move::Joint { q: q_up, a: cfg.joint_acc_rad_s2, v: cfg.joint_speed_rad_s });
+            start_pose = Some(up);
         }
         if let Some(prev) = last_up {
             travel_m += dist(&prev, &up);
@@ -332,33 +633,74 @@ pub fn build_program(
                 let down = above.raised(-d.depth_mm / 1000.0);
                 reach(&above, si, 0, "dip station")?;
                 reach(&down, si, 0, "dip station")?;
+                let (vt, vd) = (cfg.travel_speed_m_s, cfg.travel_speed_m_s * 0.5);
                 dip = vec![
-                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: cfg.travel_speed_m_s, blend_m: 0.0 },
-                    Move::Line { pose: down, a: cfg.travel_acc_m_s2, v: cfg.travel_speed_m_s * 0.5, blend_m: 0.0 },
-                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: cfg.travel_speed_m_s * 0.5, blend_m: 0.0 },
+                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vt, blend_m: 0.0 },
+                    Move::Line { pose: down, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 },
+                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 },
                 ];
+                // The station must be off the sheet if it lies below the paper's plane, and
+                // the pose above the ink must be above that plane (travel reaches it straight).
+                let off_sheet = |pose: &Pose| {
+                    let q = frame.to_paper(pose.position());
+                    !frame.contains(q[0], q[1])
+                };
+                let in_ink = if off_sheet(&down) { None } else { Some(0.0) };
+                for (pose, what, v_m_s, max_depth_mm) in [
+                    (above, "dip station (above the ink)", vt, Some(0.0)),
+                    (down, "dip station (in the ink)", vd, in_ink),
+                    (above, "dip station (above the ink)", vd, Some(0.0)),
+                ] {
+                    checked.push(Checked { stroke: si, point: None, what, pose, v_m_s, max_depth_mm });
+                }
                 reach(&up, si, 0, "approach")?;
             }
         }
+        checked.push(Checked {
+            stroke: si,
+            point: Some(0),
+            what: "travel (above the first point)",
+            pose: up,
+            v_m_s: cfg.travel_speed_m_s,
+            max_depth_mm: Some(0.0),
+        });
         let mut press = Vec::with_capacity(stroke.points.len());
-        let mut prev_pose: Option<Pose> = None;
+        let mut prev: Option<(Pose, &TrackPoint)> = None;
         for (pi, p) in stroke.points.iter().enumerate() {
             let pose = brush_pose(frame, p);
             reach(&pose, si, pi, "pressed")?;
-            if let Some(pp) = prev_pose {
+            if let Some((pp, pt)) = prev {
                 path_m += dist(&pp, &pose);
+                check_segment(pt, p, &pp, &pose, &cfg.limits, &mut peaks, |reason| unsafe_at(si, Some(pi), reason))?;
             }
             let last = pi + 1 == stroke.points.len();
             let blend = if last || pi == 0 { 0.0 } else { cfg.blend_mm / 1000.0 };
             if pi > 0 {
                 press.push(Move::Line { pose, a: cfg.write_acc_m_s2, v: cfg.write_speed_m_s, blend_m: blend });
             }
-            prev_pose = Some(pose);
+            checked.push(Checked {
+                stroke: si,
+                point: Some(pi),
+                what: if pi == 0 { "descent onto the first point" } else { "pressed" },
+                pose,
+                v_m_s: cfg.write_speed_m_s,
+                max_depth_mm: Some(p.h_mm),
+            });
+            prev = Some((pose, p));
         }
         let first_pose = brush_pose(frame, first);
-        let last_p = stroke.points.last().expect("non-empty");
+        let last_i = stroke.points.len() - 1;
+        let last_p = &stroke.points[last_i];
         let end_up = lifted_pose(frame, last_p, lift_m);
-        reach(&end_up, si, stroke.points.len() - 1, "lift")?;
+        reach(&end_up, si, last_i, "lift")?;
+        checked.push(Checked {
+            stroke: si,
+            point: Some(last_i),
+            what: "lift",
+            pose: end_up,
+            v_m_s: cfg.travel_speed_m_s,
+            max_depth_mm: Some(0.0),
+        });
         strokes.push(StrokeProgram {
             index: si,
             dip,
@@ -371,11 +713,52 @@ pub fn build_program(
         });
         last_up = Some(end_up);
     }
+    // The envelope over every commanded line move, in the order they run: nothing deeper than
+    // the track asks there, and no faster wrist than the limit at the move's speed.
+    let mut prev = start_pose.expect("at least one stroke");
+    for c in &checked {
+        let depth = frame.to_paper(c.pose.position())[2];
+        if let Some(max) = c.max_depth_mm {
+            if depth > max + 1e-6 {
+                return Err(unsafe_at(
+                    c.stroke,
+                    c.point,
+                    format!(
+                        "the {} pose lies {depth:.3} mm below the paper surface where at most {max:.3} mm is allowed",
+                        c.what
+                    ),
+                ));
+            }
+        }
+        let len_mm = dist(&prev, &c.pose) * 1000.0;
+        if len_mm >= IN_PLACE_MM {
+            let turn = prev.to_iso().rotation.angle_to(&c.pose.to_iso().rotation);
+            let rate = turn * c.v_m_s * 1000.0 / len_mm;
+            peaks.wrist = peaks.wrist.max(rate);
+            if rate > cfg.limits.max_wrist_rate_rad_s {
+                return Err(unsafe_at(
+                    c.stroke,
+                    c.point,
+                    format!(
+                        "the {} move turns the brush {turn:.4} rad ({:.1}°) over {len_mm:.3} mm at {} m/s: {rate:.2} rad/s, beyond limits.max_wrist_rate_rad_s = {}",
+                        c.what,
+                        turn.to_degrees(),
+                        c.v_m_s,
+                        cfg.limits.max_wrist_rate_rad_s
+                    ),
+                ));
+            }
+        }
+        prev = c.pose;
+    }
     let program = Program {
         tcp_offset_m,
         speed_fraction: cfg.speed_fraction,
         start: start.expect("at least one stroke"),
         strokes,
+        paper_to_base: frame.iso,
+        retreat_speed_m_s: cfg.travel_speed_m_s,
+        retreat_acc_m_s2: cfg.travel_acc_m_s2,
     };
     let report = CheckReport {
         strokes: program.strokes.len(),
@@ -383,6 +766,11 @@ pub fn build_program(
         moves: program.move_count(),
         max_press_mm: max_press,
         frame_residual_mm: frame.residual_mm,
+        paper_normal_angle_rad: normal_angle,
+        max_tilt_rad: peaks.tilt,
+        max_turn_rad_per_mm: peaks.turn_per_mm,
+        max_wrist_rate_rad_s: peaks.wrist,
+        max_depth_change_per_mm: peaks.depth_per_mm,
         estimated_seconds: path_m / cfg.write_speed_m_s
             + (travel_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s,
     };

@@ -187,8 +187,7 @@ fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::a
         timeout: Duration::from_millis(500),
         max_reconnects: 3,
         backoff: Duration::from_millis(10),
-        lift_m: 0.02,
-        stop: &stop,
+        ..RunOptions::new(&stop)
     };
     run_program(&sim.addr.to_string(), prog, None, &opts, |_| {})
 }

@@ -6,11 +6,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use robot_io::TrackFile;
 use robot_io::aubo::{RPC_PORT, RunOptions, run_program};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use robot_io::sim::{Faults, Simulator};
+use robot_io::{RobotError, TrackFile};
 
 use crate::common::{print_json, progress, write_atomic};
 
@@ -204,6 +204,9 @@ fn export(a: ExportArgs) -> Result<()> {
 }
 
 fn send(a: SendArgs) -> Result<()> {
+    if !(1..=600_000).contains(&a.timeout_ms) {
+        bail!("--timeout-ms must be between 1 and 600000, got {}", a.timeout_ms);
+    }
     let l = load(&a.program)?;
     let (program, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
     if a.dry_run {
@@ -219,24 +222,29 @@ fn send(a: SendArgs) -> Result<()> {
     let pb = progress(program.strokes.len() as u64, "strokes");
     let opts = RunOptions {
         timeout: Duration::from_millis(a.timeout_ms),
-        max_reconnects: 5,
-        backoff: Duration::from_millis(200),
         lift_m: l.cfg.lift_mm / 1000.0,
-        stop: &stop,
+        ..RunOptions::new(&stop)
     };
     let addr = format!("{}:{}", a.host, a.port);
     let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| {
         pb.set_position(r.strokes_completed.len() as u64)
     });
     pb.finish_and_clear();
-    let r = result.with_context(|| format!("running on {addr}"))?;
+    let r = match result {
+        Ok(r) => r,
+        Err(e) if matches!(&e, RobotError::RunStopped { cause, .. } if matches!(**cause, RobotError::Interrupted)) => {
+            // Ctrl-C: not a success; the conventional status of a run ended by SIGINT.
+            eprintln!("error: running on {addr}: {e}");
+            std::process::exit(130);
+        }
+        Err(e) => return Err(e).with_context(|| format!("running on {addr}")),
+    };
     println!(
-        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed{}",
+        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed",
         r.strokes_completed.len(),
         r.strokes_total,
         r.reconnects,
         r.strokes_resumed,
-        if r.stopped { "; stopped on request, brush lifted" } else { "" }
     );
     Ok(())
 }
