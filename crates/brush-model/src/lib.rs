@@ -9,6 +9,8 @@
 //! * [`regression`]: the least-squares fits from measured presses to footprints (the paper's
 //!   general Eq. 6 and its Eq. 1–5 form) with a statsmodels-style report.
 //! * [`measurements`]: the measurements CSV.
+//! * [`motion`]: the forward model of the moving brush ([`ForwardModel`]): from the brush's
+//!   commanded path (position, depth, tilt) to the footprints it leaves and which way they point.
 //! * [`profile`]: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
 //!   and the inverse model (the h that gives a wanted width).
 //!
@@ -23,11 +25,13 @@
 
 pub mod footprint;
 pub mod measurements;
+pub mod motion;
 pub mod profile;
 pub mod regression;
 pub mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
+pub use motion::{ForwardModel, Sweep};
 pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements};
 pub use profile::{BrushProfile, Clamp, Extrapolation, InverseH, PressRanges, ProfileError, Range, Source};
 pub use regression::{FitError, FitReport, Form, LinearModel, OutputFit, Terms, fit, fit_general, fit_paper};

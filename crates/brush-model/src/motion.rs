@@ -1,0 +1,404 @@
+//! The forward model of the moving brush: from the brush's continuous path (where its tip meets
+//! the paper, how deep it presses, how it is tilted) to the footprints it leaves.
+//!
+//! This is the one place that decides which way a footprint points. Track building, every
+//! renderer and the robot simulator's `render-trace` go through it, so a plan shows what the
+//! robot's motion would write (docs/brush-model.md, "The moving brush").
+//!
+//! # The model
+//!
+//! The input is a sequence of commanded brush states, [`TrackPoint`]s read as *controls*:
+//! `(x, y)` where the brush axis meets the paper (mm), `h` the depth past first contact (mm,
+//! `h ≤ 0` means the tip is not pressed and leaves nothing), `α` the tilt of the tool axis from
+//! the paper normal (rad) and `β` the direction the tool axis leans towards (rad, paper frame,
+//! only meaningful when tilted). Between two states the brush moves in a straight line at a
+//! linearly changing depth while the tool axis turns along the great circle between the two
+//! axes (what a controller's `moveLine` does with position and slerped orientation). The path is
+//! sampled every [`ForwardModel::step_mm`] (and every [`ForwardModel::step_rad`] of tool-axis
+//! turn), and each pressed sample leaves one footprint of the brush profile's size at its
+//! `(h, α)`, rooted at the sample. Its direction (root → tip) is:
+//!
+//! * **tilted** (`α ≥ tilt_threshold_rad`): the lean direction `β`; the bundle is bent that way
+//!   whatever the motion;
+//! * **upright**: the hairs are dragged. The tip lies on the path the brush has already pressed
+//!   along since it touched down: walking back along that path, the first point at least
+//!   `trail_reach` footprint lengths away in a straight line. This is a spatial lag: after a
+//!   reversal (逆锋, a backward move then forward) the tip stays ahead until the brush has passed
+//!   it, and on curves the tail stays on the stroke. While the pressed path is still shorter
+//!   than that, the tip points at its farthest point once that is `min_motion_mm` away; before
+//!   the brush has moved that far it keeps its last direction, and right at touch-down it trails
+//!   the motion that follows (the first `min_motion_mm` of travel sets the hairs).
+//!
+//! Lifting to `h ≤ 0` ends the contact: the hairs straighten, the history is forgotten.
+
+use std::f64::consts::FRAC_PI_2;
+
+use crate::profile::{BrushProfile, Extrapolation, ProfileError};
+use crate::units::{Press, Stroke, Track, TrackPoint};
+
+/// The forward model's constants. [`ForwardModel::default`] holds the values documented in
+/// docs/brush-model.md.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForwardModel {
+    /// Tilt at and above which the footprint points along the lean direction β, rad.
+    pub tilt_threshold_rad: f64,
+    /// An upright brush's tip lies on the pressed path this fraction of a footprint length
+    /// behind the brush (straight-line distance).
+    pub trail_reach: f64,
+    /// Travel before a dragged brush's direction follows the motion, mm.
+    pub min_motion_mm: f64,
+    /// Largest distance between path samples, mm.
+    pub step_mm: f64,
+    /// Largest tool-axis turn between path samples, rad.
+    pub step_rad: f64,
+    /// Largest depth change between path samples, mm.
+    pub step_h_mm: f64,
+}
+
+/// Default tilt threshold: 2° (below it a tilt hardly bends the bundle, so the drag decides).
+pub const TILT_THRESHOLD_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+
+/// Default trailing reach, as a fraction of the footprint length. Track building's sweep on the
+/// ten test characters (docs/trajectory.md): 0.35 → CSIM 0.875, 0.5 → 0.889, 0.6 → 0.891,
+/// 0.7 → 0.889, 1.0 → 0.862; 0.4 kept.
+pub const TRAIL_REACH: f64 = 0.4;
+
+impl Default for ForwardModel {
+    fn default() -> Self {
+        Self {
+            tilt_threshold_rad: TILT_THRESHOLD_RAD,
+            trail_reach: TRAIL_REACH,
+            min_motion_mm: 0.3,
+            step_mm: 0.1,
+            step_rad: 0.5f64.to_radians(),
+            step_h_mm: 0.25,
+        }
+    }
+}
+
+/// The footprints of one brush path.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Sweep {
+    /// One stamp per pressed sample, in order: anchor, `h`, `α` and the derived direction `β`
+    /// (root → tip).
+    pub stamps: Vec<TrackPoint>,
+    /// For each input state, the direction its footprint points in (rad), or `None` when it is
+    /// not pressed (`h ≤ 0`) or the profile refused its press.
+    pub directions: Vec<Option<f64>>,
+}
+
+/// A sample of the path: a commanded state plus the index of the input state it sits on (if
+/// any).
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    p: TrackPoint,
+    vertex: Option<usize>,
+}
+
+impl ForwardModel {
+    /// Whether a state is tilted enough for its lean direction to set the footprint's.
+    pub fn is_tilted(&self, p: &TrackPoint) -> bool {
+        p.alpha_rad >= self.tilt_threshold_rad
+    }
+
+    /// Samples the path through `states` (see the module doc): consecutive states joined by
+    /// straight moves, depth linear, tool axis along the great circle.
+    fn samples(&self, states: &[TrackPoint]) -> Vec<Sample> {
+        let mut out = Vec::with_capacity(states.len() * 2);
+        for (i, s) in states.iter().enumerate() {
+            if i > 0 {
+                let a = states[i - 1];
+                let d = (s.x_mm - a.x_mm).hypot(s.y_mm - a.y_mm);
+                let (ua, ub) = (axis(&a), axis(s));
+                let turn = angle_between(ua, ub);
+                let n = (d / self.step_mm)
+                    .max(turn / self.step_rad)
+                    .max((s.h_mm - a.h_mm).abs() / self.step_h_mm)
+                    .ceil()
+                    .clamp(1.0, 1e6) as usize;
+                for k in 1..n {
+                    let f = k as f64 / n as f64;
+                    let (alpha, beta) = from_axis(slerp(ua, ub, turn, f), a.beta_rad, s.beta_rad, f);
+                    let p = TrackPoint {
+                        x_mm: a.x_mm + f * (s.x_mm - a.x_mm),
+                        y_mm: a.y_mm + f * (s.y_mm - a.y_mm),
+                        h_mm: a.h_mm + f * (s.h_mm - a.h_mm),
+                        alpha_rad: alpha,
+                        beta_rad: beta,
+                    };
+                    out.push(Sample { p, vertex: None });
+                }
+            }
+            out.push(Sample { p: *s, vertex: Some(i) });
+        }
+        out
+    }
+
+    /// The footprints the brush leaves moving through `states` (one stroke, or a whole executed
+    /// path with lifts in it: states with `h ≤ 0` are off the paper).
+    ///
+    /// `extrapolation` is passed to the profile; a press it refuses leaves no footprint and
+    /// its direction is `None`.
+    pub fn sweep(&self, profile: &BrushProfile, states: &[TrackPoint], extrapolation: Extrapolation) -> Sweep {
+        let samples = self.samples(states);
+        let mut directions = vec![None; states.len()];
+        let mut stamps = Vec::with_capacity(samples.len());
+        // The pressed path since touch-down (positions), and the current direction.
+        let mut history: Vec<(f64, f64)> = Vec::new();
+        let mut last: Option<f64> = None;
+        for (i, s) in samples.iter().enumerate() {
+            let p = s.p;
+            if !(p.h_mm > 0.0) {
+                history.clear();
+                last = None;
+                continue;
+            }
+            let here = (p.x_mm, p.y_mm);
+            let Ok(len) = footprint_length(profile, &p, extrapolation) else {
+                history.push(here);
+                continue;
+            };
+            let dir = if self.is_tilted(&p) {
+                p.beta_rad
+            } else {
+                self.dragged(&history, here, self.trail_reach * len)
+                    .or(last)
+                    .or_else(|| self.ahead(&samples[i..], here))
+                    .unwrap_or(FRAC_PI_2)
+            };
+            last = Some(dir);
+            history.push(here);
+            if let Some(v) = s.vertex {
+                directions[v] = Some(dir);
+            }
+            stamps.push(TrackPoint { beta_rad: dir, ..p });
+        }
+        Sweep { stamps, directions }
+    }
+
+    /// An upright brush's direction from its pressed history: towards the first history point
+    /// (walking back) at least `reach` away, else the farthest if it is `min_motion_mm` away.
+    fn dragged(&self, history: &[(f64, f64)], here: (f64, f64), reach: f64) -> Option<f64> {
+        let mut far = (0.0f64, None);
+        for &q in history.iter().rev() {
+            let d = (q.0 - here.0).hypot(q.1 - here.1);
+            if d >= reach {
+                return Some(direction(here, q));
+            }
+            if d > far.0 {
+                far = (d, Some(q));
+            }
+        }
+        match far {
+            (d, Some(q)) if d >= self.min_motion_mm => Some(direction(here, q)),
+            _ => None,
+        }
+    }
+
+    /// At touch-down: opposite to the first `min_motion_mm` of the coming pressed motion.
+    fn ahead(&self, rest: &[Sample], here: (f64, f64)) -> Option<f64> {
+        for s in rest.iter().skip(1) {
+            if !(s.p.h_mm > 0.0) {
+                return None;
+            }
+            let q = (s.p.x_mm, s.p.y_mm);
+            if (q.0 - here.0).hypot(q.1 - here.1) >= self.min_motion_mm {
+                return Some(direction(q, here));
+            }
+        }
+        None
+    }
+
+    /// The footprints of a whole track, stroke by stroke (a lift between strokes): each stroke's
+    /// stamps form one stroke of the result.
+    pub fn sweep_track(&self, profile: &BrushProfile, track: &Track, extrapolation: Extrapolation) -> Track {
+        Track {
+            strokes: track
+                .strokes
+                .iter()
+                .map(|s| Stroke { points: self.sweep(profile, &s.points, extrapolation).stamps })
+                .collect(),
+        }
+    }
+
+    /// Track points with each `β` set to the direction the model gives their footprint (the
+    /// lean direction where tilted). A state that leaves no footprint (`h ≤ 0`) takes the
+    /// direction of the next one that does (so a tilted brush turns its wrist while it is off
+    /// the paper), or of the previous one at the end.
+    pub fn with_directions(
+        &self,
+        profile: &BrushProfile,
+        states: &[TrackPoint],
+        extrapolation: Extrapolation,
+    ) -> Vec<TrackPoint> {
+        let dirs = self.sweep(profile, states, extrapolation).directions;
+        let mut out = states.to_vec();
+        let mut next: Option<f64> = None;
+        for i in (0..out.len()).rev() {
+            match dirs[i] {
+                Some(d) => {
+                    out[i].beta_rad = d;
+                    next = Some(d);
+                }
+                None => {
+                    if let Some(d) = next {
+                        out[i].beta_rad = d;
+                    }
+                }
+            }
+        }
+        let mut prev: Option<f64> = None;
+        for i in 0..out.len() {
+            if dirs[i].is_some() {
+                prev = Some(out[i].beta_rad);
+            } else if !dirs[i..].iter().any(Option::is_some) {
+                if let Some(d) = prev {
+                    out[i].beta_rad = d;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The footprint length `lh + lt` of a press, mm.
+fn footprint_length(profile: &BrushProfile, p: &TrackPoint, ex: Extrapolation) -> Result<f64, ProfileError> {
+    profile.predict_oriented(&Press::new(p.h_mm, p.alpha_rad, 0.0), ex).map(|f| f.length_mm())
+}
+
+fn direction(from: (f64, f64), to: (f64, f64)) -> f64 {
+    (to.1 - from.1).atan2(to.0 - from.0)
+}
+
+/// The tool axis (holder → tip) of a state in the paper frame, z into the paper.
+fn axis(p: &TrackPoint) -> [f64; 3] {
+    let (s, c) = p.alpha_rad.sin_cos();
+    [s * p.beta_rad.cos(), s * p.beta_rad.sin(), c]
+}
+
+fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let dot = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).clamp(-1.0, 1.0);
+    let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt().atan2(dot)
+}
+
+/// Great-circle interpolation between unit vectors `a` and `b` (`turn` apart) at fraction `f`.
+fn slerp(a: [f64; 3], b: [f64; 3], turn: f64, f: f64) -> [f64; 3] {
+    if turn < 1e-9 {
+        return a;
+    }
+    let (wa, wb) = (((1.0 - f) * turn).sin() / turn.sin(), (f * turn).sin() / turn.sin());
+    if !(wa.is_finite() && wb.is_finite()) {
+        // Opposite axes: no unique great circle (never the case for tilts below 90°).
+        return if f < 0.5 { a } else { b };
+    }
+    [wa * a[0] + wb * b[0], wa * a[1] + wb * b[1], wa * a[2] + wb * b[2]]
+}
+
+/// `(α, β)` of a tool axis; for an axis along the normal β is interpolated between the ends'.
+fn from_axis(v: [f64; 3], beta_a: f64, beta_b: f64, f: f64) -> (f64, f64) {
+    let horiz = v[0].hypot(v[1]);
+    let alpha = horiz.atan2(v[2]);
+    let beta = if horiz > 1e-12 { v[1].atan2(v[0]) } else { beta_a + f * wrap(beta_b - beta_a) };
+    (alpha, beta)
+}
+
+/// An angle wrapped into (−π, π].
+pub fn wrap(a: f64) -> f64 {
+    let t = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    if t <= -std::f64::consts::PI { t + std::f64::consts::TAU } else { t }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pt(x: f64, y: f64, h: f64) -> TrackPoint {
+        TrackPoint { x_mm: x, y_mm: y, h_mm: h, alpha_rad: 0.0, beta_rad: 0.0 }
+    }
+
+    fn pen1() -> BrushProfile {
+        BrushProfile::builtin("pen1").unwrap()
+    }
+
+    #[test]
+    fn an_upright_brush_trails_its_motion() {
+        let m = ForwardModel::default();
+        let path = [pt(0.0, 0.0, 15.0), pt(30.0, 0.0, 15.0)];
+        let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
+        // Moving along +x, the tip points back along −x (β = ±π) everywhere, touch-down included.
+        for st in &s.stamps {
+            assert!((wrap(st.beta_rad - std::f64::consts::PI)).abs() < 1e-9, "{}", st.beta_rad);
+        }
+        assert!(s.stamps.len() >= 300, "sampled every 0.1 mm: {}", s.stamps.len());
+    }
+
+    #[test]
+    fn a_reverse_entry_points_the_tip_ahead_until_the_brush_passes_it() {
+        let m = ForwardModel::default();
+        // Touch down at x = 10, press back to 0, then forward to 40.
+        let path = [pt(10.0, 0.0, 12.0), pt(0.0, 0.0, 12.0), pt(40.0, 0.0, 12.0)];
+        let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
+        let dirs = s.directions;
+        // Backward move: tip ahead (+x, β = 0).
+        assert!(wrap(dirs[0].unwrap()).abs() < 1e-9);
+        assert!(wrap(dirs[1].unwrap()).abs() < 1e-9);
+        // Far along the forward move: trailing (β = π).
+        assert!((wrap(dirs[2].unwrap()) - std::f64::consts::PI).abs() < 1e-9);
+        // Just after the reversal the tip is still ahead (it lies on the backward path).
+        let reach = TRAIL_REACH * 1.25 * 12.0;
+        let early = s.stamps.iter().find(|p| p.x_mm > 0.5 && p.x_mm < 1.0 && wrap(p.beta_rad).abs() < 1e-9);
+        assert!(early.is_some());
+        // Once past the reach the tip trails.
+        assert!(
+            s.stamps
+                .iter()
+                .rev()
+                .take_while(|p| p.x_mm > reach + 0.2)
+                .all(|p| (wrap(p.beta_rad).abs() - std::f64::consts::PI).abs() < 1e-9)
+        );
+    }
+
+    #[test]
+    fn a_tilted_brush_points_where_it_leans_and_turns_continuously() {
+        let m = ForwardModel::default();
+        let a = 5f64.to_radians();
+        let p0 = TrackPoint { x_mm: 0.0, y_mm: 0.0, h_mm: 15.0, alpha_rad: a, beta_rad: 0.0 };
+        let p1 = TrackPoint { x_mm: 0.15, y_mm: 0.0, h_mm: 15.0, alpha_rad: a, beta_rad: FRAC_PI_2 };
+        let s = m.sweep(&pen1(), &[p0, p1], Extrapolation::Refuse);
+        assert_eq!(s.directions, vec![Some(0.0), Some(FRAC_PI_2)]);
+        // A quarter turn of the lean direction at 5° tilt is a 7° turn of the tool axis: at most
+        // 0.5° per sample, so the wrist turn leaves ≥ 14 footprints in between, in order.
+        assert!(s.stamps.len() >= 15, "{}", s.stamps.len());
+        assert!(s.stamps.windows(2).all(|w| w[1].beta_rad >= w[0].beta_rad - 1e-12));
+    }
+
+    #[test]
+    fn lifting_forgets_the_drag_and_leaves_nothing() {
+        let m = ForwardModel::default();
+        let path = [
+            pt(0.0, 0.0, 12.0),
+            pt(10.0, 0.0, 12.0),
+            pt(10.0, 0.0, 0.0),
+            pt(0.0, 0.0, 0.0),
+            pt(0.0, 0.0, 12.0),
+            pt(0.0, 10.0, 12.0),
+        ];
+        let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
+        assert!(s.stamps.iter().all(|p| p.h_mm > 0.0));
+        assert_eq!(s.directions[3], None);
+        // Pressed again at the origin and moving down the page: trails upwards (β = −π/2),
+        // from the touch-down on.
+        assert!((s.directions[4].unwrap() + FRAC_PI_2).abs() < 1e-9);
+        let dirs = m.with_directions(&pen1(), &path, Extrapolation::Refuse);
+        assert!((dirs[3].beta_rad + FRAC_PI_2).abs() < 1e-9, "off-paper states take the next direction");
+    }
+
+    #[test]
+    fn a_press_without_motion_keeps_its_direction() {
+        let m = ForwardModel::default();
+        let path = [pt(0.0, 0.0, 12.0), pt(0.0, 5.0, 12.0), pt(0.0, 5.0, 18.0)];
+        let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
+        assert!((s.directions[2].unwrap() + FRAC_PI_2).abs() < 1e-9);
+    }
+}
