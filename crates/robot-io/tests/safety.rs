@@ -568,3 +568,33 @@ fn program_helpers_measure_depth_along_the_paper_normal() {
     assert!((q[0] - 10.0).abs() < 1e-9 && (q[1] - 20.0).abs() < 1e-9);
     assert_eq!(&up.0[3..], &p.0[3..]);
 }
+
+#[test]
+fn the_robot_json_fixture_spells_out_the_defaults() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/robot.json");
+    let mut c = RobotConfig::load(&path).unwrap();
+    let d = RobotConfig::default();
+    // Angles written in decimal may differ from the constants in the last bit.
+    for (a, b) in [
+        (&mut c.approach.max_angle_rad, d.approach.max_angle_rad),
+        (&mut c.limits.max_tilt_rad, d.limits.max_tilt_rad),
+        (&mut c.limits.alpha_tolerance_rad, d.limits.alpha_tolerance_rad),
+    ] {
+        assert!((*a - b).abs() < 1e-12, "{a} vs {b}");
+        *a = b;
+    }
+    assert_eq!(c, d);
+    // Unknown fields are refused, naming them.
+    let dir = tempfile_dir();
+    let bad = dir.join("robot.json");
+    std::fs::write(&bad, r#"{"limits": {"max_tilt_deg": 5}}"#).unwrap();
+    let e = RobotConfig::load(&bad).unwrap_err().to_string();
+    assert!(e.contains("robot.json") && e.contains("max_tilt_deg"), "{e}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn tempfile_dir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("robot-io-safety-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
