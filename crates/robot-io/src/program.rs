@@ -410,7 +410,7 @@ pub fn check_approach(frame: &PaperFrame, approach: &Approach) -> Result<f64, Ro
     let n = frame.iso.rotation * Vector3::z();
     let want = Vector3::from(approach.into_paper_base).normalize();
     let angle = n.dot(&want).clamp(-1.0, 1.0).acos();
-    if !(angle <= approach.max_angle_rad) {
+    if angle > approach.max_angle_rad {
         return Err(RobotError::Unsafe {
             stroke: None,
             point: None,
