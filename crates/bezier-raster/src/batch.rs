@@ -1,6 +1,6 @@
 //! Many footprints: parallel batches and the per-pixel-max compositor.
 
-use brush_model::{BrushProfile, Extrapolation, Footprint, PointMm, ProfileError, Track};
+use brush_model::{BrushProfile, Extrapolation, Footprint, ForwardModel, PointMm, ProfileError, Track, TrackPoint};
 use rayon::prelude::*;
 
 use crate::coverage::Coverage;
@@ -76,26 +76,63 @@ impl Compositor {
     }
 }
 
-/// The stamps of a brush track: each point's footprint (from `profile`, with the point's β as a
-/// writing direction, see [`BrushProfile::predict_oriented`]) at its anchor, in writing order.
+/// The stamps of a brush track: the footprints the forward model of the moving brush
+/// ([`ForwardModel`], docs/brush-model.md) leaves along each stroke's swept path, with their
+/// directions derived from the motion and tilt, in writing order. Points with `h ≤ 0` are off the
+/// paper; points and samples lighter than the profile's lightest calibrated press (the tip only
+/// touching, or the brush easing up or down) leave nothing when `extrapolation` refuses them.
 ///
 /// # Errors
-/// [`ProfileError`] for the first point the profile refuses.
+/// [`ProfileError`] for the first track point pressed at least the profile's lightest press that
+/// the profile refuses (too deep, or α out of range).
 pub fn track_stamps(
     track: &Track,
     profile: &BrushProfile,
     extrapolation: Extrapolation,
 ) -> Result<Vec<Stamp>, ProfileError> {
-    track
-        .points()
-        .map(|p| {
-            Ok(Stamp {
-                footprint: profile.predict_oriented(&p.press(), extrapolation)?,
+    // Lighter than the calibrated range (the tip only touching while the brush turns over) is
+    // no error: such a sample leaves no footprint.
+    for p in track.points().filter(|p| p.h_mm >= profile.ranges.h_mm.min) {
+        profile.predict_oriented(&p.press(), extrapolation)?;
+    }
+    Ok(track.strokes.iter().flat_map(|s| sweep_stamps(&s.points, profile, extrapolation)).collect())
+}
+
+/// The stamps the forward model leaves along one sequence of brush states (a stroke, or a
+/// whole executed path with lifts in it: states with `h ≤ 0` are off the paper). Presses the
+/// profile refuses leave nothing.
+pub fn sweep_stamps(states: &[TrackPoint], profile: &BrushProfile, extrapolation: Extrapolation) -> Vec<Stamp> {
+    ForwardModel::default()
+        .sweep(profile, states, extrapolation)
+        .stamps
+        .iter()
+        .filter_map(|p| {
+            Some(Stamp {
+                footprint: profile.predict_oriented(&p.press(), extrapolation).ok()?,
                 anchor: p.anchor(),
                 beta_rad: p.beta_rad,
             })
         })
         .collect()
+}
+
+/// Renders stamps into a `width × height` image whose top-left corner is paper point
+/// `origin_mm`, at `px_per_mm`, composing by per-pixel max.
+pub fn render_stamps(
+    stamps: &[Stamp],
+    model: &dyn StrokeModel,
+    origin_mm: PointMm,
+    px_per_mm: f64,
+    width: u32,
+    height: u32,
+) -> Coverage {
+    let mut c = Compositor::new(width, height, px_per_mm);
+    for s in stamps {
+        let shifted =
+            Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..*s };
+        c.stamp(model, &shifted);
+    }
+    c.into_image()
 }
 
 /// Renders a track into a `width × height` image whose top-left corner is paper point
@@ -114,11 +151,5 @@ pub fn render_track(
     width: u32,
     height: u32,
 ) -> Result<Coverage, ProfileError> {
-    let mut c = Compositor::new(width, height, px_per_mm);
-    for s in track_stamps(track, profile, extrapolation)? {
-        let shifted =
-            Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..s };
-        c.stamp(model, &shifted);
-    }
-    Ok(c.into_image())
+    Ok(render_stamps(&track_stamps(track, profile, extrapolation)?, model, origin_mm, px_per_mm, width, height))
 }

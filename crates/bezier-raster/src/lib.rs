@@ -42,7 +42,7 @@ pub mod dataset;
 pub mod models;
 pub mod raster;
 
-pub use batch::{Compositor, Stamp, render_batch, render_track, track_stamps};
+pub use batch::{Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps};
 pub use canvas::StrokeCanvas;
 pub use coverage::{Coverage, RasterError};
 pub use dataset::{DatasetSpec, Sample};

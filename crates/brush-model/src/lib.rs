@@ -31,8 +31,8 @@ pub mod regression;
 pub mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
-pub use motion::{ForwardModel, Sweep};
 pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements};
+pub use motion::{ForwardModel, Sweep};
 pub use profile::{BrushProfile, Clamp, Extrapolation, InverseH, PressRanges, ProfileError, Range, Source};
 pub use regression::{FitError, FitReport, Form, LinearModel, OutputFit, Terms, fit, fit_general, fit_paper};
 pub use units::{Brush, PointMm, Press, Stroke, Track, TrackPoint, deg_to_rad, rad_to_deg};

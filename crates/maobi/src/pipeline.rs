@@ -3,8 +3,10 @@
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use bezier_raster::{Coverage, ModelKind, render_track};
-use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
+use bezier_raster::{Coverage, ModelKind, render_stamps, render_track, sweep_stamps};
+use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
 use stroke_metrics::GrayRef;
 use trajectory::{
@@ -30,6 +32,9 @@ pub struct WriteOptions {
     pub spacing_mm: f64,
     /// Also score an unconstrained run (footprints sized freely from the glyph).
     pub upper_bound: bool,
+    /// Also run the track as a robot program (default paper frame and `robot.json`, the
+    /// simulator's motion) and score what it writes.
+    pub execute: bool,
 }
 
 impl Default for WriteOptions {
@@ -41,6 +46,7 @@ impl Default for WriteOptions {
             alpha_rad: 0.0,
             spacing_mm: trajectory::DEFAULT_SPACING_MM,
             upper_bound: true,
+            execute: true,
         }
     }
 }
@@ -128,6 +134,11 @@ pub struct CharReport {
     pub clamped_high: usize,
     /// The same scores for footprints sized freely from the glyph (upper bound of the model).
     pub upper_bound: Option<Similarity>,
+    /// What the robot would write (the program executed as the simulator moves, through the
+    /// forward model) against the glyph: the headline figure.
+    pub executed: Option<Similarity>,
+    /// The plan's render against the executed render (how far the plan can be trusted).
+    pub agreement: Option<Similarity>,
 }
 
 /// One written character.
@@ -142,6 +153,50 @@ pub struct CharResult {
     pub render: Coverage,
     /// The reference glyph at the same scale.
     pub reference: Coverage,
+    /// What the executed program writes, same framing (when [`WriteOptions::execute`]).
+    pub executed: Option<Coverage>,
+    /// The executed brush states on the paper (when [`WriteOptions::execute`]).
+    pub executed_states: Option<Vec<TrackPoint>>,
+}
+
+/// The paper frame `maobi write` runs its program on: a level sheet (the simulator's), placed so
+/// the char box's centre lies in front of the AUBO-i5 at base (0.45, 0.05, 0.05) m, and large
+/// enough for the box.
+pub fn level_frame_for(b: &CharBox) -> PaperFrame {
+    let (cx, cy) = (b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0);
+    let mut f = PaperFrame::level([0.45 - cx / 1000.0, 0.05 + cy / 1000.0, 0.05], [0.0, 0.0]);
+    f.bounds_mm = [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm];
+    f
+}
+
+/// Builds the robot program of a track (checked like `maobi robot check`) and executes it as the
+/// simulator does; returns the executed brush states on the paper.
+///
+/// # Errors
+/// When the program fails the safety check.
+pub fn execute_track(
+    track: &Track,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+) -> Result<Vec<TrackPoint>> {
+    let (program, _) = build_program(track, profile, frame, cfg).context("the track fails `robot check`")?;
+    let trace = robot_io::sim::execute_program(&program);
+    Ok(robot_io::sim::trace_to_states(&trace, frame))
+}
+
+/// Renders brush states (an executed path) through the forward model over a char box onto a
+/// `size²` image of the box.
+pub fn render_states(
+    states: &[TrackPoint],
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Coverage {
+    let stamps = sweep_stamps(states, profile, ex);
+    render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
 }
 
 /// Renders a track over a char box onto a `size²` image of the box.
@@ -189,6 +244,14 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     } else {
         None
     };
+    let (executed, agreement, executed_img, executed_states) = if opts.execute {
+        let states = execute_track(&built.track, profile, &level_frame_for(&char_box), &RobotConfig::default())
+            .with_context(|| format!("{}: executing the plan", p.glyph.ch))?;
+        let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size);
+        (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
+    } else {
+        (None, None, None, None)
+    };
     let report = CharReport {
         char: p.glyph.ch.to_string(),
         source: p.glyph.source.kind(),
@@ -206,6 +269,27 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         clamped_low: built.clamped_low,
         clamped_high: built.clamped_high,
         upper_bound,
+        executed,
+        agreement,
     };
-    Ok(CharResult { report, track: built.track, char_box, render, reference })
+    Ok(CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states })
+}
+
+/// Images of one height side by side, left to right, with a 4 px white gap between them (for
+/// reference | plan | executed).
+pub fn side_by_side(images: &[&Coverage]) -> Coverage {
+    let gap = 4u32;
+    let h = images.iter().map(|c| c.height()).max().unwrap_or(0);
+    let w = images.iter().map(|c| c.width()).sum::<u32>() + gap * images.len().saturating_sub(1) as u32;
+    let mut out = Coverage::new(w, h);
+    let mut x0 = 0usize;
+    let ow = w as usize;
+    for c in images {
+        let cw = c.width() as usize;
+        for y in 0..c.height() as usize {
+            out.data_mut()[y * ow + x0..y * ow + x0 + cw].copy_from_slice(&c.data()[y * cw..(y + 1) * cw]);
+        }
+        x0 += cw + gap as usize;
+    }
+    out
 }

@@ -116,7 +116,8 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     std::thread::sleep(std::time::Duration::from_millis(300));
     let _ = sim.kill();
     let _ = sim.wait();
-    // The executed path renders back to (nearly) the planned image.
+    // The executed path renders back to the planned image: the same forward model sees the same
+    // motion (the stroke cut by the drop is written again over itself).
     let img = dir.path().join("trace.png");
     ok(&maobi(&[
         "robot",
@@ -133,7 +134,7 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     ]));
     let render = track.parent().unwrap().join("render.png");
     let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["compare", s(&render), s(&img), "--json"]))).unwrap();
-    assert!(j["csim"].as_f64().unwrap() > 0.85, "{j}");
+    assert!(j["csim"].as_f64().unwrap() > 0.97, "{j}");
     // The Lua script goes to the script port framed by \r\n\r\n.
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let addr = listener.local_addr().unwrap().to_string();
@@ -162,7 +163,7 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
             "-o",
             s(&dir.path().join("t.png")),
         ]),
-        "bad-trace.json: not a simulator trace",
+        "bad-trace.json:1: not a simulator trace",
     );
     // Dry run connects to nothing.
     ok(&maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "192.0.2.1", "--dry-run"]));

@@ -2,13 +2,15 @@
 //! the character image and composed by per-pixel max.
 
 use bezier_raster::{Coverage, StrokeCanvas};
-use brush_model::{PointMm, Press, Track};
+use brush_model::{ForwardModel, PointMm, Press, Track};
 
 use crate::NeuralGenError;
 use crate::model::Generator;
 
 /// Renders `track` into a `width × height` image whose top-left corner is paper point
-/// `origin_mm`, at `px_per_mm`. Each point's footprint is generated for its press with β reduced
+/// `origin_mm`, at `px_per_mm`. The track goes through the forward model of the moving brush
+/// first (`brush_model::ForwardModel`, as every renderer does), so the footprints are those of
+/// the swept path with directions derived from motion and tilt. Each footprint is generated for its press with β reduced
 /// into the calibrated range (as `BrushProfile::predict_oriented` does; the generator was
 /// trained there), then rotated to the point's β while being resampled (bilinear) onto the
 /// image; footprints compose by per-pixel max. Presses are generated `batch` at a time.
@@ -28,7 +30,8 @@ pub fn render_track(
     let s = g.config.size as usize;
     let canvas = StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm);
     let r = g.config.ranges;
-    let points: Vec<_> = track.points().copied().collect();
+    let swept = ForwardModel::default().sweep_track(&g.config.profile, track, brush_model::Extrapolation::Allow);
+    let points: Vec<_> = swept.points().copied().collect();
     for chunk in points.chunks(batch.max(1)) {
         let shaped: Vec<Press> = chunk
             .iter()

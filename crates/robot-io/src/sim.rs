@@ -29,14 +29,116 @@ pub struct Faults {
 /// The robot name the simulator answers to.
 pub const SIM_ROBOT: &str = "rob1";
 
-/// One executed move in the trace.
+/// One sample of the executed TCP path.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TraceEntry {
-    /// `moveLine` or `moveJoint`.
+    /// Time since the simulator started executing, s (at the commanded speeds).
+    #[serde(default)]
+    pub t_s: f64,
+    /// The move this sample belongs to (`moveLine` or `moveJoint`).
     pub kind: TraceKind,
-    /// TCP pose reached.
+    /// TCP pose at this instant.
     pub pose: Pose,
 }
+
+/// Largest TCP travel between two trace samples, m.
+pub const TRACE_STEP_M: f64 = 0.2e-3;
+/// Largest time between two trace samples, s.
+pub const TRACE_STEP_S: f64 = 0.005;
+/// Largest tool rotation between two trace samples, rad.
+pub const TRACE_STEP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// Executes a linear move as the simulator does: the TCP position moves in a straight line and
+/// the orientation turns by slerp, both at constant speed `v_m_s` along the path (accelerations
+/// and blending are not modelled: a stated simplification, see docs/robot.md). Returns the
+/// samples after `from` up to and including `to`, at most [`TRACE_STEP_M`] of travel,
+/// [`TRACE_STEP_RAD`] of rotation and [`TRACE_STEP_S`] apart, with their times after `t0_s`.
+pub fn line_motion(from: &Pose, to: &Pose, v_m_s: f64, t0_s: f64) -> Vec<TraceEntry> {
+    let (a, b) = (from.to_iso(), to.to_iso());
+    let d = (b.translation.vector - a.translation.vector).norm();
+    let turn = a.rotation.angle_to(&b.rotation);
+    let v = if v_m_s > 0.0 { v_m_s } else { 1.0 };
+    // Rotations in place run at an angular speed of v per 0.1 m (a stated choice).
+    let duration = (d / v).max(turn * 0.1 / v);
+    let n = (d / TRACE_STEP_M).max(turn / TRACE_STEP_RAD).max(duration / TRACE_STEP_S).ceil().clamp(1.0, 1e7) as usize;
+    (1..=n)
+        .map(|k| {
+            let f = k as f64 / n as f64;
+            let pose = if k == n {
+                *to
+            } else {
+                let t = a.translation.vector.lerp(&b.translation.vector, f);
+                let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 {
+                    a.rotation
+                } else {
+                    b.rotation
+                });
+                Pose::from_iso(&nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(t), r))
+            };
+            TraceEntry { t_s: t0_s + f * duration, kind: TraceKind::Line, pose }
+        })
+        .collect()
+}
+
+/// Executes a joint move: joints interpolated linearly at joint speed `v_rad_s`, the TCP pose by
+/// forward kinematics, sampled as [`line_motion`].
+pub fn joint_motion(
+    from: &[f64; 6],
+    to: &[f64; 6],
+    v_rad_s: f64,
+    tcp: &nalgebra::Isometry3<f64>,
+    t0_s: f64,
+) -> Vec<TraceEntry> {
+    let dq = from.iter().zip(to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
+    let duration = dq / if v_rad_s > 0.0 { v_rad_s } else { 1.0 };
+    let n = (dq / TRACE_STEP_RAD).max(duration / TRACE_STEP_S).ceil().clamp(1.0, 1e7) as usize;
+    (1..=n)
+        .map(|k| {
+            let f = k as f64 / n as f64;
+            let q: [f64; 6] = std::array::from_fn(|j| from[j] + f * (to[j] - from[j]));
+            TraceEntry {
+                t_s: t0_s + f * duration,
+                kind: TraceKind::Joint,
+                pose: Pose::from_iso(&kinematics::forward(&q, tcp)),
+            }
+        })
+        .collect()
+}
+
+/// Executes a whole program without a connection, as the simulator would if it were sent: the
+/// first joint move from the simulator's home position, then every move in order. Returns the
+/// executed path ([`line_motion`], [`joint_motion`]).
+pub fn execute_program(program: &crate::program::Program) -> Vec<TraceEntry> {
+    let tcp = program.tcp();
+    let mut q = HOME_JOINTS;
+    let mut out = Vec::new();
+    let mut pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
+    let mut t = 0.0;
+    let f = program.speed_fraction;
+    let mut run = |m: &crate::program::Move, out: &mut Vec<TraceEntry>| {
+        let samples = match *m {
+            crate::program::Move::Joint { q: q1, v, .. } => {
+                let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                q = q1;
+                s
+            }
+            crate::program::Move::Line { pose: p1, v, .. } => line_motion(&pose, &p1, v * f, t),
+        };
+        if let Some(last) = samples.last() {
+            pose = last.pose;
+            t = last.t_s;
+        }
+        out.extend(samples);
+    };
+    run(&program.start, &mut out);
+    for m in program.strokes.iter().flat_map(|s| s.moves()) {
+        run(m, &mut out);
+    }
+    out
+}
+
+/// The simulator's joint positions at start, rad.
+pub const HOME_JOINTS: [f64; 6] = [0.0, 0.3, 1.6, 0.3, 1.57, 0.0];
 
 /// Kind of executed move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -55,9 +157,19 @@ struct State {
     joints: [f64; 6],
     pose: Pose,
     trace: Vec<TraceEntry>,
+    time_s: f64,
     moves_seen: usize,
     dropped: bool,
     faults: Faults,
+}
+
+impl State {
+    fn record(&mut self, samples: Vec<TraceEntry>) {
+        if let Some(last) = samples.last() {
+            self.time_s = last.t_s;
+        }
+        self.trace.extend(samples);
+    }
 }
 
 /// A running simulator.
@@ -78,7 +190,7 @@ impl Simulator {
         let listener = TcpListener::bind(bind).map_err(|e| RobotError::Io(format!("{bind}: {e}")))?;
         let addr = listener.local_addr().map_err(|e| RobotError::Io(e.to_string()))?;
         listener.set_nonblocking(true).map_err(|e| RobotError::Io(e.to_string()))?;
-        let q0 = [0.0, 0.3, 1.6, 0.3, 1.57, 0.0];
+        let q0 = HOME_JOINTS;
         let tcp = tcp_iso(0.0);
         let state = Arc::new(Mutex::new(State {
             tcp_offset_m: 0.0,
@@ -86,6 +198,7 @@ impl Simulator {
             joints: q0,
             pose: Pose::from_iso(&kinematics::forward(&q0, &tcp)),
             trace: Vec::new(),
+            time_s: 0.0,
             moves_seen: 0,
             dropped: false,
             faults,
@@ -110,6 +223,12 @@ impl Simulator {
     /// The executed TCP path so far.
     pub fn trace(&self) -> Vec<TraceEntry> {
         self.state.lock().expect("sim state").trace.clone()
+    }
+
+    /// The executed TCP path from sample `from` on (for appending to a trace file as it grows).
+    pub fn trace_since(&self, from: usize) -> Vec<TraceEntry> {
+        let st = self.state.lock().expect("sim state");
+        st.trace.get(from..).map(<[TraceEntry]>::to_vec).unwrap_or_default()
     }
 
     /// Stops accepting connections.
@@ -285,18 +404,19 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
                 if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
                     return ok(&id, json!(UNREACHABLE));
                 }
+                let samples = joint_motion(&st.joints, &q, vv * st.speed_fraction, &tcp, st.time_s);
                 st.joints = q;
                 st.pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
-                let pose = st.pose;
-                st.trace.push(TraceEntry { kind: TraceKind::Joint, pose });
+                st.record(samples);
             } else {
                 let Some(p) = params.first().and_then(numbers::<6>) else { return ok(&id, json!(INVALID_ARGUMENT)) };
                 let pose = Pose(p);
                 let seed = st.joints;
                 let Some(q) = kinematics::inverse(&pose, &tcp, Some(&seed)) else { return ok(&id, json!(UNREACHABLE)) };
+                let samples = line_motion(&st.pose, &pose, vv * st.speed_fraction, st.time_s);
                 st.joints = q;
                 st.pose = pose;
-                st.trace.push(TraceEntry { kind: TraceKind::Line, pose });
+                st.record(samples);
             }
             ok(&id, json!(0))
         }
@@ -304,54 +424,24 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     }
 }
 
-/// Turns an executed TCP path back into a brush track on the paper, so it can be rendered and
-/// compared with the planned render: poses below the paper surface are presses (depth = H), the
-/// tool axis gives α and, when tilted, β; for an upright brush (α ≈ 0) β cannot be seen in the
-/// pose and is taken from the motion as a dragged brush would leave it: the footprint points back
-/// at the executed path point one footprint length behind (`footprint_len(h)`, mm), or at the
-/// stroke's first point when the stroke is shorter, and forward for a stroke's first point.
-/// Consecutive presses form a stroke; any pose at or above the paper ends it.
-pub fn trace_to_track(
-    trace: &[TraceEntry],
-    frame: &crate::frame::PaperFrame,
-    footprint_len: impl Fn(f64) -> f64,
-) -> brush_model::Track {
-    use brush_model::{Stroke, Track, TrackPoint};
-    let mut strokes: Vec<Stroke> = Vec::new();
-    let mut cur: Vec<TrackPoint> = Vec::new();
+/// Turns an executed TCP path back into commanded brush states on the paper, for the forward
+/// model (`brush_model::ForwardModel`): the position where the tool axis meets the paper, the
+/// depth below it (H; negative above the paper, where the brush leaves nothing), the tilt α of
+/// the tool axis from the paper normal and the direction β it leans towards. Joint moves are
+/// included (they happen above the paper). The result is one sequence: the forward model ends a
+/// contact wherever H ≤ 0.
+pub fn trace_to_states(trace: &[TraceEntry], frame: &crate::frame::PaperFrame) -> Vec<brush_model::TrackPoint> {
     let inv = frame.iso.rotation.inverse();
-    for t in trace.iter().filter(|t| t.kind == TraceKind::Line) {
-        let p = frame.to_paper(t.pose.position());
-        if p[2] <= 1e-6 {
-            if !cur.is_empty() {
-                strokes.push(Stroke { points: std::mem::take(&mut cur) });
-            }
-            continue;
-        }
-        let z = inv * (t.pose.to_iso().rotation * nalgebra::Vector3::z());
-        let alpha = z.z.clamp(-1.0, 1.0).acos();
-        let beta = if alpha > 1e-6 { z.y.atan2(z.x) } else { f64::NAN };
-        cur.push(TrackPoint { x_mm: p[0], y_mm: p[1], h_mm: p[2], alpha_rad: alpha, beta_rad: beta });
-    }
-    if !cur.is_empty() {
-        strokes.push(Stroke { points: cur });
-    }
-    for s in &mut strokes {
-        let n = s.points.len();
-        for i in 0..n {
-            if s.points[i].beta_rad.is_nan() {
-                let here = s.points[i];
-                let len = footprint_len(here.h_mm);
-                let far = |q: &TrackPoint| (q.x_mm - here.x_mm).hypot(q.y_mm - here.y_mm) >= len;
-                let other = if i > 0 {
-                    s.points[..i].iter().rev().find(|q| far(q)).copied().unwrap_or(s.points[0])
-                } else {
-                    s.points[1..].iter().find(|q| far(q)).copied().or(s.points.get(n - 1).copied()).unwrap_or(here)
-                };
-                let (dx, dy) = (other.x_mm - here.x_mm, other.y_mm - here.y_mm);
-                s.points[i].beta_rad = if dx == 0.0 && dy == 0.0 { 0.0 } else { dy.atan2(dx) };
-            }
-        }
-    }
-    Track { strokes }
+    trace
+        .iter()
+        .map(|t| {
+            let p = frame.to_paper(t.pose.position());
+            let z = inv * (t.pose.to_iso().rotation * nalgebra::Vector3::z());
+            let alpha = z.z.clamp(-1.0, 1.0).acos();
+            let beta = if z.x.hypot(z.y) > 1e-12 { z.y.atan2(z.x) } else { 0.0 };
+            // Round-off of a pose at the surface must not count as contact.
+            let h = if p[2].abs() < 1e-6 { 0.0 } else { p[2] };
+            brush_model::TrackPoint { x_mm: p[0], y_mm: p[1], h_mm: h, alpha_rad: alpha, beta_rad: beta }
+        })
+        .collect()
 }

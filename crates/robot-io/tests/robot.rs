@@ -201,13 +201,26 @@ fn a_full_run_on_the_simulator_follows_the_track() {
     assert_eq!(report.reconnects, 0);
     let trace = sim.trace();
     assert_eq!(trace[0].kind, TraceKind::Joint);
-    // Every pressed pose of the program was executed, in order.
-    let pressed: Vec<Pose> =
-        trace.iter().filter(|t| t.kind == TraceKind::Line).map(|t| t.pose).filter(|p| p.0[2] < 0.05 - 0.01).collect();
-    assert_eq!(pressed.len(), 8);
+    // Every pressed pose of the program was reached, in order, and the motion between was
+    // executed continuously: samples at most 0.2 mm (and 5 ms) apart, in time order.
     let f = paper();
-    let first = f.to_paper(pressed[0].position());
-    assert!((first[0] - 40.0).abs() < 1e-9 && (first[1] - 60.0).abs() < 1e-9 && (first[2] - 15.0).abs() < 1e-9);
+    let targets: Vec<[f64; 3]> =
+        small_track().strokes.iter().flat_map(|s| s.points.iter().map(|p| [p.x_mm, p.y_mm, p.h_mm])).collect();
+    assert_eq!(targets.len(), 8);
+    let mut next = 0;
+    for t in trace.iter().filter(|t| t.kind == TraceKind::Line) {
+        let p = f.to_paper(t.pose.position());
+        if next < targets.len() && (0..3).all(|k| (p[k] - targets[next][k]).abs() < 1e-6) {
+            next += 1;
+        }
+    }
+    assert_eq!(next, 8, "all pressed targets reached in order");
+    for w in trace.windows(2).filter(|w| w[1].kind == TraceKind::Line) {
+        let (a, b) = (w[0].pose.position(), w[1].pose.position());
+        let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+        assert!(d <= robot_io::sim::TRACE_STEP_M + 1e-9, "a jump of {} mm", d * 1e3);
+        assert!(w[1].t_s >= w[0].t_s && w[1].t_s - w[0].t_s <= robot_io::sim::TRACE_STEP_S + 1e-9);
+    }
 }
 
 #[test]
@@ -246,8 +259,16 @@ fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
             (p[0] - 55.0).abs() < 1e-6 && (p[1] - 40.0).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
         })
         .unwrap();
-    // Before resuming, the brush went up to the safe height.
-    assert!(trace[..i_resume].iter().rev().take(3).any(|t| f.to_paper(t.pose.position())[2] < -10.0));
+    // Between the interrupted press and resuming, the brush went up to the safe height.
+    let i_cut = trace
+        .iter()
+        .position(|t| {
+            let p = f.to_paper(t.pose.position());
+            (p[0] - 55.0).abs() < 1e-6 && (p[1] - 55.0).abs() < 1e-6 && (p[2] - 15.0).abs() < 1e-6
+        })
+        .unwrap();
+    assert!(i_cut < i_resume);
+    assert!(trace[i_cut..i_resume].iter().any(|t| f.to_paper(t.pose.position())[2] < -10.0));
 }
 
 #[test]

@@ -1,8 +1,8 @@
 //! Centre lines with widths → a 5D brush track on the paper.
 
-use std::f64::consts::PI;
-
-use brush_model::{BrushProfile, Clamp, Extrapolation, PointMm, Press, ProfileError, Stroke, Track, TrackPoint};
+use brush_model::{
+    BrushProfile, Clamp, Extrapolation, ForwardModel, PointMm, Press, ProfileError, Stroke, Track, TrackPoint,
+};
 use kurbo::Point;
 use serde::{Deserialize, Serialize};
 
@@ -201,23 +201,38 @@ fn length_model(profile: &BrushProfile, alpha: f64, beta: f64) -> (f64, f64) {
     (at(1.0) - at(0.0), at(0.0))
 }
 
-/// The footprint points at the path point this fraction of its length behind the anchor (by
-/// straight-line distance). On the ten test characters: 0.35 → CSIM 0.875, 0.5 → 0.889,
-/// 0.6 → 0.891, 0.7 → 0.889, 1.0 → 0.862.
-pub const TRAIL_REACH: f64 = 0.4;
+/// Depth while the brush turns over at a stroke's head, mm: the tip touches the paper (so the
+/// hairs are dragged round) but presses far less than any calibrated press, so it leaves no
+/// footprint in the model (a real brush leaves at most a hairline there).
+pub const GLIDE_H_MM: f64 = 0.01;
 
 /// Builds the brush track of a character from its stroke centre lines.
 ///
+/// The track holds only what a robot can be told to do: where the brush is, how deep it
+/// presses and how it leans. Which way each footprint points follows from that motion through
+/// the forward model ([`brush_model::ForwardModel`], docs/brush-model.md), never set freely.
+///
 /// Per stroke: the centre line is split at its [`StrokePath::corners`] and each piece is
-/// resampled every `spacing_mm`. A piece starts with a *reverse entry* (逆锋: a press pointing
-/// forward along the piece, blunt root on its first point); while the path behind the brush is
-/// still shorter than a footprint, the presses keep pointing forward (root on the anchor, belly
-/// lh ahead, sized to the glyph's half-width there), so the start is inked at full width; from
-/// then on the footprints trail the motion: each points back at the path point
-/// [`TRAIL_REACH`] footprint lengths behind, so its tip lies on the stroke, and its belly (lh
-/// behind the anchor) is sized to the glyph's half-width there through the inverse model. On
-/// pieces too short for a forward press, points are pressed lighter or skipped so no tip reaches
-/// past the piece's ends; the brush stays down through the whole stroke.
+/// resampled every `spacing_mm`. A piece is written as a *reverse entry* (逆锋) and then forward:
+///
+/// 1. **Entry.** The brush touches down at the first station where a trailing footprint fits
+///    behind it (its length at most the straight distance back to the piece's start) and presses
+///    *backwards* to the start. Moving back, the hairs trail ahead, so the tip points forward as
+///    kaiti's blunt stroke heads want: the root on the station, the belly `lh` ahead sized to
+///    the glyph's half-width there, pressed lighter (or not at all) where the tip would reach
+///    past the piece's end.
+/// 2. **Turn.** At the start the brush eases up until only its tip touches ([`GLIDE_H_MM`], no
+///    ink), glides forward along the stroke to the first station where its lightest press fits
+///    behind it, and presses again: turning the hairs over under pressure would sweep the tail
+///    out behind the stroke's head.
+/// 3. **Writing.** Forward to the piece's end, the hairs trailing; each belly (`lh` behind the
+///    anchor) is sized to the glyph's half-width there through the inverse model, and no press
+///    is so long that its tail passes the piece's start (pressed lighter until it fits).
+///
+/// Between the pieces of a stroke the brush eases up in place and glides to the next entry, so
+/// the stroke stays one robot stroke (no jump with the brush down). With `alpha_rad` at or above
+/// the model's tilt threshold the brush leans the way the upright model would point each
+/// footprint (the wrist turns while the brush glides at h = 0).
 ///
 /// # Errors
 /// [`ProfileError`] if the profile cannot be inverted or predicts degenerate footprints.
@@ -230,24 +245,41 @@ pub fn build_track(
     let k = opts.char_box.mm_per_em();
     let mut counts = (0usize, 0usize);
     let mut strokes = Vec::with_capacity(paths.len());
+    // Directions as an upright brush would leave them (the tilt threshold out of reach).
+    let model = ForwardModel::default();
+    let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..model };
     for path in paths {
         if path.points.is_empty() {
             continue;
         }
         let pts: Vec<PointMm> = path.points.iter().map(|&p| opts.char_box.to_paper(p)).collect();
         let widths: Vec<f64> = path.half_widths.iter().map(|w| w * k).collect();
-        let mut points = Vec::new();
+        let mut points: Vec<TrackPoint> = Vec::new();
         let mut start = 0;
         for end in path.corners.iter().copied().filter(|&c| c > 0 && c + 1 < pts.len()).chain([pts.len() - 1]) {
             if end > start {
-                points.extend(placer.piece(&pts[start..=end], &widths[start..=end], &mut counts)?);
+                let piece = placer.piece(&pts[start..=end], &widths[start..=end], &mut counts)?;
+                if let (Some(last), Some(first)) = (points.last().copied(), piece.first().copied()) {
+                    // Ease up in place, glide to the next entry.
+                    points.push(TrackPoint { h_mm: 0.0, ..last });
+                    points.push(TrackPoint { h_mm: 0.0, ..first });
+                }
+                points.extend(piece);
                 start = end;
+            }
+        }
+        let mut points = dragged.with_directions(profile, &points, placer.extrapolation());
+        // A brush easing up in place keeps its lean; it turns while gliding to the next press.
+        for i in 1..points.len() {
+            let (a, b) = (points[i - 1], points[i]);
+            if b.h_mm <= 0.0 && a.h_mm > 0.0 && a.x_mm == b.x_mm && a.y_mm == b.y_mm {
+                points[i].beta_rad = a.beta_rad;
             }
         }
         strokes.push(Stroke { points });
     }
-    // Every footprint must be predictable (refused only if the profile is degenerate).
-    for p in strokes.iter().flat_map(|s| s.points.iter()) {
+    // Every pressed footprint must be predictable (refused only if the profile is degenerate).
+    for p in strokes.iter().flat_map(|s| s.points.iter()).filter(|p| p.h_mm >= placer.lowest) {
         profile.predict_oriented(&Press::new(p.h_mm, p.alpha_rad, p.beta_rad), placer.extrapolation())?;
     }
     Ok(BuiltTrack { track: Track { strokes }, clamped_low: counts.0, clamped_high: counts.1 })
@@ -312,6 +344,8 @@ impl<'a> Placer<'a> {
         Ok(out)
     }
 
+    /// The commanded states of one corner-free piece (see [`build_track`]): entry backwards,
+    /// turn, writing forwards. β is left at 0 for the forward model to fill in.
     fn piece(
         &self,
         pts: &[PointMm],
@@ -321,88 +355,70 @@ impl<'a> Placer<'a> {
         let (alpha, step) = (self.opts.alpha_rad, self.opts.spacing_mm);
         let s = arc_lengths(pts);
         let total = s[s.len() - 1];
-        let mut points = Vec::new();
-        // Reverse entry (逆锋起笔): the first press points forward, its blunt root on the first
-        // point and its belly lh inside, pressed no longer than the piece.
-        let (mut h0, _) = self.size_belly(|lh| interp(&s, widths, lh.min(total)))?;
-        if self.length(h0) > total {
-            h0 = self.h_for_length(total).max(self.lowest).min(h0);
-        }
-        let ahead = self.chord_point(&s, pts, 0.0, self.length(h0), 1.0).unwrap_or(pts[pts.len() - 1]);
-        let beta0 = if ahead.distance(pts[0]) > 1e-9 {
-            (ahead.y_mm - pts[0].y_mm).atan2(ahead.x_mm - pts[0].x_mm)
-        } else {
-            PI / 2.0
-        };
-        points.push(TrackPoint { x_mm: pts[0].x_mm, y_mm: pts[0].y_mm, h_mm: h0, alpha_rad: alpha, beta_rad: beta0 });
         let n = (total / step).floor() as usize;
-        let mut stations: Vec<f64> = (1..=n).map(|i| i as f64 * step).collect();
+        let mut stations: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();
         if total - n as f64 * step > 1e-9 {
             stations.push(total);
         }
+        let (first, end) = (pts[0], pts[pts.len() - 1]);
+        let at = |t: f64, h: f64| {
+            let p = point_at(&s, pts, t);
+            TrackPoint { x_mm: p.x_mm, y_mm: p.y_mm, h_mm: h, alpha_rad: alpha, beta_rad: 0.0 }
+        };
         let tally = |clamp: Clamp, counts: &mut (usize, usize)| match clamp {
             Clamp::Min => counts.0 += 1,
             Clamp::Max => counts.1 += 1,
             Clamp::None => {}
         };
-        for t in stations {
+        // Trailing sizes (belly lh behind), and the first station where such a footprint fits
+        // behind the brush.
+        let mut trailing = Vec::with_capacity(stations.len());
+        for &t in &stations {
+            trailing.push(self.size_belly(|lh| interp(&s, widths, (t - lh).max(0.0)))?);
+        }
+        let entry_end = (1..stations.len())
+            .find(|&j| self.length(trailing[j].0) <= first.distance(point_at(&s, pts, stations[j])))
+            .unwrap_or(stations.len() - 1);
+        // Writing resumes at the first station where even the lightest press fits behind (pressed
+        // lighter there, up to the trailing size).
+        let resume = (1..stations.len())
+            .find(|&j| self.length(self.lowest) <= first.distance(point_at(&s, pts, stations[j])))
+            .unwrap_or(stations.len() - 1)
+            .min(entry_end);
+        let mut out = Vec::with_capacity(stations.len() + entry_end + 2);
+        // 1. Entry: backwards from the touch-down station to the start, tips ahead.
+        for j in (0..=entry_end).rev() {
+            let t = stations[j];
             let p = point_at(&s, pts, t);
-            let (mut h, clamp) = self.size_belly(|lh| interp(&s, widths, (t - lh).max(0.0)))?;
-            let start_chord = pts[0].distance(p);
-            // Which way the tip points: back along the path (trailing) once a footprint fits
-            // behind the anchor; before that, ahead (entry stage) if one fits ahead.
-            let mut dir = -1.0;
-            if self.length(h) > start_chord {
-                let (hf, clamp_f) = self.size_belly(|lh| interp(&s, widths, (t + lh).min(total)))?;
-                if self.length(hf) <= pts[pts.len() - 1].distance(p) {
-                    (h, dir) = (hf, 1.0);
-                    tally(clamp_f, counts);
-                } else {
-                    // Neither fits: press lighter so the tip does not reach back past the first
-                    // point, or skip the point when even the lightest press would.
-                    let h_fit = self.h_for_length(start_chord);
-                    if h_fit < self.lowest || start_chord < 1e-9 {
-                        continue;
-                    }
-                    h = h_fit;
-                }
-            } else {
+            let (h_in, clamp) = self.size_belly(|lh| interp(&s, widths, (t + lh).min(total)))?;
+            let fit = self.h_for_length(p.distance(end));
+            let h = if fit >= self.lowest {
                 tally(clamp, counts);
-            }
-            // The tip points at the path point TRAIL_REACH footprint lengths away (the chord
-            // keeps the tail on the stroke around bends; the local tangent would let it sweep out,
-            // the full length would pull the body inside curves).
-            let fallback = if dir < 0.0 { pts[0] } else { pts[pts.len() - 1] };
-            let target = self.chord_point(&s, pts, t, TRAIL_REACH * self.length(h), dir).unwrap_or(fallback);
-            let beta = (target.y_mm - p.y_mm).atan2(target.x_mm - p.x_mm);
-            points.push(TrackPoint {
-                x_mm: p.x_mm,
-                y_mm: p.y_mm,
-                h_mm: h.max(self.lowest),
-                alpha_rad: alpha,
-                beta_rad: beta,
-            });
+                h_in.min(fit)
+            } else if j == 0 {
+                // The head must be inked even when the piece is shorter than any footprint.
+                self.lowest
+            } else {
+                0.0
+            };
+            out.push(at(t, h));
         }
-        Ok(points)
-    }
-
-    /// Walking from arc length `t` in direction `dir` (±1), the first path point at least `len`
-    /// away in a straight line, if any.
-    fn chord_point(&self, s: &[f64], pts: &[PointMm], t: f64, len: f64, dir: f64) -> Option<PointMm> {
-        let total = s[s.len() - 1];
-        let p = point_at(s, pts, t);
-        let mut u = t;
-        loop {
-            u += dir * self.opts.spacing_mm;
-            if u < 0.0 || u > total {
-                let end = point_at(s, pts, u.clamp(0.0, total));
-                return (end.distance(p) >= len).then_some(end);
+        if resume + 1 < stations.len() {
+            // 2. Turn: ease up at the start until the tip only touches, glide along the stroke to
+            //    where writing resumes (the hairs turn over, dragged along the path).
+            for &t in &stations[..=resume] {
+                out.push(at(t, GLIDE_H_MM));
             }
-            let q = point_at(s, pts, u);
-            if q.distance(p) >= len {
-                return Some(q);
+            // 3. Writing, the hairs trailing.
+            for j in resume..stations.len() {
+                let t = stations[j];
+                let (h_tr, clamp) = trailing[j];
+                let fit = self.h_for_length(first.distance(point_at(&s, pts, t)));
+                tally(clamp, counts);
+                out.push(at(t, h_tr.min(fit).max(self.lowest)));
             }
         }
+        Ok(out)
     }
 }
 

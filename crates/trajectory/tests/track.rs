@@ -4,7 +4,8 @@ use bezier_raster::{ModelKind, render_track};
 use brush_model::{BrushProfile, Extrapolation, PointMm};
 use kurbo::{BezPath, Point, Rect, Shape as _};
 use trajectory::{
-    CharBox, Glyph, GlyphSource, Method, Shape, Sizing, TrackOptions, build_track, centre_lines, glyph, raster,
+    CharBox, DEFAULT_SPACING_MM, Glyph, GlyphSource, Method, Shape, Sizing, TrackOptions, build_track, centre_lines,
+    glyph, raster,
 };
 
 fn bar_glyph(x0: f64, x1: f64, y0: f64, y1: f64) -> Glyph {
@@ -192,24 +193,74 @@ fn corner_knobs_reach_into_the_outer_corner() {
     let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 6.0 / 80.0 * 1024.0 };
     let opts = TrackOptions { char_box: b, spacing_mm: 0.25, alpha_rad: 0.0, sizing: Sizing::Brush };
     let t = build_track(&paths, &pen1, &opts).unwrap().track;
-    let starts = t.strokes[0].points.iter().filter(|q| b.to_em(q.anchor()).distance(tip) < 1e-6).count();
-    assert_eq!(starts, 2, "the first piece ends and the second starts at the knob tip");
+    // Pressed at the tip: the end of the first piece, and the end of the second piece's reverse
+    // entry (it presses back to the tip before turning over).
+    let starts = t.strokes[0]
+        .points
+        .iter()
+        .filter(|q| q.h_mm >= pen1.ranges.h_mm.min && b.to_em(q.anchor()).distance(tip) < 1e-6)
+        .count();
+    assert_eq!(starts, 2, "the first piece ends and the second's entry ends at the knob tip");
 }
 
 #[test]
-fn the_entry_stage_presses_forward_at_full_width() {
+fn the_reverse_entry_moves_backwards_at_full_width_then_writes_forwards() {
     let g = bar_glyph(100.0, 900.0, 440.0, 540.0);
     let paths = centre_lines(&g, Method::Medians, 256).unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 6.0 / 100.0 * 1024.0 };
     let opts = TrackOptions { char_box: b, spacing_mm: 0.25, alpha_rad: 0.0, sizing: Sizing::Brush };
     let pts = &build_track(&paths, &pen1, &opts).unwrap().track.strokes[0].points;
-    let body_h = pts[pts.len() / 2].h_mm;
-    // Written left to right: first the tip points ahead (β ≈ 0), then it trails (β ≈ π).
-    let forward: Vec<_> = pts.iter().take_while(|q| q.beta_rad.cos() > 0.9).collect();
-    assert!(forward.len() > 10, "{} forward presses", forward.len());
-    assert!(pts[pts.len() / 2].beta_rad.cos() < -0.9, "the body trails");
-    for q in &forward[1..forward.len() - 1] {
-        assert!((q.h_mm - body_h).abs() < 0.05 * body_h, "entry stage pressed at {} (body {body_h})", q.h_mm);
+    let body_h = pts[pts.len() - pts.len() / 4].h_mm;
+    // Written left to right: it touches down inside the bar and presses back to the left end, the
+    // tip ahead (β ≈ 0) because the hairs trail the backward motion.
+    let entry: Vec<_> = pts.iter().take_while(|q| q.h_mm >= pen1.ranges.h_mm.min).collect();
+    assert!(entry.len() > 10, "{} entry presses", entry.len());
+    assert!(entry.windows(2).all(|w| w[1].x_mm < w[0].x_mm), "the entry moves backwards");
+    assert!(entry.iter().all(|q| q.beta_rad.cos() > 0.9), "the tip points ahead during the entry");
+    for q in &entry[1..entry.len() - 1] {
+        assert!((q.h_mm - body_h).abs() < 0.05 * body_h, "entry pressed at {} (body {body_h})", q.h_mm);
+    }
+    // Then it turns over with the tip only touching, and writes forwards with the hairs trailing.
+    let rest = &pts[entry.len()..];
+    assert!(rest[0].h_mm < 0.1, "eases up before turning over");
+    let last = pts[pts.len() - 1];
+    assert!(last.x_mm > entry[0].x_mm && last.beta_rad.cos() < -0.9, "the body trails");
+}
+
+#[test]
+fn a_track_holds_only_motion_the_forward_model_explains() {
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    let g = glyph::embedded('永').unwrap();
+    let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+    for alpha_deg in [0.0f64, 5.0] {
+        let mm = trajectory::auto_char_mm(&paths, &pen1, alpha_deg.to_radians());
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm };
+        let opts = TrackOptions {
+            char_box: b,
+            spacing_mm: DEFAULT_SPACING_MM,
+            alpha_rad: alpha_deg.to_radians(),
+            sizing: Sizing::Brush,
+        };
+        let t = build_track(&paths, &pen1, &opts).unwrap().track;
+        let model = brush_model::ForwardModel::default();
+        for s in &t.strokes {
+            // No jumps: the brush never moves more than one spacing between two points while
+            // it presses at either.
+            for w in s.points.windows(2) {
+                let d = w[0].anchor().distance(w[1].anchor());
+                let pressed = w[0].h_mm >= pen1.ranges.h_mm.min || w[1].h_mm >= pen1.ranges.h_mm.min;
+                assert!(!pressed || d <= DEFAULT_SPACING_MM + 1e-6, "a pressed jump of {d} mm at {alpha_deg}°");
+            }
+            // Every pressed point's β is what the forward model derives from the motion (tilt
+            // below the threshold) or the lean it commands (above).
+            let sweep = model.sweep(&pen1, &s.points, brush_model::Extrapolation::Refuse);
+            for (p, d) in s.points.iter().zip(&sweep.directions) {
+                if p.h_mm >= pen1.ranges.h_mm.min {
+                    let d = d.expect("a pressed point has a direction");
+                    assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
+                }
+            }
+        }
     }
 }

@@ -261,23 +261,67 @@ fn sim(a: SimArgs) -> Result<()> {
             _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
         }
     }
+    // Validate the trace path before listening: a folder or an unwritable path fails now.
+    let mut trace_file = match &a.trace {
+        Some(path) => Some(std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .with_context(|| format!("--trace {}: cannot create the file", path.display()))?,
+        )),
+        None => None,
+    };
     let sim = Simulator::start(&format!("127.0.0.1:{}", a.port), faults)?;
     eprintln!("simulating an AUBO-i5 (robot `{}`) on {}; Ctrl-C to stop", robot_io::sim::SIM_ROBOT, sim.addr);
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
+    // Ctrl-C and SIGTERM both stop the loop, which writes out what is left of the trace.
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
     let mut written = 0;
-    while !stop.load(Ordering::SeqCst) {
-        std::thread::sleep(Duration::from_millis(100));
-        if let Some(path) = &a.trace {
-            let t = sim.trace();
-            if t.len() != written {
-                written = t.len();
-                write_atomic(path, serde_json::to_string(&t)?.as_bytes())?;
-            }
+    loop {
+        let stopping = stop.load(Ordering::SeqCst);
+        if let (Some(out), Some(path)) = (trace_file.as_mut(), &a.trace) {
+            let new = sim.trace_since(written);
+            written += new.len();
+            append_trace(out, &new).with_context(|| format!("--trace {}: cannot write", path.display()))?;
         }
+        if stopping {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(50));
     }
     Ok(())
+}
+
+/// Appends trace samples as JSON lines and flushes them to the file.
+fn append_trace(out: &mut impl std::io::Write, samples: &[robot_io::sim::TraceEntry]) -> Result<()> {
+    for t in samples {
+        serde_json::to_writer(&mut *out, t)?;
+        out.write_all(b"\n")?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// Reads a simulator trace: JSON lines (one sample per line, as `robot sim --trace` writes), or
+/// one JSON array.
+fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::sim::TraceEntry>> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).with_context(|| format!("{name}: cannot read"))?;
+    if text.trim_start().starts_with('[') {
+        return serde_json::from_str(&text).with_context(|| format!("{name}: not a simulator trace"));
+    }
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        out.push(serde_json::from_str(line).with_context(|| {
+            format!("{name}:{}: not a simulator trace sample (expected {{\"t_s\", \"kind\", \"pose\"}})", i + 1)
+        })?);
+    }
+    if out.is_empty() {
+        bail!("{name}: the trace is empty (did the simulator execute any move?)");
+    }
+    Ok(out)
 }
 
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
@@ -291,33 +335,20 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     }
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
-    let tname = a.trace.display().to_string();
-    let trace: Vec<robot_io::sim::TraceEntry> =
-        serde_json::from_str(&std::fs::read_to_string(&a.trace).with_context(|| format!("{tname}: cannot read"))?)
-            .with_context(|| format!("{tname}: not a simulator trace"))?;
-    let brush = tf.brush.clone();
-    let track = robot_io::sim::trace_to_track(&trace, &frame, |h| {
-        brush
-            .predict_oriented(&brush_model::Press::new(h, 0.0, 0.0), brush_model::Extrapolation::Allow)
-            .map(|f| f.length_mm())
-            .unwrap_or(0.0)
-    });
-    let img = bezier_raster::render_track(
-        &track,
+    let trace = read_trace(&a.trace)?;
+    let states = robot_io::sim::trace_to_states(&trace, &frame);
+    let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
+    // The same forward model and renderer as `maobi write`'s plan and executed renders.
+    let img = maobi::pipeline::render_states(
+        &states,
         &tf.brush,
-        bezier_raster::ModelKind::Bsm.model(),
-        brush_model::Extrapolation::Allow,
-        brush_model::PointMm::new(b[0], b[1]),
-        a.size as f64 / b[2],
+        bezier_raster::ModelKind::Bsm,
+        brush_model::Extrapolation::Refuse,
+        &char_box,
         a.size,
-        a.size,
-    )?;
-    write_atomic(&a.output, &img.encode_png()?)?;
-    println!(
-        "{} strokes, {} pressed points rendered to {}",
-        track.strokes.len(),
-        track.point_count(),
-        a.output.display()
     );
+    write_atomic(&a.output, &img.encode_png()?)?;
+    let pressed = states.iter().filter(|p| p.h_mm > 0.0).count();
+    println!("{} trace samples ({pressed} pressed) rendered to {}", states.len(), a.output.display());
     Ok(())
 }

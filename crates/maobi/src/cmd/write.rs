@@ -147,6 +147,22 @@ pub fn run(args: Args) -> Result<()> {
             )?;
             let sim = maobi::pipeline::similarity(&r.reference, &img)?;
             (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+            if let Some(states) = &r.executed_states {
+                // The executed path through the same generator.
+                let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
+                let ex = neural_gen::compose::render_track(
+                    &g,
+                    &executed,
+                    brush_model::PointMm::new(b.x0_mm, b.y0_mm),
+                    args.size as f64 / b.size_mm,
+                    args.size,
+                    args.size,
+                    64,
+                )?;
+                r.report.executed = Some(maobi::pipeline::similarity(&r.reference, &ex)?);
+                r.report.agreement = Some(maobi::pipeline::similarity(&img, &ex)?);
+                r.executed = Some(ex);
+            }
             r.report.model = "b-bsmg";
             r.render = img;
         }
@@ -164,6 +180,12 @@ pub fn run(args: Args) -> Result<()> {
         "brush": profile.name,
         "model": args.model.name(),
         "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
+        "executed_mean": {
+            "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
+            "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
+            "iou": mean(|r| r.executed.map_or(f64::NAN, |s| s.iou)),
+        },
+        "agreement_mean": {"csim": mean(|r| r.agreement.map_or(f64::NAN, |s| s.csim))},
         "chars": reports,
     });
     if !single {
@@ -175,15 +197,20 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&summary)?;
     } else {
         for r in &reports {
+            // The executed figure (what the robot would write) is the headline.
+            let executed = match (r.executed, r.agreement) {
+                (Some(e), Some(a)) => format!(
+                    "executed CSIM {:.4}  SSIM {:.4}  IoU {:.4}  (planned CSIM {:.4}, planned vs executed {:.4})",
+                    e.csim, e.ssim, e.iou, r.csim, a.csim
+                ),
+                _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.csim, r.ssim, r.iou),
+            };
             println!(
-                "{} ({} via {}, {}): CSIM {:.4}  SSIM {:.4}  IoU {:.4}{}  strokes {}{}  points {}  {:.1} ms",
+                "{} ({} via {}, {}): {executed}{}  strokes {}{}  points {}  {:.1} ms",
                 r.char,
                 r.source,
                 r.method,
                 r.model,
-                r.csim,
-                r.ssim,
-                r.iou,
                 r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
                 r.strokes_found,
                 r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
@@ -245,6 +272,11 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<(
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
     write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;
+    if let Some(ex) = &r.executed {
+        write_atomic(&dir.join("executed.png"), &ex.encode_png()?)?;
+        let row = maobi::pipeline::side_by_side(&[&r.reference, &r.render, ex]);
+        write_atomic(&dir.join("side-by-side.png"), &row.encode_png()?)?;
+    }
     let track = json!({
         "char": r.report.char,
         "char_box_mm": [r.char_box.x0_mm, r.char_box.y0_mm, r.char_box.size_mm],
