@@ -149,7 +149,8 @@ pub fn model_figures(reference: &dyn StrokeModel, models: &[(&str, &dyn StrokeMo
 }
 
 /// Character figures: the write pipeline on [`GATE_CHARS`] for each method and model at 256²,
-/// mean CSIM, SSIM, IoU and chamfer.
+/// mean CSIM, SSIM, IoU and chamfer; for the B-BSM also the executed figures (the program run as
+/// the simulator moves, against the glyph) and the plan's agreement with them (mean and worst).
 pub fn character_figures() -> Result<Figures> {
     let pen1 = BrushProfile::builtin("pen1")?;
     let chars: Vec<char> = GATE_CHARS.chars().collect();
@@ -158,7 +159,9 @@ pub fn character_figures() -> Result<Figures> {
         let prepared =
             chars.par_iter().map(|&c| prepare(glyph::embedded(c)?, Some(method))).collect::<Result<Vec<_>>>()?;
         for model in ModelKind::ALL {
-            let opts = WriteOptions { model, size: 256, upper_bound: false, ..WriteOptions::default() };
+            // The executed figures (the program run as the simulator moves) for the B-BSM only.
+            let execute = model == ModelKind::Bsm;
+            let opts = WriteOptions { model, size: 256, upper_bound: false, execute, ..WriteOptions::default() };
             let reports = prepared
                 .par_iter()
                 .map(|p| {
@@ -174,6 +177,13 @@ pub fn character_figures() -> Result<Figures> {
             if model == ModelKind::Bsm {
                 let ch: Vec<f64> = reports.iter().filter_map(|r| r.chamfer_pct).collect();
                 f.insert(key("chamfer_pct"), fig(ch.iter().sum::<f64>() / ch.len() as f64, 0.05, Better::Lower));
+                let ex: Vec<_> = reports.iter().filter_map(|r| r.executed).collect();
+                let ag: Vec<_> = reports.iter().filter_map(|r| r.agreement).collect();
+                f.insert(key("executed_csim"), fig(ex.iter().map(|s| s.csim).sum::<f64>() / n, 0.003, Better::Higher));
+                f.insert(key("executed_iou"), fig(ex.iter().map(|s| s.iou).sum::<f64>() / n, 0.005, Better::Higher));
+                f.insert(key("agreement_csim"), fig(ag.iter().map(|s| s.csim).sum::<f64>() / n, 0.002, Better::Higher));
+                let worst = ag.iter().map(|s| s.csim).fold(f64::INFINITY, f64::min);
+                f.insert(key("agreement_csim_worst"), fig(worst, 0.005, Better::Higher));
                 let right = reports.iter().filter(|r| r.strokes_expected == Some(r.strokes_found)).count();
                 f.insert(key("strokes_right_fraction"), fig(right as f64 / n, 0.0, Better::Higher));
             }

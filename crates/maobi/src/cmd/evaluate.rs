@@ -32,6 +32,13 @@ pub struct Args {
     /// Char box side, mm (default: chosen per character from its widths).
     #[arg(long)]
     char_mm: Option<f64>,
+    /// Read characters from a hanzi-writer-data folder (`<char>.json` files) instead of the
+    /// embedded set; `--chars` then names them (e.g. characters outside the embedded set).
+    #[arg(long)]
+    hanzi_data: Option<std::path::PathBuf>,
+    /// Constant tilt α, degrees.
+    #[arg(long, default_value_t = 0.0)]
+    alpha: f64,
     /// Print every character's report and the means as JSON.
     #[arg(long)]
     json: bool,
@@ -50,13 +57,25 @@ pub fn run(args: Args) -> Result<()> {
     if chars.is_empty() {
         bail!("no characters to evaluate");
     }
-    let opts = WriteOptions { model: args.model, size: args.size, upper_bound: true, ..WriteOptions::default() };
+    if args.hanzi_data.is_some() && args.chars.is_none() {
+        bail!("--hanzi-data needs --chars: name the characters to read from it");
+    }
+    if !(args.alpha.is_finite() && (0.0..=30.0).contains(&args.alpha)) {
+        bail!("--alpha {}: expected 0..=30 degrees", args.alpha);
+    }
+    let alpha_rad = args.alpha.to_radians();
+    let opts =
+        WriteOptions { model: args.model, size: args.size, upper_bound: true, alpha_rad, ..WriteOptions::default() };
     let pb = progress(chars.len() as u64, "evaluate");
     let reports: Vec<CharReport> = chars
         .par_iter()
         .map(|&c| {
-            let p = prepare(glyph::embedded(c)?, Some(args.method))?;
-            let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, 0.0));
+            let g = match &args.hanzi_data {
+                Some(dir) => glyph::from_hanzi_dir(dir, c)?,
+                None => glyph::embedded(c)?,
+            };
+            let p = prepare(g, Some(args.method))?;
+            let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
             let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
             pb.inc(1);
             Ok(r.report)
@@ -89,6 +108,19 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
     let strokes_ok = with_medians.iter().filter(|c| c.strokes_expected == Some(c.strokes_found)).count();
     let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
     let ub: Vec<_> = r.iter().filter_map(|c| c.upper_bound).collect();
+    let mean_sim = |v: Vec<maobi::pipeline::Similarity>| {
+        let k = v.len() as f64;
+        if v.is_empty() {
+            return serde_json::Value::Null;
+        }
+        let min_csim = v.iter().map(|s| s.csim).fold(f64::INFINITY, f64::min);
+        json!({
+            "csim": v.iter().map(|s| s.csim).sum::<f64>() / k,
+            "ssim": v.iter().map(|s| s.ssim).sum::<f64>() / k,
+            "iou": v.iter().map(|s| s.iou).sum::<f64>() / k,
+            "csim_min": min_csim,
+        })
+    };
     json!({
         "count": r.len(),
         "csim": mean(&|c| c.csim),
@@ -97,6 +129,8 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
         "chamfer_pct": if chamfers.is_empty() { None } else { Some(chamfers.iter().sum::<f64>() / chamfers.len() as f64) },
         "strokes_match_fraction": if with_medians.is_empty() { None } else { Some(strokes_ok as f64 / with_medians.len() as f64) },
         "millis_mean": mean(&|c| c.millis),
+        "executed": mean_sim(r.iter().filter_map(|c| c.executed).collect()),
+        "agreement": mean_sim(r.iter().filter_map(|c| c.agreement).collect()),
         "unconstrained": if ub.is_empty() { serde_json::Value::Null } else { json!({
             "csim": ub.iter().map(|u| u.csim).sum::<f64>() / ub.len() as f64,
             "ssim": ub.iter().map(|u| u.ssim).sum::<f64>() / ub.len() as f64,
