@@ -357,8 +357,14 @@ impl<'a> Placer<'a> {
         let total = s[s.len() - 1];
         let n = (total / step).floor() as usize;
         let mut stations: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();
-        if total - n as f64 * step > 1e-9 {
-            stations.push(total);
+        // The end is a station; one closer than a twentieth of a spacing to the last regular
+        // station replaces it (no two commanded points at one place).
+        if total - n as f64 * step > 0.05 * step || n == 0 {
+            if total > 1e-9 {
+                stations.push(total);
+            }
+        } else {
+            stations[n] = total;
         }
         let (first, end) = (pts[0], pts[pts.len() - 1]);
         let at = |t: f64, h: f64| {
