@@ -1,8 +1,12 @@
-//! The AUBO ARCS JSON-RPC 2.0 client (TCP port 30004) and the fault-tolerant program runner.
+//! The AUBO ARCS JSON-RPC 2.0 client and the fault-tolerant program runner.
+//!
+//! The client speaks one of three [`Transport`]s: the official SDK's framed protocol on port
+//! 30004 (the default: named params, string ids, version query and login first), maobi's
+//! earlier line-delimited form (positional params), or JSON-RPC over HTTP on port 9012.
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
@@ -10,30 +14,105 @@ use serde_json::{Value, json};
 use crate::RobotError;
 use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
+pub use crate::wire::Transport;
+use crate::wire::{self, FrameDecoder};
 
-/// The controller's JSON-RPC port.
+/// The controller's JSON-RPC port (framed and line-delimited).
 pub const RPC_PORT: u16 = 30004;
 /// The controller's script port.
 pub const SCRIPT_PORT: u16 = 30002;
+/// The controller's JSON-RPC over HTTP port.
+pub const HTTP_PORT: u16 = wire::HTTP_PORT;
 
-/// A JSON-RPC 2.0 connection to an AUBO controller (or the simulator). Responses are parsed
-/// incrementally from the byte stream (no reliance on newlines); every call has a timeout.
+/// How to reach and log in to a controller: the transport and the credentials (used by the
+/// framed transport only).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Link {
+    /// The transport.
+    pub transport: Transport,
+    /// The user for the login.
+    pub user: String,
+    /// The password for the login.
+    pub password: String,
+}
+
+impl Default for Link {
+    /// The framed transport with the controller's default user `aubo`, password `123456`.
+    fn default() -> Self {
+        Self::new(Transport::Framed)
+    }
+}
+
+impl Link {
+    /// `transport` with the default credentials.
+    pub fn new(transport: Transport) -> Self {
+        Self { transport, user: wire::DEFAULT_USER.into(), password: wire::DEFAULT_PASSWORD.into() }
+    }
+}
+
+/// A JSON-RPC 2.0 connection to an AUBO controller (or the simulator). Answers are read
+/// incrementally from the byte stream (frames, HTTP messages or JSON values may arrive in any
+/// pieces or several at once); every call has a timeout.
 pub struct AuboClient {
     stream: TcpStream,
+    transport: Transport,
+    host: String,
     buf: Vec<u8>,
+    frames: FrameDecoder,
     next_id: u64,
+    client_no: u64,
     timeout: Duration,
+    interface_version: Option<i64>,
 }
 
 /// Result code the controller returns when its motion queue is full.
 pub const QUEUE_FULL: i64 = 2;
 
+/// Distinguishes the ids of clients made by one process.
+static CLIENTS: AtomicU64 = AtomicU64::new(0);
+
+const ID_ALPHABET: &[u8; 62] = b"0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz";
+
+/// A string id shaped like the SDK's (`xxxxxxxx-xxxx-xxxx`, 18 characters from 0–9, A–Z,
+/// a–z), distinct for every client of a process and every call.
+fn string_id(client: u64, n: u64) -> String {
+    let mix = |mut z: u64| {
+        // splitmix64's finaliser: a bijection, so distinct inputs give distinct ids.
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    };
+    let mut x = mix((u64::from(std::process::id()) << 44) ^ (client << 28) ^ n);
+    let mut s = String::with_capacity(18);
+    for i in 0..16 {
+        if i == 8 || i == 12 {
+            s.push('-');
+        }
+        if i == 10 {
+            x = mix(x);
+        }
+        s.push(char::from(ID_ALPHABET[(x % 62) as usize]));
+        x /= 62;
+    }
+    s
+}
+
 impl AuboClient {
-    /// Connects with `timeout` for the connection and for every later call.
+    /// Connects with the line-delimited transport (positional params, no login: maobi's earlier
+    /// form), with `timeout` for the connection and every later call. [`AuboClient::open`]
+    /// speaks the controller's own protocol.
     ///
     /// # Errors
     /// [`RobotError::Io`] if the address does not resolve or the connection fails.
     pub fn connect(addr: &str, timeout: Duration) -> Result<Self, RobotError> {
+        Self::connect_with(addr, Transport::Lines, timeout)
+    }
+
+    /// Connects with `transport`, without any handshake (see [`AuboClient::handshake`]).
+    ///
+    /// # Errors
+    /// [`RobotError::Io`] if the address does not resolve or the connection fails.
+    pub fn connect_with(addr: &str, transport: Transport, timeout: Duration) -> Result<Self, RobotError> {
         let addrs: Vec<SocketAddr> =
             addr.to_socket_addrs().map_err(|e| RobotError::Io(format!("{addr}: {e}")))?.collect();
         let mut last = None;
@@ -43,7 +122,17 @@ impl AuboClient {
                     stream.set_read_timeout(Some(timeout)).map_err(|e| RobotError::Io(e.to_string()))?;
                     stream.set_write_timeout(Some(timeout)).map_err(|e| RobotError::Io(e.to_string()))?;
                     let _ = stream.set_nodelay(true);
-                    return Ok(Self { stream, buf: Vec::new(), next_id: 1, timeout });
+                    return Ok(Self {
+                        stream,
+                        transport,
+                        host: addr.to_string(),
+                        buf: Vec::new(),
+                        frames: FrameDecoder::default(),
+                        next_id: 1,
+                        client_no: CLIENTS.fetch_add(1, Ordering::Relaxed),
+                        timeout,
+                        interface_version: None,
+                    });
                 }
                 Err(e) => last = Some(e),
             }
@@ -51,22 +140,139 @@ impl AuboClient {
         Err(RobotError::Io(format!("{addr}: {}", last.map_or("no address".to_string(), |e| e.to_string()))))
     }
 
-    /// Calls `method` with `params` and returns the `result`.
+    /// Connects as `link` says and does the handshake ([`AuboClient::handshake`]); returns the
+    /// client and the controller's robot names.
     ///
     /// # Errors
-    /// [`RobotError::Timeout`], [`RobotError::Io`] (connection lost), [`RobotError::Protocol`]
-    /// (not JSON-RPC), [`RobotError::Rpc`] (a JSON-RPC `error` object).
+    /// As [`AuboClient::connect_with`] and [`AuboClient::handshake`].
+    pub fn open(addr: &str, link: &Link, timeout: Duration) -> Result<(Self, Vec<String>), RobotError> {
+        let mut c = Self::connect_with(addr, link.transport, timeout)?;
+        let names = c.handshake(&link.user, &link.password)?;
+        Ok((c, names))
+    }
+
+    /// The transport this client speaks.
+    pub fn transport(&self) -> Transport {
+        self.transport
+    }
+
+    /// The controller's interface version, once the handshake asked for it.
+    pub fn interface_version(&self) -> Option<i64> {
+        self.interface_version
+    }
+
+    /// The handshake the SDK does, returning the robot names. Framed:
+    /// `SystemInfo.getInterfaceVersionCode`, the login, `getRobotNames`, `getAxisNames`.
+    /// HTTP: the version query and `getRobotNames`. Lines: `getRobotNames`.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Login`] if the controller refuses the login;
+    /// [`RobotError::Protocol`] if the version is not an integer.
+    pub fn handshake(&mut self, user: &str, password: &str) -> Result<Vec<String>, RobotError> {
+        if self.transport != Transport::Lines {
+            let m = "SystemInfo.getInterfaceVersionCode";
+            let v = self.call(m, Value::Null)?;
+            let code = v.as_i64().ok_or_else(|| RobotError::Protocol(format!("{m}: expected an integer, got {v}")))?;
+            self.interface_version = Some(code);
+        }
+        if self.transport == Transport::Framed {
+            self.login(user, password)?;
+        }
+        let names = self.robot_names()?;
+        if self.transport == Transport::Framed {
+            self.call("getAxisNames", Value::Null)?;
+        }
+        Ok(names)
+    }
+
+    /// Sends the framed login message (`__login__`, the user, the password digest, the SDK
+    /// version) and waits for `SUCCEED` or `FAILED`.
+    ///
+    /// # Errors
+    /// [`RobotError::Login`] when refused; [`RobotError::Protocol`] if the transport is not
+    /// framed or the answer is not a login answer; as [`AuboClient::call`] otherwise.
+    pub fn login(&mut self, user: &str, password: &str) -> Result<(), RobotError> {
+        if self.transport != Transport::Framed {
+            return Err(RobotError::Protocol(format!("login: the {} transport has no login", self.transport)));
+        }
+        let payload = wire::login_payload(user, password)?;
+        self.send_frame("login", &payload)?;
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            let reply = self.read_frame("login", deadline)?;
+            if reply.first() == Some(&b'{') {
+                continue; // a notification
+            }
+            let text = String::from_utf8_lossy(&reply);
+            let text = text.trim_end();
+            if !text.starts_with("__login__") {
+                return Err(RobotError::Protocol(format!(
+                    "login: expected an answer beginning `__login__`, got {}",
+                    wire::show_bytes(&reply[..reply.len().min(40)])
+                )));
+            }
+            if text.ends_with("SUCCEED") {
+                return Ok(());
+            }
+            let message = if text.ends_with("FAILED") {
+                "the controller answered FAILED (wrong user or password?)".to_string()
+            } else {
+                format!("unexpected answer {text:?}")
+            };
+            return Err(RobotError::Login { user: user.to_string(), message });
+        }
+    }
+
+    /// The request text for `method` with `params` and `id` as this transport writes it (the
+    /// payload, before framing). `Value::Null` params are left out.
+    fn request_text(&self, method: &str, params: &Value, id: &Value) -> Vec<u8> {
+        match self.transport {
+            Transport::Lines => {
+                let req = json!({"jsonrpc": "2.0", "method": method, "params": params, "id": id});
+                let mut b = serde_json::to_vec(&req).unwrap_or_default();
+                b.push(b'\n');
+                b
+            }
+            Transport::Framed | Transport::Http => {
+                let mut m = serde_json::Map::new();
+                m.insert("id".into(), id.clone());
+                m.insert("jsonrpc".into(), json!("2.0"));
+                m.insert("method".into(), json!(method));
+                if !params.is_null() {
+                    m.insert("params".into(), params.clone());
+                }
+                wire::sdk_json(&Value::Object(m)).into_bytes()
+            }
+        }
+    }
+
+    /// Calls `method` with `params` (an array, an object, or `Value::Null` for none) and
+    /// returns the `result`. Params are sent as given, whatever the transport.
+    ///
+    /// # Errors
+    /// [`RobotError::Timeout`], [`RobotError::Io`] (connection lost), [`RobotError::Framing`]
+    /// (not the transport's format), [`RobotError::Protocol`] (not JSON-RPC),
+    /// [`RobotError::Rpc`] (a JSON-RPC `error` object).
     pub fn call(&mut self, method: &str, params: Value) -> Result<Value, RobotError> {
-        let id = self.next_id;
+        let n = self.next_id;
         self.next_id += 1;
-        let req = json!({"jsonrpc": "2.0", "method": method, "params": params, "id": id});
-        let mut bytes = serde_json::to_vec(&req).expect("serialisable");
-        bytes.push(b'\n');
-        self.stream.write_all(&bytes).map_err(|e| io_err(method, e))?;
+        let id = match self.transport {
+            Transport::Lines => json!(n),
+            _ => json!(string_id(self.client_no, n)),
+        };
+        let text = self.request_text(method, &params, &id);
+        match self.transport {
+            Transport::Lines => self.stream.write_all(&text).map_err(|e| io_err(method, e))?,
+            Transport::Framed => self.send_frame(method, &text)?,
+            Transport::Http => {
+                let msg = wire::http_post(&self.host, &text);
+                self.stream.write_all(&msg).map_err(|e| io_err(method, e))?;
+            }
+        }
         let deadline = Instant::now() + self.timeout;
         loop {
             let v = self.read_value(method, deadline)?;
-            if v.get("id").and_then(Value::as_u64) != Some(id) {
+            if v.get("id") != Some(&id) {
                 continue; // a notification or a stale answer
             }
             if let Some(err) = v.get("error") {
@@ -83,35 +289,104 @@ impl AuboClient {
         }
     }
 
-    fn read_value(&mut self, method: &str, deadline: Instant) -> Result<Value, RobotError> {
-        loop {
-            let start = self.buf.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(self.buf.len());
-            self.buf.drain(..start);
-            if !self.buf.is_empty() {
-                let mut it = serde_json::Deserializer::from_slice(&self.buf).into_iter::<Value>();
-                match it.next() {
-                    Some(Ok(v)) => {
-                        let used = it.byte_offset();
-                        self.buf.drain(..used);
-                        return Ok(v);
-                    }
-                    Some(Err(e)) if e.is_eof() => {}
-                    Some(Err(e)) => {
-                        return Err(RobotError::Protocol(format!("{method}: malformed JSON from the controller: {e}")));
-                    }
-                    None => {}
-                }
-            }
-            if Instant::now() >= deadline {
-                return Err(RobotError::Timeout(method.to_string()));
-            }
-            let mut chunk = [0u8; 4096];
-            match self.stream.read(&mut chunk) {
-                Ok(0) => return Err(RobotError::Io(format!("{method}: connection closed by the controller"))),
-                Ok(n) => self.buf.extend_from_slice(&chunk[..n]),
-                Err(e) => return Err(io_err(method, e)),
-            }
+    fn send_frame(&mut self, method: &str, payload: &[u8]) -> Result<(), RobotError> {
+        // One write per frame: the SDK cannot take a header split inside its length field.
+        let frame = wire::encode_frame(payload)?;
+        self.stream.write_all(&frame).map_err(|e| io_err(method, e))
+    }
+
+    /// Reads more bytes, waiting at most until `deadline`.
+    fn fill(&mut self, method: &str, deadline: Instant) -> Result<Vec<u8>, RobotError> {
+        let now = Instant::now();
+        if now >= deadline {
+            return Err(RobotError::Timeout(method.to_string()));
         }
+        let wait = (deadline - now).max(Duration::from_millis(1));
+        self.stream.set_read_timeout(Some(wait)).map_err(|e| io_err(method, e))?;
+        let mut chunk = vec![0u8; 64 * 1024];
+        match self.stream.read(&mut chunk) {
+            Ok(0) => Err(RobotError::Io(match self.frames.incomplete() {
+                Some(what) if self.transport == Transport::Framed => format!("{method}: {what}"),
+                _ if !self.buf.is_empty() => {
+                    format!("{method}: the connection closed in the middle of an answer ({} bytes)", self.buf.len())
+                }
+                _ => format!("{method}: connection closed by the controller"),
+            })),
+            Ok(n) => {
+                chunk.truncate(n);
+                Ok(chunk)
+            }
+            Err(e) => Err(io_err(method, e)),
+        }
+    }
+
+    fn read_frame(&mut self, method: &str, deadline: Instant) -> Result<Vec<u8>, RobotError> {
+        loop {
+            if let Some(p) = self.frames.next_frame()? {
+                return Ok(p);
+            }
+            let more = self.fill(method, deadline)?;
+            self.frames.push(&more);
+        }
+    }
+
+    fn read_value(&mut self, method: &str, deadline: Instant) -> Result<Value, RobotError> {
+        match self.transport {
+            Transport::Framed => {
+                let p = self.read_frame(method, deadline)?;
+                serde_json::from_slice(&p).map_err(|e| {
+                    RobotError::Protocol(format!(
+                        "{method}: the frame is not JSON ({e}): {}",
+                        wire::show_bytes(&p[..p.len().min(40)])
+                    ))
+                })
+            }
+            Transport::Http => loop {
+                if let Some((head, body)) = wire::take_http_message(&mut self.buf, true)? {
+                    let status = head.start.split_whitespace().nth(1).unwrap_or("");
+                    if !head.start.starts_with("HTTP/1.") || status != "200" {
+                        return Err(RobotError::Protocol(format!(
+                            "{method}: HTTP answer `{}` (expected 200 OK): {}",
+                            head.start,
+                            wire::show_bytes(&body[..body.len().min(80)])
+                        )));
+                    }
+                    return serde_json::from_slice(&body)
+                        .map_err(|e| RobotError::Protocol(format!("{method}: the HTTP body is not JSON: {e}")));
+                }
+                let more = self.fill(method, deadline)?;
+                self.buf.extend_from_slice(&more);
+            },
+            Transport::Lines => loop {
+                let start = self.buf.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(self.buf.len());
+                self.buf.drain(..start);
+                if !self.buf.is_empty() {
+                    let mut it = serde_json::Deserializer::from_slice(&self.buf).into_iter::<Value>();
+                    match it.next() {
+                        Some(Ok(v)) => {
+                            let used = it.byte_offset();
+                            self.buf.drain(..used);
+                            return Ok(v);
+                        }
+                        Some(Err(e)) if e.is_eof() => {}
+                        Some(Err(e)) => {
+                            return Err(RobotError::Protocol(format!(
+                                "{method}: malformed JSON from the controller: {e}"
+                            )));
+                        }
+                        None => {}
+                    }
+                }
+                let more = self.fill(method, deadline)?;
+                self.buf.extend_from_slice(&more);
+            },
+        }
+    }
+
+    /// Params for this transport: `named` (an object, or `Value::Null` for none) on the framed
+    /// and HTTP transports, `positional` (an array) on lines.
+    fn params(&self, named: Value, positional: Value) -> Value {
+        if self.transport.named_params() { named } else { positional }
     }
 
     /// Calls a method whose result is a status code: `< 0` is an error, `> 0` a warning that
@@ -134,8 +409,28 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`].
     pub fn robot_names(&mut self) -> Result<Vec<String>, RobotError> {
-        let r = self.call("getRobotNames", json!([]))?;
+        let p = self.params(Value::Null, json!([]));
+        let r = self.call("getRobotNames", p)?;
         serde_json::from_value(r).map_err(|e| RobotError::Protocol(format!("getRobotNames: {e}")))
+    }
+
+    /// `<robot>.RobotConfig.setTcpOffset`: the tool centre point in the flange frame
+    /// `[x, y, z, rx, ry, rz]` (m, rad). Returns the status code.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call_status`].
+    pub fn set_tcp_offset(&mut self, robot: &str, offset: [f64; 6]) -> Result<i64, RobotError> {
+        let p = self.params(json!({"offset": offset}), json!([offset]));
+        self.call_status(&format!("{robot}.RobotConfig.setTcpOffset"), p)
+    }
+
+    /// `<robot>.MotionControl.setSpeedFraction`: the fraction (0, 1] of the commanded speeds.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call_status`].
+    pub fn set_speed_fraction(&mut self, robot: &str, fraction: f64) -> Result<i64, RobotError> {
+        let p = self.params(json!({"fraction": fraction}), json!([fraction]));
+        self.call_status(&format!("{robot}.MotionControl.setSpeedFraction"), p)
     }
 
     /// `<robot>.MotionControl.getExecId`: the running motion's id, −1 when idle.
@@ -144,8 +439,27 @@ impl AuboClient {
     /// As [`AuboClient::call`].
     pub fn exec_id(&mut self, robot: &str) -> Result<i64, RobotError> {
         let m = format!("{robot}.MotionControl.getExecId");
-        let r = self.call(&m, json!([]))?;
+        let p = self.params(Value::Null, json!([]));
+        let r = self.call(&m, p)?;
         r.as_i64().ok_or_else(|| RobotError::Protocol(format!("{m}: expected an integer")))
+    }
+
+    /// `<robot>.RobotState.isSteady`: whether the arm stands still.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Protocol`] if the result is not a bool.
+    pub fn is_steady(&mut self, robot: &str) -> Result<bool, RobotError> {
+        let m = format!("{robot}.RobotState.isSteady");
+        let p = self.params(Value::Null, json!([]));
+        let r = self.call(&m, p)?;
+        r.as_bool().ok_or_else(|| RobotError::Protocol(format!("{m}: expected a bool, got {r}")))
+    }
+
+    fn six(&mut self, m: &str) -> Result<[f64; 6], RobotError> {
+        let p = self.params(Value::Null, json!([]));
+        let r = self.call(m, p)?;
+        let v: Vec<f64> = serde_json::from_value(r).map_err(|e| RobotError::Protocol(format!("{m}: {e}")))?;
+        v.try_into().map_err(|_| RobotError::Protocol(format!("{m}: expected 6 numbers")))
     }
 
     /// `<robot>.RobotState.getTcpPose`.
@@ -153,11 +467,37 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`].
     pub fn tcp_pose(&mut self, robot: &str) -> Result<Pose, RobotError> {
-        let m = format!("{robot}.RobotState.getTcpPose");
-        let r = self.call(&m, json!([]))?;
-        let v: Vec<f64> = serde_json::from_value(r).map_err(|e| RobotError::Protocol(format!("{m}: {e}")))?;
-        let a: [f64; 6] = v.try_into().map_err(|_| RobotError::Protocol(format!("{m}: expected 6 numbers")))?;
-        Ok(Pose(a))
+        Ok(Pose(self.six(&format!("{robot}.RobotState.getTcpPose"))?))
+    }
+
+    /// `<robot>.RobotState.getJointPositions`: the six joint angles, rad.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`].
+    pub fn joint_positions(&mut self, robot: &str) -> Result<[f64; 6], RobotError> {
+        self.six(&format!("{robot}.RobotState.getJointPositions"))
+    }
+
+    /// The method and params of one motion command for this transport: `moveJoint` with
+    /// `{q, a, v, blend_radius, duration}` or `moveLine` with `{pose, a, v, blend_radius,
+    /// duration}` (positional in that order on lines); duration 0 (the controller times it).
+    pub fn move_request(&self, robot: &str, m: &Move) -> (String, Value) {
+        match m {
+            Move::Joint { q, a, v } => (
+                format!("{robot}.MotionControl.moveJoint"),
+                self.params(
+                    json!({"q": q, "a": a, "v": v, "blend_radius": 0.0, "duration": 0.0}),
+                    json!([q, a, v, 0.0, 0.0]),
+                ),
+            ),
+            Move::Line { pose, a, v, blend_m } => (
+                format!("{robot}.MotionControl.moveLine"),
+                self.params(
+                    json!({"pose": pose.0, "a": a, "v": v, "blend_radius": blend_m, "duration": 0.0}),
+                    json!([pose.0, a, v, blend_m, 0.0]),
+                ),
+            ),
+        }
     }
 
     /// Sends one motion command, waiting and retrying while the queue is full (bounded).
@@ -165,12 +505,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call_status`]; [`RobotError::Timeout`] if the queue stays full.
     pub fn send_move(&mut self, robot: &str, m: &Move) -> Result<(), RobotError> {
-        let (method, params) = match m {
-            Move::Joint { q, a, v } => (format!("{robot}.MotionControl.moveJoint"), json!([q, a, v, 0.0, 0.0])),
-            Move::Line { pose, a, v, blend_m } => {
-                (format!("{robot}.MotionControl.moveLine"), json!([pose.0, a, v, blend_m, 0.0]))
-            }
-        };
+        let (method, params) = self.move_request(robot, m);
         for attempt in 0..200 {
             match self.call_status(&method, params.clone())? {
                 QUEUE_FULL => std::thread::sleep(Duration::from_millis(5 + attempt.min(20) * 5)),
@@ -231,6 +566,8 @@ pub struct RunOptions<'a> {
     pub max_backoff: Duration,
     /// Safe height above the paper to lift to after a fault or a stop, m.
     pub lift_m: f64,
+    /// The transport and credentials.
+    pub link: Link,
     /// Set (for example by Ctrl-C) to stop: the runner sends no further stroke, waits for the
     /// controller to finish what it queued, lifts the brush and returns
     /// [`RobotError::Interrupted`] inside [`RobotError::RunStopped`].
@@ -239,7 +576,8 @@ pub struct RunOptions<'a> {
 
 impl<'a> RunOptions<'a> {
     /// The defaults `maobi robot send` uses: 2 s per call, 5 connection attempts per fault,
-    /// 3 faults per stroke, 10 per run, backoff 200 ms doubling to 5 s, lift 20 mm.
+    /// 3 faults per stroke, 10 per run, backoff 200 ms doubling to 5 s, lift 20 mm, the framed
+    /// transport with the default user and password ([`Link::default`]).
     pub fn new(stop: &'a AtomicBool) -> Self {
         Self {
             timeout: Duration::from_secs(2),
@@ -249,6 +587,7 @@ impl<'a> RunOptions<'a> {
             backoff: Duration::from_millis(200),
             max_backoff: Duration::from_secs(5),
             lift_m: 0.02,
+            link: Link::default(),
             stop,
         }
     }
@@ -275,8 +614,7 @@ struct Session {
 }
 
 fn open(addr: &str, program: &Program, opts: &RunOptions<'_>, robot_name: Option<&str>) -> Result<Session, RobotError> {
-    let mut client = AuboClient::connect(addr, opts.timeout)?;
-    let names = client.robot_names()?;
+    let (mut client, names) = AuboClient::open(addr, &opts.link, opts.timeout)?;
     let robot = match robot_name {
         Some(n) if names.iter().any(|x| x == n) => n.to_string(),
         Some(n) => {
@@ -287,11 +625,8 @@ fn open(addr: &str, program: &Program, opts: &RunOptions<'_>, robot_name: Option
         }
         None => names.first().cloned().ok_or_else(|| RobotError::Protocol("getRobotNames: no robots".into()))?,
     };
-    client.call_status(
-        &format!("{robot}.RobotConfig.setTcpOffset"),
-        json!([[0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0]]),
-    )?;
-    client.call_status(&format!("{robot}.MotionControl.setSpeedFraction"), json!([program.speed_fraction]))?;
+    client.set_tcp_offset(&robot, [0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0])?;
+    client.set_speed_fraction(&robot, program.speed_fraction)?;
     Ok(Session { client, robot })
 }
 
@@ -377,7 +712,8 @@ pub fn run_program(
                 Some(s) => lift(s, program, opts.lift_m, idle_limit),
                 None => Err(RobotError::Io("not connected".into())),
             };
-            if outcome.as_ref().is_err_and(is_fault) {
+            // A broken stream (a fault, or bytes out of frame) is left for a fresh connection.
+            if outcome.as_ref().is_err_and(|e| is_fault(e) || matches!(e, RobotError::Framing(_))) {
                 outcome = open(addr, program, opts, robot_name)
                     .and_then(|mut s| lift(&mut s, program, opts.lift_m, idle_limit));
             }

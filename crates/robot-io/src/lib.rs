@@ -12,6 +12,8 @@
 //! * [`aubo`]: the ARCS JSON-RPC client and a fault-tolerant runner (reconnect, lift, resume).
 //! * [`export`]: ARCS Lua script, URScript, G-code.
 //! * [`sim`]: a loopback simulator of the controller for tests and dry runs.
+//! * [`wire`]: the controller's wire formats (the SDK's frames, JSON text and login; lines;
+//!   JSON-RPC over HTTP).
 //!
 //! ```
 //! use robot_io::{frame::PaperFrame, pose::{brush_pose, Pose}};
@@ -30,6 +32,7 @@ pub mod kinematics;
 pub mod pose;
 pub mod program;
 pub mod sim;
+pub mod wire;
 
 use std::path::Path;
 
@@ -67,6 +70,19 @@ pub enum RobotError {
     /// The controller's answer is not valid JSON-RPC.
     #[error("protocol: {0}")]
     Protocol(String),
+    /// The byte stream is not in the transport's format (a frame without `SOF`, an unknown
+    /// frame type, a length beyond the limit, a malformed HTTP message); the connection cannot
+    /// be used further.
+    #[error("framing: {0}")]
+    Framing(String),
+    /// The controller refused the login (or the user name cannot be sent).
+    #[error("login as `{user}` refused: {message}")]
+    Login {
+        /// The user.
+        user: String,
+        /// Why.
+        message: String,
+    },
     /// A JSON-RPC `error` object.
     #[error("{method}: JSON-RPC error {code}: {message}")]
     Rpc {

@@ -1,5 +1,7 @@
-//! A loopback AUBO JSON-RPC simulator: validates every request, executes moves on a model of
-//! the arm, answers `getExecId`/`getTcpPose`, injects faults, and records the executed TCP path.
+//! A loopback AUBO JSON-RPC simulator: serves the SDK's framed transport (with its login), the
+//! line-delimited form and JSON-RPC over HTTP; validates every request (named or positional
+//! params), executes moves on a model of the arm, answers `getExecId`, `isSteady`,
+//! `getTcpPose` and `getJointPositions`, injects faults, and records the executed TCP path.
 
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -14,6 +16,8 @@ use crate::RobotError;
 use crate::kinematics;
 use crate::pose::Pose;
 use crate::program::tcp_iso;
+use crate::wire;
+pub use crate::wire::Transport;
 
 /// Faults to inject.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -172,24 +176,76 @@ impl State {
     }
 }
 
+/// What the simulator answers to besides its listeners: the faults to inject and the one user
+/// who may log in over the framed transport.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SimOptions {
+    /// Faults to inject.
+    pub faults: Faults,
+    /// The user the framed login accepts.
+    pub user: String,
+    /// The password the framed login accepts (compared by its digest, as a controller would).
+    pub password: String,
+}
+
+impl Default for SimOptions {
+    /// No faults; the controller's default user `aubo`, password `123456`.
+    fn default() -> Self {
+        Self { faults: Faults::default(), user: wire::DEFAULT_USER.into(), password: wire::DEFAULT_PASSWORD.into() }
+    }
+}
+
+/// One port the simulator listens on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Listen {
+    /// The address to bind, for example `127.0.0.1:30004` (`:0` for any free port).
+    pub bind: String,
+    /// The transport it serves; `None` serves all three, told apart by each connection's first
+    /// byte (`S` of `SOF`: framed; `{` or `[`: lines; a capital letter, as in `POST`: HTTP).
+    pub transport: Option<Transport>,
+}
+
 /// A running simulator.
 pub struct Simulator {
-    /// The address it listens on.
+    /// The address it listens on (the first listener's).
     pub addr: std::net::SocketAddr,
+    addrs: Vec<(Option<Transport>, std::net::SocketAddr)>,
     state: Arc<Mutex<State>>,
     stop: Arc<AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
 impl Simulator {
-    /// Starts a simulator on `bind` (for example `127.0.0.1:0` for any free port).
+    /// Starts a simulator on `bind` (for example `127.0.0.1:0` for any free port) serving every
+    /// transport on that one port, with the default login.
     ///
     /// # Errors
     /// [`RobotError::Io`] if the address cannot be bound.
     pub fn start(bind: &str, faults: Faults) -> Result<Self, RobotError> {
-        let listener = TcpListener::bind(bind).map_err(|e| RobotError::Io(format!("{bind}: {e}")))?;
-        let addr = listener.local_addr().map_err(|e| RobotError::Io(e.to_string()))?;
-        listener.set_nonblocking(true).map_err(|e| RobotError::Io(e.to_string()))?;
+        Self::start_with(
+            &[Listen { bind: bind.to_string(), transport: None }],
+            SimOptions { faults, ..SimOptions::default() },
+        )
+    }
+
+    /// Starts a simulator listening on every address of `listen` (one shared arm).
+    ///
+    /// # Errors
+    /// [`RobotError::Io`] if an address cannot be bound; [`RobotError::Config`] if `listen` is
+    /// empty.
+    pub fn start_with(listen: &[Listen], options: SimOptions) -> Result<Self, RobotError> {
+        if listen.is_empty() {
+            return Err(RobotError::Config { file: "simulator".into(), message: "no port to listen on".into() });
+        }
+        let mut listeners = Vec::new();
+        let mut addrs = Vec::new();
+        for l in listen {
+            let listener = TcpListener::bind(&l.bind).map_err(|e| RobotError::Io(format!("{}: {e}", l.bind)))?;
+            let addr = listener.local_addr().map_err(|e| RobotError::Io(e.to_string()))?;
+            listener.set_nonblocking(true).map_err(|e| RobotError::Io(e.to_string()))?;
+            addrs.push((l.transport, addr));
+            listeners.push((listener, l.transport));
+        }
         let q0 = HOME_JOINTS;
         let tcp = tcp_iso(0.0);
         let state = Arc::new(Mutex::new(State {
@@ -201,23 +257,37 @@ impl Simulator {
             time_s: 0.0,
             moves_seen: 0,
             dropped: false,
-            faults,
+            faults: options.faults,
         }));
         let stop = Arc::new(AtomicBool::new(false));
+        let login = Arc::new((options.user, wire::login_digest(&options.password)));
         let (st, sp) = (state.clone(), stop.clone());
         let thread = std::thread::spawn(move || {
             while !sp.load(Ordering::SeqCst) {
-                match listener.accept() {
-                    Ok((stream, _)) => {
-                        let st = st.clone();
-                        let sp = sp.clone();
-                        std::thread::spawn(move || serve(stream, st, sp));
+                let mut idle = true;
+                for (listener, transport) in &listeners {
+                    if let Ok((stream, _)) = listener.accept() {
+                        idle = false;
+                        let (st, sp, login, t) = (st.clone(), sp.clone(), login.clone(), *transport);
+                        std::thread::spawn(move || serve(stream, t, &st, &sp, &login));
                     }
-                    Err(_) => std::thread::sleep(Duration::from_millis(5)),
+                }
+                if idle {
+                    std::thread::sleep(Duration::from_millis(5));
                 }
             }
         });
-        Ok(Simulator { addr, state, stop, thread: Some(thread) })
+        Ok(Simulator { addr: addrs[0].1, addrs, state, stop, thread: Some(thread) })
+    }
+
+    /// Every listener: the transport it serves (`None`: all, by the first byte) and its address.
+    pub fn addrs(&self) -> &[(Option<Transport>, std::net::SocketAddr)] {
+        &self.addrs
+    }
+
+    /// The first address serving `transport` (a listener for it, or one serving all).
+    pub fn addr_of(&self, transport: Transport) -> Option<std::net::SocketAddr> {
+        self.addrs.iter().find(|(t, _)| t.is_none_or(|t| t == transport)).map(|(_, a)| *a)
     }
 
     /// The executed TCP path so far.
@@ -250,60 +320,198 @@ impl Drop for Simulator {
     }
 }
 
-fn serve(mut stream: TcpStream, state: Arc<Mutex<State>>, stop: Arc<AtomicBool>) {
+/// One connection: its stream, the bytes read and not yet used, and the stop flag.
+struct Conn<'a> {
+    stream: TcpStream,
+    buf: Vec<u8>,
+    stop: &'a AtomicBool,
+    state: &'a Mutex<State>,
+}
+
+impl Conn<'_> {
+    /// Reads more bytes into `buf`; false when the peer closed, the read failed or the
+    /// simulator stops.
+    fn read_more(&mut self) -> bool {
+        let mut chunk = [0u8; 16 * 1024];
+        while !self.stop.load(Ordering::SeqCst) {
+            match self.stream.read(&mut chunk) {
+                Ok(0) => return false,
+                Ok(n) => {
+                    self.buf.extend_from_slice(&chunk[..n]);
+                    return true;
+                }
+                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                Err(_) => return false,
+            }
+        }
+        false
+    }
+
+    /// Writes one message in one piece after the configured delay; false if the write failed.
+    fn send(&mut self, bytes: &[u8]) -> bool {
+        let delay = self.state.lock().expect("sim state").faults.delay_ms;
+        if let Some(ms) = delay {
+            std::thread::sleep(Duration::from_millis(ms));
+        }
+        self.stream.write_all(bytes).is_ok()
+    }
+}
+
+fn serve(
+    stream: TcpStream,
+    mode: Option<Transport>,
+    state: &Mutex<State>,
+    stop: &AtomicBool,
+    login: &(String, String),
+) {
     let _ = stream.set_read_timeout(Some(Duration::from_millis(50)));
-    let mut buf: Vec<u8> = Vec::new();
-    let mut chunk = [0u8; 4096];
-    while !stop.load(Ordering::SeqCst) {
+    let _ = stream.set_nodelay(true);
+    let mut c = Conn { stream, buf: Vec::new(), stop, state };
+    let transport = match mode {
+        Some(t) => t,
+        None => loop {
+            match c.buf.iter().copied().find(|b| !b.is_ascii_whitespace()) {
+                Some(b'S') => break Transport::Framed,
+                Some(b'{' | b'[') => break Transport::Lines,
+                Some(b'A'..=b'Z') => break Transport::Http,
+                Some(_) => return, // none of the three: hang up
+                None if !c.read_more() => return,
+                None => {}
+            }
+        },
+    };
+    match transport {
+        Transport::Framed => serve_framed(c, login),
+        Transport::Lines => serve_lines(c),
+        Transport::Http => serve_http(c),
+    }
+}
+
+fn serve_lines(mut c: Conn<'_>) {
+    loop {
         // Answer every complete request in the buffer.
         loop {
-            let start = buf.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(buf.len());
-            buf.drain(..start);
-            if buf.is_empty() {
+            let start = c.buf.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(c.buf.len());
+            c.buf.drain(..start);
+            if c.buf.is_empty() {
                 break;
             }
-            let mut it = serde_json::Deserializer::from_slice(&buf).into_iter::<Value>();
+            let mut it = serde_json::Deserializer::from_slice(&c.buf).into_iter::<Value>();
             let v = match it.next() {
                 Some(Ok(v)) => {
                     let used = it.byte_offset();
-                    buf.drain(..used);
+                    c.buf.drain(..used);
                     v
                 }
                 Some(Err(e)) if e.is_eof() => break,
                 _ => {
-                    let _ = write_json(
-                        &mut stream,
-                        &json!({"jsonrpc": "2.0", "id": null, "error": {"code": -32700, "message": "parse error"}}),
-                    );
+                    let _ = c.send(&line(&parse_error()));
                     return;
                 }
             };
-            match handle(&v, &state) {
+            match handle(&v, c.state) {
                 Reply::Answer(a) => {
-                    let delay = state.lock().expect("sim state").faults.delay_ms;
-                    if let Some(ms) = delay {
-                        std::thread::sleep(Duration::from_millis(ms));
-                    }
-                    if write_json(&mut stream, &a).is_err() {
+                    if !c.send(&line(&a)) {
                         return;
                     }
                 }
                 Reply::Drop => return,
             }
         }
-        match stream.read(&mut chunk) {
-            Ok(0) => return,
-            Ok(n) => buf.extend_from_slice(&chunk[..n]),
-            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
-            Err(_) => return,
+        if !c.read_more() {
+            return;
         }
     }
 }
 
-fn write_json(s: &mut TcpStream, v: &Value) -> std::io::Result<()> {
-    let mut b = serde_json::to_vec(v).expect("serialisable");
+fn line(v: &Value) -> Vec<u8> {
+    let mut b = serde_json::to_vec(v).unwrap_or_default();
     b.push(b'\n');
-    s.write_all(&b)
+    b
+}
+
+fn parse_error() -> Value {
+    json!({"jsonrpc": "2.0", "id": null, "error": {"code": -32700, "message": "parse error"}})
+}
+
+/// The framed transport: the login first (only the version query is answered before it),
+/// then JSON-RPC requests, every answer one frame of type 1. A frame that breaks the framing
+/// (bad magic or type, a length beyond the limit) closes the connection.
+fn serve_framed(mut c: Conn<'_>, login: &(String, String)) {
+    let mut frames = wire::FrameDecoder::default();
+    let mut logged_in = false;
+    loop {
+        frames.push(&std::mem::take(&mut c.buf));
+        loop {
+            let payload = match frames.next_frame() {
+                Ok(Some(p)) => p,
+                Ok(None) => break,
+                Err(_) => return,
+            };
+            let answer = if let Some(req) = wire::parse_login(&payload) {
+                logged_in = req.user == login.0 && req.digest == login.1;
+                wire::login_reply(logged_in)
+            } else {
+                let reply = match serde_json::from_slice::<Value>(&payload) {
+                    Err(_) => Reply::Answer(parse_error()),
+                    Ok(v) if !logged_in && v.get("method") != Some(&json!("SystemInfo.getInterfaceVersionCode")) => {
+                        err(
+                            &v.get("id").cloned().unwrap_or(Value::Null),
+                            NOT_LOGGED_IN,
+                            "not logged in: send the __login__ message first",
+                        )
+                    }
+                    Ok(v) => handle(&v, c.state),
+                };
+                match reply {
+                    Reply::Answer(a) => wire::sdk_json(&a).into_bytes(),
+                    Reply::Drop => return,
+                }
+            };
+            let Ok(frame) = wire::encode_frame(&answer) else { return };
+            if !c.send(&frame) {
+                return;
+            }
+        }
+        if !c.read_more() {
+            return;
+        }
+    }
+}
+
+/// JSON-RPC over HTTP/1.1: `POST` (any path) with a `Content-Length` JSON body, answered
+/// `200 OK` with the JSON-RPC answer; keep-alive unless the request says `Connection: close`.
+fn serve_http(mut c: Conn<'_>) {
+    loop {
+        loop {
+            let (head, body) = match wire::take_http_message(&mut c.buf, true) {
+                Ok(Some(m)) => m,
+                Ok(None) => break,
+                Err(e) => {
+                    let body = json!({"error": e.to_string()}).to_string();
+                    let _ = c.send(&wire::http_response(400, "Bad Request", body.as_bytes(), true));
+                    return;
+                }
+            };
+            if !head.start.starts_with("POST ") {
+                let body = json!({"error": "JSON-RPC requests are POSTed"}).to_string();
+                let _ = c.send(&wire::http_response(405, "Method Not Allowed", body.as_bytes(), true));
+                return;
+            }
+            let close = head.header("connection").is_some_and(|v| v.eq_ignore_ascii_case("close"));
+            let reply = match serde_json::from_slice::<Value>(&body) {
+                Err(_) => Reply::Answer(parse_error()),
+                Ok(v) => handle(&v, c.state),
+            };
+            let Reply::Answer(a) = reply else { return };
+            if !c.send(&wire::http_response(200, "OK", wire::sdk_json(&a).as_bytes(), close)) || close {
+                return;
+            }
+        }
+        if !c.read_more() {
+            return;
+        }
+    }
 }
 
 enum Reply {
@@ -334,6 +542,30 @@ fn numbers<const N: usize>(v: &Value) -> Option<[f64; N]> {
 /// Status codes the simulator returns for rejected motions.
 const INVALID_ARGUMENT: i64 = -5;
 const UNREACHABLE: i64 = -10;
+/// JSON-RPC error code for a framed call before the login (an assumption).
+const NOT_LOGGED_IN: i64 = -32000;
+
+/// The argument `name` (named params) or at `pos` (positional params).
+fn arg<'a>(params: &'a Value, name: &str, pos: usize) -> Option<&'a Value> {
+    match params {
+        Value::Object(m) => m.get(name),
+        Value::Array(a) => a.get(pos),
+        _ => None,
+    }
+}
+
+/// Whether `params` holds exactly the arguments `names` (by name or, positionally, by count);
+/// `optional` names may be left out of named params.
+fn arity(params: &Value, names: &[&str], optional: &[&str]) -> bool {
+    match params {
+        Value::Object(m) => {
+            m.keys().all(|k| names.contains(&k.as_str()))
+                && names.iter().all(|n| optional.contains(n) || m.contains_key(*n))
+        }
+        Value::Array(a) => a.len() == names.len(),
+        _ => names.is_empty(),
+    }
+}
 
 fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     let id = v.get("id").cloned().unwrap_or(Value::Null);
@@ -343,13 +575,18 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     {
         return err(&id, -32600, "invalid request: need jsonrpc \"2.0\", a method and an id");
     }
-    let Some(params) = v.get("params").and_then(Value::as_array) else {
-        return err(&id, -32602, "params must be an array");
-    };
-    let method = v["method"].as_str().expect("checked");
+    // Params: positional (an array), named (an object) or none (no `params` key, or null).
+    let params = v.get("params").unwrap_or(&Value::Null);
+    if !matches!(params, Value::Array(_) | Value::Object(_) | Value::Null) {
+        return err(&id, -32602, "params must be an array or an object");
+    }
+    let method = v["method"].as_str().unwrap_or_default();
     let mut st = state.lock().expect("sim state");
-    if method == "getRobotNames" {
-        return ok(&id, json!([SIM_ROBOT]));
+    match method {
+        "getRobotNames" => return ok(&id, json!([SIM_ROBOT])),
+        "getAxisNames" => return ok(&id, json!([])),
+        "SystemInfo.getInterfaceVersionCode" => return ok(&id, json!(wire::INTERFACE_VERSION)),
+        _ => {}
     }
     let Some((robot, rest)) = method.split_once('.') else {
         return err(&id, -32601, "method not found");
@@ -358,8 +595,8 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
         return err(&id, -32601, &format!("unknown robot `{robot}`"));
     }
     match rest {
-        "RobotConfig.setTcpOffset" => match params.first().and_then(numbers::<6>) {
-            Some(o) if o[2] >= 0.0 && o[2] < 0.5 => {
+        "RobotConfig.setTcpOffset" => match arg(params, "offset", 0).and_then(numbers::<6>) {
+            Some(o) if arity(params, &["offset"], &[]) && o[2] >= 0.0 && o[2] < 0.5 => {
                 st.tcp_offset_m = o[2];
                 let q = st.joints;
                 st.pose = Pose::from_iso(&kinematics::forward(&q, &tcp_iso(o[2])));
@@ -367,15 +604,18 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
             }
             _ => ok(&id, json!(INVALID_ARGUMENT)),
         },
-        "MotionControl.setSpeedFraction" => match params.first().and_then(Value::as_f64) {
-            Some(f) if f > 0.0 && f <= 1.0 => {
+        "MotionControl.setSpeedFraction" => match arg(params, "fraction", 0).and_then(Value::as_f64) {
+            Some(f) if arity(params, &["fraction"], &[]) && f > 0.0 && f <= 1.0 => {
                 st.speed_fraction = f;
                 ok(&id, json!(0))
             }
             _ => ok(&id, json!(INVALID_ARGUMENT)),
         },
+        // Moves execute at once: the arm is always idle and steady between requests.
         "MotionControl.getExecId" => ok(&id, json!(-1)),
+        "RobotState.isSteady" => ok(&id, json!(true)),
         "RobotState.getTcpPose" => ok(&id, json!(st.pose.0)),
+        "RobotState.getJointPositions" => ok(&id, json!(st.joints)),
         "MotionControl.moveJoint" | "MotionControl.moveLine" => {
             st.moves_seen += 1;
             let n = st.moves_seen;
@@ -390,17 +630,23 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
                     return ok(&id, json!(crate::aubo::QUEUE_FULL));
                 }
             }
-            if params.len() != 5 {
+            let target = if rest == "MotionControl.moveJoint" { "q" } else { "pose" };
+            if !arity(params, &[target, "a", "v", "blend_radius", "duration"], &["duration"]) {
                 return ok(&id, json!(INVALID_ARGUMENT));
             }
-            let (a, vv, blend) = (params[1].as_f64(), params[2].as_f64(), params[3].as_f64());
-            let (Some(a), Some(vv), Some(blend)) = (a, vv, blend) else { return ok(&id, json!(INVALID_ARGUMENT)) };
+            let num = |name: &str, pos: usize| arg(params, name, pos).and_then(Value::as_f64);
+            let (Some(a), Some(vv), Some(blend)) = (num("a", 1), num("v", 2), num("blend_radius", 3)) else {
+                return ok(&id, json!(INVALID_ARGUMENT));
+            };
             if !(a > 0.0 && a <= 20.0 && vv > 0.0 && vv <= 3.2 && (0.0..=0.1).contains(&blend)) {
                 return ok(&id, json!(INVALID_ARGUMENT));
             }
+            let Some(target) = arg(params, target, 0).and_then(numbers::<6>) else {
+                return ok(&id, json!(INVALID_ARGUMENT));
+            };
             let tcp = tcp_iso(st.tcp_offset_m);
             if rest == "MotionControl.moveJoint" {
-                let Some(q) = params.first().and_then(numbers::<6>) else { return ok(&id, json!(INVALID_ARGUMENT)) };
+                let q = target;
                 if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
                     return ok(&id, json!(UNREACHABLE));
                 }
@@ -409,8 +655,7 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
                 st.pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
                 st.record(samples);
             } else {
-                let Some(p) = params.first().and_then(numbers::<6>) else { return ok(&id, json!(INVALID_ARGUMENT)) };
-                let pose = Pose(p);
+                let pose = Pose(target);
                 let seed = st.joints;
                 let Some(q) = kinematics::inverse(&pose, &tcp, Some(&seed)) else { return ok(&id, json!(UNREACHABLE)) };
                 let samples = line_motion(&st.pose, &pose, vv * st.speed_fraction, st.time_s);

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::RobotError;
-use robot_io::aubo::{AuboClient, RunOptions, run_program};
+use robot_io::aubo::{AuboClient, Link, RunOptions, Transport, run_program};
 use robot_io::frame::{PaperFile, PaperFrame};
 use robot_io::program::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
@@ -426,6 +426,8 @@ fn relay(
 
 fn opts(stop: &AtomicBool) -> RunOptions<'_> {
     RunOptions {
+        // The proxy counts requests by their newline: the line-delimited transport.
+        link: Link::new(Transport::Lines),
         timeout: Duration::from_millis(500),
         backoff: Duration::from_millis(5),
         max_backoff: Duration::from_millis(80),
