@@ -481,10 +481,11 @@ fn serve_framed(mut c: Conn<'_>, login: &(String, String)) {
 
 /// JSON-RPC over HTTP/1.1: `POST` (any path) with a `Content-Length` JSON body, answered
 /// `200 OK` with the JSON-RPC answer; keep-alive unless the request says `Connection: close`.
+/// Anything else is answered 400 (malformed), 405 (not a POST) or 411 (no length) and closed.
 fn serve_http(mut c: Conn<'_>) {
     loop {
         loop {
-            let (head, body) = match wire::take_http_message(&mut c.buf, true) {
+            let (head, body) = match wire::take_http_message(&mut c.buf, false) {
                 Ok(Some(m)) => m,
                 Ok(None) => break,
                 Err(e) => {
@@ -496,6 +497,11 @@ fn serve_http(mut c: Conn<'_>) {
             if !head.start.starts_with("POST ") {
                 let body = json!({"error": "JSON-RPC requests are POSTed"}).to_string();
                 let _ = c.send(&wire::http_response(405, "Method Not Allowed", body.as_bytes(), true));
+                return;
+            }
+            if head.header("content-length").is_none() {
+                let body = json!({"error": "send the JSON-RPC request with a Content-Length"}).to_string();
+                let _ = c.send(&wire::http_response(411, "Length Required", body.as_bytes(), true));
                 return;
             }
             let close = head.header("connection").is_some_and(|v| v.eq_ignore_ascii_case("close"));
