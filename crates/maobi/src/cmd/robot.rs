@@ -6,10 +6,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use robot_io::aubo::{RPC_PORT, RunOptions, run_program};
+use robot_io::aubo::{Link, RPC_PORT, RunOptions, Transport, run_program};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
-use robot_io::sim::{Faults, Simulator};
+use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::{RobotError, TrackFile};
 
 use crate::common::{print_json, progress, write_atomic};
@@ -23,7 +23,7 @@ pub enum RobotCmd {
     Export(ExportArgs),
     /// Run the program on a controller (or on `maobi robot sim`).
     Send(SendArgs),
-    /// A loopback AUBO JSON-RPC simulator.
+    /// A loopback AUBO controller simulator (framed, line-delimited and HTTP JSON-RPC).
     Sim(SimArgs),
     /// Render a simulator trace as what the brush wrote, framed like `maobi write`'s render.
     RenderTrace(RenderTraceArgs),
@@ -96,9 +96,19 @@ pub struct SendArgs {
     /// Controller host.
     #[arg(long)]
     host: String,
-    /// JSON-RPC port.
-    #[arg(long, default_value_t = RPC_PORT)]
-    port: u16,
+    /// Port (default: 30004 for framed and lines, 9012 for http).
+    #[arg(long)]
+    port: Option<u16>,
+    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines
+    /// (line-delimited JSON, positional params) or http (JSON-RPC over HTTP).
+    #[arg(long, default_value = "framed")]
+    transport: Transport,
+    /// User for the framed transport's login.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
+    user: String,
+    /// Password for the framed transport's login.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
+    password: String,
     /// Check and print the plan without connecting.
     #[arg(long)]
     dry_run: bool,
@@ -110,9 +120,25 @@ pub struct SendArgs {
 /// Arguments of `maobi robot sim`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
-    /// Port to listen on (127.0.0.1).
+    /// Port to listen on (127.0.0.1); it serves all three transports, told apart by each
+    /// connection's first bytes.
     #[arg(long, default_value_t = RPC_PORT)]
     port: u16,
+    /// Also serve JSON-RPC over HTTP alone on this port (AUBO's is 9012).
+    #[arg(long)]
+    http_port: Option<u16>,
+    /// Also serve the line-delimited transport alone on this port.
+    #[arg(long)]
+    lines_port: Option<u16>,
+    /// Also serve the framed transport alone on this port.
+    #[arg(long)]
+    framed_port: Option<u16>,
+    /// The user the framed login accepts.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
+    user: String,
+    /// The password the framed login accepts.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
+    password: String,
     /// Inject a fault: drop-after=N, delay-ms=D or queue-full-every=K (repeatable).
     #[arg(long)]
     fault: Vec<String>,
@@ -207,12 +233,13 @@ fn send(a: SendArgs) -> Result<()> {
     if !(1..=600_000).contains(&a.timeout_ms) {
         bail!("--timeout-ms must be between 1 and 600000, got {}", a.timeout_ms);
     }
+    let port = a.port.unwrap_or(a.transport.default_port());
     let l = load(&a.program)?;
     let (program, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
     if a.dry_run {
         println!(
-            "dry run: {} strokes, {} moves would be sent to {}:{}; nothing connected",
-            report.strokes, report.moves, a.host, a.port
+            "dry run: {} strokes, {} moves would be sent to {}:{port} ({}); nothing connected",
+            report.strokes, report.moves, a.host, a.transport
         );
         return Ok(());
     }
@@ -223,9 +250,10 @@ fn send(a: SendArgs) -> Result<()> {
     let opts = RunOptions {
         timeout: Duration::from_millis(a.timeout_ms),
         lift_m: l.cfg.lift_mm / 1000.0,
+        link: Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() },
         ..RunOptions::new(&stop)
     };
-    let addr = format!("{}:{}", a.host, a.port);
+    let addr = format!("{}:{port}", a.host);
     let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| {
         pb.set_position(r.strokes_completed.len() as u64)
     });
@@ -237,7 +265,7 @@ fn send(a: SendArgs) -> Result<()> {
             eprintln!("error: running on {addr}: {e}");
             std::process::exit(130);
         }
-        Err(e) => return Err(e).with_context(|| format!("running on {addr}")),
+        Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", a.transport)),
     };
     println!(
         "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed",
@@ -269,8 +297,27 @@ fn sim(a: SimArgs) -> Result<()> {
         )),
         None => None,
     };
-    let sim = Simulator::start(&format!("127.0.0.1:{}", a.port), faults)?;
-    eprintln!("simulating an AUBO-i5 (robot `{}`) on {}; Ctrl-C to stop", robot_io::sim::SIM_ROBOT, sim.addr);
+    let mut listen = vec![Listen { bind: format!("127.0.0.1:{}", a.port), transport: None }];
+    for (port, t) in
+        [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)]
+    {
+        if let Some(p) = port {
+            listen.push(Listen { bind: format!("127.0.0.1:{p}"), transport: Some(t) });
+        }
+    }
+    let sim = Simulator::start_with(&listen, SimOptions { faults, user: a.user.clone(), password: a.password.clone() })
+        .context("cannot start the simulator")?;
+    let ports: Vec<String> = sim
+        .addrs()
+        .iter()
+        .map(|(t, addr)| format!("{addr} ({})", t.map_or("framed, lines, http", |t| t.name())))
+        .collect();
+    eprintln!(
+        "simulating an AUBO-i5 (robot `{}`, login `{}`) on {}; Ctrl-C to stop",
+        robot_io::sim::SIM_ROBOT,
+        a.user,
+        ports.join(", ")
+    );
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
     // Ctrl-C and SIGTERM both stop the loop, which writes out what is left of the trace.
