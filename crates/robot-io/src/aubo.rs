@@ -377,6 +377,12 @@ impl AuboClient {
                         None => {}
                     }
                 }
+                if self.buf.len() > wire::MAX_FRAME_BYTES {
+                    return Err(RobotError::Framing(format!(
+                        "{method}: an answer longer than {} bytes",
+                        wire::MAX_FRAME_BYTES
+                    )));
+                }
                 let more = self.fill(method, deadline)?;
                 self.buf.extend_from_slice(&more);
             },

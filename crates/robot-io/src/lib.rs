@@ -9,7 +9,8 @@
 //! * [`kinematics`]: AUBO-i5 forward kinematics (modified DH) and a numerical inverse.
 //! * [`program`]: `robot.json`, the writing program (travel, descend, press, lift, optional
 //!   dipping) and the safety envelope checked before anything moves.
-//! * [`aubo`]: the ARCS JSON-RPC client and a fault-tolerant runner (reconnect, lift, resume).
+//! * [`aubo`]: the ARCS JSON-RPC client (the SDK's framed protocol with its login, line-delimited
+//!   JSON, or HTTP) and a fault-tolerant runner (reconnect, lift, resume).
 //! * [`export`]: ARCS Lua script, URScript, G-code.
 //! * [`sim`]: a loopback simulator of the controller for tests and dry runs.
 //! * [`wire`]: the controller's wire formats (the SDK's frames, JSON text and login; lines;

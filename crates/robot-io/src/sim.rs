@@ -403,7 +403,7 @@ fn serve_lines(mut c: Conn<'_>) {
                     c.buf.drain(..used);
                     v
                 }
-                Some(Err(e)) if e.is_eof() => break,
+                Some(Err(e)) if e.is_eof() && c.buf.len() <= wire::MAX_FRAME_BYTES => break,
                 _ => {
                     let _ = c.send(&line(&parse_error()));
                     return;
