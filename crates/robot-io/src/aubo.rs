@@ -74,10 +74,11 @@ static CLIENTS: AtomicU64 = AtomicU64::new(0);
 const ID_ALPHABET: &[u8; 62] = b"0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz";
 
 /// A string id shaped like the SDK's (`xxxxxxxx-xxxx-xxxx`, 18 characters from 0–9, A–Z,
-/// a–z), distinct for every client of a process and every call.
+/// a–z, so a frame is as long as the SDK's), made from the process, the client and the call
+/// number: different for every call in practice (answers are matched to calls by it).
 fn string_id(client: u64, n: u64) -> String {
     let mix = |mut z: u64| {
-        // splitmix64's finaliser: a bijection, so distinct inputs give distinct ids.
+        // splitmix64's finaliser.
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
