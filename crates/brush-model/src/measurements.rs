@@ -15,6 +15,24 @@ use crate::units::Press;
 /// The columns a measurements CSV must have.
 pub const REQUIRED_COLUMNS: [&str; 6] = ["h_mm", "alpha_deg", "beta_deg", "lt_mm", "lh_mm", "lr_mm"];
 
+/// The most rows a measurements file may have.
+pub const MAX_ROWS: usize = 1_000_000;
+
+/// The largest measurements file read, bytes (a million rows take about 40 MB).
+pub const MAX_BYTES: u64 = 64 << 20;
+
+/// Each column's accepted values (inclusive), with the reason given when a value is outside:
+/// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::profile::MAX_BRUSH_MM) can
+/// do, tilts short of lying flat, rotations within a turn either way.
+const BOUNDS: [(f64, f64, &str); 6] = [
+    (0.0, 1000.0, "expected a depth of 0..=1000 mm"),
+    (-90.0, 90.0, "expected a tilt of -90..=90 degrees"),
+    (-360.0, 360.0, "expected a rotation of -360..=360 degrees"),
+    (0.0, 2000.0, "expected a positive length of at most 2000 mm"),
+    (0.0, 2000.0, "expected a positive length of at most 2000 mm"),
+    (0.0, 2000.0, "expected a positive length of at most 2000 mm"),
+];
+
 /// One measured press and the footprint it left.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Measurement {
@@ -58,6 +76,24 @@ pub enum MeasurementError {
         /// What was expected.
         expected: &'static str,
     },
+    /// A file larger than [`MAX_BYTES`].
+    #[error("{source_name}: {bytes} bytes; a measurements file is at most {max} bytes")]
+    TooLarge {
+        /// File name.
+        source_name: String,
+        /// Its size.
+        bytes: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// More rows than [`MAX_ROWS`].
+    #[error("{source_name}: more than {max} rows")]
+    TooManyRows {
+        /// File name or other source label.
+        source_name: String,
+        /// The limit.
+        max: usize,
+    },
     /// The CSV itself is malformed (ragged rows, bad quoting, bad UTF-8).
     #[error("{source_name}: line {line}: malformed CSV: {message}")]
     Csv {
@@ -77,6 +113,10 @@ pub enum MeasurementError {
 pub fn load_measurements(path: &Path) -> Result<Vec<Measurement>, MeasurementError> {
     let name = path.display().to_string();
     let file = std::fs::File::open(path).map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?;
+    let len = file.metadata().map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?.len();
+    if len > MAX_BYTES {
+        return Err(MeasurementError::TooLarge { source_name: name, bytes: len, max: MAX_BYTES });
+    }
     read_measurements(file, &name)
 }
 
@@ -102,6 +142,9 @@ pub fn read_measurements(reader: impl Read, source_name: &str) -> Result<Vec<Mea
     let mut out = Vec::new();
     for rec in rdr.records() {
         let rec = rec.map_err(csv_err)?;
+        if out.len() == MAX_ROWS {
+            return Err(MeasurementError::TooManyRows { source_name: source_name.to_string(), max: MAX_ROWS });
+        }
         let line = rec.position().map(|p| p.line()).unwrap_or(0);
         let mut v = [0.0f64; 6];
         for (k, col) in REQUIRED_COLUMNS.iter().enumerate() {
@@ -122,6 +165,10 @@ pub fn read_measurements(reader: impl Read, source_name: &str) -> Result<Vec<Mea
             }
             if k == 0 && x < 0.0 {
                 return Err(field_err("expected a non-negative depth in mm"));
+            }
+            let (lo, hi, expected) = BOUNDS[k];
+            if !(lo..=hi).contains(&x) {
+                return Err(field_err(expected));
             }
             v[k] = x;
         }

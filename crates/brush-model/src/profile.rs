@@ -17,6 +17,16 @@ use crate::units::{Brush, Press};
 /// The profile format version this crate reads and writes.
 pub const PROFILE_VERSION: u32 = 1;
 
+/// The longest brush a profile may describe, mm (a metre: far beyond any writing brush).
+pub const MAX_BRUSH_MM: f64 = 1000.0;
+
+/// The largest profile file read, bytes (a profile with its fit report is about 4 KiB).
+pub const MAX_PROFILE_BYTES: u64 = 1 << 20;
+
+/// How many times the bundle's length a predicted footprint length may be: no brush leaves a
+/// mark much longer than its hair, and a coefficient of 1e300 must not reach the renderers.
+pub const MAX_FOOTPRINT_PER_LENGTH: f64 = 2.0;
+
 /// Errors from loading, validating or using a profile.
 #[derive(Debug, Error)]
 pub enum ProfileError {
@@ -77,6 +87,23 @@ pub enum ProfileError {
     NotInvertible {
         /// The profile's name.
         profile: String,
+    },
+    /// The model predicts a length no brush of this size can leave (see
+    /// [`MAX_FOOTPRINT_PER_LENGTH`]).
+    #[error(
+        "profile `{profile}` predicts {field} = {value:.4e} mm for this press, beyond the {max:.1} mm a {length:.1} mm brush can leave"
+    )]
+    Implausible {
+        /// The profile's name.
+        profile: String,
+        /// Which length.
+        field: &'static str,
+        /// The predicted value.
+        value: f64,
+        /// The cap, mm.
+        max: f64,
+        /// The brush's length, mm.
+        length: f64,
     },
     /// No built-in profile has this name.
     #[error("unknown built-in brush `{0}` (known: pen1, pen2)")]
@@ -271,8 +298,16 @@ impl BrushProfile {
     /// [`ProfileError::Io`], [`ProfileError::Json`] (names the missing or mistyped field, with
     /// line and column) or [`ProfileError::Invalid`].
     pub fn load(path: &Path) -> Result<Self, ProfileError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|error| ProfileError::Io { path: path.display().to_string(), error })?;
+        let io = |error| ProfileError::Io { path: path.display().to_string(), error };
+        let len = std::fs::metadata(path).map_err(io)?.len();
+        if len > MAX_PROFILE_BYTES {
+            return Err(ProfileError::Invalid {
+                source_name: path.display().to_string(),
+                field: "(file)".into(),
+                reason: format!("{len} bytes; a profile is at most {MAX_PROFILE_BYTES} bytes"),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(io)?;
         Self::from_json(&text, &path.display().to_string())
     }
 
@@ -312,8 +347,8 @@ impl BrushProfile {
             return Err(bad("name", "must not be empty".into()));
         }
         for (f, v) in [("brush.length_mm", self.brush.length_mm), ("brush.radius_mm", self.brush.radius_mm)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(bad(f, format!("must be a positive length in mm, got {v}")));
+            if !(v.is_finite() && v > 0.0 && v <= MAX_BRUSH_MM) {
+                return Err(bad(f, format!("must be a length in mm above 0 and at most {MAX_BRUSH_MM}, got {v}")));
             }
         }
         for (f, r) in [
@@ -330,6 +365,22 @@ impl BrushProfile {
         }
         if self.ranges.h_mm.min < 0.0 {
             return Err(bad("ranges.h_mm", "press depth cannot be negative".into()));
+        }
+        // Physical bounds: no press deeper than the hair, tilts short of lying flat, rotations
+        // within a turn either way. They also bound every loop that walks a range.
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let tau = std::f64::consts::TAU;
+        for (f, r, lo, hi, what) in [
+            ("ranges.h_mm", self.ranges.h_mm, 0.0, self.brush.length_mm, "0 up to brush.length_mm"),
+            ("ranges.alpha_rad", self.ranges.alpha_rad, -half_pi, half_pi, "−π/2..=π/2"),
+            ("ranges.beta_rad", self.ranges.beta_rad, -tau, tau, "−2π..=2π"),
+        ] {
+            if r.min < lo || r.max > hi {
+                let num = |v: f64| {
+                    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+                };
+                return Err(bad(f, format!("[{}, {}] leaves {what} ({lo:.4}..={hi:.4})", num(r.min), num(r.max))));
+            }
         }
         for (f, t) in
             [("model.lt_mm", self.model.lt_mm), ("model.lh_mm", self.model.lh_mm), ("model.lr_mm", self.model.lr_mm)]
@@ -351,9 +402,26 @@ impl BrushProfile {
                         ),
                     ));
                 }
+                if v > self.max_footprint_mm() {
+                    return Err(bad(
+                        f,
+                        format!(
+                            "predicts {v:.4e} mm at the range corner h={} α={} β={}; at most {:.1} mm ({MAX_FOOTPRINT_PER_LENGTH} × brush.length_mm)",
+                            c.h_mm,
+                            c.alpha_rad,
+                            c.beta_rad,
+                            self.max_footprint_mm()
+                        ),
+                    ));
+                }
             }
         }
         Ok(())
+    }
+
+    /// The longest footprint length this brush can leave, mm.
+    pub fn max_footprint_mm(&self) -> f64 {
+        MAX_FOOTPRINT_PER_LENGTH * self.brush.length_mm
     }
 
     fn raw(&self, p: &Press) -> [f64; 3] {
@@ -392,6 +460,15 @@ impl BrushProfile {
         for (field, value) in [("lt_mm", lt), ("lh_mm", lh), ("lr_mm", lr)] {
             if !(value > 0.0 && value.is_finite()) {
                 return Err(ProfileError::Degenerate { profile: self.name.clone(), field, value });
+            }
+            if value > self.max_footprint_mm() {
+                return Err(ProfileError::Implausible {
+                    profile: self.name.clone(),
+                    field,
+                    value,
+                    max: self.max_footprint_mm(),
+                    length: self.brush.length_mm,
+                });
             }
         }
         Ok(Footprint { lt_mm: lt, lh_mm: lh, lr_mm: lr })

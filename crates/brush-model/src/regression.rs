@@ -74,20 +74,31 @@ impl fmt::Display for Form {
     }
 }
 
+/// Reads a number that may be `null` (how JSON writes NaN, e.g. an undefined R²) as NaN.
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// As [`f64_or_nan`] for an optional term: absent is `None`, `null` is `Some(NaN)`.
+fn some_f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    Ok(Some(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN)))
+}
+
 /// One value per regressor. `None` for a regressor left out as unidentifiable.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Terms {
     /// Constant term (mm).
+    #[serde(deserialize_with = "f64_or_nan")]
     pub intercept: f64,
     /// Per mm of press depth.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "some_f64_or_nan")]
     pub h_mm: Option<f64>,
     /// Per radian of tilt.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "some_f64_or_nan")]
     pub alpha_rad: Option<f64>,
     /// Per radian of rotation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "some_f64_or_nan")]
     pub beta_rad: Option<f64>,
 }
 
@@ -132,14 +143,25 @@ pub struct OutputFit {
     pub coef: Terms,
     /// Their standard errors.
     pub std_err: Terms,
-    /// Their t values (coefficient / standard error).
+    /// Their t values (coefficient / standard error); NaN (JSON `null`) when the output is
+    /// constant in the data.
     pub t: Terms,
-    /// Coefficient of determination.
+    /// Coefficient of determination; NaN (JSON `null`) when the output is constant in the data
+    /// (no variance to explain: statsmodels says nan too). See [`OutputFit::is_constant`].
+    #[serde(deserialize_with = "f64_or_nan")]
     pub r2: f64,
-    /// R² adjusted for the number of regressors.
+    /// R² adjusted for the number of regressors; NaN when R² is.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub adj_r2: f64,
     /// Residual standard error `sqrt(SSR / (n − p))`, mm.
     pub resid_se: f64,
+}
+
+impl OutputFit {
+    /// Whether the output was constant in the data (R² undefined).
+    pub fn is_constant(&self) -> bool {
+        self.r2.is_nan()
+    }
 }
 
 /// A full fit report, in the shape `maobi calibrate --json` prints.
@@ -329,7 +351,13 @@ impl Design {
                 }
             })
             .collect();
-        let r2 = if sst > 0.0 { 1.0 - ssr / sst } else { 1.0 };
+        // An output constant in the data (up to rounding) has no variance to explain: R² and the
+        // t values are undefined, not the −4.4 or 1e15 that rounding noise over rounding noise
+        // gives.
+        let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let constant = sst <= n as f64 * (64.0 * f64::EPSILON * scale).powi(2);
+        let t: Vec<f64> = if constant { vec![f64::NAN; t.len()] } else { t };
+        let r2 = if constant { f64::NAN } else { 1.0 - ssr / sst };
         let adj_r2 = 1.0 - (1.0 - r2) * ((n - 1) as f64) / df_resid;
         OutputFit {
             coef: Terms::from_kept(&self.kept, beta.as_slice()),
@@ -425,7 +453,11 @@ impl fmt::Display for FitReport {
         }
         for (name, o) in &self.outputs {
             writeln!(f)?;
-            writeln!(f, "{name}: R² = {:.5}  adj. R² = {:.5}  resid. SE = {:.5} mm", o.r2, o.adj_r2, o.resid_se)?;
+            if o.is_constant() {
+                writeln!(f, "{name}: R² undefined ({name} is constant in the data)  resid. SE = {:.5} mm", o.resid_se)?;
+            } else {
+                writeln!(f, "{name}: R² = {:.5}  adj. R² = {:.5}  resid. SE = {:.5} mm", o.r2, o.adj_r2, o.resid_se)?;
+            }
             writeln!(f, "  {:<10} {:>14} {:>12} {:>10}", "term", "coef", "std err", "t")?;
             let rows = [
                 ("intercept", Some(o.coef.intercept), Some(o.std_err.intercept), Some(o.t.intercept)),
@@ -435,7 +467,11 @@ impl fmt::Display for FitReport {
             ];
             for (term, c, se, t) in rows {
                 if let (Some(c), Some(se), Some(t)) = (c, se, t) {
-                    writeln!(f, "  {term:<10} {c:>14.6} {se:>12.6} {t:>10.3}")?;
+                    if t.is_nan() {
+                        writeln!(f, "  {term:<10} {c:>14.6} {se:>12.6} {:>10}", "undefined")?;
+                    } else {
+                        writeln!(f, "  {term:<10} {c:>14.6} {se:>12.6} {t:>10.3}")?;
+                    }
                 }
             }
         }
