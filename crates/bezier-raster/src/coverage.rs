@@ -7,6 +7,66 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
 use thiserror::Error;
 
+/// The largest side of any image, px (also what PNG viewers and tiny-skia handle comfortably).
+pub const MAX_SIDE: u32 = 16384;
+
+/// The most pixels an image read from a file may have (64 Mpx: a 600-dpi A3 scan), checked from
+/// the file's header before anything is decoded.
+pub const MAX_LOAD_PIXELS: u64 = 1 << 26;
+
+/// Limits for decoding a user's image: sides up to [`MAX_SIDE`], at most 1 GiB for the decoder.
+/// The pixel count is checked separately against [`MAX_LOAD_PIXELS`] (see [`open_image`]).
+pub fn image_limits() -> image::Limits {
+    let mut l = image::Limits::default();
+    l.max_image_width = Some(MAX_SIDE);
+    l.max_image_height = Some(MAX_SIDE);
+    l.max_alloc = Some(1 << 30);
+    l
+}
+
+/// Opens and decodes an image file with [`image_limits`], refusing more than
+/// [`MAX_LOAD_PIXELS`] from the header's dimensions before decoding. The message says what is
+/// wrong: missing or unreadable file, empty file, not an image, or too large.
+///
+/// # Errors
+/// A one-line reason (without the path; callers add it).
+pub fn open_image(path: &Path) -> Result<image::DynamicImage, String> {
+    probe_image(path)?;
+    let mut reader =
+        image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
+    reader.limits(image_limits());
+    reader.decode().map_err(|e| format!("not a readable image: {e}"))
+}
+
+/// Checks, from the file and its header only, that an image file can be opened by
+/// [`open_image`]: it exists, is not empty, is PNG or JPEG, and is within the size limits.
+/// Returns its width and height.
+///
+/// # Errors
+/// A one-line reason (without the path; callers add it).
+pub fn probe_image(path: &Path) -> Result<(u32, u32), String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() == 0 {
+        return Err("the file is empty".into());
+    }
+    let reader =
+        image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
+    if reader.format().is_none() {
+        return Err("not an image (expected PNG or JPEG)".into());
+    }
+    let (w, h) = reader.into_dimensions().map_err(|e| format!("not a readable image: {e}"))?;
+    if w as u64 * h as u64 > MAX_LOAD_PIXELS || w > MAX_SIDE || h > MAX_SIDE {
+        return Err(format!(
+            "image is {w}×{h} px; the limit is {MAX_SIDE} px a side and {} Mpx in all",
+            MAX_LOAD_PIXELS >> 20
+        ));
+    }
+    Ok((w, h))
+}
+
 /// Errors from image I/O.
 #[derive(Debug, Error)]
 pub enum RasterError {
@@ -48,7 +108,7 @@ impl Coverage {
     /// # Errors
     /// [`RasterError::BadSize`] if a side is 0 or above 16384.
     pub fn try_new(width: u32, height: u32) -> Result<Self, RasterError> {
-        if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
             return Err(RasterError::BadSize(width, height));
         }
         Ok(Self { width, height, data: vec![0.0; width as usize * height as usize] })
@@ -128,12 +188,7 @@ impl Coverage {
     /// [`RasterError::Read`] naming the file when it cannot be opened or decoded.
     pub fn load(path: &Path) -> Result<Self, RasterError> {
         let err = |message: String| RasterError::Read { path: path.display().to_string(), message };
-        let img = image::ImageReader::open(path)
-            .map_err(|e| err(e.to_string()))?
-            .with_guessed_format()
-            .map_err(|e| err(e.to_string()))?
-            .decode()
-            .map_err(|e| err(e.to_string()))?;
+        let img = open_image(path).map_err(err)?;
         let la = img.to_luma_alpha8();
         let (w, h) = la.dimensions();
         let data = la.pixels().map(|p| (1.0 - p.0[0] as f32 / 255.0) * (p.0[1] as f32 / 255.0)).collect();

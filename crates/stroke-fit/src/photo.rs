@@ -95,11 +95,9 @@ pub fn scale_from_metadata(path: &Path) -> Option<f64> {
 /// [`PhotoError`] for unreadable files, no ink, mostly ink, or several large blobs.
 pub fn load_ink(path: &Path) -> Result<InkMask, PhotoError> {
     let name = path.display().to_string();
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| PhotoError::Unreadable { path: name.clone(), message: e.to_string() })?
-        .decode()
-        .map_err(|e| PhotoError::Unreadable { path: name.clone(), message: e.to_string() })?;
+    // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
+    let img = bezier_raster::coverage::open_image(path)
+        .map_err(|message| PhotoError::Unreadable { path: name.clone(), message })?;
     let g = img.to_luma32f();
     let (w, h) = (g.width() as usize, g.height() as usize);
     mask_from_gray(g.into_raw(), w, h, &name)

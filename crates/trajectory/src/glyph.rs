@@ -18,6 +18,50 @@ pub const EM: f64 = 1024.0;
 /// The original data's top edge: `y' = EM_TOP − y`.
 pub const EM_TOP: f64 = 900.0;
 
+/// Input bounds on glyph data, checked before anything is built from it. Real
+/// hanzi-writer-data stays inside the em box; these leave a full em of margin on every side and
+/// room for ten times the most detailed character, while keeping every raster and every loop
+/// over points bounded.
+pub mod limits {
+    /// Coordinates (em units, either frame) must lie in `[MIN_COORD, MAX_COORD]`.
+    pub const MIN_COORD: f64 = -1024.0;
+    /// See [`MIN_COORD`].
+    pub const MAX_COORD: f64 = 2048.0;
+    /// Strokes per character (the most complex characters have about 60).
+    pub const MAX_STROKES: usize = 128;
+    /// Points per median (hanzi-writer-data uses 2–20).
+    pub const MAX_MEDIAN_POINTS: usize = 1000;
+    /// Path elements per stroke outline (hanzi-writer-data uses about 10–60).
+    pub const MAX_PATH_ELEMENTS: usize = 4096;
+    /// Bytes of one hanzi-writer-data file (the largest real file is about 10 KB).
+    pub const MAX_JSON_BYTES: u64 = 1 << 20;
+    /// Bytes of a font file (a full CJK font is 10–40 MB).
+    pub const MAX_FONT_BYTES: u64 = 256 << 20;
+}
+
+/// A coordinate for a message: plain when short, exponent form when huge or tiny.
+fn num(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+}
+
+/// Whether a point lies inside the accepted coordinate window.
+fn in_window(p: Point) -> bool {
+    (limits::MIN_COORD..=limits::MAX_COORD).contains(&p.x) && (limits::MIN_COORD..=limits::MAX_COORD).contains(&p.y)
+}
+
+/// The first point of a path outside the window, if any.
+fn path_outside(p: &BezPath) -> Option<Point> {
+    p.elements()
+        .iter()
+        .flat_map(|el| match *el {
+            kurbo::PathEl::MoveTo(a) | kurbo::PathEl::LineTo(a) => vec![a],
+            kurbo::PathEl::QuadTo(a, b) => vec![a, b],
+            kurbo::PathEl::CurveTo(a, b, c) => vec![a, b, c],
+            kurbo::PathEl::ClosePath => vec![],
+        })
+        .find(|&q| !in_window(q))
+}
+
 /// The embedded hanzi-writer-data subset: one minified JSON object per line.
 pub static EMBEDDED_SUBSET: &str = include_str!("../data/hanzi-subset.jsonl");
 /// The Arphic Public License the embedded subset is distributed under.
@@ -132,13 +176,36 @@ fn flip(p: Point) -> Point {
 /// [`GlyphError::Malformed`] naming `source_name` and the stroke at fault.
 pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: &str) -> Result<Glyph, GlyphError> {
     let bad = |message: String| GlyphError::Malformed { source_name: source_name.to_string(), message };
+    if text.len() as u64 > limits::MAX_JSON_BYTES {
+        return Err(bad(format!("{} bytes; a character file is at most {} bytes", text.len(), limits::MAX_JSON_BYTES)));
+    }
     let j: HanziJson = serde_json::from_str(text).map_err(|e| bad(format!("not hanzi-writer data: {e}")))?;
     if j.strokes.is_empty() || j.strokes.len() != j.medians.len() {
         return Err(bad(format!("{} strokes but {} medians", j.strokes.len(), j.medians.len())));
     }
+    if j.strokes.len() > limits::MAX_STROKES {
+        return Err(bad(format!("{} strokes; at most {}", j.strokes.len(), limits::MAX_STROKES)));
+    }
+    let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
     let mut outlines = Vec::with_capacity(j.strokes.len());
     for (i, s) in j.strokes.iter().enumerate() {
         let mut p = BezPath::from_svg(s).map_err(|e| bad(format!("stroke {}: bad SVG path: {e}", i + 1)))?;
+        if p.elements().len() > limits::MAX_PATH_ELEMENTS {
+            return Err(bad(format!(
+                "stroke {}: {} path elements; at most {}",
+                i + 1,
+                p.elements().len(),
+                limits::MAX_PATH_ELEMENTS
+            )));
+        }
+        if let Some(q) = path_outside(&p) {
+            return Err(bad(format!(
+                "stroke {}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
+                i + 1,
+                num(q.x),
+                num(q.y)
+            )));
+        }
         p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
         outlines.push(p);
     }
@@ -146,6 +213,17 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
     for (i, m) in j.medians.iter().enumerate() {
         if m.is_empty() || m.iter().flatten().any(|v| !v.is_finite()) {
             return Err(bad(format!("median {} is empty or not finite", i + 1)));
+        }
+        if m.len() > limits::MAX_MEDIAN_POINTS {
+            return Err(bad(format!("median {}: {} points; at most {}", i + 1, m.len(), limits::MAX_MEDIAN_POINTS)));
+        }
+        if let Some([x, y]) = m.iter().find(|&&[x, y]| !in_window(Point::new(x, y))) {
+            return Err(bad(format!(
+                "median {}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
+                i + 1,
+                num(*x),
+                num(*y)
+            )));
         }
         medians.push(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect());
     }
@@ -199,10 +277,17 @@ pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
         return Err(GlyphError::Io { path: dir.display().to_string(), message: "not a folder".into() });
     }
     let path = dir.join(format!("{ch}.json"));
-    let text = std::fs::read_to_string(&path).map_err(|_| GlyphError::Unknown {
-        ch,
-        code: ch as u32,
-        source_name: dir.display().to_string(),
+    let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: dir.display().to_string() };
+    let len = std::fs::metadata(&path).map_err(|_| unknown())?.len();
+    if len > limits::MAX_JSON_BYTES {
+        return Err(GlyphError::Malformed {
+            source_name: path.display().to_string(),
+            message: format!("{len} bytes; a character file is at most {} bytes", limits::MAX_JSON_BYTES),
+        });
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => unknown(),
+        _ => GlyphError::Io { path: path.display().to_string(), message: e.to_string() },
     })?;
     parse_hanzi_json(ch, &text, GlyphSource::HanziData(dir.display().to_string()), &path.display().to_string())
 }
@@ -248,7 +333,15 @@ impl ttf_parser::OutlineBuilder for OutlineSink {
 /// [`GlyphError::Io`], [`GlyphError::Malformed`] (not a font), [`GlyphError::Unknown`].
 pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     let name = path.display().to_string();
-    let data = std::fs::read(path).map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?;
+    let io = |e: std::io::Error| GlyphError::Io { path: name.clone(), message: e.to_string() };
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > limits::MAX_FONT_BYTES {
+        return Err(GlyphError::Malformed {
+            source_name: name,
+            message: format!("{len} bytes; a font is at most {} bytes", limits::MAX_FONT_BYTES),
+        });
+    }
+    let data = std::fs::read(path).map_err(io)?;
     let face = ttf_parser::Face::parse(&data, 0).map_err(|e| GlyphError::Malformed {
         source_name: name.clone(),
         message: format!("not a TrueType/OpenType font: {e}"),
@@ -257,6 +350,28 @@ pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     let gid = face.glyph_index(ch).ok_or_else(unknown)?;
     let mut sink = OutlineSink { path: BezPath::new(), scale: EM / face.units_per_em() as f64 };
     face.outline_glyph(gid, &mut sink).ok_or_else(unknown)?;
+    if sink.path.elements().len() > limits::MAX_STROKES * limits::MAX_PATH_ELEMENTS {
+        return Err(GlyphError::Malformed {
+            source_name: name,
+            message: format!(
+                "glyph of {ch:?}: {} outline elements; at most {}",
+                sink.path.elements().len(),
+                limits::MAX_STROKES * limits::MAX_PATH_ELEMENTS
+            ),
+        });
+    }
+    if let Some(q) = path_outside(&sink.path) {
+        return Err(GlyphError::Malformed {
+            source_name: name,
+            message: format!(
+                "glyph of {ch:?}: point ({:.0}, {:.0}) outside the accepted em coordinates {}..={} (odd units_per_em?)",
+                q.x,
+                q.y,
+                limits::MIN_COORD,
+                limits::MAX_COORD
+            ),
+        });
+    }
     Ok(Glyph {
         ch,
         source: GlyphSource::Font(name),

@@ -9,11 +9,9 @@ use crate::glyph::GlyphError;
 /// Loads, thresholds and cleans an image; returns the square side and the binary ink (1/0).
 pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     let name = path.display().to_string();
-    let img = image::ImageReader::open(path)
-        .and_then(|r| r.with_guessed_format())
-        .map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?
-        .decode()
-        .map_err(|e| GlyphError::Io { path: name.clone(), message: e.to_string() })?;
+    // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
+    let img =
+        bezier_raster::coverage::open_image(path).map_err(|message| GlyphError::Io { path: name.clone(), message })?;
     let img = if img.width().max(img.height()) > 1024 {
         img.resize(1024, 1024, image::imageops::FilterType::Triangle)
     } else {
