@@ -46,7 +46,7 @@ impl Arch {
 
     /// Output side, px.
     pub fn output_side(&self) -> usize {
-        self.seed_side << self.stages.len()
+        self.seed_side.saturating_mul(1usize.checked_shl(self.stages.len() as u32).unwrap_or(usize::MAX))
     }
 
     /// Checks that consecutive stages fit together and end in one channel.
@@ -56,6 +56,24 @@ impl Arch {
     pub fn validate(&self) -> Result<(), String> {
         if self.stages.is_empty() || self.seed_side == 0 || self.seed_channels == 0 {
             return Err("need at least one stage and a non-empty seed map".into());
+        }
+        // Bounds before any size is computed or allocated: output side, widths and the
+        // parameter count stay far above any useful generator and far below memory limits.
+        if self.stages.len() > 8 || self.seed_side > 64 || self.output_side() > 1024 {
+            return Err(format!(
+                "{} stages from a {}² seed: at most 8 stages and a 1024² output",
+                self.stages.len(),
+                self.seed_side
+            ));
+        }
+        if self.hidden.len() > 16 || self.hidden.iter().any(|&h| h == 0 || h > 8192) {
+            return Err("hidden layers: at most 16, each 1..=8192 wide".into());
+        }
+        if self.seed_channels > 4096 || self.stages.iter().any(|&(a, b)| a > 4096 || b > 4096) {
+            return Err("channels: at most 4096 per layer".into());
+        }
+        if self.parameter_count() > 50_000_000 {
+            return Err(format!("{} parameters: at most 50 million", self.parameter_count()));
         }
         let mut c = self.seed_channels;
         for (i, &(cin, cout)) in self.stages.iter().enumerate() {

@@ -15,8 +15,15 @@ pub const HELD_OUT_SEED: u64 = 0x4845_4c44_4f55_54;
 /// presses (rendered in batches of 64).
 ///
 /// # Errors
-/// [`NeuralGenError`] from inference.
+/// [`NeuralGenError::Config`] for `n = 0` (metrics of nothing); [`NeuralGenError`] from
+/// inference, or when the generator's output is not finite.
 pub fn evaluate(g: &Generator, n: usize) -> Result<(Summary, Summary), NeuralGenError> {
+    if n == 0 {
+        return Err(NeuralGenError::Config {
+            source_name: "evaluation".into(),
+            message: "no held-out presses (n = 0): nothing to measure".into(),
+        });
+    }
     let s = g.config.size;
     let spec = DatasetSpec {
         profile: g.config.profile.clone(),
@@ -27,6 +34,11 @@ pub fn evaluate(g: &Generator, n: usize) -> Result<(Summary, Summary), NeuralGen
     let mut gen_imgs = Vec::with_capacity(n);
     for chunk in presses.chunks(64) {
         gen_imgs.extend(g.render(chunk)?);
+    }
+    if let Some(i) = gen_imgs.iter().position(|img| img.data().iter().any(|v| !v.is_finite())) {
+        return Err(NeuralGenError::Shape(format!(
+            "the generator's image of held-out press {i} is not finite (NaN or infinite pixels)"
+        )));
     }
     let scores: Vec<(f64, f64)> = presses
         .par_iter()

@@ -235,6 +235,13 @@ impl Generator {
             .profile
             .validate(&name)
             .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
+        config.arch.validate().map_err(|m| NeuralGenError::Config { source_name: name.clone(), message: m })?;
+        if !(config.px_per_mm.is_finite() && config.px_per_mm > 0.0 && config.px_per_mm <= 1e4) {
+            return Err(NeuralGenError::Config {
+                source_name: name,
+                message: format!("px_per_mm {}: expected a scale above 0 and at most 10000 px/mm", config.px_per_mm),
+            });
+        }
         let g = Generator::new(config, 0)?;
         let wname = weights_name.to_string();
         let tensors =
@@ -263,6 +270,20 @@ impl Generator {
                             t.dims(),
                             var.dims()
                         ),
+                    });
+                }
+                // NaN or infinite weights draw blank images and SSIM of ±inf: refuse them.
+                let finite = t
+                    .flatten_all()
+                    .and_then(|f| f.to_dtype(candle_core::DType::F32))
+                    .and_then(|f| f.to_vec1::<f32>())
+                    .map_err(cerr)?
+                    .iter()
+                    .all(|v| v.is_finite());
+                if !finite {
+                    return Err(NeuralGenError::Config {
+                        source_name: wname.clone(),
+                        message: format!("tensor `{k}` holds NaN or infinite weights"),
                     });
                 }
                 var.set(t).map_err(cerr)?;

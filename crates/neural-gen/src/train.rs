@@ -141,6 +141,15 @@ pub fn train(
     opts: &TrainOptions,
     mut on_step: impl FnMut(&TrainPoint),
 ) -> Result<TrainReport, NeuralGenError> {
+    if opts.steps == 0 || opts.batch == 0 || opts.val_every == 0 || !(opts.lr.is_finite() && opts.lr > 0.0) {
+        return Err(NeuralGenError::Config {
+            source_name: "training options".into(),
+            message: format!(
+                "steps {}, batch {}, val_every {} must be at least 1 and lr {} positive",
+                opts.steps, opts.batch, opts.val_every, opts.lr
+            ),
+        });
+    }
     let t0 = Instant::now();
     let spec = DatasetSpec {
         profile: g.config.profile.clone(),
