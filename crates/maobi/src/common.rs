@@ -1,10 +1,167 @@
-//! Helpers shared by the subcommands: brush selection and atomic file output.
+//! Helpers shared by the subcommands: brush selection, atomic file output, stdout that ends
+//! quietly when the reader goes away, Ctrl-C clean-up, and numeric flag ranges.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
+
+/// The smallest image scale a flag may ask for, px per mm (a 25-dpi scan is 1 px/mm).
+pub const MIN_PX_PER_MM: f64 = 0.1;
+/// The largest image scale a flag may ask for, px per mm (a 250 000-dpi microscope).
+pub const MAX_PX_PER_MM: f64 = 10_000.0;
+
+/// Checks a numeric flag against a closed range (NaN is outside every range); the error names
+/// the flag, the value and the range with its unit.
+pub fn check_range<T: PartialOrd + std::fmt::Display + Copy>(flag: &str, v: T, lo: T, hi: T, unit: &str) -> Result<T> {
+    if lo <= v && v <= hi {
+        Ok(v)
+    } else {
+        let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+        bail!("{flag} {}: expected {lo}..={hi}{unit}", short_number(&v.to_string()))
+    }
+}
+
+/// A number as typed, or in exponent form when that is long (`1e300`, not 301 digits).
+pub fn short_number(s: &str) -> String {
+    match s.parse::<f64>() {
+        Ok(v) if s.len() > 16 => format!("{v:e}"),
+        _ => s.to_string(),
+    }
+}
+
+/// Writes one line to stdout. A reader that went away (`maobi … | head`) is an error that
+/// [`is_broken_pipe`] recognises, so `main` ends quietly instead of panicking as `println!` does.
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => { $crate::common::out_fmt(format_args!("{}\n", format_args!($($t)*))) };
+}
+
+/// Writes to stdout without a newline; see [`outln!`].
+#[macro_export]
+macro_rules! out {
+    ($($t:tt)*) => { $crate::common::out_fmt(format_args!($($t)*)) };
+}
+
+/// The writer behind [`outln!`] and [`out!`].
+pub fn out_fmt(args: std::fmt::Arguments<'_>) -> Result<()> {
+    let mut o = std::io::stdout().lock();
+    o.write_fmt(args).and_then(|()| o.flush()).map_err(anyhow::Error::from)
+}
+
+/// Whether an error (anywhere in its chain) is a write to a closed pipe.
+pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe))
+}
+
+/// Temporary files being written now: removed by the Ctrl-C handler.
+static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Set once Ctrl-C (SIGINT) or SIGTERM arrived.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// Set by commands that stop by themselves at a consistent point when [`interrupted`] says so.
+static COOPERATIVE: AtomicBool = AtomicBool::new(false);
+static SIGNALS: AtomicUsize = AtomicUsize::new(0);
+
+/// Removes every registered temporary file.
+fn remove_temps() {
+    let temps = TEMPS.lock().unwrap_or_else(|e| e.into_inner());
+    for t in temps.iter() {
+        let _ = std::fs::remove_file(t);
+    }
+}
+
+/// Installs the Ctrl-C / SIGTERM handler of every command but `robot` (which has its own):
+/// temporary files are removed and the process exits with status 130 saying `interrupted`.
+/// A command that called [`stop_on_interrupt`] is asked to stop instead (a second signal still
+/// exits at once).
+pub fn install_interrupt_handler() -> Result<()> {
+    ctrlc::set_handler(|| {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        let n = SIGNALS.fetch_add(1, Ordering::SeqCst);
+        if COOPERATIVE.load(Ordering::SeqCst) && n == 0 {
+            return;
+        }
+        remove_temps();
+        eprintln!("error: interrupted");
+        std::process::exit(130);
+    })
+    .context("cannot install the Ctrl-C handler")
+}
+
+/// Asks the Ctrl-C handler to let this command stop by itself: it polls [`interrupted`].
+pub fn stop_on_interrupt() {
+    COOPERATIVE.store(true, Ordering::SeqCst);
+}
+
+/// Whether Ctrl-C (or SIGTERM) arrived.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// Keeps a temporary file on the list the Ctrl-C handler removes, while it lives.
+struct TempGuard(PathBuf);
+
+impl TempGuard {
+    fn new(p: &Path) -> Self {
+        TEMPS.lock().unwrap_or_else(|e| e.into_inner()).push(p.to_path_buf());
+        TempGuard(p.to_path_buf())
+    }
+}
+
+impl Drop for TempGuard {
+    fn drop(&mut self) {
+        let mut t = TEMPS.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = t.iter().position(|p| *p == self.0) {
+            t.swap_remove(i);
+        }
+    }
+}
+
+/// Where writing `path` must go: the path itself, or, through any symlinks, the file they point
+/// to. A folder, FIFO, socket or device is refused (writing would replace the node).
+pub fn output_target(path: &Path) -> Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(p),
+            Err(e) => return Err(e).with_context(|| format!("cannot write {}", path.display())),
+            Ok(m) if m.file_type().is_symlink() => {
+                let t = std::fs::read_link(&p).with_context(|| format!("cannot read the link {}", p.display()))?;
+                p = match p.parent() {
+                    Some(dir) if t.is_relative() => dir.join(t),
+                    _ => t,
+                };
+            }
+            Ok(m) if m.is_file() => return Ok(p),
+            Ok(m) => {
+                let ft = m.file_type();
+                #[cfg(unix)]
+                let kind = {
+                    use std::os::unix::fs::FileTypeExt;
+                    if ft.is_fifo() {
+                        "a FIFO"
+                    } else if ft.is_char_device() || ft.is_block_device() {
+                        "a device"
+                    } else if ft.is_socket() {
+                        "a socket"
+                    } else if ft.is_dir() {
+                        "a folder"
+                    } else {
+                        "not a regular file"
+                    }
+                };
+                #[cfg(not(unix))]
+                let kind = if ft.is_dir() { "a folder" } else { "not a regular file" };
+                let via = if p == path { String::new() } else { format!(" (the link's target {})", p.display()) };
+                bail!("{}{via} is {kind}: refusing to write there; name a regular file", path.display());
+            }
+        }
+    }
+    bail!("{}: too many levels of symbolic links", path.display())
+}
 
 /// Resolves `--brush`: a built-in name (`pen1`, `pen2`) or a profile JSON file.
 pub fn load_brush(spec: &str) -> Result<BrushProfile> {
@@ -19,8 +176,12 @@ pub fn load_brush(spec: &str) -> Result<BrushProfile> {
 }
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same folder, then renamed,
-/// so a failure never leaves a half-written output. Creates the parent folder if needed.
+/// so a failure never leaves a half-written output. Creates the parent folder if needed. A
+/// symlink is written through (its target is replaced, the link stays); folders, FIFOs, sockets
+/// and devices are refused ([`output_target`]). Ctrl-C removes the temporary file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let target = output_target(path)?;
+    let path = target.as_path();
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -28,6 +189,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
     let mut tmp = tempfile::NamedTempFile::new_in(dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    let _guard = TempGuard::new(tmp.path());
     tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
     #[cfg(unix)]
     {
@@ -41,8 +203,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Prints a value as pretty JSON on stdout.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
-    println!("{}", serde_json::to_string_pretty(value)?);
-    Ok(())
+    outln!("{}", serde_json::to_string_pretty(value)?)
 }
 
 /// Loads an image file as coverage (ink = 1), naming the file on error.
@@ -97,9 +258,14 @@ pub struct PressArgs {
 }
 
 impl PressArgs {
-    /// The press, angles converted to radians.
-    pub fn press(&self) -> brush_model::Press {
-        brush_model::Press::from_degrees(self.h_mm, self.alpha_deg, self.beta_deg)
+    /// The press, angles converted to radians, after checking each value against what the
+    /// brush can physically do (even with `--extrapolate`): depth 0 up to the bundle's length,
+    /// tilt within ±90°, rotation within ±360°.
+    pub fn press(&self, profile: &BrushProfile) -> Result<brush_model::Press> {
+        check_range("--h", self.h_mm, 0.0, profile.brush.length_mm, "mm (up to the brush's length)")?;
+        check_range("--alpha", self.alpha_deg, -90.0, 90.0, "degrees")?;
+        check_range("--beta", self.beta_deg, -360.0, 360.0, "degrees")?;
+        Ok(brush_model::Press::from_degrees(self.h_mm, self.alpha_deg, self.beta_deg))
     }
 }
 

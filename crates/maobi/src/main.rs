@@ -66,6 +66,28 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // `println!` in a command not yet moved to `outln!` panics when stdout's reader has gone
+    // away (`maobi … | head`): end quietly then too, as `outln!` does.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        default_hook(info);
+    }));
+    // `robot` installs its own Ctrl-C handling (the brush is lifted first).
+    if !matches!(cli.command, Command::Robot(_)) {
+        if let Err(e) = common::install_interrupt_handler() {
+            eprintln!("error: {e:#}");
+            return ExitCode::from(2);
+        }
+    }
     let result = match cli.command {
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Footprint(a) => cmd::footprint::run(a),
@@ -82,6 +104,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of stdout went away (`maobi … | head`): nothing left to say to anyone.
+        Err(e) if common::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)

@@ -56,7 +56,7 @@ fn train_a_tiny_generator_and_use_it() {
     // A corrupted checkpoint is a clear error.
     std::fs::write(&m, b"not weights").unwrap();
     fails(&maobi(&["eval-generator", "--model", s(&m), "--n", "4"]), "safetensors");
-    fails(&maobi(&["train", "--steps", "0", "-o", s(&m)]), "positive");
+    fails(&maobi(&["train", "--steps", "0", "-o", s(&m)]), "--steps 0: expected 1..");
     fails(&maobi(&["train", "--steps", "3", "-o", s(&dir.path().join("g.bin"))]), ".safetensors");
 }
 

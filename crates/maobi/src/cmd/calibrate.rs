@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Form, PressRanges, Range, load_measurements};
 
-use crate::common::{load_brush, print_json, write_atomic};
+use crate::common::{check_range, load_brush, print_json, write_atomic};
 
 /// Arguments of `maobi calibrate`.
 #[derive(clap::Args, Debug)]
@@ -48,6 +48,7 @@ enum FormArg {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    check_range("--min-iou", args.min_iou, 0.0, 1.0, "")?;
     let (rows, source) = match (&args.measurements, &args.images) {
         (Some(m), _) => (load_measurements(m)?, m.clone()),
         (None, Some(dir)) => {
@@ -64,6 +65,15 @@ pub fn run(args: Args) -> Result<()> {
         FormArg::Paper => Form::Paper,
     };
     let report = brush_model::fit(&rows, form).with_context(|| format!("{}: cannot fit", source.display()))?;
+    for (name, o) in &report.outputs {
+        if o.is_constant() {
+            eprintln!(
+                "warning: {}: {name} is constant in the data ({:.4} mm): R² is undefined and the profile predicts that constant",
+                source.display(),
+                o.coef.intercept
+            );
+        }
+    }
     let brush = load_brush(&args.brush)?.brush;
     let span = |f: fn(&brush_model::Measurement) -> f64| {
         let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
@@ -80,7 +90,9 @@ pub fn run(args: Args) -> Result<()> {
     });
     if let Some(out) = &args.output {
         let profile = BrushProfile::calibrated(&name, brush, ranges, report.clone());
-        profile.validate(&out.display().to_string()).context("the fitted model is not a usable profile")?;
+        profile
+            .validate(&format!("the profile fitted from {}", source.display()))
+            .with_context(|| format!("not writing {}: the fitted model is not a usable profile", out.display()))?;
         write_atomic(out, profile.to_json().as_bytes())?;
         if args.images.is_some() {
             let plot = out.with_file_name("regression.png");
@@ -90,9 +102,9 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&report)?;
     } else {
-        print!("{report}");
+        crate::out!("{report}")?;
         if let Some(out) = &args.output {
-            println!("\nprofile `{name}` written to {}", out.display());
+            crate::outln!("\nprofile `{name}` written to {}", out.display())?;
         }
     }
     Ok(())

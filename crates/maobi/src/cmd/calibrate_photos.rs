@@ -7,7 +7,7 @@ use anyhow::Result;
 use brush_model::{Footprint, Measurement};
 use rayon::prelude::*;
 
-use crate::cmd::fit_stroke::{fit_photo, scale_for};
+use crate::cmd::fit_stroke::fit_photo;
 use crate::common::{progress, read_stroke_labels, write_atomic};
 
 /// Fits every photo listed in the labels (in parallel, with a progress bar), lists and drops
@@ -21,7 +21,8 @@ pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Pa
         .enumerate()
         .map(|(i, l)| {
             let photo = dir.join(&l.file);
-            let r = scale_for(&photo, l.px_per_mm).and_then(|scale| Ok(fit_photo(&photo, scale)?.0));
+            let what = format!("{}: column `px_per_mm`", labels_path.display());
+            let r = fit_photo(&photo, l.px_per_mm, &what).map(|f| f.0);
             pb.inc(1);
             (i, r)
         })

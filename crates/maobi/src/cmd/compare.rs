@@ -38,7 +38,7 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&s)?;
     } else {
         let psnr = s.psnr.map_or("inf (identical)".to_string(), |p| format!("{p:.3} dB"));
-        println!("CSIM {:.6}\nSSIM {:.6}\nIoU  {:.6}\nMSE  {:.6e}\nPSNR {psnr}", s.csim, s.ssim, s.iou, s.mse);
+        crate::outln!("CSIM {:.6}\nSSIM {:.6}\nIoU  {:.6}\nMSE  {:.6e}\nPSNR {psnr}", s.csim, s.ssim, s.iou, s.mse)?;
     }
     Ok(())
 }

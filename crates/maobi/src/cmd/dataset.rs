@@ -1,13 +1,14 @@
-//! `maobi dataset`: N random footprints as PNGs plus `labels.csv`.
+//! `maobi dataset`: N random footprints as PNGs plus `labels.csv` (streamed: see [`run`]).
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer};
 use rayon::prelude::*;
 
-use crate::common::{BrushArg, load_brush, parse_model, progress, write_atomic};
+use crate::common::{BrushArg, check_range, interrupted, load_brush, parse_model, progress, write_atomic};
 
 /// Arguments of `maobi dataset`.
 #[derive(clap::Args, Debug)]
@@ -31,52 +32,95 @@ pub struct Args {
     output: PathBuf,
 }
 
+/// The most images one run may write.
+pub const MAX_IMAGES: u64 = 100_000_000;
+
+/// Images rendered in parallel between two appends to `labels.csv`.
+const CHUNK: u64 = 1024;
+
 /// Runs the command.
+///
+/// `labels.csv` is streamed: it is created first (header only) and, after each chunk of images
+/// has been written (each one atomically), that chunk's rows are appended in index order and
+/// flushed. An interrupted run therefore leaves a consistent prefix: every row names an image
+/// that is complete, and at most the images of the chunk in flight have no row yet; Ctrl-C
+/// (or SIGTERM) stops at the end of the current image, removes that chunk's images past the
+/// last row, and exits 130 saying `interrupted`. Memory stays at one chunk's rows whatever `--n`.
 pub fn run(args: Args) -> Result<()> {
-    if args.n == 0 {
-        bail!("--n 0: expected at least one image");
-    }
-    if !(8..=4096).contains(&args.size) {
-        bail!("--size {}: expected a canvas side between 8 and 4096 px", args.size);
-    }
+    check_range("--n", args.n, 1, MAX_IMAGES, "images")?;
+    check_range("--size", args.size, 8, 4096, "px")?;
     let profile = load_brush(&args.brush.brush)?;
     let spec = DatasetSpec::new(profile, args.size, args.seed);
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create folder {}", args.output.display()))?;
+    let labels_path = args.output.join("labels.csv");
+    let labels_target = crate::common::output_target(&labels_path)?;
+    let mut labels = std::io::BufWriter::new(
+        std::fs::File::create(&labels_target).with_context(|| format!("cannot write {}", labels_path.display()))?,
+    );
+    let write_err = || format!("cannot write {}", labels_path.display());
+    labels
+        .write_all(b"file,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,px_per_mm,anchor_u,anchor_v\n")
+        .and_then(|()| labels.flush())
+        .with_context(write_err)?;
+    crate::common::stop_on_interrupt();
     let digits = (args.n - 1).to_string().len().max(6);
+    let file_name = |i: u64| format!("fp_{i:0digits$}.png");
     let pb = progress(args.n, "dataset");
     let started = std::time::Instant::now();
-    let rows: Vec<String> = (0..args.n)
-        .into_par_iter()
-        .map_init(
-            || (Rasterizer::new(), Coverage::new(args.size, args.size)),
-            |(raster, img), i| -> Result<String> {
-                let s = spec.sample(i)?;
-                spec.render(&s, args.model.model(), raster, img);
-                let file = format!("fp_{i:0digits$}.png");
-                write_atomic(&args.output.join(&file), &img.encode_png()?)?;
-                pb.inc(1);
-                let (p, f) = (s.press, s.footprint);
-                Ok(format!(
-                    "{file},{},{},{},{},{},{},{},{},{}\n",
-                    p.h_mm,
-                    p.alpha_rad.to_degrees(),
-                    p.beta_rad.to_degrees(),
-                    f.lt_mm,
-                    f.lh_mm,
-                    f.lr_mm,
-                    spec.canvas.px_per_mm,
-                    s.anchor_px[0],
-                    s.anchor_px[1]
-                ))
-            },
-        )
-        .collect::<Result<_>>()?;
-    pb.finish_and_clear();
-    let mut csv = String::from("file,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,px_per_mm,anchor_u,anchor_v\n");
-    for r in rows {
-        csv.push_str(&r);
+    let mut start = 0;
+    while start < args.n {
+        let end = (start + CHUNK).min(args.n);
+        // None: skipped because of Ctrl-C.
+        let rows: Vec<Option<String>> = (start..end)
+            .into_par_iter()
+            .map_init(
+                || (Rasterizer::new(), Coverage::new(args.size, args.size)),
+                |(raster, img), i| -> Result<Option<String>> {
+                    if interrupted() {
+                        return Ok(None);
+                    }
+                    let s = spec.sample(i)?;
+                    spec.render(&s, args.model.model(), raster, img);
+                    let file = file_name(i);
+                    write_atomic(&args.output.join(&file), &img.encode_png()?)?;
+                    pb.inc(1);
+                    let (p, f) = (s.press, s.footprint);
+                    Ok(Some(format!(
+                        "{file},{},{},{},{},{},{},{},{},{}\n",
+                        p.h_mm,
+                        p.alpha_rad.to_degrees(),
+                        p.beta_rad.to_degrees(),
+                        f.lt_mm,
+                        f.lh_mm,
+                        f.lr_mm,
+                        spec.canvas.px_per_mm,
+                        s.anchor_px[0],
+                        s.anchor_px[1]
+                    )))
+                },
+            )
+            .collect::<Result<_>>()?;
+        // Rows in index order up to the first image not written; later images of this chunk
+        // (finished by other threads after Ctrl-C) are removed so the folder matches the labels.
+        let done = rows.iter().take_while(|r| r.is_some()).count();
+        for r in rows.iter().take(done).flatten() {
+            labels.write_all(r.as_bytes()).with_context(write_err)?;
+        }
+        labels.flush().with_context(write_err)?;
+        if done < rows.len() {
+            for (k, r) in rows.iter().enumerate().skip(done) {
+                if r.is_some() {
+                    let _ = std::fs::remove_file(args.output.join(file_name(start + k as u64)));
+                }
+            }
+            pb.finish_and_clear();
+            let written = start + done as u64;
+            eprintln!("error: interrupted: {written} of {} images written, labels.csv lists exactly those", args.n);
+            std::process::exit(130);
+        }
+        start = end;
     }
-    write_atomic(&args.output.join("labels.csv"), csv.as_bytes())?;
+    pb.finish_and_clear();
     let secs = started.elapsed().as_secs_f64();
     let mut msg = String::new();
     let _ = write!(

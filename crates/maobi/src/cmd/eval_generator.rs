@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{gray, print_json};
+use crate::common::{check_range, gray, print_json};
 
 /// Arguments of `maobi eval-generator`.
 #[derive(clap::Args, Debug)]
@@ -28,6 +28,7 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    check_range("--n", args.n, 1, 100_000, "presses")?;
     let g = maobi::generator::load_generator(args.model.as_deref())?;
     let t0 = std::time::Instant::now();
     let (gc, gs) = neural_gen::eval::evaluate(&g, args.n)?;
@@ -71,17 +72,24 @@ pub fn run(args: Args) -> Result<()> {
             table.iter().map(|(k, (c, s))| (k.clone(), json!({"csim": c, "ssim": s}))).collect();
         print_json(&json!({"n": args.n, "reference": "analytic b-bsm", "generator_seconds": secs, "models": models}))?;
     } else {
-        println!(
+        crate::outln!(
             "{} held-out presses of {}, each model against the analytic B-BSM (%):",
-            args.n, g.config.profile.name
-        );
-        println!(
+            args.n,
+            g.config.profile.name
+        )?;
+        crate::outln!(
             "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
-            "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean"
-        );
+            "model",
+            "CSIM best",
+            "worst",
+            "mean",
+            "SSIM best",
+            "worst",
+            "mean"
+        )?;
         for name in ["b-bsmg", "circle", "ellipse", "line", "qbc"] {
             let (c, s) = table[name];
-            println!(
+            crate::outln!(
                 "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
                 name,
                 100.0 * c.best,
@@ -90,7 +98,7 @@ pub fn run(args: Args) -> Result<()> {
                 100.0 * s.best,
                 100.0 * s.worst,
                 100.0 * s.mean
-            );
+            )?;
         }
     }
     Ok(())

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
 
-use crate::common::{BrushArg, load_brush, parse_method, parse_model, print_json, progress};
+use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
 
 /// Arguments of `maobi evaluate`.
 #[derive(clap::Args, Debug)]
@@ -46,6 +46,13 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    check_range("--size", args.size, 64, 4096, "px")?;
+    if let Some(mm) = args.char_mm {
+        check_range("--char-mm", mm, crate::cmd::write::MIN_CHAR_MM, crate::cmd::write::MAX_CHAR_MM, "mm")?;
+    }
+    if args.limit == Some(0) {
+        bail!("--limit 0: expected at least 1 character");
+    }
     let profile = load_brush(&args.brush.brush)?;
     let mut chars: Vec<char> = match &args.chars {
         Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),

@@ -7,7 +7,7 @@ use bezier_raster::{Bsm, StrokeModel};
 use serde_json::json;
 use stroke_fit::{PhotoError, StrokeFit, fit_footprint, load_ink, scale_from_metadata};
 
-use crate::common::{print_json, write_atomic};
+use crate::common::{MAX_PX_PER_MM, MIN_PX_PER_MM, check_range, print_json, write_atomic};
 
 /// Arguments of `maobi fit-stroke`.
 #[derive(clap::Args, Debug)]
@@ -25,27 +25,38 @@ pub struct Args {
     json: bool,
 }
 
-/// The scale of a photo: given, or from its metadata.
-pub fn scale_for(photo: &Path, given: Option<f64>) -> Result<f64> {
+/// The scale of a photo: given (by the flag or column `what`), or from its metadata; either
+/// must lie in [`MIN_PX_PER_MM`]..=[`MAX_PX_PER_MM`].
+pub fn scale_for(photo: &Path, given: Option<f64>, what: &str) -> Result<f64> {
     match given {
-        Some(s) if s.is_finite() && s > 0.0 => Ok(s),
-        Some(s) => anyhow::bail!("--px-per-mm {s}: expected a positive scale"),
+        Some(s) => check_range(what, s, MIN_PX_PER_MM, MAX_PX_PER_MM, "px/mm"),
         None => {
-            scale_from_metadata(photo).ok_or_else(|| PhotoError::NoScale { path: photo.display().to_string() }.into())
+            let s = scale_from_metadata(photo)
+                .ok_or_else(|| anyhow::Error::from(PhotoError::NoScale { path: photo.display().to_string() }))?;
+            check_range(
+                &format!("{}: the resolution in the file,", photo.display()),
+                s,
+                MIN_PX_PER_MM,
+                MAX_PX_PER_MM,
+                "px/mm",
+            )
         }
     }
 }
 
-/// Fits one photo.
-pub fn fit_photo(photo: &Path, px_per_mm: f64) -> Result<(StrokeFit, stroke_fit::InkMask)> {
+/// Fits one photo at the scale given or stored in the file. A missing, empty or non-image file
+/// says so first (not "no scale"), then the scale is checked, then the ink.
+pub fn fit_photo(photo: &Path, given: Option<f64>, what: &str) -> Result<(StrokeFit, stroke_fit::InkMask, f64)> {
+    bezier_raster::coverage::probe_image(photo)
+        .map_err(|message| PhotoError::Unreadable { path: photo.display().to_string(), message })?;
+    let scale = scale_for(photo, given, what)?;
     let mask = load_ink(photo)?;
-    Ok((fit_footprint(&mask, px_per_mm), mask))
+    Ok((fit_footprint(&mask, scale), mask, scale))
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let scale = scale_for(&args.photo, args.px_per_mm)?;
-    let (fit, mask) = fit_photo(&args.photo, scale)?;
+    let (fit, mask, scale) = fit_photo(&args.photo, args.px_per_mm, "--px-per-mm")?;
     if let Some(out) = &args.overlay {
         write_atomic(out, &overlay(&mask, &fit, scale).with_context(|| format!("drawing {}", out.display()))?)?;
     }
@@ -54,7 +65,7 @@ pub fn run(args: Args) -> Result<()> {
             &json!({"lt_mm": fit.lt_mm, "lh_mm": fit.lh_mm, "lr_mm": fit.lr_mm, "anchor_mm": fit.anchor_mm, "beta_rad": fit.beta_rad, "iou": fit.iou}),
         )?;
     } else {
-        println!(
+        crate::outln!(
             "lt = {:.3} mm, lh = {:.3} mm, lr = {:.3} mm, root at ({:.2}, {:.2}) mm, β = {:.2}°, IoU {:.4} (scale {scale} px/mm)",
             fit.lt_mm,
             fit.lh_mm,
@@ -63,7 +74,7 @@ pub fn run(args: Args) -> Result<()> {
             fit.anchor_mm[1],
             fit.beta_rad.to_degrees(),
             fit.iou
-        );
+        )?;
     }
     Ok(())
 }
@@ -77,10 +88,12 @@ pub fn overlay(mask: &stroke_fit::InkMask, fit: &StrokeFit, scale: f64) -> Resul
         let g = (mask.gray[(y * w + x) as usize].clamp(0.0, 1.0) * 255.0) as u8;
         image::Rgb([g, g, g])
     });
-    // Sample the outline densely and draw 2-px red dots.
+    // Sample the outline densely and draw 2-px red dots. Flattened to a quarter pixel, so the
+    // number of points follows the outline's length in pixels, not in mm (a tiny --px-per-mm
+    // made millions of points); each segment's dots are capped by the image's perimeter.
     let flat = {
         let mut pts = Vec::new();
-        kurbo::flatten(path.iter(), 0.02, |el| match el {
+        kurbo::flatten(path.iter(), 0.25 / scale, |el| match el {
             kurbo::PathEl::MoveTo(p) | kurbo::PathEl::LineTo(p) => pts.push(p),
             _ => {}
         });
@@ -88,7 +101,7 @@ pub fn overlay(mask: &stroke_fit::InkMask, fit: &StrokeFit, scale: f64) -> Resul
     };
     for win in flat.windows(2) {
         let (a, b) = (win[0], win[1]);
-        let steps = ((a.distance(b) * scale) * 2.0).ceil().max(1.0) as usize;
+        let steps = ((a.distance(b) * scale) * 2.0).ceil().clamp(1.0, 4.0 * (w + h) as f64) as usize;
         for i in 0..=steps {
             let p = a.lerp(b, i as f64 / steps as f64);
             let (cx, cy) = ((p.x * scale) as i64, (p.y * scale) as i64);

@@ -24,13 +24,13 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush)?;
-    let press = args.press.press();
+    let press = args.press.press(&profile)?;
     let extrapolation = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let fp = profile.predict(&press, extrapolation)?;
     if args.json {
         print_json(&fp)?;
     } else {
-        println!(
+        crate::outln!(
             "{} ({}): h = {} mm, α = {}°, β = {}°\n  tip length  lt = {:.3} mm\n  root length lh = {:.3} mm\n  belly half-width lr = {:.3} mm (width {:.3} mm)\n  length lh + lt = {:.3} mm, area = {:.2} mm²",
             profile.name,
             match profile.source {
@@ -46,7 +46,7 @@ pub fn run(args: Args) -> Result<()> {
             2.0 * fp.lr_mm,
             fp.length_mm(),
             fp.area_mm2()
-        );
+        )?;
     }
     Ok(())
 }

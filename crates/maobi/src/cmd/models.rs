@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{BrushArg, gray, load_brush, load_image, print_json, progress, read_stroke_labels};
+use crate::common::{BrushArg, check_range, gray, load_brush, load_image, print_json, progress, read_stroke_labels};
 
 /// Arguments of `maobi models`.
 #[derive(clap::Args, Debug)]
@@ -64,12 +64,11 @@ struct Target {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    check_range("--n", args.n, 1, 1_000_000, "presses")?;
+    check_range("--size", args.size, 8, 4096, "px")?;
     let profile = load_brush(&args.brush.brush)?;
     let (targets, size, models, reference) = match &args.reference {
         None => {
-            if args.n == 0 {
-                bail!("--n 0: expected at least one press");
-            }
             let spec = DatasetSpec::new(profile.clone(), args.size, args.seed);
             let t = (0..args.n)
                 .map(|i| Target { press: spec.press(i), photo: None, px_per_mm: spec.canvas.px_per_mm })
@@ -124,14 +123,25 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         print_json(&report)?;
     } else {
-        println!("{} presses of {} at {size}², each model against {} (%):", report.n, report.brush, report.reference);
-        println!(
+        crate::outln!(
+            "{} presses of {} at {size}², each model against {} (%):",
+            report.n,
+            report.brush,
+            report.reference
+        )?;
+        crate::outln!(
             "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
-            "model", "CSIM best", "worst", "mean", "SSIM best", "worst", "mean"
-        );
+            "model",
+            "CSIM best",
+            "worst",
+            "mean",
+            "SSIM best",
+            "worst",
+            "mean"
+        )?;
         for m in &models {
             let s = report.models[m.name()];
-            println!(
+            crate::outln!(
                 "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
                 m.name(),
                 100.0 * s.csim.best,
@@ -140,7 +150,7 @@ pub fn run(args: Args) -> Result<()> {
                 100.0 * s.ssim.best,
                 100.0 * s.ssim.worst,
                 100.0 * s.ssim.mean
-            );
+            )?;
         }
     }
     Ok(())

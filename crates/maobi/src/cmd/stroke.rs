@@ -7,7 +7,10 @@ use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, coverage::svg
 use brush_model::Extrapolation;
 use serde_json::json;
 
-use crate::common::{BrushArg, PressArgs, RendererArgs, load_brush, parse_model, print_json, write_atomic};
+use crate::common::{
+    BrushArg, MAX_PX_PER_MM, MIN_PX_PER_MM, PressArgs, RendererArgs, check_range, load_brush, parse_model, print_json,
+    write_atomic,
+};
 
 /// Arguments of `maobi stroke`.
 #[derive(clap::Args, Debug)]
@@ -48,11 +51,12 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--size {}: expected a canvas side between 8 and 8192 px", args.size);
     }
     let canvas = match args.px_per_mm {
-        Some(s) if s.is_finite() && s > 0.0 => StrokeCanvas::with_scale(args.size, s),
-        Some(s) => bail!("--px-per-mm {s}: expected a positive scale"),
+        Some(s) => {
+            StrokeCanvas::with_scale(args.size, check_range("--px-per-mm", s, MIN_PX_PER_MM, MAX_PX_PER_MM, "px/mm")?)
+        }
         None => StrokeCanvas::for_profile(&profile, args.size),
     };
-    let press = args.press.press();
+    let press = args.press.press(&profile)?;
     let ex = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let fp = profile.predict(&press, ex)?;
     let anchor = canvas.anchor_mm(&fp, press.beta_rad);
@@ -94,7 +98,7 @@ fn run_neural(args: &Args) -> Result<()> {
     if args.px_per_mm.is_some() {
         bail!("--px-per-mm: the generator's scale is fixed ({:.4} px/mm)", g.config.px_per_mm);
     }
-    let press = args.press.press();
+    let press = args.press.press(&g.config.profile)?;
     // The generator only knows its training range.
     let fp = g.config.profile.predict(&press, Extrapolation::Refuse)?;
     let img = g.render(&[press])?.remove(0);

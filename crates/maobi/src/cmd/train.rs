@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
 
-use crate::common::{BrushArg, load_brush, write_atomic};
+use crate::common::{BrushArg, check_range, load_brush, write_atomic};
 
 /// Arguments of `maobi train`.
 #[derive(clap::Args, Debug)]
@@ -44,9 +44,13 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    if args.steps == 0 || args.batch == 0 || !(args.lr.is_finite() && args.lr > 0.0) {
-        bail!("--steps, --batch and --lr must be positive");
+    check_range("--steps", args.steps, 1, 10_000_000, "steps")?;
+    check_range("--batch", args.batch, 1, 256, "images")?;
+    if !(args.lr.is_finite() && args.lr > 0.0 && args.lr <= 1.0) {
+        bail!("--lr {}: expected a learning rate above 0 and at most 1", args.lr);
     }
+    check_range("--val-every", args.val_every, 1, 10_000_000, "steps")?;
+    check_range("--eval-n", args.eval_n, 1, 100_000, "presses")?;
     if args.output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
         bail!("-o {}: expected a .safetensors file name", args.output.display());
     }
@@ -139,7 +143,7 @@ pub fn run(args: Args) -> Result<()> {
     let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
     let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
     write_atomic(&dir.join("loss.png"), &maobi::plot::loss_png(&[("train", train), ("validation", val)])?)?;
-    println!(
+    crate::outln!(
         "{} steps in {:.1} s ({:.3} s/step, data {:.1}%){}; best validation MSE {:.6} at step {}; held-out (n = {}): SSIM mean {:.4} worst {:.4}, CSIM mean {:.4}",
         report.steps_run,
         report.wall_seconds,
@@ -152,6 +156,6 @@ pub fn run(args: Args) -> Result<()> {
         ssim.mean,
         ssim.worst,
         csim.mean
-    );
+    )?;
     Ok(())
 }

@@ -11,7 +11,7 @@ use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
 
 use crate::common::{
-    BrushArg, RendererArgs, load_brush, parse_method, parse_model, print_json, progress, write_atomic,
+    BrushArg, RendererArgs, check_range, load_brush, parse_method, parse_model, print_json, progress, write_atomic,
 };
 
 /// Arguments of `maobi write`.
@@ -90,6 +90,10 @@ pub fn run(args: Args) -> Result<()> {
     if args.per_line == 0 {
         bail!("--per-line 0: expected at least 1");
     }
+    if let Some(mm) = args.char_mm {
+        check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
+    }
+    check_sheet_size(chars.len(), args.size, args.per_line, args.rows)?;
     let profile = load_brush(&args.brush.brush)?;
     let alpha_rad = args.alpha.to_radians();
     if !profile.ranges.alpha_rad.contains(alpha_rad) {
@@ -103,9 +107,17 @@ pub fn run(args: Args) -> Result<()> {
     // Load and analyse every glyph before writing anything.
     let prepared: Vec<Prepared> =
         chars.par_iter().map(|&c| prepare(load_glyph(&args, c)?, args.method)).collect::<Result<_>>()?;
+    for p in &prepared {
+        if p.paths.is_empty() {
+            let from = args.image.as_ref().map_or(String::new(), |i| format!(" in --image {}", i.display()));
+            bail!(
+                "{}: found no strokes{from} (is it one character, dark ink on light paper, strokes wider than a hair?)",
+                p.glyph.ch
+            );
+        }
+    }
     let char_mm = match args.char_mm {
-        Some(v) if v.is_finite() && v > 0.0 => v,
-        Some(v) => bail!("--char-mm {v}: expected a positive size in mm"),
+        Some(v) => v,
         None => {
             let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
             trajectory::auto_char_mm(&all, &profile, alpha_rad)
@@ -219,6 +231,31 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         println!("char box {char_mm:.1} mm; outputs in {}", args.out.display());
+    }
+    Ok(())
+}
+
+/// The smallest character box a flag may ask for, mm.
+pub const MIN_CHAR_MM: f64 = 1.0;
+/// The largest character box a flag may ask for, mm (a metre: beyond any robot's reach).
+pub const MAX_CHAR_MM: f64 = 1000.0;
+
+/// Refuses a layout whose sheet image would exceed the largest image side, before any work.
+/// The sheet's size in pixels does not depend on the box size in mm.
+fn check_sheet_size(n: usize, size: u32, per_line: usize, rows: bool) -> Result<()> {
+    if n < 2 {
+        return Ok(());
+    }
+    let px_per_mm = size as f64; // a 1 mm box: scale-free
+    let boxes = layout(n, 1.0, per_line, rows);
+    let w = boxes.iter().map(|b| b.x0_mm + b.size_mm).fold(0.0, f64::max) + 0.1;
+    let h = boxes.iter().map(|b| b.y0_mm + b.size_mm).fold(0.0, f64::max) + 0.1;
+    let (wp, hp) = ((w * px_per_mm).ceil(), (h * px_per_mm).ceil());
+    let max = bezier_raster::coverage::MAX_SIDE as f64;
+    if wp > max || hp > max {
+        bail!(
+            "--size {size} with --per-line {per_line}: the sheet of {n} characters would be {wp}×{hp} px, over the {max} px limit of an image side; lower --size or change --per-line"
+        );
     }
     Ok(())
 }
