@@ -101,6 +101,12 @@ pub fn interrupted() -> bool {
     INTERRUPTED.load(Ordering::SeqCst)
 }
 
+/// Puts a temporary file that a library writes (and renames) on the list the Ctrl-C handler
+/// removes, for the rest of the run.
+pub fn remove_on_interrupt(p: &Path) {
+    TEMPS.lock().unwrap_or_else(|e| e.into_inner()).push(p.to_path_buf());
+}
+
 /// Keeps a temporary file on the list the Ctrl-C handler removes, while it lives.
 struct TempGuard(PathBuf);
 
@@ -282,7 +288,13 @@ pub struct StrokeLabel {
 /// Reads `file,h_mm,alpha_deg,beta_deg[,px_per_mm]` (extra columns ignored); errors name the
 /// file, line and column.
 pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
+    const MAX_BYTES: u64 = 64 << 20;
+    const MAX_ROWS: usize = 100_000;
     let name = path.display().to_string();
+    let len = std::fs::metadata(path).with_context(|| format!("{name}: cannot read"))?.len();
+    if len > MAX_BYTES {
+        bail!("{name}: {len} bytes; a labels file is at most {MAX_BYTES} bytes");
+    }
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -297,6 +309,9 @@ pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
     let mut out = Vec::new();
     for rec in rdr.records() {
         let rec = rec.with_context(|| format!("{name}: malformed CSV"))?;
+        if out.len() == MAX_ROWS {
+            bail!("{name}: more than {MAX_ROWS} rows");
+        }
         let line = rec.position().map_or(0, |p| p.line());
         let num = |i: usize, c: &str| -> Result<f64> {
             let v = rec.get(i).unwrap_or("");

@@ -54,6 +54,9 @@ pub fn run(args: Args) -> Result<()> {
     if args.output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
         bail!("-o {}: expected a .safetensors file name", args.output.display());
     }
+    // The checkpoints are written to these and renamed (neural_gen::Generator::save).
+    crate::common::remove_on_interrupt(&args.output.with_extension("safetensors.tmp"));
+    crate::common::remove_on_interrupt(&neural_gen::model::config_path(&args.output).with_extension("json.tmp"));
     let profile = load_brush(&args.brush.brush)?;
     let mut g = match &args.resume {
         Some(p) => {
