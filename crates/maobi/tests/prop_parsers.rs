@@ -324,6 +324,24 @@ mod flags {
         }
 
         #[test]
+        fn stroke_labels_csv(rows in prop::collection::vec(prop::collection::vec(wild_token(), 5), 0..4), junk in "[ -~\n,]{0,60}") {
+            // The labels parser of `models --reference` and `calibrate --images` (in the binary).
+            let dir = tempfile::tempdir().unwrap();
+            std::fs::copy(
+                concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/photos/stroke_01.png"),
+                dir.path().join("a.png"),
+            )
+            .unwrap();
+            let mut text = String::from("file,h_mm,alpha_deg,beta_deg,px_per_mm\n");
+            for r in &rows {
+                text.push_str(&format!("a.png,{}\n", r[..4].join(",")));
+            }
+            text.push_str(&junk);
+            std::fs::write(dir.path().join("labels.csv"), text).unwrap();
+            clean_exit(&["models", "--reference", dir.path().to_str().unwrap()])?;
+        }
+
+        #[test]
         fn write_flags(char_mm in flag_value(), per_line in prop::sample::select(vec!["0", "1", "2", "1000000"])) {
             let dir = tempfile::tempdir().unwrap();
             let out = dir.path().join("w");
