@@ -37,7 +37,7 @@ pub fn render_batch(
         .collect()
 }
 
-/// Composes many footprints into one image by per-pixel max (DESIGN §7): overlapping
+/// Composes many footprints into one image by per-pixel max (docs/contracts.md §6): overlapping
 /// anti-aliased edges never darken each other, and re-stamping the same footprint changes
 /// nothing.
 pub struct Compositor {

@@ -8,7 +8,7 @@
 //!   [`BezPath`](kurbo::BezPath)s in paper millimetres.
 //! * [`raster`]: a reusable [`Rasterizer`] that fills a path, scaled by `px_per_mm`, into a
 //!   [`Coverage`] image with tiny-skia's anti-aliasing (ink = 1), either replacing the image or
-//!   stamping into it by per-pixel max (DESIGN §7).
+//!   stamping into it by per-pixel max (docs/contracts.md §6).
 //! * [`canvas`]: the single-footprint canvas convention shared by `maobi stroke`, the dataset and
 //!   the neural generator ([`StrokeCanvas`]).
 //! * [`batch`]: parallel rendering with rayon and the [`Compositor`] for many stamps.

@@ -6,7 +6,7 @@
 //!
 //! | model | shape |
 //! |---|---|
-//! | [`Bsm`] | the two mirrored cubic Béziers of DESIGN §4 |
+//! | [`Bsm`] | the two mirrored cubic Béziers of docs/contracts.md §3 |
 //! | [`Circle`] | a disc of radius `lr` centred on the belly `(lh, 0)` |
 //! | [`Ellipse`] | semi-axes `(lt + lh)/2` along the axis and `lr` across, centred midway `((lh + lt)/2, 0)`, so it spans root to tip |
 //! | [`Line`] | the segment root → tip drawn `2·lr` wide with butt ends: the rectangle `[0, lh + lt] × [−lr, lr]` |

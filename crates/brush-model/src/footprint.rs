@@ -1,4 +1,4 @@
-//! The B-BSM footprint: two mirrored cubic Béziers (DESIGN §4).
+//! The B-BSM footprint: two mirrored cubic Béziers (docs/contracts.md §3).
 //!
 //! In the footprint's own frame the root end is at the origin and the axis runs along +x to the
 //! tip. The upper boundary is the cubic

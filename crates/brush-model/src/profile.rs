@@ -1,5 +1,5 @@
 //! Brush profiles: a brush, the press range it was calibrated over, and the linear model from
-//! press to footprint (DESIGN §5).
+//! press to footprint (docs/contracts.md §4).
 //!
 //! Profiles are versioned JSON. The built-in `pen1` and `pen2` are *nominal*: their coefficients
 //! come from the brush geometry (see `docs/brush-model.md`), not from measurements, and a

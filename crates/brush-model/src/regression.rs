@@ -1,4 +1,4 @@
-//! Ordinary least squares for the brush model (DESIGN §5, paper Eq. 1–6).
+//! Ordinary least squares for the brush model (docs/contracts.md §4, paper Eq. 1–6).
 //!
 //! Two forms are fitted from [`Measurement`]s:
 //!

@@ -1,4 +1,4 @@
-//! Property tests for every footprint invariant of DESIGN §4.
+//! Property tests for every footprint invariant of docs/contracts.md §3.
 
 use brush_model::{BrushProfile, Extrapolation, Footprint, PointMm, Press};
 use proptest::prelude::*;

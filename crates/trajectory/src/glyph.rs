@@ -1,7 +1,7 @@
 //! Glyph sources: hanzi-writer-data JSON (embedded subset or a folder), CJK fonts, and images.
 //!
 //! Every glyph lives in the **em frame**: the 1024-unit box of Make Me a Hanzi with y flipped to
-//! point down, so `x' = x`, `y' = 900 − y` (DESIGN §3). The em box is `[0, 1024]²` in `(x', y')`.
+//! point down, so `x' = x`, `y' = 900 − y` (docs/contracts.md §2). The em box is `[0, 1024]²` in `(x', y')`.
 
 use std::collections::HashMap;
 use std::path::Path;
