@@ -3,7 +3,7 @@
 
 use brush_model::Track;
 
-use crate::program::{Move, Program, RobotConfig};
+use crate::program::{DWELL_SINK_MM, Move, Program, RobotConfig, dip_plan};
 
 fn f(v: f64) -> String {
     let s = format!("{v:.6}");
@@ -39,8 +39,14 @@ pub fn aubo_lua(program: &Program, title: &str) -> String {
     };
     emit(&mut s, &program.start);
     for st in &program.strokes {
+        if !st.dip.is_empty() {
+            s.push_str(&format!("  -- ink dip before stroke {}\n", st.index + 1));
+            for m in &st.dip {
+                emit(&mut s, m);
+            }
+        }
         s.push_str(&format!("  -- stroke {}\n", st.index + 1));
-        for m in st.moves() {
+        for m in st.moves().skip(st.dip.len()) {
             emit(&mut s, m);
         }
     }
@@ -69,8 +75,14 @@ pub fn urscript(program: &Program, title: &str) -> String {
     };
     emit(&mut s, &program.start);
     for st in &program.strokes {
+        if !st.dip.is_empty() {
+            s.push_str(&format!("  # ink dip before stroke {}\n", st.index + 1));
+            for m in &st.dip {
+                emit(&mut s, m);
+            }
+        }
         s.push_str(&format!("  # stroke {}\n", st.index + 1));
-        for m in st.moves() {
+        for m in st.moves().skip(st.dip.len()) {
             emit(&mut s, m);
         }
     }
@@ -80,9 +92,41 @@ pub fn urscript(program: &Program, title: &str) -> String {
 
 /// G-code for a 3-axis brush plotter working in paper millimetres: X, Y on the paper, Z = −H
 /// (Z 0 where the tip touches, positive up), feed rates from the configured speeds. Tilt α and
-/// direction β cannot be expressed and are ignored; the returned warnings say so.
+/// direction β cannot be expressed and are ignored; the returned warnings say so. Ink dips
+/// (robot.json `ink` with `paper_mm`) go to the pot, down `depth_mm` below the paper plane,
+/// soak (sink `DWELL_SINK_MM` further over `dwell_s`, as the arm programs do) and back up,
+/// before the strokes the reload rule picks.
 pub fn gcode(track: &Track, cfg: &RobotConfig, title: &str) -> (String, Vec<String>) {
+    gcode_chars(track, None, cfg, title)
+}
+
+/// [`gcode`] with the track's character boundaries (`stroke_chars`, for the reload rule
+/// `before_each_char`).
+pub fn gcode_chars(
+    track: &Track,
+    stroke_chars: Option<&[usize]>,
+    cfg: &RobotConfig,
+    title: &str,
+) -> (String, Vec<String>) {
     let mut warnings = Vec::new();
+    let station = cfg.station();
+    let dips = match (&station, station.and_then(|s| s.paper_mm)) {
+        (Some(st), Some(_)) => match dip_plan(track, stroke_chars, st) {
+            Ok(d) => d,
+            Err(e) => {
+                warnings.push(format!("no ink dips in the G-code: {e}"));
+                vec![false; track.strokes.len()]
+            }
+        },
+        (Some(_), None) => {
+            warnings.push(
+                "robot.json ink.paper_mm (where the plotter finds the ink, paper mm) is not set: the G-code has no ink dips"
+                    .into(),
+            );
+            vec![false; track.strokes.len()]
+        }
+        _ => vec![false; track.strokes.len()],
+    };
     if track.points().any(|p| p.alpha_rad.abs() > 1e-9) {
         warnings.push("G-code has no tilt axis: α is ignored".to_string());
     }
@@ -93,6 +137,22 @@ pub fn gcode(track: &Track, cfg: &RobotConfig, title: &str) -> (String, Vec<Stri
     s.push_str(&format!("G0 Z{}\n", f(cfg.lift_mm)));
     for (i, st) in track.strokes.iter().enumerate() {
         let Some(first) = st.points.first() else { continue };
+        if let (true, Some(st)) = (dips[i], station) {
+            let [x, y] = st.paper_mm.unwrap_or([0.0, 0.0]);
+            s.push_str(&format!("; ink dip before stroke {}\n", i + 1));
+            s.push_str(&format!("G0 X{} Y{} F{}\n", f(x), f(y), f(travel_f)));
+            s.push_str(&format!("G1 Z{} F{}\n", f(-st.depth_mm), f(travel_f * 0.5)));
+            if st.dwell_s > 0.0 {
+                let soak_f = DWELL_SINK_MM / st.dwell_s * 60.0;
+                s.push_str(&format!(
+                    "G1 Z{} F{} ; dwell {} s\n",
+                    f(-st.depth_mm - DWELL_SINK_MM),
+                    f(soak_f),
+                    st.dwell_s
+                ));
+            }
+            s.push_str(&format!("G0 Z{}\n", f(cfg.lift_mm)));
+        }
         s.push_str(&format!("; stroke {}\n", i + 1));
         s.push_str(&format!("G0 X{} Y{} F{}\n", f(first.x_mm), f(first.y_mm), f(travel_f)));
         for p in &st.points {

@@ -39,6 +39,63 @@ pub struct DipStation {
     pub every_strokes: usize,
 }
 
+/// How far the brush sinks further into the ink during the dwell of a dip, mm: the dwell is a
+/// slow straight move of this length lasting `dwell_s` (every transport and export carries a
+/// line move; none needs a separate wait command).
+pub const DWELL_SINK_MM: f64 = 1.0;
+
+/// The longest dwell accepted, s.
+pub const MAX_DWELL_S: f64 = 60.0;
+
+/// When the brush goes back to the ink. A dip only ever happens between strokes, before the
+/// stroke the rule picks; the first stroke always starts with a dip.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Reload {
+    /// `{"every_strokes": N}`: before every N-th stroke (1: before each stroke).
+    EveryStrokes(usize),
+    /// `{"every_mm": L}`: a load lasts L mm of pressed path: dip before a stroke that would take
+    /// the pressed path since the last dip beyond L (a single stroke longer than L still runs
+    /// on one load).
+    EveryMm(f64),
+    /// `"before_each_char"`: before the first stroke of each character (needs the character
+    /// boundaries: a sheet `track.json`'s `stroke_chars`).
+    BeforeEachChar,
+}
+
+/// `robot.json` → `ink`: the ink station and the reload rule.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InkStation {
+    /// TCP pose just above the ink, base frame (m, rad).
+    pub pose: [f64; 6],
+    /// How far down into the ink from `pose`, mm.
+    pub depth_mm: f64,
+    /// How long the brush soaks, s (0: straight back up): it sinks [`DWELL_SINK_MM`] further
+    /// over this time.
+    #[serde(default)]
+    pub dwell_s: f64,
+    /// When to dip.
+    pub reload: Reload,
+    /// Where the ink pot is for a 3-axis plotter (G-code), paper mm (may lie off the sheet);
+    /// without it the G-code export has no dips and says so.
+    #[serde(default)]
+    pub paper_mm: Option<[f64; 2]>,
+}
+
+impl InkStation {
+    /// The legacy `dip` form: every N strokes, no dwell.
+    pub fn from_dip(d: &DipStation) -> Self {
+        InkStation {
+            pose: d.pose,
+            depth_mm: d.depth_mm,
+            dwell_s: 0.0,
+            reload: Reload::EveryStrokes(d.every_strokes),
+            paper_mm: None,
+        }
+    }
+}
+
 /// Where the brush comes from: the paper's into-paper normal (paper z = x × y) must point
 /// within `max_angle_rad` of `into_paper_base`, or the frame is refused (a mirrored or upside
 /// down `paper.json`).
@@ -133,8 +190,10 @@ pub struct RobotConfig {
     pub blend_mm: f64,
     /// Controller speed fraction (0, 1].
     pub speed_fraction: f64,
-    /// Optional ink dipping.
+    /// Optional ink dipping every N strokes (the older form of `ink`).
     pub dip: Option<DipStation>,
+    /// Optional ink station with a dwell and a reload rule (docs/robot.md, "Ink").
+    pub ink: Option<InkStation>,
     /// The side of the paper the brush comes from.
     pub approach: Approach,
     /// Limits.
@@ -155,6 +214,7 @@ impl Default for RobotConfig {
             blend_mm: 0.5,
             speed_fraction: 1.0,
             dip: None,
+            ink: None,
             approach: Approach::default(),
             limits: Limits::default(),
         }
@@ -266,8 +326,98 @@ impl RobotConfig {
                 return Err("dip: every_strokes ≥ 1, depth_mm > 0 and a finite pose are required".into());
             }
         }
+        if let Some(i) = &self.ink {
+            if self.dip.is_some() {
+                return Err("give either dip or ink, not both (ink replaces dip)".into());
+            }
+            if !(i.depth_mm.is_finite() && i.depth_mm > 0.0) {
+                return Err(format!("ink.depth_mm must be > 0, got {}", i.depth_mm));
+            }
+            if i.pose.iter().any(|v| !v.is_finite()) {
+                return Err("ink.pose must be six finite numbers [x, y, z, rx, ry, rz] (m, rad)".into());
+            }
+            if !(i.dwell_s.is_finite() && (0.0..=MAX_DWELL_S).contains(&i.dwell_s)) {
+                return Err(format!("ink.dwell_s must be within 0..={MAX_DWELL_S} s, got {}", i.dwell_s));
+            }
+            match i.reload {
+                Reload::EveryStrokes(0) => return Err("ink.reload.every_strokes must be ≥ 1".into()),
+                Reload::EveryMm(mm) if !(mm.is_finite() && mm > 0.0) => {
+                    return Err(format!("ink.reload.every_mm must be > 0 mm, got {mm}"));
+                }
+                _ => {}
+            }
+            if i.paper_mm.is_some_and(|p| p.iter().any(|v| !v.is_finite())) {
+                return Err("ink.paper_mm must be two finite numbers (paper mm)".into());
+            }
+        }
         Ok(())
     }
+
+    /// The ink station in use: `ink`, or the older `dip` as one.
+    pub fn station(&self) -> Option<InkStation> {
+        self.ink.or_else(|| self.dip.as_ref().map(InkStation::from_dip))
+    }
+}
+
+/// Pressed path length of a stroke on the paper, mm (between consecutive points both pressed).
+pub fn pressed_mm(points: &[TrackPoint]) -> f64 {
+    points
+        .windows(2)
+        .filter(|w| w[0].h_mm > 0.0 && w[1].h_mm > 0.0)
+        .map(|w| (w[1].x_mm - w[0].x_mm).hypot(w[1].y_mm - w[0].y_mm))
+        .sum()
+}
+
+/// Before which strokes the brush goes to the ink, by the station's reload rule: one flag per
+/// stroke of `track` (empty strokes never dip). `stroke_chars` gives each stroke's character
+/// (a sheet `track.json`'s `stroke_chars`), needed by `before_each_char`.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] when the rule needs character boundaries that were not given, or
+/// they do not match the track.
+pub fn dip_plan(track: &Track, stroke_chars: Option<&[usize]>, station: &InkStation) -> Result<Vec<bool>, RobotError> {
+    let n = track.strokes.len();
+    if let Some(c) = stroke_chars {
+        if c.len() != n {
+            return Err(RobotError::Unsafe {
+                stroke: None,
+                point: None,
+                reason: format!("the track's stroke_chars has {} entries for {n} strokes", c.len()),
+            });
+        }
+    }
+    let mut out = vec![false; n];
+    let mut since_mm = 0.0;
+    let mut first = true;
+    let mut last_char = None;
+    for (si, st) in track.strokes.iter().enumerate() {
+        if st.points.is_empty() {
+            continue;
+        }
+        let len = pressed_mm(&st.points);
+        let dip = match station.reload {
+            Reload::EveryStrokes(k) => si % k.max(1) == 0,
+            Reload::EveryMm(l) => first || (since_mm > 0.0 && since_mm + len > l),
+            Reload::BeforeEachChar => {
+                let Some(c) = stroke_chars else {
+                    return Err(RobotError::Unsafe {
+                        stroke: None,
+                        point: None,
+                        reason: "robot.json ink.reload = before_each_char needs the track's character boundaries (a sheet track.json from `maobi write` with several characters has stroke_chars); this track has none: use {\"every_mm\": L} or {\"every_strokes\": N}".into(),
+                    });
+                };
+                first || last_char != Some(c[si])
+            }
+        };
+        if dip {
+            since_mm = 0.0;
+        }
+        since_mm += len;
+        last_char = stroke_chars.map(|c| c[si]);
+        first = false;
+        out[si] = dip;
+    }
+    Ok(out)
 }
 
 /// One motion command.
@@ -393,6 +543,8 @@ pub struct CheckReport {
     /// Estimated writing time at the configured speeds, s (path length / speed, accelerations
     /// ignored).
     pub estimated_seconds: f64,
+    /// Ink dips in the program.
+    pub dips: usize,
 }
 
 fn unsafe_at(stroke: usize, point: Option<usize>, reason: String) -> RobotError {
@@ -568,6 +720,22 @@ pub fn build_program(
     frame: &PaperFrame,
     cfg: &RobotConfig,
 ) -> Result<(Program, CheckReport), RobotError> {
+    build_program_chars(track, None, profile, frame, cfg)
+}
+
+/// [`build_program`] for a track whose strokes belong to characters (`stroke_chars[i]`: the
+/// character of stroke `i`, as a sheet `track.json` records it), which the ink reload rule
+/// `before_each_char` needs.
+///
+/// # Errors
+/// As [`build_program`]; also when the reload rule needs character boundaries not given.
+pub fn build_program_chars(
+    track: &Track,
+    stroke_chars: Option<&[usize]>,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+) -> Result<(Program, CheckReport), RobotError> {
     cfg.validate().map_err(|m| RobotError::Unsafe { stroke: None, point: None, reason: format!("robot.json: {m}") })?;
     if track.strokes.is_empty() || track.point_count() == 0 {
         return Err(RobotError::Unsafe { stroke: None, point: None, reason: "the track has no points".into() });
@@ -585,6 +753,13 @@ pub fn build_program(
         });
     }
     let normal_angle = check_approach(frame, &cfg.approach)?;
+    let station = cfg.station();
+    let dips = match &station {
+        Some(s) => dip_plan(track, stroke_chars, s)?,
+        None => vec![false; track.strokes.len()],
+    };
+    let mut dip_count = 0usize;
+    let mut dip_m = 0.0f64;
     let tcp = tcp_iso(tcp_offset_m);
     let lift_m = cfg.lift_mm / 1000.0;
     let mut seed: Option<[f64; 6]> = None;
@@ -627,30 +802,44 @@ pub fn build_program(
             travel_m += dist(&prev, &up);
         }
         let mut dip = Vec::new();
-        if let Some(d) = &cfg.dip {
-            if si % d.every_strokes == 0 {
+        if let Some(d) = &station {
+            if dips[si] {
                 let above = Pose(d.pose);
                 let down = above.raised(-d.depth_mm / 1000.0);
+                let soak = down.raised(-DWELL_SINK_MM / 1000.0);
                 reach(&above, si, 0, "dip station")?;
                 reach(&down, si, 0, "dip station")?;
                 let (vt, vd) = (cfg.travel_speed_m_s, cfg.travel_speed_m_s * 0.5);
                 dip = vec![
                     Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vt, blend_m: 0.0 },
                     Move::Line { pose: down, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 },
-                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 },
                 ];
+                if d.dwell_s > 0.0 {
+                    reach(&soak, si, 0, "dip station")?;
+                    // The dwell: sink DWELL_SINK_MM further over dwell_s.
+                    let v = DWELL_SINK_MM / 1000.0 / d.dwell_s;
+                    dip.push(Move::Line { pose: soak, a: cfg.travel_acc_m_s2, v, blend_m: 0.0 });
+                }
+                dip.push(Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 });
+                dip_count += 1;
+                dip_m += dist(last_up.as_ref().unwrap_or(&above), &above) + dist(&above, &up);
+                dip_m += 2.0 * (d.depth_mm + if d.dwell_s > 0.0 { DWELL_SINK_MM } else { 0.0 }) / 1000.0 * 2.0;
                 // The station must be off the sheet if it lies below the paper's plane, and
                 // the pose above the ink must be above that plane (travel reaches it straight).
                 let off_sheet = |pose: &Pose| {
                     let q = frame.to_paper(pose.position());
                     !frame.contains(q[0], q[1])
                 };
-                let in_ink = if off_sheet(&down) { None } else { Some(0.0) };
-                for (pose, what, v_m_s, max_depth_mm) in [
+                let in_ink = if off_sheet(&down) && off_sheet(&soak) { None } else { Some(0.0) };
+                let mut steps = vec![
                     (above, "dip station (above the ink)", vt, Some(0.0)),
                     (down, "dip station (in the ink)", vd, in_ink),
-                    (above, "dip station (above the ink)", vd, Some(0.0)),
-                ] {
+                ];
+                if d.dwell_s > 0.0 {
+                    steps.push((soak, "dip station (in the ink)", DWELL_SINK_MM / 1000.0 / d.dwell_s, in_ink));
+                }
+                steps.push((above, "dip station (above the ink)", vd, Some(0.0)));
+                for (pose, what, v_m_s, max_depth_mm) in steps {
                     checked.push(Checked { stroke: si, point: None, what, pose, v_m_s, max_depth_mm });
                 }
                 reach(&up, si, 0, "approach")?;
@@ -772,7 +961,9 @@ pub fn build_program(
         max_wrist_rate_rad_s: peaks.wrist,
         max_depth_change_per_mm: peaks.depth_per_mm,
         estimated_seconds: path_m / cfg.write_speed_m_s
-            + (travel_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s,
+            + (travel_m + dip_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s
+            + station.map_or(0.0, |s| s.dwell_s) * dip_count as f64,
+        dips: dip_count,
     };
     Ok((program, report))
 }
