@@ -69,7 +69,12 @@ static SIGNALS: AtomicUsize = AtomicUsize::new(0);
 fn remove_temps() {
     let temps = TEMPS.lock().unwrap_or_else(|e| e.into_inner());
     for t in temps.iter() {
-        let _ = std::fs::remove_file(t);
+        // A staging folder (`maobi write`) or a temporary file.
+        if t.is_dir() {
+            let _ = std::fs::remove_dir_all(t);
+        } else {
+            let _ = std::fs::remove_file(t);
+        }
     }
 }
 

@@ -4,3 +4,4 @@
 pub mod generator;
 pub mod pipeline;
 pub mod plot;
+pub mod sheet;

@@ -40,6 +40,8 @@ enum Command {
     Dataset(cmd::dataset::Args),
     /// Write characters: brush track, render, reference and scores.
     Write(cmd::write::Args),
+    /// One self-contained HTML page that plays a track over its sheet (brush, footprints, plots, check, dips).
+    Preview(cmd::preview::Args),
     /// Run the write pipeline over many characters and report mean scores.
     Evaluate(cmd::evaluate::Args),
     /// Robot arms: check, export, send, simulate.
@@ -98,6 +100,7 @@ fn main() -> ExitCode {
         Command::Models(a) => cmd::models::run(a),
         Command::Write(a) => cmd::write::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
+        Command::Preview(a) => cmd::preview::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGenerator(a) => cmd::eval_generator::run(a),
         Command::Robot(c) => cmd::robot::run(c),

@@ -6,6 +6,7 @@ use anyhow::{Context, Result, bail};
 use bezier_raster::{ModelKind, coverage::overlay_png};
 use brush_model::{BrushProfile, Extrapolation, Track};
 use maobi::pipeline::{CharReport, CharResult, Prepared, WriteOptions, prepare, write_char};
+use maobi::sheet::{Flow, Grid, Layout, Sheet, SheetTrack, layout_on_sheet, parse_sheet};
 use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
@@ -50,12 +51,27 @@ pub struct Args {
     /// Lay several characters out in rows, left to right (default: columns, right to left).
     #[arg(long)]
     rows: bool,
-    /// Characters per column (or row).
-    #[arg(long, default_value_t = 4)]
-    per_line: usize,
-    /// Output folder.
+    /// Characters per column (or row) (default: 4; with --sheet, the count that gives the largest
+    /// characters).
+    #[arg(long)]
+    per_line: Option<usize>,
+    /// The paper: A0–A6, B3–B5 (portrait; A4L for landscape), WxH in mm (180x680 for a couplet
+    /// strip), or a paper.json (its size_mm). The characters are laid out inside --margin-mm and
+    /// sized from the paper and their count unless --char-mm is given (docs/sheet.md).
+    #[arg(long)]
+    sheet: Option<String>,
+    /// Margin kept free on every side of --sheet, mm.
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    margin_mm: f64,
+    /// Grid drawn under each character in the preview (never written): none, mi (米字格), tian (田字格).
+    #[arg(long, default_value = "none")]
+    grid: Grid,
+    /// Output folder. An existing non-empty folder is refused unless --force is given.
     #[arg(long)]
     out: PathBuf,
+    /// Replace an existing --out folder (the old contents are removed once the new run is complete).
+    #[arg(long)]
+    force: bool,
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -87,13 +103,26 @@ pub fn run(args: Args) -> Result<()> {
     if !(64..=4096).contains(&args.size) {
         bail!("--size {}: expected 64..=4096 px", args.size);
     }
-    if args.per_line == 0 {
+    if args.per_line == Some(0) {
         bail!("--per-line 0: expected at least 1");
     }
     if let Some(mm) = args.char_mm {
         check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
     }
-    check_sheet_size(chars.len(), args.size, args.per_line, args.rows)?;
+    check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
+    check_out(&args.out, args.force)?;
+    let flow = if args.rows { Flow::Rows } else { Flow::Columns };
+    let sheet = args.sheet.as_deref().map(parse_sheet).transpose()?;
+    // With a sheet the layout (and so the sheet image's size) is known before any glyph work
+    // unless the size comes from the glyphs.
+    let sheet_layout = match &sheet {
+        Some(sh) => Some(layout_on_sheet(sh, chars.len(), flow, args.per_line, args.margin_mm, args.char_mm)?),
+        None => None,
+    };
+    match &sheet_layout {
+        Some(l) => check_sheet_px(l, args.size)?,
+        None => check_sheet_size(chars.len(), args.size, args.per_line.unwrap_or(4), args.rows)?,
+    }
     let profile = load_brush(&args.brush.brush)?;
     let alpha_rad = args.alpha.to_radians();
     if !profile.ranges.alpha_rad.contains(alpha_rad) {
@@ -116,14 +145,14 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
-    let char_mm = match args.char_mm {
-        Some(v) => v,
-        None => {
-            let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
-            trajectory::auto_char_mm(&all, &profile, alpha_rad)
-        }
+    let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
+    let brush_mm = trajectory::auto_char_mm(&all, &profile, alpha_rad);
+    let lay = match sheet_layout {
+        Some(l) => l,
+        None => auto_layout(chars.len(), args.char_mm.unwrap_or(brush_mm), args.per_line.unwrap_or(4), args.rows),
     };
-    let boxes = layout(chars.len(), char_mm, args.per_line, args.rows);
+    let char_mm = lay.char_mm;
+    let boxes = lay.boxes.clone();
     let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, ..WriteOptions::default() };
     let pb = progress(chars.len() as u64, "write");
     let results: Vec<CharResult> = prepared
@@ -180,9 +209,12 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let single = results.len() == 1;
+    // Everything goes to a staging folder beside --out, swapped in at the end: a run never
+    // mixes with an older one, and a failed run leaves the old folder as it was.
+    let stage = Stage::new(&args.out)?;
     for (i, r) in results.iter().enumerate() {
-        let dir = if single { args.out.clone() } else { args.out.join(format!("{:02}-{}", i + 1, r.report.char)) };
-        write_outputs(&dir, r, &profile)?;
+        let dir = if single { stage.path.clone() } else { stage.path.join(format!("{:02}-{}", i + 1, r.report.char)) };
+        write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
     let mean = |f: fn(&CharReport) -> f64| reports.iter().map(|r| f(r)).sum::<f64>() / reports.len() as f64;
@@ -198,13 +230,29 @@ pub fn run(args: Args) -> Result<()> {
             "iou": mean(|r| r.executed.map_or(f64::NAN, |s| s.iou)),
         },
         "agreement_mean": {"csim": mean(|r| r.agreement.map_or(f64::NAN, |s| s.csim))},
+        "sheet": {
+            "name": lay.sheet.name, "size_mm": [lay.sheet.width_mm, lay.sheet.height_mm],
+            "margin_mm": lay.margin_mm, "flow": flow, "per_line": lay.per_line, "lines": lay.lines,
+        },
+        "brush_fit": brush_fit(&reports, char_mm, brush_mm),
         "chars": reports,
     });
+    let sheet_track = SheetTrack::new(
+        &lay,
+        flow,
+        args.grid,
+        &results.iter().map(|r| (r.report.char.clone(), r.char_box, r.track.strokes.as_slice())).collect::<Vec<_>>(),
+        &profile,
+    );
     if !single {
-        let sheet = sheet_image(&results, &profile, args.model, char_mm, args.size)?;
-        write_atomic(&args.out.join("sheet.png"), &sheet.encode_png()?)?;
-        write_atomic(&args.out.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+        let img = sheet_image(&results, &profile, args.model, &lay, args.size)?;
+        write_atomic(&stage.path.join("sheet.png"), &img.encode_png()?)?;
+        write_atomic(&stage.path.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+        write_atomic(&stage.path.join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
     }
+    let preview = crate::cmd::preview::sheet_preview(&sheet_track, None, None)?;
+    write_atomic(&stage.path.join("preview.html"), preview.as_bytes())?;
+    stage.commit(&args.out)?;
     if args.json {
         print_json(&summary)?;
     } else {
@@ -230,7 +278,14 @@ pub fn run(args: Args) -> Result<()> {
                 r.millis
             );
         }
-        println!("char box {char_mm:.1} mm; outputs in {}", args.out.display());
+        println!(
+            "{} sheet {:.0}×{:.0} mm, char box {char_mm:.1} mm ({}); outputs in {} (preview.html to watch it)",
+            lay.sheet.name,
+            lay.sheet.width_mm,
+            lay.sheet.height_mm,
+            summary["brush_fit"]["note"].as_str().unwrap_or(""),
+            args.out.display()
+        );
     }
     Ok(())
 }
@@ -263,6 +318,7 @@ fn check_sheet_size(n: usize, size: u32, per_line: usize, rows: bool) -> Result<
 /// Character boxes on the paper: columns right to left (or rows left to right), a gap of a
 /// tenth of the box between characters and around the sheet.
 fn layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Vec<CharBox> {
+    let per_line = per_line.clamp(1, n.max(1));
     let gap = 0.1 * char_mm;
     let step = char_mm + gap;
     let lines = n.div_ceil(per_line);
@@ -275,23 +331,163 @@ fn layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Vec<CharBox> {
         .collect()
 }
 
+/// The layout without `--sheet`: the old automatic one (a gap of a tenth of the box around and
+/// between the characters), the sheet just large enough for it.
+fn auto_layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Layout {
+    let boxes = layout(n, char_mm, per_line, rows);
+    let gap = 0.1 * char_mm;
+    let w = boxes.iter().map(|b| b.x0_mm + b.size_mm).fold(0.0, f64::max) + gap;
+    let h = boxes.iter().map(|b| b.y0_mm + b.size_mm).fold(0.0, f64::max) + gap;
+    let per = per_line.clamp(1, n.max(1));
+    Layout {
+        sheet: Sheet { name: "automatic".into(), width_mm: w, height_mm: h },
+        boxes,
+        char_mm,
+        per_line: per,
+        lines: n.div_ceil(per),
+        margin_mm: gap,
+    }
+}
+
+/// Refuses a sheet whose image would exceed the largest image side.
+fn check_sheet_px(l: &Layout, size: u32) -> Result<()> {
+    let ppm = size as f64 / l.char_mm;
+    let (wp, hp) = ((l.sheet.width_mm * ppm).ceil(), (l.sheet.height_mm * ppm).ceil());
+    let max = bezier_raster::coverage::MAX_SIDE as f64;
+    if wp > max || hp > max {
+        bail!(
+            "--size {size} on the {} sheet with {:.1} mm characters: the sheet image would be {wp}×{hp} px, over the {max} px limit of an image side; lower --size",
+            l.sheet.name,
+            l.char_mm
+        );
+    }
+    Ok(())
+}
+
+/// Refuses an existing non-empty `--out` (a file, or a folder with anything in it) unless
+/// `--force`.
+fn check_out(out: &Path, force: bool) -> Result<()> {
+    let meta = match std::fs::symlink_metadata(out) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => bail!("--out {}: {e}", out.display()),
+    };
+    if force {
+        if !meta.is_dir() {
+            bail!("--out {}: exists and is not a folder; --force replaces folders only", out.display());
+        }
+        return Ok(());
+    }
+    let empty = meta.is_dir()
+        && std::fs::read_dir(out).with_context(|| format!("--out {}: cannot read", out.display()))?.next().is_none();
+    if !empty {
+        bail!(
+            "--out {}: already exists and is not empty; give --force to replace it (a run never mixes with an older one)",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// A staging folder beside `--out`; `commit` swaps it in, dropping it uncommitted removes it.
+struct Stage {
+    path: PathBuf,
+    done: bool,
+}
+
+impl Stage {
+    fn new(out: &Path) -> Result<Self> {
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent).with_context(|| format!("cannot create folder {}", parent.display()))?;
+        let name = out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
+        let path = parent.join(format!(".{name}.maobi-partial-{}", std::process::id()));
+        if path.exists() {
+            std::fs::remove_dir_all(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+        }
+        std::fs::create_dir(&path).with_context(|| format!("cannot create folder {}", path.display()))?;
+        crate::common::remove_on_interrupt(&path);
+        Ok(Stage { path, done: false })
+    }
+
+    /// Replaces `out` by the staged folder (the old one, if any, is moved aside first and
+    /// removed after the swap).
+    fn commit(mut self, out: &Path) -> Result<()> {
+        let old = self.path.with_file_name(format!(
+            "{}.old",
+            self.path.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
+        ));
+        let had_old = std::fs::symlink_metadata(out).is_ok();
+        if had_old {
+            std::fs::rename(out, &old).with_context(|| format!("cannot move the old {} aside", out.display()))?;
+        }
+        if let Err(e) = std::fs::rename(&self.path, out) {
+            if had_old {
+                let _ = std::fs::rename(&old, out);
+            }
+            return Err(e).with_context(|| format!("cannot move the new outputs to {}", out.display()));
+        }
+        self.done = true;
+        if had_old {
+            std::fs::remove_dir_all(&old).with_context(|| format!("cannot remove the old {}", old.display()))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Stage {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}
+
+/// Whether the brush's width range covers the glyphs at the chosen size: the size where it
+/// does (`trajectory::auto_char_mm`) and the share of points whose width had to be clamped.
+fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json::Value {
+    let points: usize = reports.iter().map(|r| r.points).sum();
+    let (low, high): (usize, usize) = reports.iter().fold((0, 0), |(l, h), r| (l + r.clamped_low, h + r.clamped_high));
+    let share = |n: usize| if points == 0 { 0.0 } else { n as f64 / points as f64 };
+    let note = if share(low) > 0.05 || char_mm < brush_mm / 1.5 {
+        format!(
+            "at {char_mm:.1} mm the glyphs' strokes are thinner than the brush can make at {:.0}% of the points (its width range suits about {brush_mm:.0} mm characters): give a larger sheet, fewer characters or a smaller brush",
+            100.0 * share(low)
+        )
+    } else if share(high) > 0.05 || char_mm > brush_mm * 1.5 {
+        format!(
+            "at {char_mm:.1} mm the glyphs' strokes are wider than the brush can make at {:.0}% of the points (its width range suits about {brush_mm:.0} mm characters): give --char-mm or a larger brush",
+            100.0 * share(high)
+        )
+    } else {
+        "the brush's width range covers the glyphs at this size".into()
+    };
+    json!({
+        "brush_char_mm": brush_mm,
+        "char_mm": char_mm,
+        "points": points,
+        "clamped_thin": low,
+        "clamped_wide": high,
+        "covered": !note.starts_with("at "),
+        "note": note,
+    })
+}
+
 fn sheet_image(
     results: &[CharResult],
     profile: &BrushProfile,
     model: ModelKind,
-    char_mm: f64,
+    lay: &Layout,
     size: u32,
 ) -> Result<bezier_raster::Coverage> {
-    let (mut w, mut h) = (0.0f64, 0.0f64);
     let mut all = Track::default();
     for r in results {
-        w = w.max(r.char_box.x0_mm + r.char_box.size_mm);
-        h = h.max(r.char_box.y0_mm + r.char_box.size_mm);
         all.strokes.extend(r.track.strokes.iter().cloned());
     }
-    let gap = 0.1 * char_mm;
-    let px_per_mm = size as f64 / char_mm;
-    let (wp, hp) = (((w + gap) * px_per_mm).ceil() as u32, ((h + gap) * px_per_mm).ceil() as u32);
+    let px_per_mm = size as f64 / lay.char_mm;
+    let (wp, hp) = ((lay.sheet.width_mm * px_per_mm).ceil() as u32, (lay.sheet.height_mm * px_per_mm).ceil() as u32);
     Ok(bezier_raster::render_track(
         &all,
         profile,
@@ -304,7 +500,7 @@ fn sheet_image(
     )?)
 }
 
-fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<()> {
+fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
@@ -314,12 +510,16 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile) -> Result<(
         let row = maobi::pipeline::side_by_side(&[&r.reference, &r.render, ex]);
         write_atomic(&dir.join("side-by-side.png"), &row.encode_png()?)?;
     }
-    let track = json!({
+    let mut track = json!({
         "char": r.report.char,
         "char_box_mm": [r.char_box.x0_mm, r.char_box.y0_mm, r.char_box.size_mm],
         "brush": profile,
         "strokes": r.track.strokes,
     });
+    if let Some(l) = sheet {
+        // Where this character sits: on the --sheet, in paper mm.
+        track["sheet_mm"] = json!([l.sheet.width_mm, l.sheet.height_mm]);
+    }
     write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
     write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
     Ok(())

@@ -1,0 +1,346 @@
+//! `maobi preview`: one self-contained HTML file that plays the writing program over the sheet
+//! (the brush moving in time, footprints appearing), with plots of h, α and speed, the robot
+//! check's verdict and the ink dips. No network: the data and the script are inline.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use brush_model::{BrushProfile, Extrapolation, ForwardModel, Track, TrackPoint};
+use maobi::sheet::{Grid, SheetTrack, parse_sheet};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{Move, RobotConfig, build_program_chars};
+use robot_io::sim::{HOME_JOINTS, joint_motion, line_motion};
+use robot_io::{TrackFile, kinematics, pose::Pose};
+use serde_json::{Value, json};
+
+use crate::common::write_atomic;
+
+/// Arguments of `maobi preview`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// `track.json` from `maobi write` (one character or a whole sheet).
+    track: PathBuf,
+    /// The paper to show: A4, WxH or paper.json (default: the track's sheet, or the box around
+    /// its strokes).
+    #[arg(long)]
+    sheet: Option<String>,
+    /// `paper.json` for the robot check (default: a level sheet in front of the AUBO-i5).
+    #[arg(long)]
+    paper: Option<PathBuf>,
+    /// `robot.json` (speeds, ink station); defaults when omitted.
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Output HTML file.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// What the preview shows.
+pub struct PreviewInput<'a> {
+    /// Title.
+    pub title: String,
+    /// Sheet `[w, h]`, mm.
+    pub sheet_mm: [f64; 2],
+    /// Grid under each box.
+    pub grid: Grid,
+    /// Character boxes `[x0, y0, size]`, mm.
+    pub boxes: Vec<[f64; 3]>,
+    /// Each stroke's character, when known.
+    pub stroke_chars: Option<Vec<usize>>,
+    /// The brush.
+    pub brush: &'a BrushProfile,
+    /// The strokes.
+    pub track: Track,
+}
+
+/// Runs the command.
+pub fn run(a: Args) -> Result<()> {
+    let name = a.track.display().to_string();
+    let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
+    let v: Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;
+    let tf = TrackFile::load(&a.track)?;
+    let track = tf.track();
+    if track.point_count() == 0 {
+        bail!("{name}: the track has no points");
+    }
+    let nums = |key: &str, n: usize| -> Result<Option<Vec<f64>>> {
+        match v.get(key) {
+            None | Some(Value::Null) => Ok(None),
+            Some(x) => {
+                let out: Vec<f64> = serde_json::from_value(x.clone())
+                    .with_context(|| format!("{name}: field `{key}` must be a list of {n} numbers"))?;
+                if out.len() != n || out.iter().any(|x| !x.is_finite()) {
+                    bail!("{name}: field `{key}` must be a list of {n} finite numbers");
+                }
+                Ok(Some(out))
+            }
+        }
+    };
+    let mut boxes = Vec::new();
+    if let Some(chars) = v.get("chars").and_then(Value::as_array) {
+        for c in chars {
+            let b: [f64; 3] = serde_json::from_value(c["char_box_mm"].clone())
+                .with_context(|| format!("{name}: chars[].char_box_mm must be [x0, y0, size]"))?;
+            boxes.push(b);
+        }
+    } else if let Some(b) = nums("char_box_mm", 3)? {
+        boxes.push([b[0], b[1], b[2]]);
+    }
+    let stroke_chars: Option<Vec<usize>> = match v.get("stroke_chars") {
+        None | Some(Value::Null) => None,
+        Some(x) => Some(
+            serde_json::from_value(x.clone())
+                .with_context(|| format!("{name}: field `stroke_chars` must be a list of character indices"))?,
+        ),
+    };
+    let grid: Grid = match v.get("grid") {
+        None | Some(Value::Null) => Grid::None,
+        Some(x) => serde_json::from_value(x.clone()).with_context(|| format!("{name}: field `grid`"))?,
+    };
+    let sheet_mm = if let Some(s) = &a.sheet {
+        let s = parse_sheet(s)?;
+        [s.width_mm, s.height_mm]
+    } else if let Some(s) = nums("sheet_mm", 2)? {
+        [s[0], s[1]]
+    } else {
+        // The box around the strokes and the character boxes, with a margin.
+        let (mut w, mut h) = (0.0f64, 0.0f64);
+        for p in track.points() {
+            w = w.max(p.x_mm);
+            h = h.max(p.y_mm);
+        }
+        for b in &boxes {
+            w = w.max(b[0] + b[2]);
+            h = h.max(b[1] + b[2]);
+        }
+        [w + 10.0, h + 10.0]
+    };
+    if !(sheet_mm.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= maobi::sheet::MAX_SHEET_MM)) {
+        bail!("{name}: the sheet {:?} mm is not a usable size", sheet_mm);
+    }
+    let frame = a.paper.as_deref().map(PaperFrame::load).transpose()?;
+    let cfg = a.robot.as_deref().map(RobotConfig::load).transpose()?;
+    let input = PreviewInput {
+        title: tf.char.clone().unwrap_or_else(|| "track".into()),
+        sheet_mm,
+        grid,
+        boxes,
+        stroke_chars,
+        brush: &tf.brush,
+        track,
+    };
+    let html = preview_html(&input, frame.as_ref(), cfg.as_ref())?;
+    write_atomic(&a.output, html.as_bytes())?;
+    println!("preview of {} strokes written to {}", input.track.strokes.len(), a.output.display());
+    Ok(())
+}
+
+/// The preview of a sheet track (what `maobi write` writes beside the sheet).
+pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+    let input = PreviewInput {
+        title: t.char.clone(),
+        sheet_mm: t.sheet_mm,
+        grid: t.grid,
+        boxes: t.chars.iter().map(|c| c.char_box_mm).collect(),
+        stroke_chars: Some(t.stroke_chars.clone()),
+        brush: &t.brush,
+        track: Track { strokes: t.strokes.clone() },
+    };
+    preview_html(&input, frame, cfg)
+}
+
+/// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
+/// `maobi write` places a character for its executed figure).
+fn level_frame(sheet_mm: [f64; 2]) -> PaperFrame {
+    let (cx, cy) = (sheet_mm[0] / 2.0, sheet_mm[1] / 2.0);
+    PaperFrame::level([0.45 - cx / 1000.0, 0.05 + cy / 1000.0, 0.05], sheet_mm)
+}
+
+fn r2(v: f64) -> f64 {
+    (v * 100.0).round() / 100.0
+}
+
+/// A timed sample of the executed path: time, paper x, y, depth h, tilt α, and whether it belongs
+/// to an ink dip.
+struct Sample {
+    t: f64,
+    p: TrackPoint,
+    dip: bool,
+}
+
+/// Executes the program as the simulator does (`line_motion`, `joint_motion`), tagging each
+/// sample with whether its move is part of an ink dip.
+fn execute_tagged(program: &robot_io::program::Program, frame: &PaperFrame) -> Vec<Sample> {
+    let tcp = program.tcp();
+    let mut q = HOME_JOINTS;
+    let mut pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
+    let mut t = 0.0;
+    let f = program.speed_fraction;
+    let mut out = Vec::new();
+    let mut run = |m: &Move, dip: bool, out: &mut Vec<Sample>| {
+        let samples = match *m {
+            Move::Joint { q: q1, v, .. } => {
+                let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                q = q1;
+                s
+            }
+            Move::Line { pose: p1, v, .. } => line_motion(&pose, &p1, v * f, t),
+        };
+        if let Some(last) = samples.last() {
+            pose = last.pose;
+            t = last.t_s;
+        }
+        let states = robot_io::sim::trace_to_states(&samples, frame);
+        out.extend(samples.iter().zip(states).map(|(e, p)| Sample { t: e.t_s, p, dip }));
+    };
+    run(&program.start, false, &mut out);
+    for st in &program.strokes {
+        for (i, m) in st.moves().enumerate() {
+            run(m, i < st.dip.len(), &mut out);
+        }
+    }
+    out
+}
+
+/// Builds the preview HTML: the program is checked with `paper` (default: a level sheet in front
+/// of the arm) and `robot.json` (default settings) and executed as the simulator would; the
+/// footprints come from the forward model over the executed path, each at the time the brush
+/// reaches it. A refused program is previewed from the planned track (timed at the write speed)
+/// with the refusal as the verdict.
+///
+/// # Errors
+/// When the brush profile refuses the track's presses.
+pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+    let default_cfg = RobotConfig::default();
+    let cfg = cfg.unwrap_or(&default_cfg);
+    let level = level_frame(input.sheet_mm);
+    let frame = paper.unwrap_or(&level);
+    let where_ = if paper.is_some() { "on the given paper.json" } else { "on a level sheet in front of the AUBO-i5" };
+    let built = build_program_chars(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg);
+    let (samples, verdict, safe, dips) = match built {
+        Ok((program, report)) => {
+            let s = execute_tagged(&program, frame);
+            let v = format!(
+                "safe ({where_}): {} strokes, {} points, {} moves, {} ink dip(s); deepest press {:.2} mm; about {:.0} s",
+                report.strokes, report.points, report.moves, report.dips, report.max_press_mm, report.estimated_seconds
+            );
+            (s, v, true, report.dips)
+        }
+        Err(e) => {
+            // The planned track, pen-down paths at the write speed, a second of travel between.
+            let mut out = Vec::new();
+            let mut t = 0.0;
+            for st in &input.track.strokes {
+                let mut prev: Option<&TrackPoint> = None;
+                for p in &st.points {
+                    if let Some(q) = prev {
+                        t += (p.x_mm - q.x_mm).hypot(p.y_mm - q.y_mm) / (cfg.write_speed_m_s * 1000.0);
+                    }
+                    out.push(Sample { t, p: *p, dip: false });
+                    prev = Some(p);
+                }
+                t += 1.0;
+            }
+            (out, format!("refused ({where_}): {e}"), false, 0)
+        }
+    };
+    // Footprints: the forward model over each contact (a run of pressed samples), each stamp
+    // timed by the nearest sample along the run.
+    let model = ForwardModel::default();
+    let mut feet: Vec<f64> = Vec::new();
+    let mut i = 0;
+    while i < samples.len() {
+        if samples[i].p.h_mm <= 0.0 || samples[i].dip || !frame.contains(samples[i].p.x_mm, samples[i].p.y_mm) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < samples.len() && samples[i].p.h_mm > 0.0 && !samples[i].dip {
+            i += 1;
+        }
+        // One sample of lift before and after, so the forward model sees the contact begin and end.
+        let (a, b) = (start.saturating_sub(1), (i + 1).min(samples.len()));
+        let run: Vec<TrackPoint> = samples[a..b].iter().map(|s| s.p).collect();
+        let sweep = model.sweep(input.brush, &run, Extrapolation::Refuse);
+        let mut j = 0usize;
+        for st in &sweep.stamps {
+            // Advance along the run to the nearest sample (stamps are in path order).
+            let d = |k: usize| (run[k].x_mm - st.x_mm).hypot(run[k].y_mm - st.y_mm);
+            let mut best = j;
+            for k in j..(j + 64).min(run.len()) {
+                if d(k) < d(best) {
+                    best = k;
+                }
+            }
+            j = best;
+            let Ok(fp) = input.brush.predict_oriented(&st.press(), Extrapolation::Refuse) else { continue };
+            let o = fp.outline(st.anchor(), st.beta_rad);
+            feet.push(r2(samples[a + j].t));
+            for c in [o.upper, o.lower] {
+                for p in &c.points[..3] {
+                    feet.push(r2(p.x_mm));
+                    feet.push(r2(p.y_mm));
+                }
+            }
+        }
+    }
+    // Thin the samples for the animation and plots (at most ~8000).
+    let step = samples.len().div_ceil(8000).max(1);
+    let mut path: Vec<f64> = Vec::new();
+    let mut prev: Option<&Sample> = None;
+    for (k, s) in samples.iter().enumerate() {
+        if k % step != 0 && k + 1 != samples.len() {
+            continue;
+        }
+        let speed = prev.map_or(0.0, |q| {
+            let dt = s.t - q.t;
+            let d =
+                ((s.p.x_mm - q.p.x_mm).powi(2) + (s.p.y_mm - q.p.y_mm).powi(2) + (s.p.h_mm - q.p.h_mm).powi(2)).sqrt();
+            if dt > 1e-9 { d / dt } else { 0.0 }
+        });
+        path.extend([
+            (s.t * 1000.0).round() / 1000.0,
+            r2(s.p.x_mm),
+            r2(s.p.y_mm),
+            r2(s.p.h_mm),
+            (s.p.alpha_rad.to_degrees() * 100.0).round() / 100.0,
+            r2(speed),
+            if s.dip { 1.0 } else { 0.0 },
+        ]);
+        prev = Some(s);
+    }
+    // Dip intervals.
+    let mut dip_spans: Vec<[f64; 2]> = Vec::new();
+    for w in samples.windows(2) {
+        if w[1].dip && !w[0].dip {
+            dip_spans.push([w[0].t, w[1].t]);
+        } else if w[1].dip {
+            if let Some(last) = dip_spans.last_mut() {
+                last[1] = w[1].t;
+            }
+        }
+    }
+    let data = json!({
+        "title": input.title,
+        "sheet_mm": input.sheet_mm,
+        "grid": input.grid,
+        "boxes": input.boxes,
+        "verdict": verdict,
+        "safe": safe,
+        "dips": dips,
+        "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
+        "duration_s": samples.last().map_or(0.0, |s| s.t),
+        "path": path,
+        "feet": feet,
+        "brush": input.brush.name,
+    });
+    // `</` inside the inline JSON would end the script element.
+    let data = serde_json::to_string(&data)?.replace("</", "<\\/");
+    Ok(TEMPLATE.replace("__TITLE__", &html_escape(&input.title)).replace("__DATA__", &data))
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+const TEMPLATE: &str = include_str!("preview.html");
