@@ -1,0 +1,750 @@
+//! The refinement problem: which values of a track are free, the loss over them and its
+//! gradient.
+//!
+//! **Variables.** Points of a stroke that sit at one place in the input (a pressed point and the
+//! glide or ease state at the same spot) share one position variable `(x, y)` in mm, so they
+//! stay together and the structure the robot check relies on is kept. Each *pressed* point
+//! (`h` at least the profile's lightest calibrated press, so it leaves a footprint) has its
+//! own depth `h` (mm). Where a pressed point is tilted (`α` at least the forward model's tilt
+//! threshold), its position group has one tilt variable `α` (rad), shared by the group.
+//! Everything else is fixed: the number and order of strokes and points, the pen lifts, and
+//! the depth of every unpressed state (the reverse entry's zero presses, the turn-over glide at
+//! `trajectory::GLIDE_H_MM`, the eases between pieces stay unpressed).
+//!
+//! **Directions are not variables.** Which way a footprint points follows from the motion
+//! (docs/brush-model.md): [`Problem::directions`] re-derives it with the forward model the way
+//! `trajectory::build_track` does (upright directions, `ForwardModel::with_directions` with the
+//! tilt threshold at infinity; a tilted brush leans the way those point). Inside a step the
+//! directions are held fixed and the gradient is taken with respect to positions, depths and
+//! tilts at fixed directions; [`crate::refine`] re-derives them every few steps and after the
+//! last.
+//!
+//! **Loss** (all terms dimensionless or mm², summed):
+//! * image: `Σ_p (U_p − G_p)² / Σ_p G_p`, with `U_p = 1 − Π_i (1 − c_i(p))` the soft union of
+//!   every pressed point's soft footprint ([`crate::soft`]) at pixel centre `p` and `G` the
+//!   glyph raster (ink = 1);
+//! * smoothness: `w_s / n · (Σ |Δ²(q − q₀)|² + Σ (Δ²(h − h₀))²)`, the first sum over each
+//!   stroke's position groups, the second over runs of consecutive pressed points, `n` the
+//!   number of position groups: second differences of the *change* from the input track (so
+//!   the planned reversals and corners are not smoothed away, only kinks the refinement would
+//!   add);
+//! * spacing: `w_sp / n · Σ (|q_{j+1} − q_j| − d₀_j)²` over consecutive groups, keeping the
+//!   point spacing of the input;
+//! * barrier: `w_b · Σ (max(0, lo − v)² + max(0, v − hi)²) / m²` for every depth and tilt `v`
+//!   with range `[lo, hi]` (`m` = 2 % of the range). It is zero inside the range: the track
+//!   builder puts many depths exactly on a bound (widths the brush cannot make), and a barrier
+//!   reaching inside pushed them off it and cost image loss. The optimiser projects every
+//!   iterate into the ranges, so the barrier only shapes the loss outside them.
+
+use brush_model::{BrushProfile, Extrapolation, ForwardModel, Stroke, Track, TrackPoint};
+use rayon::prelude::*;
+
+use crate::soft::{Shape, edge};
+use crate::{RefineError, RefineOptions, Target};
+
+/// The values of the loss terms at one iterate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LossTerms {
+    /// The sum of the terms below.
+    pub total: f64,
+    /// Image term (squared error of the soft union against the glyph over the glyph's ink).
+    pub image: f64,
+    /// Smoothness term (weighted).
+    pub smooth: f64,
+    /// Spacing term (weighted).
+    pub spacing: f64,
+    /// Range barriers (weighted).
+    pub barrier: f64,
+}
+
+/// Footprints per parallel chunk of the image sum (a fixed size, so that the order of the
+/// floating-point sums, and hence the result, does not depend on the thread count).
+const CHUNK: usize = 256;
+
+/// A point of the flattened track.
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    /// Position group.
+    group: usize,
+    /// Depth variable (pressed points).
+    h_var: Option<usize>,
+}
+
+/// One footprint prepared for the image sums.
+#[derive(Clone, Copy, Debug)]
+struct Fp {
+    x: f64,
+    y: f64,
+    cb: f64,
+    sb: f64,
+    shape: Shape,
+    /// `∂(lt, lh, lr)/∂h`.
+    dh: [f64; 3],
+    /// `∂(lt, lh, lr)/∂α`.
+    da: [f64; 3],
+    /// Pixel bounds, inclusive: columns `i0..=i1`, rows `j0..=j1` (empty when `i0 > i1`).
+    i0: i64,
+    i1: i64,
+    j0: i64,
+    j1: i64,
+}
+
+/// Directions of the pressed points (rad), in the order of the problem's pressed points, plus
+/// the full re-derived track the directions came from.
+#[derive(Clone, Debug)]
+pub struct Directions {
+    /// Footprint direction (root → tip) of each pressed point, rad.
+    pub beta_rad: Vec<f64>,
+    /// Where each pressed point's footprint aims, when the forward model's drag rule set it
+    /// (the path sample its tip points at): the position groups of the segment holding the
+    /// sample and its fraction along that segment. With [`RefineOptions::aim_coupling`] the
+    /// direction follows the point and its aim inside a step; `None` keeps the angle.
+    pub aim: Vec<Option<(usize, usize, f64)>>,
+    /// The track at the iterate, every β as the forward model derives it.
+    pub track: Track,
+}
+
+/// A track prepared for refinement against a target raster (see the module doc).
+pub struct Problem<'a> {
+    profile: &'a BrushProfile,
+    target: &'a Target,
+    opts: RefineOptions,
+    /// The input points, stroke by stroke.
+    strokes: Vec<Vec<TrackPoint>>,
+    /// Per stroke, per point.
+    slots: Vec<Vec<Slot>>,
+    /// Initial group positions.
+    q0: Vec<[f64; 2]>,
+    /// Per stroke, the range of its groups.
+    stroke_groups: Vec<std::ops::Range<usize>>,
+    /// Group → α variable.
+    group_alpha: Vec<Option<usize>>,
+    /// Pressed points as (stroke, index), in variable order of their depths.
+    pressed: Vec<(usize, usize)>,
+    /// Initial depths of the pressed points.
+    h0: Vec<f64>,
+    /// Initial tilt of each α variable.
+    a0: Vec<f64>,
+    /// Allowed tilt range of the α variables.
+    alpha_range: (f64, f64),
+    /// Σ of the target's ink.
+    ink_sum: f64,
+    /// Edge half-width, mm.
+    edge_mm: f64,
+}
+
+impl<'a> Problem<'a> {
+    /// Prepares `track` for refinement.
+    ///
+    /// # Errors
+    /// [`RefineError::EmptyTrack`] without points; [`RefineError::Target`] for a blank target;
+    /// [`RefineError::Profile`] when the profile cannot size a pressed point.
+    pub fn new(
+        track: &Track,
+        profile: &'a BrushProfile,
+        target: &'a Target,
+        opts: &RefineOptions,
+    ) -> Result<Self, RefineError> {
+        opts.validate()?;
+        if track.point_count() == 0 {
+            return Err(RefineError::EmptyTrack);
+        }
+        let ink_sum: f64 = target.ink.iter().map(|&v| v as f64).sum();
+        if !(ink_sum > 0.0) {
+            return Err(RefineError::Target("the target raster has no ink (expected some pixels above 0)".into()));
+        }
+        let model = ForwardModel::default();
+        let hmin = profile.ranges.h_mm.min;
+        let mut strokes = Vec::new();
+        let mut slots = Vec::new();
+        let mut q0 = Vec::new();
+        let mut stroke_groups = Vec::new();
+        let mut group_alpha: Vec<Option<usize>> = Vec::new();
+        let mut pressed = Vec::new();
+        let mut h0 = Vec::new();
+        let mut a0 = Vec::new();
+        for (si, s) in track.strokes.iter().enumerate() {
+            let g_start = q0.len();
+            let mut st = Vec::with_capacity(s.points.len());
+            for (pi, p) in s.points.iter().enumerate() {
+                let same = pi > 0 && {
+                    let a = s.points[pi - 1];
+                    a.x_mm == p.x_mm && a.y_mm == p.y_mm
+                };
+                if !same {
+                    q0.push([p.x_mm, p.y_mm]);
+                    group_alpha.push(None);
+                }
+                let group = q0.len() - 1;
+                let h_var = if p.h_mm >= hmin {
+                    profile.predict_oriented(&p.press(), Extrapolation::Allow)?;
+                    pressed.push((si, pi));
+                    h0.push(p.h_mm);
+                    if model.is_tilted(p) && group_alpha[group].is_none() {
+                        group_alpha[group] = Some(a0.len());
+                        a0.push(p.alpha_rad);
+                    }
+                    Some(h0.len() - 1)
+                } else {
+                    None
+                };
+                st.push(Slot { group, h_var });
+            }
+            stroke_groups.push(g_start..q0.len());
+            strokes.push(s.points.clone());
+            slots.push(st);
+        }
+        let ar = profile.ranges.alpha_rad;
+        let alpha_range = (ar.min.max(model.tilt_threshold_rad), ar.max);
+        let edge_mm = opts.edge_px * target.mm_per_px;
+        Ok(Self {
+            profile,
+            target,
+            opts: *opts,
+            strokes,
+            slots,
+            q0,
+            stroke_groups,
+            group_alpha,
+            pressed,
+            h0,
+            a0,
+            alpha_range,
+            ink_sum,
+            edge_mm,
+        })
+    }
+
+    /// Number of variables: 2 per position group, 1 per pressed point, 1 per tilt group.
+    pub fn len(&self) -> usize {
+        2 * self.q0.len() + self.h0.len() + self.a0.len()
+    }
+
+    /// Whether there is nothing to refine (no variables).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Number of pressed points (footprints in the image term).
+    pub fn pressed_count(&self) -> usize {
+        self.pressed.len()
+    }
+
+    fn h_off(&self) -> usize {
+        2 * self.q0.len()
+    }
+
+    fn a_off(&self) -> usize {
+        2 * self.q0.len() + self.h0.len()
+    }
+
+    /// The input track as a variable vector.
+    pub fn initial(&self) -> Vec<f64> {
+        let mut v: Vec<f64> = self.q0.iter().flat_map(|q| q.iter().copied()).collect();
+        v.extend_from_slice(&self.h0);
+        v.extend_from_slice(&self.a0);
+        v
+    }
+
+    /// Per variable, the optimiser step (mm for positions and depths, rad for tilts).
+    pub(crate) fn steps(&self) -> Vec<f64> {
+        let mut s = vec![self.opts.step_mm; 2 * self.q0.len()];
+        s.extend(std::iter::repeat_n(self.opts.step_h_mm, self.h0.len()));
+        s.extend(std::iter::repeat_n(self.opts.step_alpha_rad, self.a0.len()));
+        s
+    }
+
+    /// Smooths a gradient along each stroke (a Sobolev-type preconditioner): the position
+    /// part over each stroke's position groups and the depth part over each run of consecutive
+    /// pressed points, with a Gaussian of `sigma_mm` along the track (in points of the input's
+    /// median spacing). Every update is then a smooth displacement field, so the directions the
+    /// forward model derives from the motion change smoothly between re-derivations; `sigma_mm`
+    /// = 0 leaves the gradient as it is.
+    pub fn smooth_gradient(&self, grad: &mut [f64], sigma_mm: f64) {
+        if !(sigma_mm > 0.0) {
+            return;
+        }
+        let mut gaps: Vec<f64> = Vec::new();
+        for r in &self.stroke_groups {
+            for j in r.start..r.end.saturating_sub(1) {
+                gaps.push((self.q0[j + 1][0] - self.q0[j][0]).hypot(self.q0[j + 1][1] - self.q0[j][1]));
+            }
+        }
+        if gaps.is_empty() {
+            return;
+        }
+        gaps.sort_by(f64::total_cmp);
+        let spacing = gaps[gaps.len() / 2].max(1e-6);
+        let sigma = sigma_mm / spacing;
+        let radius = (3.0 * sigma).ceil() as usize;
+        let kernel: Vec<f64> = (0..=radius).map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp()).collect();
+        let blur = |v: &mut [f64], stride: usize, ranges: &[std::ops::Range<usize>]| {
+            for r in ranges {
+                for c in 0..stride {
+                    let src: Vec<f64> = (r.start..r.end).map(|j| v[stride * j + c]).collect();
+                    let n = src.len();
+                    for (i, j) in (r.start..r.end).enumerate() {
+                        let (lo, hi) = (i.saturating_sub(radius), (i + radius).min(n - 1));
+                        let (mut acc, mut wsum) = (0.0, 0.0);
+                        for (k, s) in src.iter().enumerate().take(hi + 1).skip(lo) {
+                            let w = kernel[k.abs_diff(i)];
+                            acc += w * s;
+                            wsum += w;
+                        }
+                        v[stride * j + c] = acc / wsum;
+                    }
+                }
+            }
+        };
+        let (ho, ao) = (self.h_off(), self.a_off());
+        blur(&mut grad[..ho], 2, &self.stroke_groups);
+        // Runs of consecutive pressed points.
+        let mut runs = Vec::new();
+        let mut start = 0;
+        for k in 1..=self.pressed.len() {
+            let cont = k < self.pressed.len() && {
+                let (a, b) = (self.pressed[k - 1], self.pressed[k]);
+                a.0 == b.0 && a.1 + 1 == b.1
+            };
+            if !cont {
+                runs.push(start..k);
+                start = k;
+            }
+        }
+        blur(&mut grad[ho..ao], 1, &runs);
+    }
+
+    /// Per variable, its kind: 0 position, 1 depth, 2 tilt.
+    pub(crate) fn kinds(&self) -> Vec<u8> {
+        let mut k = vec![0u8; 2 * self.q0.len()];
+        k.extend(std::iter::repeat_n(1u8, self.h0.len()));
+        k.extend(std::iter::repeat_n(2u8, self.a0.len()));
+        k
+    }
+
+    /// Clamps depths and tilts into their ranges.
+    pub fn project(&self, theta: &mut [f64]) {
+        let r = self.profile.ranges.h_mm;
+        let (ho, ao) = (self.h_off(), self.a_off());
+        for h in &mut theta[ho..ao] {
+            *h = h.clamp(r.min, r.max);
+        }
+        for a in &mut theta[ao..] {
+            *a = a.clamp(self.alpha_range.0, self.alpha_range.1);
+        }
+    }
+
+    /// The commanded states at an iterate, β as in the input (not yet re-derived).
+    fn states(&self, theta: &[f64]) -> Vec<Vec<TrackPoint>> {
+        let (ho, ao) = (self.h_off(), self.a_off());
+        self.strokes
+            .iter()
+            .zip(&self.slots)
+            .map(|(pts, slots)| {
+                pts.iter()
+                    .zip(slots)
+                    .map(|(p, s)| {
+                        let mut q = *p;
+                        q.x_mm = theta[2 * s.group];
+                        q.y_mm = theta[2 * s.group + 1];
+                        if let Some(h) = s.h_var {
+                            q.h_mm = theta[ho + h];
+                        }
+                        if let Some(a) = self.group_alpha[s.group] {
+                            q.alpha_rad = theta[ao + a];
+                        }
+                        q
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The track at an iterate with every direction re-derived by the forward model, as
+    /// `trajectory::build_track` derives them (see the module doc), and the pressed points'
+    /// directions.
+    pub fn directions(&self, theta: &[f64]) -> Directions {
+        let model = ForwardModel::default();
+        let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..model };
+        let strokes: Vec<Stroke> = self
+            .states(theta)
+            .into_iter()
+            .map(|pts| {
+                let mut points = dragged.with_directions(self.profile, &pts, Extrapolation::Refuse);
+                // A brush easing up in place keeps its lean (as build_track does).
+                for i in 1..points.len() {
+                    let (a, b) = (points[i - 1], points[i]);
+                    if b.h_mm <= 0.0 && a.h_mm > 0.0 && a.x_mm == b.x_mm && a.y_mm == b.y_mm {
+                        points[i].beta_rad = a.beta_rad;
+                    }
+                }
+                Stroke { points }
+            })
+            .collect();
+        let beta_rad: Vec<f64> = self.pressed.iter().map(|&(s, i)| strokes[s].points[i].beta_rad).collect();
+        let aim = if self.opts.aim_coupling {
+            self.pressed.iter().zip(&beta_rad).map(|(&(s, i), &b)| self.find_aim(&strokes[s].points, s, i, b)).collect()
+        } else {
+            vec![None; beta_rad.len()]
+        };
+        Directions { beta_rad, aim, track: Track { strokes } }
+    }
+
+    /// The path sample an upright brush's footprint at point `i` aims at under the forward
+    /// model's drag rule (walking back along the pressed path since touch-down, the first sample
+    /// at least `trail_reach` footprint lengths away), found by sampling the path as the model
+    /// does; `None` where another rule set the direction or the found sample disagrees with
+    /// `beta` (then the angle is kept fixed).
+    fn find_aim(&self, pts: &[TrackPoint], s: usize, i: usize, beta: f64) -> Option<(usize, usize, f64)> {
+        let model = ForwardModel::default();
+        let p = pts[i];
+        let len = self.profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?.length_mm();
+        let reach = model.trail_reach * len;
+        for k in (0..i).rev() {
+            let (a, b) = (pts[k], pts[k + 1]);
+            let d = (b.x_mm - a.x_mm).hypot(b.y_mm - a.y_mm);
+            let turn = axis_angle(&a, &b);
+            let n = (d / model.step_mm)
+                .max(turn / model.step_rad)
+                .max((b.h_mm - a.h_mm).abs() / model.step_h_mm)
+                .ceil()
+                .clamp(1.0, 1e6) as usize;
+            // Samples of this segment from b's side back to a (a itself last).
+            for m in (0..n).rev() {
+                let f = m as f64 / n as f64;
+                let h = a.h_mm + f * (b.h_mm - a.h_mm);
+                if !(h > 0.0) {
+                    return None;
+                }
+                let (x, y) = (a.x_mm + f * (b.x_mm - a.x_mm), a.y_mm + f * (b.y_mm - a.y_mm));
+                if (x - p.x_mm).hypot(y - p.y_mm) >= reach {
+                    let dir = (y - p.y_mm).atan2(x - p.x_mm);
+                    if brush_model::motion::wrap(dir - beta).abs() > 1e-9 {
+                        return None;
+                    }
+                    return Some((self.slots[s][k].group, self.slots[s][k + 1].group, f));
+                }
+            }
+        }
+        None
+    }
+
+    /// The footprints at an iterate with the given directions.
+    fn footprints(&self, theta: &[f64], dirs: &Directions) -> Vec<Fp> {
+        let (ho, ao) = (self.h_off(), self.a_off());
+        let m = &self.profile.model;
+        let t = self.target;
+        let e = self.edge_mm;
+        self.pressed
+            .iter()
+            .enumerate()
+            .map(|(k, &(s, i))| {
+                let slot = self.slots[s][i];
+                let p = self.strokes[s][i];
+                let x = theta[2 * slot.group];
+                let y = theta[2 * slot.group + 1];
+                let h = theta[ho + k];
+                let alpha = self.group_alpha[slot.group].map_or(p.alpha_rad, |a| theta[ao + a]);
+                let beta = match dirs.aim[k] {
+                    Some((ga, gb, f)) => {
+                        let ax = (1.0 - f) * theta[2 * ga] + f * theta[2 * gb];
+                        let ay = (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1];
+                        (ay - y).atan2(ax - x)
+                    }
+                    None => dirs.beta_rad[k],
+                };
+                let wrapped = (beta + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+                let bs = self.profile.ranges.beta_rad.clamp(wrapped);
+                let terms = [&m.lt_mm, &m.lh_mm, &m.lr_mm];
+                let [lt, lh, lr] = terms.map(|t| t.eval(h, alpha, bs).max(1e-6));
+                let dh = terms.map(|t| t.h_mm.unwrap_or(0.0));
+                let da = terms.map(|t| t.alpha_rad.unwrap_or(0.0));
+                let (sb, cb) = beta.sin_cos();
+                let shape = Shape { lt, lh, lr };
+                // Local box u ∈ [−e, L + e], |v| ≤ lr + e, rotated onto the paper.
+                let (ul, uh, vh) = (-e, shape.length() + e, lr + e);
+                let (mut xmin, mut xmax, mut ymin, mut ymax) =
+                    (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+                for (u, v) in [(ul, -vh), (ul, vh), (uh, -vh), (uh, vh)] {
+                    let (px, py) = (x + u * cb - v * sb, y + u * sb + v * cb);
+                    xmin = xmin.min(px);
+                    xmax = xmax.max(px);
+                    ymin = ymin.min(py);
+                    ymax = ymax.max(py);
+                }
+                let col = |v: f64, up: bool| {
+                    let f = (v - t.origin_mm.x_mm) / t.mm_per_px - 0.5;
+                    if up { f.floor() as i64 } else { f.ceil() as i64 }
+                };
+                let row = |v: f64, up: bool| {
+                    let f = (v - t.origin_mm.y_mm) / t.mm_per_px - 0.5;
+                    if up { f.floor() as i64 } else { f.ceil() as i64 }
+                };
+                let (w, hgt) = (t.width as i64, t.height as i64);
+                Fp {
+                    x,
+                    y,
+                    cb,
+                    sb,
+                    shape,
+                    dh,
+                    da,
+                    i0: col(xmin, false).max(0),
+                    i1: col(xmax, true).min(w - 1),
+                    j0: row(ymin, false).max(0),
+                    j1: row(ymax, true).min(hgt - 1),
+                }
+            })
+            .collect()
+    }
+
+    /// Visits every pixel of a footprint's box with its local coordinates `(u, v)` when inside
+    /// the footprint's band.
+    #[inline]
+    fn visit(&self, f: &Fp, mut each: impl FnMut(usize, f64, f64)) {
+        let t = self.target;
+        let e = self.edge_mm;
+        let (ul, uh, vh) = (-e, f.shape.length() + e, f.shape.lr + e);
+        let w = t.width as usize;
+        for j in f.j0..=f.j1 {
+            let py = t.origin_mm.y_mm + (j as f64 + 0.5) * t.mm_per_px - f.y;
+            for i in f.i0..=f.i1 {
+                let px = t.origin_mm.x_mm + (i as f64 + 0.5) * t.mm_per_px - f.x;
+                let u = px * f.cb + py * f.sb;
+                if u < ul || u > uh {
+                    continue;
+                }
+                let v = -px * f.sb + py * f.cb;
+                if v.abs() > vh {
+                    continue;
+                }
+                each(j as usize * w + i as usize, u, v);
+            }
+        }
+    }
+
+    /// The soft union's per-pixel state: `Σ ln(1 − c)` over unsaturated coverages and the
+    /// number of saturated ones (`c = 1`).
+    fn union(&self, fps: &[Fp]) -> (Vec<f64>, Vec<u32>) {
+        let n = (self.target.width * self.target.height) as usize;
+        let e = self.edge_mm;
+        let parts: Vec<(Vec<f64>, Vec<u32>)> = fps
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut s = vec![0.0f64; n];
+                let mut sat = vec![0u32; n];
+                for f in chunk {
+                    self.visit(f, |k, u, v| {
+                        let (c, _) = edge(f.shape.measure(u, v), e);
+                        if c >= 1.0 {
+                            sat[k] += 1;
+                        } else if c > 0.0 {
+                            s[k] += (1.0 - c).ln();
+                        }
+                    });
+                }
+                (s, sat)
+            })
+            .collect();
+        let mut s = vec![0.0f64; n];
+        let mut sat = vec![0u32; n];
+        for (ps, pt) in parts {
+            for k in 0..n {
+                s[k] += ps[k];
+                sat[k] += pt[k];
+            }
+        }
+        (s, sat)
+    }
+
+    /// The soft union image `U` at an iterate (for inspection and tests).
+    pub fn soft_image(&self, theta: &[f64], dirs: &Directions) -> Vec<f64> {
+        let (s, sat) = self.union(&self.footprints(theta, dirs));
+        s.iter().zip(&sat).map(|(&s, &n)| if n > 0 { 1.0 } else { 1.0 - s.exp() }).collect()
+    }
+
+    /// The loss at an iterate with fixed directions.
+    pub fn loss(&self, theta: &[f64], dirs: &Directions) -> LossTerms {
+        self.evaluate(theta, dirs, false).0
+    }
+
+    /// The loss and its gradient with respect to the variables, at fixed directions.
+    pub fn loss_grad(&self, theta: &[f64], dirs: &Directions) -> (LossTerms, Vec<f64>) {
+        self.evaluate(theta, dirs, true)
+    }
+
+    fn evaluate(&self, theta: &[f64], dirs: &Directions, want_grad: bool) -> (LossTerms, Vec<f64>) {
+        let mut grad = vec![0.0; if want_grad { theta.len() } else { 0 }];
+        let fps = self.footprints(theta, dirs);
+        let (s, sat) = self.union(&fps);
+        // Image term and ∂L/∂U.
+        let mut image = 0.0;
+        let mut q = vec![0.0f64; s.len()];
+        for k in 0..s.len() {
+            let prod = if sat[k] > 0 { 0.0 } else { s[k].exp() };
+            let u = 1.0 - prod;
+            let r = u - self.target.ink[k] as f64;
+            image += r * r;
+            // ∂L/∂U · Π(1 − c): what each unsaturated footprint's (1 − c) multiplies.
+            q[k] = 2.0 * r / self.ink_sum * prod;
+        }
+        image /= self.ink_sum;
+        if want_grad {
+            let e = self.edge_mm;
+            let per_fp: Vec<[f64; 5]> = fps
+                .par_iter()
+                .map(|f| {
+                    let mut g = [0.0f64; 5];
+                    self.visit(f, |k, u, v| {
+                        let qk = q[k];
+                        if qk == 0.0 {
+                            return;
+                        }
+                        let m = f.shape.measure_grad(u, v);
+                        let (c, dc) = edge(m.d, e);
+                        if dc == 0.0 || c >= 1.0 {
+                            return;
+                        }
+                        // ∂U/∂c_i = Π_{j≠i}(1 − c_j) = Π/(1 − c_i), so ∂L/∂d = q/(1 − c)·∂c/∂d.
+                        let w = qk / (1.0 - c) * dc;
+                        let [gu, gv, glt, glh, glr] = m.grad;
+                        g[0] += w * (-f.cb * gu + f.sb * gv);
+                        g[1] += w * (-f.sb * gu - f.cb * gv);
+                        g[2] += w * (glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2]);
+                        g[3] += w * (glt * f.da[0] + glh * f.da[1] + glr * f.da[2]);
+                        // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
+                        g[4] += w * (gu * v - gv * u);
+                    });
+                    g
+                })
+                .collect();
+            let (ho, ao) = (self.h_off(), self.a_off());
+            for (k, &(si, pi)) in self.pressed.iter().enumerate() {
+                let slot = self.slots[si][pi];
+                let g = per_fp[k];
+                grad[2 * slot.group] += g[0];
+                grad[2 * slot.group + 1] += g[1];
+                grad[ho + k] += g[2];
+                if let Some(a) = self.group_alpha[slot.group] {
+                    grad[ao + a] += g[3];
+                }
+                if let Some((ga, gb, fr)) = dirs.aim[k] {
+                    // β = atan2(aim − p): ∂β/∂aim = (−r_y, r_x)/|r|², ∂β/∂p = −∂β/∂aim.
+                    let fp = &fps[k];
+                    let ax = (1.0 - fr) * theta[2 * ga] + fr * theta[2 * gb];
+                    let ay = (1.0 - fr) * theta[2 * ga + 1] + fr * theta[2 * gb + 1];
+                    let (rx, ry) = (ax - fp.x, ay - fp.y);
+                    let r2 = rx * rx + ry * ry;
+                    if r2 > 0.0 {
+                        let (bx, by) = (-ry / r2 * g[4], rx / r2 * g[4]);
+                        grad[2 * slot.group] -= bx;
+                        grad[2 * slot.group + 1] -= by;
+                        grad[2 * ga] += (1.0 - fr) * bx;
+                        grad[2 * ga + 1] += (1.0 - fr) * by;
+                        grad[2 * gb] += fr * bx;
+                        grad[2 * gb + 1] += fr * by;
+                    }
+                }
+            }
+        }
+        let smooth = self.smoothness(theta, &mut grad, want_grad);
+        let spacing = self.spacing(theta, &mut grad, want_grad);
+        let barrier = self.barrier(theta, &mut grad, want_grad);
+        let total = image + smooth + spacing + barrier;
+        (LossTerms { total, image, smooth, spacing, barrier }, grad)
+    }
+
+    fn smoothness(&self, theta: &[f64], grad: &mut [f64], want_grad: bool) -> f64 {
+        let w = self.opts.smooth_weight / self.q0.len().max(1) as f64;
+        let mut sum = 0.0;
+        // Positions: second differences of the displacement over each stroke's groups.
+        for r in &self.stroke_groups {
+            for j in r.start + 1..r.end.saturating_sub(1) {
+                for c in 0..2 {
+                    let d = |g: usize| theta[2 * g + c] - self.q0[g][c];
+                    let dd = d(j - 1) - 2.0 * d(j) + d(j + 1);
+                    sum += w * dd * dd;
+                    if want_grad {
+                        grad[2 * (j - 1) + c] += 2.0 * w * dd;
+                        grad[2 * j + c] -= 4.0 * w * dd;
+                        grad[2 * (j + 1) + c] += 2.0 * w * dd;
+                    }
+                }
+            }
+        }
+        // Depths: over runs of consecutive pressed points of a stroke.
+        let ho = self.h_off();
+        for k in 1..self.pressed.len().saturating_sub(1) {
+            let (a, b, c) = (self.pressed[k - 1], self.pressed[k], self.pressed[k + 1]);
+            if a.0 != b.0 || b.0 != c.0 || a.1 + 1 != b.1 || b.1 + 1 != c.1 {
+                continue;
+            }
+            let d = |i: usize| theta[ho + i] - self.h0[i];
+            let dd = d(k - 1) - 2.0 * d(k) + d(k + 1);
+            sum += w * dd * dd;
+            if want_grad {
+                grad[ho + k - 1] += 2.0 * w * dd;
+                grad[ho + k] -= 4.0 * w * dd;
+                grad[ho + k + 1] += 2.0 * w * dd;
+            }
+        }
+        sum
+    }
+
+    fn spacing(&self, theta: &[f64], grad: &mut [f64], want_grad: bool) -> f64 {
+        let w = self.opts.spacing_weight / self.q0.len().max(1) as f64;
+        let mut sum = 0.0;
+        for r in &self.stroke_groups {
+            for j in r.start..r.end.saturating_sub(1) {
+                let d0 = (self.q0[j + 1][0] - self.q0[j][0]).hypot(self.q0[j + 1][1] - self.q0[j][1]);
+                let (dx, dy) = (theta[2 * j + 2] - theta[2 * j], theta[2 * j + 3] - theta[2 * j + 1]);
+                let d = dx.hypot(dy);
+                let r = d - d0;
+                sum += w * r * r;
+                if want_grad && d > 0.0 {
+                    let (gx, gy) = (2.0 * w * r * dx / d, 2.0 * w * r * dy / d);
+                    grad[2 * j + 2] += gx;
+                    grad[2 * j + 3] += gy;
+                    grad[2 * j] -= gx;
+                    grad[2 * j + 1] -= gy;
+                }
+            }
+        }
+        sum
+    }
+
+    fn barrier(&self, theta: &[f64], grad: &mut [f64], want_grad: bool) -> f64 {
+        let w = self.opts.barrier_weight;
+        let mut sum = 0.0;
+        let r = self.profile.ranges.h_mm;
+        let mut one = |i: usize, lo: f64, hi: f64| {
+            let m = 0.02 * (hi - lo).max(1e-9);
+            let v = theta[i];
+            let (below, above) = ((lo - v).max(0.0), (v - hi).max(0.0));
+            sum += w * (below * below + above * above) / (m * m);
+            if want_grad {
+                grad[i] += w * 2.0 * (above - below) / (m * m);
+            }
+        };
+        let (ho, ao) = (self.h_off(), self.a_off());
+        for i in ho..ao {
+            one(i, r.min, r.max);
+        }
+        for i in ao..theta.len() {
+            one(i, self.alpha_range.0, self.alpha_range.1);
+        }
+        sum
+    }
+}
+
+/// The angle between the tool axes of two states, rad (as the forward model samples turns).
+fn axis_angle(a: &TrackPoint, b: &TrackPoint) -> f64 {
+    let ax = |p: &TrackPoint| {
+        let (s, c) = p.alpha_rad.sin_cos();
+        [s * p.beta_rad.cos(), s * p.beta_rad.sin(), c]
+    };
+    let (u, v) = (ax(a), ax(b));
+    let dot = (u[0] * v[0] + u[1] * v[1] + u[2] * v[2]).clamp(-1.0, 1.0);
+    let cr = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+    (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt().atan2(dot)
+}
