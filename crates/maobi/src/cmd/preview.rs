@@ -193,11 +193,18 @@ fn execute_tagged(program: &robot_io::program::Program, frame: &PaperFrame) -> V
         let states = robot_io::sim::trace_to_states(&samples, frame);
         out.extend(samples.iter().zip(states).map(|(e, p)| Sample { t: e.t_s, p, dip }));
     };
+    // The first joint move from the controller's home pose is left out: the timeline starts
+    // with the brush at the safe height above the first stroke.
     run(&program.start, false, &mut out);
+    let t0 = out.last().map_or(0.0, |s| s.t);
+    out.clear();
     for st in &program.strokes {
         for (i, m) in st.moves().enumerate() {
             run(m, i < st.dip.len(), &mut out);
         }
+    }
+    for s in &mut out {
+        s.t -= t0;
     }
     out
 }
@@ -311,14 +318,18 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     }
     // Dip intervals.
     let mut dip_spans: Vec<[f64; 2]> = Vec::new();
-    for w in samples.windows(2) {
-        if w[1].dip && !w[0].dip {
-            dip_spans.push([w[0].t, w[1].t]);
-        } else if w[1].dip {
-            if let Some(last) = dip_spans.last_mut() {
-                last[1] = w[1].t;
+    let mut was_dip = false;
+    for x in &samples {
+        match (x.dip, was_dip) {
+            (true, false) => dip_spans.push([x.t, x.t]),
+            (true, true) => {
+                if let Some(last) = dip_spans.last_mut() {
+                    last[1] = x.t;
+                }
             }
+            _ => {}
         }
+        was_dip = x.dip;
     }
     let data = json!({
         "title": input.title,
