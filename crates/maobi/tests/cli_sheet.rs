@@ -58,6 +58,24 @@ fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
     assert_eq!(check["strokes"].as_u64().unwrap() as usize, strokes.len());
     let dips = check["dips"].as_u64().unwrap();
     assert!(dips >= 2, "{check}");
+    // Reloading before each character uses the sheet's stroke_chars: one dip per character,
+    // and G-code carries them too.
+    let mut cfg = json(&robot);
+    cfg["ink"]["reload"] = serde_json::json!("before_each_char");
+    let per_char = dir.path().join("robot-per-char.json");
+    std::fs::write(&per_char, cfg.to_string()).unwrap();
+    let c: serde_json::Value = serde_json::from_str(&ok(&maobi(&[
+        "robot",
+        "check",
+        s(&track),
+        "--paper",
+        s(&paper),
+        "--robot",
+        s(&per_char),
+        "--json",
+    ])))
+    .unwrap();
+    assert_eq!(c["dips"].as_u64().unwrap(), 4, "{c}");
     // Sent to the simulator, which drops the link once: the whole sheet, resumed at a stroke.
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let trace = dir.path().join("trace.jsonl");

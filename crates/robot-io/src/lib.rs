@@ -162,6 +162,10 @@ pub struct TrackFile {
     pub brush: BrushProfile,
     /// The strokes.
     pub strokes: Vec<Stroke>,
+    /// For a sheet: the character (index) of each stroke, which the ink reload rule
+    /// `before_each_char` needs (absent for a single character).
+    #[serde(default)]
+    pub stroke_chars: Option<Vec<usize>>,
 }
 
 impl TrackFile {

@@ -8,7 +8,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use robot_io::aubo::{Link, RPC_PORT, RunOptions, Transport, run_program};
 use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program};
+use robot_io::program::{RobotConfig, build_program_chars};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::{RobotError, TrackFile};
 
@@ -180,15 +180,17 @@ fn title(t: &TrackFile) -> String {
 
 fn check(a: CheckArgs) -> Result<()> {
     let l = load(&a.program)?;
-    let (_, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
+    let (_, report) =
+        build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     if a.json {
         print_json(&report)?;
     } else {
         println!(
-            "safe: {} strokes, {} points, {} moves; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
+            "safe: {} strokes, {} points, {} moves, {} ink dips; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
             report.strokes,
             report.points,
             report.moves,
+            report.dips,
             report.max_press_mm,
             l.track.brush.ranges.h_mm.max,
             report.frame_residual_mm,
@@ -201,13 +203,13 @@ fn check(a: CheckArgs) -> Result<()> {
 fn export(a: ExportArgs) -> Result<()> {
     let l = load(&a.program)?;
     let track = l.track.track();
-    let (program, _) = build_program(&track, &l.track.brush, &l.frame, &l.cfg)?;
+    let (program, _) = build_program_chars(&track, l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     let t = title(&l.track);
     let text = match a.format.as_str() {
         "aubo-lua" => robot_io::export::aubo_lua(&program, &t),
         "urscript" => robot_io::export::urscript(&program, &t),
         _ => {
-            let (g, warnings) = robot_io::export::gcode(&track, &l.cfg, &t);
+            let (g, warnings) = robot_io::export::gcode_chars(&track, l.track.stroke_chars.as_deref(), &l.cfg, &t);
             for w in warnings {
                 eprintln!("warning: {w}");
             }
@@ -235,7 +237,8 @@ fn send(a: SendArgs) -> Result<()> {
     }
     let port = a.port.unwrap_or(a.transport.default_port());
     let l = load(&a.program)?;
-    let (program, report) = build_program(&l.track.track(), &l.track.brush, &l.frame, &l.cfg)?;
+    let (program, report) =
+        build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     if a.dry_run {
         println!(
             "dry run: {} strokes, {} moves would be sent to {}:{port} ({}); nothing connected",
