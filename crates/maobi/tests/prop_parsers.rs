@@ -44,6 +44,7 @@ fn svg_segment() -> impl Strategy<Value = String> {
         1 => (n(), n()).prop_map(|(x, y)| format!("M {x} {y} ")),
         2 => (n(), n(), n(), n()).prop_map(|(a, b, x, y)| format!("Q {a} {b} {x} {y} ")),
         2 => (n(), n(), n(), n(), n(), n()).prop_map(|(a, b, c, d, x, y)| format!("C {a} {b} {c} {d} {x} {y} ")),
+        1 => (wild_f64(), wild_f64(), n(), n()).prop_map(|(rx, ry, x, y)| format!("A {rx} {ry} 0 0 1 {x} {y} ")),
         1 => Just("Z ".to_string()),
         1 => "[MLQCZAHV0-9 .,eE+-]{0,12}",
     ]

@@ -33,6 +33,12 @@ pub mod limits {
     pub const MAX_MEDIAN_POINTS: usize = 1000;
     /// Path elements per stroke outline (hanzi-writer-data uses about 10–60).
     pub const MAX_PATH_ELEMENTS: usize = 4096;
+    /// Bytes of one stroke's SVG path string.
+    pub const MAX_SVG_BYTES: usize = 64 << 10;
+    /// The largest magnitude of any number in an SVG path string, checked *before* kurbo parses
+    /// it: an arc's radius of 1e66 made kurbo's arc-to-cubic conversion allocate gigabytes
+    /// (found by the `svg_path` fuzz target), and relative coordinates add up.
+    pub const MAX_SVG_NUMBER: f64 = 100_000.0;
     /// Bytes of one hanzi-writer-data file (the largest real file is about 10 KB).
     pub const MAX_JSON_BYTES: u64 = 1 << 20;
     /// Bytes of a font file (a full CJK font is 10–40 MB).
@@ -42,6 +48,53 @@ pub mod limits {
 /// A coordinate for a message: plain when short, exponent form when huge or tiny.
 fn num(v: f64) -> String {
     if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+}
+
+/// The first number in an SVG path string (SVG number grammar) whose magnitude exceeds
+/// [`limits::MAX_SVG_NUMBER`] or is not finite, if any. Linear in the string's length.
+fn svg_number_too_large(s: &str) -> Option<&str> {
+    let b = s.as_bytes();
+    let digits = |mut i: usize| {
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if !(c.is_ascii_digit() || c == b'.' || c == b'-' || c == b'+') {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        if c == b'-' || c == b'+' {
+            i += 1;
+        }
+        i = digits(i);
+        if i < b.len() && b[i] == b'.' {
+            i = digits(i + 1);
+        }
+        if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
+            let mut j = i + 1;
+            if j < b.len() && (b[j] == b'-' || b[j] == b'+') {
+                j += 1;
+            }
+            let k = digits(j);
+            if k > j {
+                i = k;
+            }
+        }
+        let i_next = i.max(start + 1);
+        let tok = &s[start..i_next];
+        if let Ok(v) = tok.parse::<f64>() {
+            if !(v.abs() <= limits::MAX_SVG_NUMBER) {
+                return Some(tok);
+            }
+        }
+        i = i_next;
+    }
+    None
 }
 
 /// Whether a point lies inside the accepted coordinate window.
@@ -189,6 +242,22 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
     let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
     let mut outlines = Vec::with_capacity(j.strokes.len());
     for (i, s) in j.strokes.iter().enumerate() {
+        if s.len() > limits::MAX_SVG_BYTES {
+            return Err(bad(format!(
+                "stroke {}: SVG path of {} bytes; at most {}",
+                i + 1,
+                s.len(),
+                limits::MAX_SVG_BYTES
+            )));
+        }
+        if let Some(tok) = svg_number_too_large(s) {
+            let tok: String = tok.chars().take(40).collect();
+            return Err(bad(format!(
+                "stroke {}: SVG path number {tok} is beyond ±{} (the em box is 0..=1024)",
+                i + 1,
+                limits::MAX_SVG_NUMBER
+            )));
+        }
         let mut p = BezPath::from_svg(s).map_err(|e| bad(format!("stroke {}: bad SVG path: {e}", i + 1)))?;
         if p.elements().len() > limits::MAX_PATH_ELEMENTS {
             return Err(bad(format!(
@@ -396,4 +465,32 @@ pub fn from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
         stroke_outlines: None,
         medians: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(path: &str) -> Result<Glyph, GlyphError> {
+        let doc = serde_json::json!({"strokes": [path], "medians": [[[100, 400], [900, 400]]]}).to_string();
+        parse_hanzi_json('一', &doc, GlyphSource::Embedded, "t.json")
+    }
+
+    #[test]
+    fn svg_numbers_are_bounded_before_parsing() {
+        // The fuzz find (fuzz/artifacts/svg_path/oom-509c…): an arc to x = 1.1e66 made kurbo
+        // build billions of cubics. Now refused from the text, in no time.
+        let arc = format!("M 541 410 A 37 9 9 0 0 {} 0 Z", "1".repeat(67));
+        let e = parse(&arc).unwrap_err().to_string();
+        assert!(e.contains("stroke 1: SVG path number 1111") && e.contains("beyond ±100000"), "{e}");
+        for bad in ["M 0 0 L 1e300 0 Z", "M 0 0 L 1e400 0", "M 0 0 l -2e5 0", "M0,0L5E+06,1"] {
+            assert!(parse(bad).unwrap_err().to_string().contains("SVG path number"), "{bad}");
+        }
+        // Ordinary paths, packed numbers and exponents within range pass.
+        for good in ["M 100 100 L 900 100 L 900 200 Z", "M 100 100.5 L 1e2 2E+2 Z", "M 10 10 A 5 5 0 0 1 20 20 Z"] {
+            let g = parse(good).unwrap_or_else(|e| panic!("{good}: {e}"));
+            assert_eq!(g.stroke_outlines.unwrap().len(), 1);
+        }
+        assert!(parse(&"L 1 1 ".repeat(20_000)).unwrap_err().to_string().contains("bytes; at most"));
+    }
 }
