@@ -131,7 +131,7 @@ fn inputs_have_bounds_named_by_file_and_field() {
         (&["write", "永", "--hanzi-data", &h1e7, "--out", o], "median 1: point (1e7, 100) outside"),
         (&["write", "永", "--hanzi-data", &many, "--out", o], "median 1: 2000 points; at most 1000"),
         (&["write", "永", "--hanzi-data", &huge, "--out", o], "a character file is at most 1048576 bytes"),
-        (&["write", "永", "--hanzi-data", &svg, "--out", o], "stroke 1: point (1e300, 0) outside"),
+        (&["write", "永", "--hanzi-data", &svg, "--out", o], "stroke 1: SVG path number 1e300 is beyond ±100000"),
         (&["write", "永", "--brush", &hmax, "--out", o], "field `ranges.h_mm`: [11, 1e300] leaves 0 up to brush.length_mm"),
         (&["write", "永", "--brush", &coef, "--out", o], "field `model.lt_mm`: predicts 1.1000e301 mm"),
         (&["footprint", "--brush", &coef, "--h", "15", "--alpha", "5"], "at most 96.0 mm"),
@@ -264,20 +264,22 @@ fn with_closed_stdout(args: &[&str]) -> std::process::Output {
 #[test]
 fn stdout_closing_early_ends_quietly() {
     let csv = fixture("measurements/pen1-sample.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("w");
     // `calibrate … | true` panicked with "failed printing to stdout: Broken pipe".
     for args in [
         &["calibrate", csv.as_str()][..],
         &["models", "--n", "20", "--size", "32"][..],
         &["footprint", "--h", "15", "--alpha", "5", "--json"][..],
         // `write` still prints with println!: the panic hook ends it quietly too.
-        &["write", "永", "--size", "64", "--out", &std::env::temp_dir().join("maobi-pipe-test").to_string_lossy()][..],
+        &["write", "永", "--size", "64", "--out", s(&out)][..],
     ] {
         let o = with_closed_stdout(args);
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(!e.contains("panicked") && !e.contains("Broken pipe"), "{args:?}: {e}");
         assert_eq!(o.status.code(), Some(0), "{args:?}: {e}");
     }
-    let _ = std::fs::remove_dir_all(std::env::temp_dir().join("maobi-pipe-test"));
+    assert!(out.join("track.json").exists(), "write finished its work before stdout mattered");
 }
 
 #[cfg(unix)]
