@@ -87,10 +87,10 @@ fn svg_number_too_large(s: &str) -> Option<&str> {
         }
         let i_next = i.max(start + 1);
         let tok = &s[start..i_next];
-        if let Ok(v) = tok.parse::<f64>() {
-            if !(v.abs() <= limits::MAX_SVG_NUMBER) {
-                return Some(tok);
-            }
+        if let Ok(v) = tok.parse::<f64>()
+            && (v.is_nan() || v.abs() > limits::MAX_SVG_NUMBER)
+        {
+            return Some(tok);
         }
         i = i_next;
     }
