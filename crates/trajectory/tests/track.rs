@@ -246,11 +246,12 @@ fn a_track_holds_only_motion_the_forward_model_explains() {
         let model = brush_model::ForwardModel::default();
         for s in &t.strokes {
             // No jumps: the brush never moves more than one spacing between two points while
-            // it presses at either.
+            // it presses at either (the end station may stretch a piece's last step by up to a
+            // twentieth of a spacing).
             for w in s.points.windows(2) {
                 let d = w[0].anchor().distance(w[1].anchor());
                 let pressed = w[0].h_mm >= pen1.ranges.h_mm.min || w[1].h_mm >= pen1.ranges.h_mm.min;
-                assert!(!pressed || d <= DEFAULT_SPACING_MM + 1e-6, "a pressed jump of {d} mm at {alpha_deg}°");
+                assert!(!pressed || d <= 1.05 * DEFAULT_SPACING_MM + 1e-6, "a pressed jump of {d} mm at {alpha_deg}°");
             }
             // Every pressed point's β is what the forward model derives from the motion (tilt
             // below the threshold) or the lean it commands (above).
