@@ -9,6 +9,8 @@ use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
 use stroke_metrics::GrayRef;
+pub use track_refine::RefineOptions;
+use track_refine::{LossTerms, Target};
 use trajectory::{
     CharBox, Glyph, Method, Sizing, StrokePath, TrackOptions, build_track, centre_lines, chamfer_pct,
     raster::render_glyph,
@@ -35,6 +37,9 @@ pub struct WriteOptions {
     /// Also run the track as a robot program (default paper frame and `robot.json`, the
     /// simulator's motion) and score what it writes.
     pub execute: bool,
+    /// Refine the built track by gradient descent against the glyph (`track_refine`); `None`
+    /// leaves the track as built.
+    pub refine: Option<RefineOptions>,
 }
 
 impl Default for WriteOptions {
@@ -47,6 +52,7 @@ impl Default for WriteOptions {
             spacing_mm: trajectory::DEFAULT_SPACING_MM,
             upper_bound: true,
             execute: true,
+            refine: None,
         }
     }
 }
@@ -139,6 +145,36 @@ pub struct CharReport {
     pub executed: Option<Similarity>,
     /// The plan's render against the executed render (how far the plan can be trusted).
     pub agreement: Option<Similarity>,
+    /// Before/after figures of the refinement (when [`WriteOptions::refine`] is set); the
+    /// figures above are then those of the refined track (or of the built one if the refined
+    /// track was rejected).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refine: Option<RefineReport>,
+}
+
+/// What refinement did to one character.
+#[derive(Clone, Debug, Serialize)]
+pub struct RefineReport {
+    /// The options used.
+    pub options: RefineOptions,
+    /// The built track's render vs the glyph.
+    pub planned_before: Similarity,
+    /// The refined track's render vs the glyph.
+    pub planned_after: Similarity,
+    /// What the built track's program writes vs the glyph (when executing).
+    pub executed_before: Option<Similarity>,
+    /// What the refined track's program writes vs the glyph (when executing).
+    pub executed_after: Option<Similarity>,
+    /// The loss before each step and after the last.
+    pub curve: Vec<LossTerms>,
+    /// Variables refined.
+    pub variables: usize,
+    /// Footprints in the image term.
+    pub footprints: usize,
+    /// Wall time of the refinement itself, ms.
+    pub millis: f64,
+    /// Why the refined track was not used (it failed `robot check`), if it was not.
+    pub rejected: Option<String>,
 }
 
 /// One written character.
@@ -271,8 +307,94 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         upper_bound,
         executed,
         agreement,
+        refine: None,
     };
-    Ok(CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states })
+    let mut result =
+        CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };
+    if let Some(ro) = &opts.refine {
+        refine_result(&mut result, p, profile, opts, ro)?;
+    }
+    Ok(result)
+}
+
+/// The glyph raster a track is refined against: the em box (the char box on the paper) at
+/// `px²`.
+pub fn refine_target(glyph: &Glyph, char_box: &CharBox, px: u32) -> Result<Target> {
+    let img = render_glyph(glyph, px);
+    Ok(Target::new(
+        px,
+        px,
+        img.data().to_vec(),
+        PointMm::new(char_box.x0_mm, char_box.y0_mm),
+        char_box.size_mm / px as f64,
+    )?)
+}
+
+/// Refines a written character's track against its glyph and replaces the result's track,
+/// renders and figures by the refined ones, keeping the built track's figures as "before".
+/// A refined track that fails the robot check is not used (the report says why).
+fn refine_result(
+    r: &mut CharResult,
+    p: &Prepared,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    ro: &RefineOptions,
+) -> Result<()> {
+    let target = refine_target(&p.glyph, &r.char_box, ro.analysis_px)?;
+    let refined = track_refine::refine(&r.track, profile, &target, ro)
+        .with_context(|| format!("{}: refining the track", p.glyph.ch))?;
+    let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
+    let planned_after = similarity(&r.reference, &render)?;
+    let planned_before = Similarity { csim: r.report.csim, ssim: r.report.ssim, iou: r.report.iou };
+    let mut rejected = None;
+    let mut executed_after = None;
+    let mut executed = None;
+    if opts.execute {
+        match execute_track(&refined.track, profile, &level_frame_for(&r.char_box), &RobotConfig::default()) {
+            Ok(states) => {
+                let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size);
+                executed_after = Some(similarity(&r.reference, &img)?);
+                executed = Some((img, states));
+            }
+            Err(e) => rejected = Some(format!("{e:#}")),
+        }
+    } else if let Err(e) = build_program(
+        &refined.track,
+        profile,
+        &level_frame_for(&r.char_box),
+        &RobotConfig::default(),
+    ) {
+        rejected = Some(format!("the refined track fails `robot check`: {e}"));
+    }
+    let report = RefineReport {
+        options: *ro,
+        planned_before,
+        planned_after,
+        executed_before: r.report.executed,
+        executed_after,
+        curve: refined.curve,
+        variables: refined.variables,
+        footprints: refined.footprints,
+        millis: refined.millis,
+        rejected: rejected.clone(),
+    };
+    if rejected.is_none() {
+        (r.report.csim, r.report.ssim, r.report.iou) = (planned_after.csim, planned_after.ssim, planned_after.iou);
+        r.report.points = refined.track.point_count();
+        if let Some((img, states)) = executed {
+            r.report.executed = executed_after;
+            r.report.agreement = Some(similarity(&render, &img)?);
+            r.executed = Some(img);
+            r.executed_states = Some(states);
+        }
+        if let Some(m) = p.glyph.medians.as_ref() {
+            r.report.chamfer_pct = Some(chamfer_pct(&refined.track, &r.char_box, m));
+        }
+        r.track = refined.track;
+        r.render = render;
+    }
+    r.report.refine = Some(report);
+    Ok(())
 }
 
 /// Images of one height side by side, left to right, with a 4 px white gap between them (for

@@ -42,6 +42,13 @@ pub struct Args {
     /// Print every character's report and the means as JSON.
     #[arg(long)]
     json: bool,
+    /// Refine every track by gradient descent against its glyph (as `maobi write --refine`);
+    /// the summary gains the means before and after.
+    #[arg(long)]
+    refine: bool,
+    /// Gradient steps of --refine (default 20).
+    #[arg(long, requires = "refine")]
+    iters: Option<usize>,
 }
 
 /// Runs the command.
@@ -71,8 +78,9 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--alpha {}: expected 0..=30 degrees", args.alpha);
     }
     let alpha_rad = args.alpha.to_radians();
+    let refine = crate::cmd::write::refine_options(args.refine, args.iters)?;
     let opts =
-        WriteOptions { model: args.model, size: args.size, upper_bound: true, alpha_rad, ..WriteOptions::default() };
+        WriteOptions { model: args.model, size: args.size, upper_bound: true, alpha_rad, refine, ..WriteOptions::default() };
     let pb = progress(chars.len() as u64, "evaluate");
     let reports: Vec<CharReport> = chars
         .par_iter()
@@ -89,7 +97,10 @@ pub fn run(args: Args) -> Result<()> {
         })
         .collect::<Result<_>>()?;
     pb.finish_and_clear();
-    let summary = summarize(&reports);
+    let mut summary = summarize(&reports);
+    if let Some(r) = refine_summary(&reports) {
+        summary["refine"] = r;
+    }
     if args.json {
         print_json(
             &json!({"method": args.method.name(), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
@@ -144,4 +155,34 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
             "iou": ub.iter().map(|u| u.iou).sum::<f64>() / ub.len() as f64,
         })},
     })
+}
+
+/// Means of the refinement's before/after figures (`None` when nothing was refined).
+fn refine_summary(r: &[CharReport]) -> Option<serde_json::Value> {
+    let rf: Vec<&maobi::pipeline::RefineReport> = r.iter().filter_map(|c| c.refine.as_ref()).collect();
+    if rf.is_empty() {
+        return None;
+    }
+    let mean = |v: Vec<maobi::pipeline::Similarity>| {
+        let k = v.len() as f64;
+        if v.is_empty() {
+            return serde_json::Value::Null;
+        }
+        json!({
+            "csim": v.iter().map(|s| s.csim).sum::<f64>() / k,
+            "ssim": v.iter().map(|s| s.ssim).sum::<f64>() / k,
+            "iou": v.iter().map(|s| s.iou).sum::<f64>() / k,
+        })
+    };
+    let ms: Vec<f64> = rf.iter().map(|x| x.millis).collect();
+    Some(json!({
+        "count": rf.len(),
+        "rejected": rf.iter().filter(|x| x.rejected.is_some()).count(),
+        "executed_before": mean(rf.iter().filter_map(|x| x.executed_before).collect()),
+        "executed_after": mean(rf.iter().filter_map(|x| x.executed_after).collect()),
+        "planned_before": mean(rf.iter().map(|x| x.planned_before).collect()),
+        "planned_after": mean(rf.iter().map(|x| x.planned_after).collect()),
+        "millis_mean": ms.iter().sum::<f64>() / ms.len() as f64,
+        "millis_max": ms.iter().copied().fold(0.0, f64::max),
+    }))
 }

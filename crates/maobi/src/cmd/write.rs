@@ -77,6 +77,29 @@ pub struct Args {
     json: bool,
     #[command(flatten)]
     renderer: RendererArgs,
+    /// Refine each track by gradient descent against its glyph before executing it (see
+    /// docs/trajectory.md, "Refinement"); report.json gains the before/after figures and the
+    /// loss curve goes to refine.png.
+    #[arg(long)]
+    refine: bool,
+    /// Gradient steps of --refine (default 20).
+    #[arg(long, requires = "refine")]
+    iters: Option<usize>,
+}
+
+/// The refinement options of `--refine [--iters N]` (`None` without `--refine`).
+pub(crate) fn refine_options(refine: bool, iters: Option<usize>) -> Result<Option<track_refine::RefineOptions>> {
+    if !refine {
+        return Ok(None);
+    }
+    let mut o = track_refine::RefineOptions::default();
+    if let Some(n) = iters {
+        if !(1..=10_000).contains(&n) {
+            bail!("--iters {n}: expected 1..=10000 gradient steps");
+        }
+        o.iterations = n;
+    }
+    Ok(Some(o))
 }
 
 fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
@@ -153,7 +176,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     let char_mm = lay.char_mm;
     let boxes = lay.boxes.clone();
-    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, ..WriteOptions::default() };
+    let refine = refine_options(args.refine, args.iters)?;
+    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, refine, ..WriteOptions::default() };
     let pb = progress(chars.len() as u64, "write");
     let results: Vec<CharResult> = prepared
         .par_iter()
@@ -277,6 +301,19 @@ pub fn run(args: Args) -> Result<()> {
                 r.points,
                 r.millis
             );
+            if let Some(rf) = &r.refine {
+                let fig = |s: Option<maobi::pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
+                println!(
+                    "  refined ({} steps, {:.0} ms): executed CSIM {} → {}, planned CSIM {:.4} → {:.4}{}",
+                    rf.options.iterations,
+                    rf.millis,
+                    fig(rf.executed_before),
+                    fig(rf.executed_after),
+                    rf.planned_before.csim,
+                    rf.planned_after.csim,
+                    rf.rejected.as_ref().map_or(String::new(), |w| format!("; not used: {w}"))
+                );
+            }
         }
         println!(
             "{} sheet {:.0}×{:.0} mm, char box {char_mm:.1} mm ({}); outputs in {} (preview.html to watch it)",
@@ -522,5 +559,12 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
     }
     write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
     write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
+    if let Some(rf) = &r.report.refine {
+        let series = |f: fn(&track_refine::LossTerms) -> f64| -> Vec<(f64, f64)> {
+            rf.curve.iter().enumerate().map(|(i, l)| (i as f64, f(l))).collect()
+        };
+        let png = maobi::plot::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
+        write_atomic(&dir.join("refine.png"), &png)?;
+    }
     Ok(())
 }
