@@ -1,0 +1,64 @@
+//! The refinement gate: `maobi write --refine` on a few gate characters, bounded in time.
+//!
+//! Wire it into `gates.rs` as a figure group (e.g. `"refine" => refine_gate::refine_figures()`,
+//! baseline `fixtures/baselines/refine.json`) and `mod refine_gate;` in `main.rs`.
+
+use anyhow::{Result, bail};
+use brush_model::BrushProfile;
+use maobi::pipeline::{RefineOptions, WriteOptions, prepare, write_char};
+use rayon::prelude::*;
+use trajectory::{CharBox, Method, glyph};
+
+use crate::gates::{Better, Figure, Figures};
+
+/// The characters the refinement gate writes: the first four gate characters (one stroke-rich,
+/// one short, two with crossings). At the default settings each refines in about 1.3 s on one
+/// core, so the gate takes a few seconds on two.
+pub const REFINE_GATE_CHARS: &str = "永字八十";
+
+/// Refinement figures on [`REFINE_GATE_CHARS`] (medians, B-BSM, 256², default refinement):
+/// mean executed CSIM and IoU of the refined tracks against the glyph, the mean gain in executed
+/// CSIM over the built tracks, and how many refined tracks the robot check refused (must stay 0).
+///
+/// # Errors
+/// When a character cannot be written, or a refined track fails the robot check.
+pub fn refine_figures() -> Result<Figures> {
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let opts = WriteOptions {
+        size: 256,
+        upper_bound: false,
+        refine: Some(RefineOptions::default()),
+        ..WriteOptions::default()
+    };
+    let chars: Vec<char> = REFINE_GATE_CHARS.chars().collect();
+    let reports = chars
+        .par_iter()
+        .map(|&c| {
+            let p = prepare(glyph::embedded(c)?, Some(Method::Medians))?;
+            let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
+            Ok(write_char(&p, &pen1, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?.report)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut after = (0.0, 0.0);
+    let mut gain = 0.0;
+    let mut rejected = 0usize;
+    for r in &reports {
+        let Some(rf) = &r.refine else { bail!("{}: no refinement report", r.char) };
+        if rf.rejected.is_some() {
+            rejected += 1;
+        }
+        let (Some(b), Some(a)) = (rf.executed_before, rf.executed_after) else {
+            bail!("{}: the refined track was not executed ({:?})", r.char, rf.rejected)
+        };
+        after = (after.0 + a.csim, after.1 + a.iou);
+        gain += a.csim - b.csim;
+    }
+    let n = reports.len() as f64;
+    let f = |value, tolerance, better| Figure { value, tolerance, better };
+    Ok(Figures::from([
+        ("refine/medians/bsm/executed_csim".to_string(), f(after.0 / n, 0.003, Better::Higher)),
+        ("refine/medians/bsm/executed_iou".to_string(), f(after.1 / n, 0.005, Better::Higher)),
+        ("refine/medians/bsm/executed_csim_gain".to_string(), f(gain / n, 0.003, Better::Higher)),
+        ("refine/medians/bsm/rejected".to_string(), f(rejected as f64, 0.0, Better::Lower)),
+    ]))
+}
