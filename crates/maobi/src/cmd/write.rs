@@ -201,29 +201,24 @@ pub fn run(args: Args) -> Result<()> {
         }
         for r in results.iter_mut() {
             let b = r.char_box;
-            let img = neural_gen::compose::render_track(
-                &g,
-                &r.track,
-                brush_model::PointMm::new(b.x0_mm, b.y0_mm),
-                args.size as f64 / b.size_mm,
-                args.size,
-                args.size,
-                64,
-            )?;
-            let sim = maobi::pipeline::similarity(&r.reference, &img)?;
-            (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
-            if let Some(states) = &r.executed_states {
-                // The executed path through the same generator.
-                let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
-                let ex = neural_gen::compose::render_track(
+            let neural = |t: &brush_model::Track| {
+                neural_gen::compose::render_track(
                     &g,
-                    &executed,
+                    t,
                     brush_model::PointMm::new(b.x0_mm, b.y0_mm),
                     args.size as f64 / b.size_mm,
                     args.size,
                     args.size,
                     64,
-                )?;
+                )
+            };
+            let img = neural(&r.track)?;
+            let sim = maobi::pipeline::similarity(&r.reference, &img)?;
+            (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+            if let Some(states) = &r.executed_states {
+                // The executed path through the same generator.
+                let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
+                let ex = neural(&executed)?;
                 r.report.executed = Some(maobi::pipeline::similarity(&r.reference, &ex)?);
                 r.report.agreement = Some(maobi::pipeline::similarity(&img, &ex)?);
                 r.executed = Some(ex);
