@@ -221,6 +221,7 @@ pub fn run(args: &[String]) -> Result<()> {
         ("models", model_figures(ModelKind::Bsm.model(), &baselines, 300)),
         ("characters", character_figures()?),
         ("generator", generator_figures()?),
+        ("refine", crate::refine_gate::refine_figures()?),
     ];
     println!("{:<48} {:>12} {:>12} {:>10}  {}", "figure", "baseline", "now", "Δ", "");
     let mut failures = Vec::new();

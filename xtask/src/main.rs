@@ -5,6 +5,7 @@ use std::process::ExitCode;
 mod bench;
 mod fixtures;
 mod gates;
+mod refine_gate;
 mod rng;
 mod train_fixture;
 
