@@ -184,8 +184,8 @@ mod tests {
                 (f(0.0, 0.0, 0.0, 0.0, eps) - f(0.0, 0.0, 0.0, 0.0, -eps)) / (2.0 * eps),
             ];
             assert!((m.d - f(0.0, 0.0, 0.0, 0.0, 0.0)).abs() < 1e-12);
-            for k in 0..5 {
-                assert!((m.grad[k] - fd[k]).abs() < 1e-5, "({u}, {v}) ∂{k}: {} vs {}", m.grad[k], fd[k]);
+            for (k, (g, d)) in m.grad.iter().zip(&fd).enumerate() {
+                assert!((g - d).abs() < 1e-5, "({u}, {v}) ∂{k}: {g} vs {d}");
             }
         }
     }
