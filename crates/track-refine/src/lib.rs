@@ -12,8 +12,8 @@
 //! [`problem`]; the analytic soft footprint and its closed-form derivatives in [`soft`].
 //!
 //! Directions are never free: the forward model re-derives them every
-//! [`RefineOptions::rederive_every`] steps and after the last; inside a step gradients are
-//! taken at fixed directions. After the last step depths and tilts are clamped into the
+//! [`RefineOptions::rederive_every`] steps and after the last; inside a step each dragged
+//! footprint keeps the path sample it aims at (see [`problem`]). After the last step depths and tilts are clamped into the
 //! profile's calibrated ranges (every step is projected into them anyway).
 //!
 //! ```no_run
@@ -122,8 +122,7 @@ impl Target {
 }
 
 /// Settings of [`refine`]. Units are in the field names; the defaults are what `maobi write
-/// --refine` uses (chosen on the first 200 embedded characters, docs/trajectory.md,
-/// "Refinement").
+/// --refine` uses (chosen on 永字八法十 from the tuning set, docs/trajectory.md, "Refinement").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RefineOptions {

@@ -14,10 +14,14 @@
 //! **Directions are not variables.** Which way a footprint points follows from the motion
 //! (docs/brush-model.md): [`Problem::directions`] re-derives it with the forward model the way
 //! `trajectory::build_track` does (upright directions, `ForwardModel::with_directions` with the
-//! tilt threshold at infinity; a tilted brush leans the way those point). Inside a step the
-//! directions are held fixed and the gradient is taken with respect to positions, depths and
-//! tilts at fixed directions; [`crate::refine`] re-derives them every few steps and after the
-//! last.
+//! tilt threshold at infinity; a tilted brush leans the way those point); [`crate::refine`]
+//! re-derives them every few steps and after the last. Inside a step each dragged footprint
+//! keeps the path sample the drag rule aimed it at ([`Directions::aim`]) and its direction
+//! follows its own point and that sample, which is how the gradient is taken
+//! ([`RefineOptions::aim_coupling`]); where another rule set the direction, or with the coupling
+//! off, the angle itself is held fixed. Holding every angle fixed was tried first: moving a root
+//! sideways at a fixed angle moves the whole footprint, while the model swings it about its tip,
+//! so each re-derivation undid what the steps had gained (docs/trajectory.md, "Refinement").
 //!
 //! **Loss** (all terms dimensionless or mm², summed):
 //! * image: `Σ_p (U_p − G_p)² / Σ_p G_p`, with `U_p = 1 − Π_i (1 − c_i(p))` the soft union of
