@@ -248,15 +248,10 @@ impl ForwardModel {
                 }
             }
         }
-        let mut prev: Option<f64> = None;
-        for i in 0..out.len() {
-            if dirs[i].is_some() {
-                prev = Some(out[i].beta_rad);
-            } else if !dirs[i..].iter().any(Option::is_some) {
-                if let Some(d) = prev {
-                    out[i].beta_rad = d;
-                }
-            }
+        // After the last footprint: its direction.
+        if let Some(last) = dirs.iter().rposition(Option::is_some) {
+            let d = out[last].beta_rad;
+            out[last + 1..].iter_mut().for_each(|p| p.beta_rad = d);
         }
         out
     }

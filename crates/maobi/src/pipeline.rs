@@ -281,9 +281,8 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         None
     };
     let (executed, agreement, executed_img, executed_states) = if opts.execute {
-        let states = execute_track(&built.track, profile, &level_frame_for(&char_box), &RobotConfig::default())
+        let (states, img) = execute_and_render(&built.track, profile, opts, &char_box)
             .with_context(|| format!("{}: executing the plan", p.glyph.ch))?;
-        let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size);
         (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
     } else {
         (None, None, None, None)
@@ -315,6 +314,20 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         refine_result(&mut result, p, profile, opts, ro)?;
     }
     Ok(result)
+}
+
+/// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
+/// char box with the default `robot.json` ([`execute_track`]), rendered like the plan
+/// ([`render_states`]). Returns the executed states and their render.
+fn execute_and_render(
+    track: &Track,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    char_box: &CharBox,
+) -> Result<(Vec<TrackPoint>, Coverage)> {
+    let states = execute_track(track, profile, &level_frame_for(char_box), &RobotConfig::default())?;
+    let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, char_box, opts.size);
+    Ok((states, img))
 }
 
 /// The glyph raster a track is refined against: the em box (the char box on the paper) at
@@ -350,20 +363,16 @@ fn refine_result(
     let mut executed_after = None;
     let mut executed = None;
     if opts.execute {
-        match execute_track(&refined.track, profile, &level_frame_for(&r.char_box), &RobotConfig::default()) {
-            Ok(states) => {
-                let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size);
+        match execute_and_render(&refined.track, profile, opts, &r.char_box) {
+            Ok((states, img)) => {
                 executed_after = Some(similarity(&r.reference, &img)?);
                 executed = Some((img, states));
             }
             Err(e) => rejected = Some(format!("{e:#}")),
         }
-    } else if let Err(e) = build_program(
-        &refined.track,
-        profile,
-        &level_frame_for(&r.char_box),
-        &RobotConfig::default(),
-    ) {
+    } else if let Err(e) =
+        build_program(&refined.track, profile, &level_frame_for(&r.char_box), &RobotConfig::default())
+    {
         rejected = Some(format!("the refined track fails `robot check`: {e}"));
     }
     let report = RefineReport {

@@ -79,8 +79,14 @@ pub fn run(args: Args) -> Result<()> {
     }
     let alpha_rad = args.alpha.to_radians();
     let refine = crate::cmd::write::refine_options(args.refine, args.iters)?;
-    let opts =
-        WriteOptions { model: args.model, size: args.size, upper_bound: true, alpha_rad, refine, ..WriteOptions::default() };
+    let opts = WriteOptions {
+        model: args.model,
+        size: args.size,
+        upper_bound: true,
+        alpha_rad,
+        refine,
+        ..WriteOptions::default()
+    };
     let pb = progress(chars.len() as u64, "evaluate");
     let reports: Vec<CharReport> = chars
         .par_iter()
