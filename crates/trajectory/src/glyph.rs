@@ -13,6 +13,9 @@ use thiserror::Error;
 
 use crate::image_glyph;
 
+pub mod font;
+pub use font::{FontSet, from_font_files};
+
 /// Side of the em box, em units.
 pub const EM: f64 = 1024.0;
 /// The original data's top edge: `y' = EM_TOP − y`.
@@ -121,7 +124,7 @@ pub static EMBEDDED_SUBSET: &str = include_str!("../data/hanzi-subset.jsonl");
 pub static ARPHIC_LICENSE: &str = include_str!("../data/ARPHICPL.TXT");
 
 /// Errors from loading glyphs.
-#[derive(Debug, Error)]
+#[derive(Clone, Debug, Error)]
 pub enum GlyphError {
     /// The character is not in the source.
     #[error("character {ch:?} (U+{code:04X}) is not in {source_name}")]
@@ -166,8 +169,14 @@ pub enum GlyphSource {
     Embedded,
     /// A hanzi-writer-data folder.
     HanziData(String),
-    /// A font file.
-    Font(String),
+    /// A font file: the file the glyph was taken from and the face in it (0 unless the file is
+    /// a collection).
+    Font {
+        /// The file.
+        path: String,
+        /// The face index in the file.
+        face_index: u32,
+    },
     /// An image file.
     Image(String),
 }
@@ -178,7 +187,7 @@ impl GlyphSource {
         match self {
             GlyphSource::Embedded => "embedded",
             GlyphSource::HanziData(_) => "hanzi-data",
-            GlyphSource::Font(_) => "font",
+            GlyphSource::Font { .. } => "font",
             GlyphSource::Image(_) => "image",
         }
     }
@@ -361,93 +370,20 @@ pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
     parse_hanzi_json(ch, &text, GlyphSource::HanziData(dir.display().to_string()), &path.display().to_string())
 }
 
-struct OutlineSink {
-    path: BezPath,
-    scale: f64,
-}
-
-impl OutlineSink {
-    fn p(&self, x: f32, y: f32) -> Point {
-        Point::new(x as f64 * self.scale, EM_TOP - y as f64 * self.scale)
-    }
-}
-
-impl ttf_parser::OutlineBuilder for OutlineSink {
-    fn move_to(&mut self, x: f32, y: f32) {
-        let p = self.p(x, y);
-        self.path.move_to(p);
-    }
-    fn line_to(&mut self, x: f32, y: f32) {
-        let p = self.p(x, y);
-        self.path.line_to(p);
-    }
-    fn quad_to(&mut self, x1: f32, y1: f32, x: f32, y: f32) {
-        let (a, b) = (self.p(x1, y1), self.p(x, y));
-        self.path.quad_to(a, b);
-    }
-    fn curve_to(&mut self, x1: f32, y1: f32, x2: f32, y2: f32, x: f32, y: f32) {
-        let (a, b, c) = (self.p(x1, y1), self.p(x2, y2), self.p(x, y));
-        self.path.curve_to(a, b, c);
-    }
-    fn close(&mut self) {
-        self.path.close_path();
-    }
-}
-
-/// A glyph from a TrueType/OpenType font's outlines. Font units are scaled so the em is 1024
-/// units with the baseline at `y = 0` of the original frame (so the ideographic em box, from
-/// about −0.12 em to 0.88 em, lands on the 1024 box like hanzi-writer-data). No medians.
+/// A glyph from one font file: TrueType/OpenType (`.ttf`, `.otf`), the first face of a
+/// collection (`.ttc`, `.otc`), WOFF or WOFF2 (see [`font`]). Font units are scaled so the em is
+/// 1024 units with the baseline at `y = 0` of the original frame (so the ideographic em box,
+/// from about −0.12 em to 0.88 em, lands on the 1024 box like hanzi-writer-data). No medians.
+/// For several files, folders or another face, see [`from_font_files`] and [`FontSet`].
 ///
 /// # Errors
-/// [`GlyphError::Io`], [`GlyphError::Malformed`] (not a font), [`GlyphError::Unknown`].
+/// [`GlyphError::Io`], [`GlyphError::Malformed`] (not a font, a web font that does not decode,
+/// a glyph beyond [`limits`]), [`GlyphError::Unknown`].
 pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
-    let name = path.display().to_string();
-    let io = |e: std::io::Error| GlyphError::Io { path: name.clone(), message: e.to_string() };
-    let len = std::fs::metadata(path).map_err(io)?.len();
-    if len > limits::MAX_FONT_BYTES {
-        return Err(GlyphError::Malformed {
-            source_name: name,
-            message: format!("{len} bytes; a font is at most {} bytes", limits::MAX_FONT_BYTES),
-        });
+    if path.is_dir() {
+        return Err(GlyphError::Io { path: path.display().to_string(), message: "a folder, not a font file".into() });
     }
-    let data = std::fs::read(path).map_err(io)?;
-    let face = ttf_parser::Face::parse(&data, 0).map_err(|e| GlyphError::Malformed {
-        source_name: name.clone(),
-        message: format!("not a TrueType/OpenType font: {e}"),
-    })?;
-    let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: name.clone() };
-    let gid = face.glyph_index(ch).ok_or_else(unknown)?;
-    let mut sink = OutlineSink { path: BezPath::new(), scale: EM / face.units_per_em() as f64 };
-    face.outline_glyph(gid, &mut sink).ok_or_else(unknown)?;
-    if sink.path.elements().len() > limits::MAX_STROKES * limits::MAX_PATH_ELEMENTS {
-        return Err(GlyphError::Malformed {
-            source_name: name,
-            message: format!(
-                "glyph of {ch:?}: {} outline elements; at most {}",
-                sink.path.elements().len(),
-                limits::MAX_STROKES * limits::MAX_PATH_ELEMENTS
-            ),
-        });
-    }
-    if let Some(q) = path_outside(&sink.path) {
-        return Err(GlyphError::Malformed {
-            source_name: name,
-            message: format!(
-                "glyph of {ch:?}: point ({:.0}, {:.0}) outside the accepted em coordinates {}..={} (odd units_per_em?)",
-                q.x,
-                q.y,
-                limits::MIN_COORD,
-                limits::MAX_COORD
-            ),
-        });
-    }
-    Ok(Glyph {
-        ch,
-        source: GlyphSource::Font(name),
-        shape: Shape::Outlines(vec![sink.path]),
-        stroke_outlines: None,
-        medians: None,
-    })
+    from_font_files(&[path.to_path_buf()], None, ch)
 }
 
 /// A glyph from a photo or scan of one character (dark ink on light paper): Otsu threshold,
