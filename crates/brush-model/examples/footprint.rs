@@ -3,7 +3,7 @@
 //!
 //! `cargo run -p brush-model --example footprint`
 
-use brush_model::{BrushProfile, Extrapolation, Footprint, Measurement, PointMm, Press, fit_general};
+use brush_model::{BrushProfile, Clamp, Extrapolation, Footprint, Measurement, PointMm, Press, fit_general};
 
 fn main() {
     let pen1 = BrushProfile::builtin("pen1").expect("built-in");
@@ -17,9 +17,15 @@ fn main() {
         println!("{name}: {}", pts.join(" "));
     }
     let inv = pen1.h_for_half_width(3.0, 0.0, 0.0).expect("invertible");
-    println!("for a 6 mm wide stroke at α = 0 press h = {:.2} mm ({:?})", inv.h_mm, inv.clamped);
+    let clamped = match inv.clamped {
+        Clamp::None => "inside the calibrated range".to_string(),
+        Clamp::Min => format!("clamped up to the range's minimum; exactly {:.2} mm", inv.exact_h_mm),
+        Clamp::Max => format!("clamped down to the range's maximum; exactly {:.2} mm", inv.exact_h_mm),
+    };
+    println!("for a 6 mm wide stroke at α = 0 press h = {:.2} mm ({clamped})", inv.h_mm);
 
-    // A tiny calibration from exact data.
+    // A tiny calibration from exact data (no noise: the fit is exact, so the report prints its
+    // standard errors and t values as undefined).
     let rows: Vec<Measurement> = [(11.0, 0.0), (14.0, 5.0), (17.0, 0.0), (20.0, 10.0), (12.0, 10.0), (18.0, 5.0)]
         .iter()
         .map(|&(h, a)| {

@@ -445,16 +445,30 @@ fn ratio_through_origin(rows: &[Measurement], y: impl Fn(&Measurement) -> f64) -
     Ok((k, (s2 / sxx).sqrt()))
 }
 
+/// A residual standard error at or below this (mm, a picometre) is an exact fit for
+/// [`FitReport`]'s `Display`: standard errors and t values are printed as undefined.
+const EXACT_FIT_SE_MM: f64 = 1e-9;
+
 impl fmt::Display for FitReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(f, "{} form, n = {}, condition number = {:.4e}", self.form, self.n, self.condition_number)?;
         if !self.unidentifiable.is_empty() {
             writeln!(f, "unidentifiable (constant in the data, left out): {}", self.unidentifiable.join(", "))?;
         }
-        for (name, o) in &self.outputs {
+        // lt, lh, lr (the footprint's order), then anything else.
+        const ORDER: [&str; 4] = ["lt_mm", "lh_mm", "lr_mm", "sum_mm"];
+        let rank = |n: &str| ORDER.iter().position(|o| *o == n).unwrap_or(ORDER.len());
+        let mut outputs: Vec<(&String, &OutputFit)> = self.outputs.iter().collect();
+        outputs.sort_by_key(|(n, _)| rank(n));
+        for (name, o) in outputs {
             writeln!(f)?;
+            // Residuals that are zero to rounding (data generated from the model): standard
+            // errors are rounding noise and t values meaningless, so they are printed as such.
+            let exact = o.resid_se <= EXACT_FIT_SE_MM;
             if o.is_constant() {
                 writeln!(f, "{name}: R² undefined ({name} is constant in the data)  resid. SE = {:.5} mm", o.resid_se)?;
+            } else if exact {
+                writeln!(f, "{name}: R² = {:.5}  resid. SE = 0 mm (an exact fit: std err and t are undefined)", o.r2)?;
             } else {
                 writeln!(f, "{name}: R² = {:.5}  adj. R² = {:.5}  resid. SE = {:.5} mm", o.r2, o.adj_r2, o.resid_se)?;
             }
@@ -467,7 +481,9 @@ impl fmt::Display for FitReport {
             ];
             for (term, c, se, t) in rows {
                 if let (Some(c), Some(se), Some(t)) = (c, se, t) {
-                    if t.is_nan() {
+                    if exact {
+                        writeln!(f, "  {term:<10} {c:>14.6} {:>12} {:>10}", "undefined", "undefined")?;
+                    } else if t.is_nan() {
                         writeln!(f, "  {term:<10} {c:>14.6} {se:>12.6} {:>10}", "undefined")?;
                     } else {
                         writeln!(f, "  {term:<10} {c:>14.6} {se:>12.6} {t:>10.3}")?;

@@ -143,3 +143,27 @@ fn calibrated_profile_predicts_like_the_fit() {
     let c = &fit.outputs["lr_mm"].coef;
     assert!((fp.lr_mm - c.eval(p.h_mm, p.alpha_rad, p.beta_rad)).abs() < 1e-12);
 }
+
+#[test]
+fn the_report_prints_lt_lh_lr_in_order_and_exact_fits_as_undefined() {
+    // Noisy data: a normal table, outputs in the footprint's order.
+    let noisy = fit_general(&synthetic(3, 0.05, &[0.0, 10.0], 7)).unwrap().to_string();
+    let at = |s: &str, n: &str| s.find(n).unwrap_or_else(|| panic!("{n} missing: {s}"));
+    assert!(at(&noisy, "lt_mm:") < at(&noisy, "lh_mm:") && at(&noisy, "lh_mm:") < at(&noisy, "lr_mm:"), "{noisy}");
+    assert!(!noisy.contains("undefined"), "{noisy}");
+    // Data made by the model itself: zero residuals, so no standard errors or t values.
+    let exact: Vec<Measurement> = [(11.0, 0.0), (14.0, 5.0), (17.0, 0.0), (20.0, 10.0), (12.0, 10.0), (18.0, 5.0)]
+        .iter()
+        .map(|&(h, a)| {
+            let p = Press::from_degrees(h, a, 0.0);
+            Measurement {
+                press: p,
+                footprint: Footprint { lt_mm: 0.9 * h + 12.0 * p.alpha_rad, lh_mm: 0.35 * h, lr_mm: 0.2 * h },
+            }
+        })
+        .collect();
+    let text = fit_general(&exact).unwrap().to_string();
+    assert!(text.contains("an exact fit: std err and t are undefined"), "{text}");
+    // No t value of rounding noise (the old output printed t = 775173491632631.125).
+    assert!(text.lines().all(|l| l.chars().count() < 100 && !l.contains("e14") && !l.contains("000000000")), "{text}");
+}
