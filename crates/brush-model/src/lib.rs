@@ -23,16 +23,24 @@
 //! assert!(pen1.predict(&Press::from_degrees(30.0, 0.0, 0.0), Extrapolation::Refuse).is_err());
 //! ```
 
-pub mod footprint;
-pub mod measurements;
+#![warn(unreachable_pub)]
+
+mod footprint;
+mod measurements;
+// `motion` and `profile` stay public only for callers that still name items through them
+// (`brush_model::motion::wrap`, `brush_model::profile::MAX_BRUSH_MM`); everything in them is
+// re-exported below, which is the path to use.
 pub mod motion;
 pub mod profile;
-pub mod regression;
-pub mod units;
+mod regression;
+mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
-pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements};
-pub use motion::{ForwardModel, Sweep};
-pub use profile::{BrushProfile, Clamp, Extrapolation, InverseH, PressRanges, ProfileError, Range, Source};
+pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements, write_measurements};
+pub use motion::{ForwardModel, Sweep, TILT_THRESHOLD_RAD, TRAIL_REACH};
+pub use profile::{
+    BrushProfile, Clamp, Extrapolation, InverseH, MAX_BRUSH_MM, MAX_FOOTPRINT_PER_LENGTH, MAX_PROFILE_BYTES,
+    PROFILE_VERSION, PressRanges, ProfileError, Range, Source,
+};
 pub use regression::{FitError, FitReport, Form, LinearModel, OutputFit, Terms, fit, fit_general, fit_paper};
-pub use units::{Brush, PointMm, Press, Stroke, Track, TrackPoint, deg_to_rad, rad_to_deg};
+pub use units::{Brush, PointMm, Press, Stroke, Track, TrackPoint, deg_to_rad, rad_to_deg, wrap_angle_rad};

@@ -5,7 +5,7 @@
 //! converted to radians on reading, so fitted α and β coefficients are per radian.
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
@@ -13,13 +13,13 @@ use crate::footprint::Footprint;
 use crate::units::Press;
 
 /// The columns a measurements CSV must have.
-pub const REQUIRED_COLUMNS: [&str; 6] = ["h_mm", "alpha_deg", "beta_deg", "lt_mm", "lh_mm", "lr_mm"];
+pub(crate) const REQUIRED_COLUMNS: [&str; 6] = ["h_mm", "alpha_deg", "beta_deg", "lt_mm", "lh_mm", "lr_mm"];
 
 /// The most rows a measurements file may have.
-pub const MAX_ROWS: usize = 1_000_000;
+pub(crate) const MAX_ROWS: usize = 1_000_000;
 
 /// The largest measurements file read, bytes (a million rows take about 40 MB).
-pub const MAX_BYTES: u64 = 64 << 20;
+pub(crate) const MAX_BYTES: u64 = 64 << 20;
 
 /// Each column's accepted values (inclusive), with the reason given when a value is outside:
 /// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::profile::MAX_BRUSH_MM) can
@@ -47,12 +47,13 @@ pub struct Measurement {
 #[derive(Debug, Error)]
 pub enum MeasurementError {
     /// The file could not be opened or read.
-    #[error("{source_name}: cannot read: {error}")]
+    #[error("{}: cannot read", path.display())]
     Io {
-        /// File name or other source label.
-        source_name: String,
+        /// The file.
+        path: PathBuf,
         /// The I/O error.
-        error: std::io::Error,
+        #[source]
+        source: std::io::Error,
     },
     /// A required column is missing from the header.
     #[error("{source_name}: header has no column `{column}` (need {})", REQUIRED_COLUMNS.join(","))]
@@ -76,17 +77,17 @@ pub enum MeasurementError {
         /// What was expected.
         expected: &'static str,
     },
-    /// A file larger than [`MAX_BYTES`].
-    #[error("{source_name}: {bytes} bytes; a measurements file is at most {max} bytes")]
+    /// A file larger than 64 MiB.
+    #[error("{}: {bytes} bytes; a measurements file is at most {max} bytes", path.display())]
     TooLarge {
-        /// File name.
-        source_name: String,
+        /// The file.
+        path: PathBuf,
         /// Its size.
         bytes: u64,
         /// The limit.
         max: u64,
     },
-    /// More rows than [`MAX_ROWS`].
+    /// More than a million rows.
     #[error("{source_name}: more than {max} rows")]
     TooManyRows {
         /// File name or other source label.
@@ -95,14 +96,15 @@ pub enum MeasurementError {
         max: usize,
     },
     /// The CSV itself is malformed (ragged rows, bad quoting, bad UTF-8).
-    #[error("{source_name}: line {line}: malformed CSV: {message}")]
+    #[error("{source_name}: line {line}: malformed CSV")]
     Csv {
         /// File name or other source label.
         source_name: String,
         /// 1-based line number.
         line: u64,
-        /// Description from the CSV reader.
-        message: String,
+        /// The CSV reader's error.
+        #[source]
+        source: csv::Error,
     },
 }
 
@@ -111,13 +113,13 @@ pub enum MeasurementError {
 /// # Errors
 /// [`MeasurementError`] naming the file, line and column of the first problem.
 pub fn load_measurements(path: &Path) -> Result<Vec<Measurement>, MeasurementError> {
-    let name = path.display().to_string();
-    let file = std::fs::File::open(path).map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?;
-    let len = file.metadata().map_err(|error| MeasurementError::Io { source_name: name.clone(), error })?.len();
+    let io = |source| MeasurementError::Io { path: path.to_path_buf(), source };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
     if len > MAX_BYTES {
-        return Err(MeasurementError::TooLarge { source_name: name, bytes: len, max: MAX_BYTES });
+        return Err(MeasurementError::TooLarge { path: path.to_path_buf(), bytes: len, max: MAX_BYTES });
     }
-    read_measurements(file, &name)
+    read_measurements(file, &path.display().to_string())
 }
 
 /// Reads measurements from any reader; `source_name` labels errors.
@@ -129,7 +131,7 @@ pub fn read_measurements(reader: impl Read, source_name: &str) -> Result<Vec<Mea
     let csv_err = |e: csv::Error| MeasurementError::Csv {
         source_name: source_name.to_string(),
         line: e.position().map(|p| p.line()).unwrap_or(1),
-        message: e.to_string(),
+        source: e,
     };
     let header = rdr.headers().map_err(csv_err)?.clone();
     let mut idx = [0usize; 6];
@@ -236,6 +238,17 @@ mod tests {
         let csv = "h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm\n11,0,0,9,3\n";
         let e = read_measurements(csv.as_bytes(), "m.csv").unwrap_err();
         assert!(e.to_string().contains("line 2"), "{e}");
+        // The CSV reader's own description is kept as the cause.
+        let cause = std::error::Error::source(&e).expect("the csv error is the source");
+        assert!(cause.to_string().contains("fields"), "{cause}");
+    }
+
+    #[test]
+    fn a_missing_file_keeps_its_io_error() {
+        let e = load_measurements(Path::new("/nonexistent/m.csv")).unwrap_err();
+        assert!(matches!(&e, MeasurementError::Io { path, .. } if path == Path::new("/nonexistent/m.csv")), "{e}");
+        let cause = std::error::Error::source(&e).and_then(|c| c.downcast_ref::<std::io::Error>());
+        assert_eq!(cause.map(std::io::Error::kind), Some(std::io::ErrorKind::NotFound));
     }
 
     #[test]

@@ -34,7 +34,7 @@
 use std::f64::consts::FRAC_PI_2;
 
 use crate::profile::{BrushProfile, Extrapolation, ProfileError};
-use crate::units::{Press, Stroke, Track, TrackPoint};
+use crate::units::{Press, Stroke, Track, TrackPoint, wrap_angle_rad};
 
 /// The forward model's constants. [`ForwardModel::default`] holds the values documented in
 /// docs/brush-model.md.
@@ -149,7 +149,7 @@ impl ForwardModel {
         let mut last: Option<f64> = None;
         for (i, s) in samples.iter().enumerate() {
             let p = s.p;
-            if !(p.h_mm > 0.0) {
+            if !p.is_pressed() {
                 history.clear();
                 last = None;
                 continue;
@@ -199,7 +199,7 @@ impl ForwardModel {
     /// At touch-down: opposite to the first `min_motion_mm` of the coming pressed motion.
     fn ahead(&self, rest: &[Sample], here: (f64, f64)) -> Option<f64> {
         for s in rest.iter().skip(1) {
-            if !(s.p.h_mm > 0.0) {
+            if !s.p.is_pressed() {
                 return None;
             }
             let q = (s.p.x_mm, s.p.y_mm);
@@ -295,15 +295,13 @@ fn slerp(a: [f64; 3], b: [f64; 3], turn: f64, f: f64) -> [f64; 3] {
 fn from_axis(v: [f64; 3], beta_a: f64, beta_b: f64, f: f64) -> (f64, f64) {
     let horiz = v[0].hypot(v[1]);
     let alpha = horiz.atan2(v[2]);
-    let beta = if horiz > 1e-12 { v[1].atan2(v[0]) } else { beta_a + f * wrap(beta_b - beta_a) };
+    let beta = if horiz > 1e-12 { v[1].atan2(v[0]) } else { beta_a + f * wrap_angle_rad(beta_b - beta_a) };
     (alpha, beta)
 }
 
-/// An angle wrapped into (−π, π].
-pub fn wrap(a: f64) -> f64 {
-    let t = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
-    if t <= -std::f64::consts::PI { t + std::f64::consts::TAU } else { t }
-}
+/// An angle wrapped into (−π, π]: the older name of [`wrap_angle_rad`], kept for existing
+/// callers (`brush_model::motion::wrap`); new code uses `brush_model::wrap_angle_rad`.
+pub use crate::units::wrap_angle_rad as wrap;
 
 #[cfg(test)]
 mod tests {

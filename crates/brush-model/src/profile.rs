@@ -5,14 +5,14 @@
 //! come from the brush geometry (see `docs/brush-model.md`), not from measurements, and a
 //! calibration (`maobi calibrate`) replaces them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::footprint::Footprint;
 use crate::regression::{FitReport, LinearModel, Terms};
-use crate::units::{Brush, Press};
+use crate::units::{Brush, Press, wrap_angle_rad};
 
 /// The profile format version this crate reads and writes.
 pub const PROFILE_VERSION: u32 = 1;
@@ -27,24 +27,29 @@ pub const MAX_PROFILE_BYTES: u64 = 1 << 20;
 /// mark much longer than its hair, and a coefficient of 1e300 must not reach the renderers.
 pub const MAX_FOOTPRINT_PER_LENGTH: f64 = 2.0;
 
+/// A field that failed validation: its dotted path and what is wrong with it.
+type BadField = (&'static str, String);
+
 /// Errors from loading, validating or using a profile.
 #[derive(Debug, Error)]
 pub enum ProfileError {
     /// The file could not be read.
-    #[error("{path}: cannot read: {error}")]
+    #[error("{}: cannot read", path.display())]
     Io {
         /// The file.
-        path: String,
+        path: PathBuf,
         /// The I/O error.
-        error: std::io::Error,
+        #[source]
+        source: std::io::Error,
     },
     /// The JSON is malformed or a field is missing or of the wrong type.
-    #[error("{source_name}: not a valid brush profile: {error}")]
+    #[error("{source_name}: not a valid brush profile")]
     Json {
         /// File name or other label.
         source_name: String,
-        /// serde_json's message (names the field, line and column).
-        error: serde_json::Error,
+        /// serde_json's error (names the field, line and column).
+        #[source]
+        source: serde_json::Error,
     },
     /// A field has an impossible value.
     #[error("{source_name}: field `{field}`: {reason}")]
@@ -298,7 +303,7 @@ impl BrushProfile {
     /// [`ProfileError::Io`], [`ProfileError::Json`] (names the missing or mistyped field, with
     /// line and column) or [`ProfileError::Invalid`].
     pub fn load(path: &Path) -> Result<Self, ProfileError> {
-        let io = |error| ProfileError::Io { path: path.display().to_string(), error };
+        let io = |source| ProfileError::Io { path: path.to_path_buf(), source };
         let len = std::fs::metadata(path).map_err(io)?.len();
         if len > MAX_PROFILE_BYTES {
             return Err(ProfileError::Invalid {
@@ -317,7 +322,7 @@ impl BrushProfile {
     /// As [`BrushProfile::load`].
     pub fn from_json(text: &str, source_name: &str) -> Result<Self, ProfileError> {
         let p: BrushProfile = serde_json::from_str(text)
-            .map_err(|error| ProfileError::Json { source_name: source_name.to_string(), error })?;
+            .map_err(|source| ProfileError::Json { source_name: source_name.to_string(), source })?;
         p.validate(source_name)?;
         Ok(p)
     }
@@ -332,39 +337,50 @@ impl BrushProfile {
     /// # Errors
     /// [`ProfileError::Invalid`] naming the first bad field.
     pub fn validate(&self, source_name: &str) -> Result<(), ProfileError> {
-        let bad = |field: &str, reason: String| ProfileError::Invalid {
-            source_name: source_name.to_string(),
-            field: field.to_string(),
-            reason,
-        };
+        self.check_identity().and_then(|()| self.check_ranges()).and_then(|()| self.check_model()).map_err(
+            |(field, reason)| ProfileError::Invalid {
+                source_name: source_name.to_string(),
+                field: field.to_string(),
+                reason,
+            },
+        )
+    }
+
+    /// Version, name and brush size.
+    fn check_identity(&self) -> Result<(), BadField> {
         if self.version != PROFILE_VERSION {
-            return Err(bad(
+            return Err((
                 "version",
                 format!("unsupported version {} (this build reads {PROFILE_VERSION})", self.version),
             ));
         }
         if self.name.trim().is_empty() {
-            return Err(bad("name", "must not be empty".into()));
+            return Err(("name", "must not be empty".into()));
         }
         for (f, v) in [("brush.length_mm", self.brush.length_mm), ("brush.radius_mm", self.brush.radius_mm)] {
             if !(v.is_finite() && v > 0.0 && v <= MAX_BRUSH_MM) {
-                return Err(bad(f, format!("must be a length in mm above 0 and at most {MAX_BRUSH_MM}, got {v}")));
+                return Err((f, format!("must be a length in mm above 0 and at most {MAX_BRUSH_MM}, got {v}")));
             }
         }
+        Ok(())
+    }
+
+    /// The calibrated ranges: finite, not empty, within physical bounds.
+    fn check_ranges(&self) -> Result<(), BadField> {
         for (f, r) in [
             ("ranges.h_mm", self.ranges.h_mm),
             ("ranges.alpha_rad", self.ranges.alpha_rad),
             ("ranges.beta_rad", self.ranges.beta_rad),
         ] {
             if !(r.min.is_finite() && r.max.is_finite()) {
-                return Err(bad(f, "ends must be finite".into()));
+                return Err((f, "ends must be finite".into()));
             }
             if r.min > r.max {
-                return Err(bad(f, format!("empty range: min {} > max {}", r.min, r.max)));
+                return Err((f, format!("empty range: min {} > max {}", r.min, r.max)));
             }
         }
         if self.ranges.h_mm.min < 0.0 {
-            return Err(bad("ranges.h_mm", "press depth cannot be negative".into()));
+            return Err(("ranges.h_mm", "press depth cannot be negative".into()));
         }
         // Physical bounds: no press deeper than the hair, tilts short of lying flat, rotations
         // within a turn either way. They also bound every loop that walks a range.
@@ -379,37 +395,35 @@ impl BrushProfile {
                 let num = |v: f64| {
                     if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
                 };
-                return Err(bad(f, format!("[{}, {}] leaves {what} ({lo:.4}..={hi:.4})", num(r.min), num(r.max))));
+                return Err((f, format!("[{}, {}] leaves {what} ({lo:.4}..={hi:.4})", num(r.min), num(r.max))));
             }
         }
+        Ok(())
+    }
+
+    /// The model: finite coefficients, and at every corner of the ranges positive lengths no
+    /// longer than [`BrushProfile::max_footprint_mm`].
+    fn check_model(&self) -> Result<(), BadField> {
         for (f, t) in
             [("model.lt_mm", self.model.lt_mm), ("model.lh_mm", self.model.lh_mm), ("model.lr_mm", self.model.lr_mm)]
         {
             let vals = [Some(t.intercept), t.h_mm, t.alpha_rad, t.beta_rad];
             if vals.iter().flatten().any(|v| !v.is_finite()) {
-                return Err(bad(f, "coefficients must be finite".into()));
+                return Err((f, "coefficients must be finite".into()));
             }
         }
         for c in self.ranges.corners() {
             let fp = self.raw(&c);
+            let corner = format!("at the range corner h={} α={} β={}", c.h_mm, c.alpha_rad, c.beta_rad);
             for (f, v) in [("model.lt_mm", fp[0]), ("model.lh_mm", fp[1]), ("model.lr_mm", fp[2])] {
                 if v <= 0.0 {
-                    return Err(bad(
-                        f,
-                        format!(
-                            "predicts {v:.4} mm at the range corner h={} α={} β={}; lengths must be positive",
-                            c.h_mm, c.alpha_rad, c.beta_rad
-                        ),
-                    ));
+                    return Err((f, format!("predicts {v:.4} mm {corner}; lengths must be positive")));
                 }
                 if v > self.max_footprint_mm() {
-                    return Err(bad(
+                    return Err((
                         f,
                         format!(
-                            "predicts {v:.4e} mm at the range corner h={} α={} β={}; at most {:.1} mm ({MAX_FOOTPRINT_PER_LENGTH} × brush.length_mm)",
-                            c.h_mm,
-                            c.alpha_rad,
-                            c.beta_rad,
+                            "predicts {v:.4e} mm {corner}; at most {:.1} mm ({MAX_FOOTPRINT_PER_LENGTH} × brush.length_mm)",
                             self.max_footprint_mm()
                         ),
                     ));
@@ -482,7 +496,7 @@ impl BrushProfile {
     /// # Errors
     /// As [`BrushProfile::predict`], for h and α.
     pub fn predict_oriented(&self, press: &Press, extrapolation: Extrapolation) -> Result<Footprint, ProfileError> {
-        let b = (press.beta_rad + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        let b = wrap_angle_rad(press.beta_rad);
         let shape = Press::new(press.h_mm, press.alpha_rad, self.ranges.beta_rad.clamp(b));
         self.predict(&shape, extrapolation)
     }

@@ -307,7 +307,9 @@ impl Design {
         let smax = svd.singular_values.max();
         let smin = svd.singular_values.min();
         let condition = smax / smin;
-        if !(smin > 1e-10 * smax) {
+        // NaN-aware: a NaN singular value is not well conditioned either.
+        let well_conditioned = smin > 1e-10 * smax;
+        if !well_conditioned {
             return Err(FitError::Collinear {
                 columns: kept.iter().map(|r| r.name().to_string()).collect(),
                 condition,
@@ -375,9 +377,11 @@ impl Design {
 /// # Errors
 /// [`FitError`] when there are too few rows, a non-finite value, or collinear regressors.
 pub fn fit_general(rows: &[Measurement]) -> Result<FitReport, FitError> {
+    /// An output's name and how to read it from a row.
+    type Output = (&'static str, fn(&Measurement) -> f64);
     let design = Design::new(rows, Form::General)?;
     let mut outputs = BTreeMap::new();
-    let pick: [(&str, fn(&Measurement) -> f64); 3] =
+    let pick: [Output; 3] =
         [("lt_mm", |m| m.footprint.lt_mm), ("lh_mm", |m| m.footprint.lh_mm), ("lr_mm", |m| m.footprint.lr_mm)];
     for (name, f) in pick {
         let y = DVector::from_iterator(rows.len(), rows.iter().map(f));

@@ -16,6 +16,15 @@ pub fn rad_to_deg(rad: f64) -> f64 {
     rad.to_degrees()
 }
 
+/// An angle wrapped into (−π, π], rad: the one angle wrap of maobi (a direction, a β, a
+/// joint). `π` stays `π` and `−π` becomes `π`; every other finite angle maps to the value in
+/// range that differs from it by a multiple of 2π. A non-finite angle gives NaN.
+pub fn wrap_angle_rad(angle_rad: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let t = (angle_rad + PI).rem_euclid(TAU) - PI;
+    if t <= -PI { t + TAU } else { t }
+}
+
 /// A point or vector in a millimetre frame (the paper frame: x right, y down; or a footprint's
 /// own frame: x along the axis from root to tip).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
@@ -114,6 +123,11 @@ impl TrackPoint {
     pub fn anchor(&self) -> PointMm {
         PointMm::new(self.x_mm, self.y_mm)
     }
+
+    /// Whether the brush presses into the paper here: `h > 0` (a NaN depth is not pressed).
+    pub fn is_pressed(&self) -> bool {
+        self.h_mm > 0.0
+    }
 }
 
 /// One stroke: the points the brush passes through between touching down and lifting off.
@@ -140,5 +154,25 @@ impl Track {
     /// All points in writing order, ignoring the lifts.
     pub fn points(&self) -> impl Iterator<Item = &TrackPoint> {
         self.strokes.iter().flat_map(|s| s.points.iter())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_angle_rad;
+    use std::f64::consts::{PI, TAU};
+
+    #[test]
+    fn wrap_is_half_open_at_minus_pi() {
+        assert_eq!(wrap_angle_rad(PI), PI);
+        assert_eq!(wrap_angle_rad(-PI), PI);
+        assert_eq!(wrap_angle_rad(3.0 * PI), PI);
+        assert_eq!(wrap_angle_rad(0.0), 0.0);
+        assert!((wrap_angle_rad(-PI + 1e-9) - (-PI + 1e-9)).abs() < 1e-15);
+        for k in -5..=5 {
+            let a = 0.3 + k as f64 * TAU;
+            assert!((wrap_angle_rad(a) - 0.3).abs() < 1e-12, "{a}");
+        }
+        assert!(wrap_angle_rad(f64::NAN).is_nan() && wrap_angle_rad(f64::INFINITY).is_nan());
     }
 }

@@ -54,12 +54,24 @@ fn pen1_json() -> serde_json::Value {
     serde_json::from_str(&BrushProfile::builtin("pen1").unwrap().to_json()).unwrap()
 }
 
+/// The error and its causes, joined as `anyhow` prints them with `{:#}`.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s += &format!(": {c}");
+        cause = c.source();
+    }
+    s
+}
+
 #[test]
 fn loading_names_what_is_wrong() {
     let mut v = pen1_json();
     v.as_object_mut().unwrap().remove("ranges");
     let e = BrushProfile::from_json(&v.to_string(), "p.json").unwrap_err();
-    assert!(e.to_string().contains("p.json") && e.to_string().contains("ranges"), "{e}");
+    let msg = chain(&e);
+    assert!(msg.contains("p.json") && msg.contains("ranges"), "{msg}");
 
     let mut v = pen1_json();
     v["brush"]["radius_mm"] = serde_json::json!(-6.0);
@@ -84,6 +96,9 @@ fn loading_names_what_is_wrong() {
     assert!(matches!(e, ProfileError::Json { .. }));
     let e = BrushProfile::load(std::path::Path::new("/nonexistent/p.json")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/p.json"));
+    // The I/O error is kept as the cause.
+    let io = std::error::Error::source(&e).and_then(|c| c.downcast_ref::<std::io::Error>());
+    assert_eq!(io.map(std::io::Error::kind), Some(std::io::ErrorKind::NotFound), "{}", chain(&e));
 }
 
 #[test]
