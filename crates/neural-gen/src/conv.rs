@@ -42,7 +42,7 @@ fn cpu_f32<'a>(storage: &'a candle_core::Storage, layout: &Layout, op: &str) -> 
 }
 
 /// Every image of `x` (`[B·C, H, W]` planes) copied into a zero-padded `[Hp, Wp]` plane.
-fn pad_planes(x: &[f32], planes: usize, (h, w): (usize, usize), p: usize) -> Vec<f32> {
+pub(crate) fn pad_planes(x: &[f32], planes: usize, (h, w): (usize, usize), p: usize) -> Vec<f32> {
     let (hp, wp) = (h + 2 * p, w + 2 * p);
     let mut out = vec![0f32; planes * hp * wp];
     out.par_chunks_mut(hp * wp).zip(x.par_chunks(h * w)).for_each(|(dst, src)| {
@@ -81,11 +81,11 @@ fn dot(a: &[f32], b: &[f32]) -> f32 {
 /// the output also laid out on rows of `Wp` (the last `k − 1` columns of each row are junk)
 /// every kernel tap is one long contiguous `axpy` or `dot` over `len = Ho·Wp − (k − 1)`.
 #[derive(Debug, Clone, Copy)]
-struct Padded {
-    c: usize,
-    hp: usize,
-    wp: usize,
-    k: usize,
+pub(crate) struct Padded {
+    pub(crate) c: usize,
+    pub(crate) hp: usize,
+    pub(crate) wp: usize,
+    pub(crate) k: usize,
 }
 
 impl Padded {
@@ -109,7 +109,7 @@ const TILE: usize = 16;
 /// `w` (`[O, C, k, k]`): `[B, O, Ho, Wo]`. Parallel over images and blocks of [`OB`] output
 /// channels; within a block, [`TILE`] output positions × [`OB`] channels are accumulated in
 /// registers over every input channel and kernel tap.
-fn direct_forward(pd: Padded, b: usize, o: usize, xp: &[f32], w: &[f32]) -> Vec<f32> {
+pub(crate) fn direct_forward(pd: Padded, b: usize, o: usize, xp: &[f32], w: &[f32]) -> Vec<f32> {
     let (plane_in, taps, len) = (pd.c * pd.hp * pd.wp, pd.c * pd.k * pd.k, pd.len());
     let (ho, wo, wp, k, hpwp) = (pd.ho(), pd.wo(), pd.wp, pd.k, pd.hp * pd.wp);
     let blocks = o.div_ceil(OB);
@@ -229,7 +229,7 @@ fn direct_weight_grad(pd: Padded, b: usize, o: usize, xp: &[f32], dy: &[f32]) ->
 }
 
 /// The flipped, transposed kernel: `wf[c, o, ky, kx] = w[o, c, k−1−ky, k−1−kx]`.
-fn flip_transpose(w: &[f32], o: usize, c: usize, k: usize) -> Vec<f32> {
+pub(crate) fn flip_transpose(w: &[f32], o: usize, c: usize, k: usize) -> Vec<f32> {
     let mut wf = vec![0f32; w.len()];
     for oi in 0..o {
         for ci in 0..c {

@@ -14,6 +14,8 @@
 //! * [`adam`]: a fused AdamW (one in-place pass per variable).
 //! * [`conv`]: a faster CPU convolution for candle (direct, with bias and ReLU fused in, forward
 //!   and backward) and a pixel shuffle with a direct backward.
+//! * [`vjp`]: batched images and input VJPs without autograd ([`InputVjp`],
+//!   [`Generator::images_and_vjps`]), for track refinement.
 //! * [`ltp`]: the LearningToPaint-sized renderer network, kept as a speed reference.
 
 pub mod adam;
@@ -24,12 +26,14 @@ pub mod eval;
 pub mod ltp;
 pub mod model;
 pub mod train;
+pub mod vjp;
 
 use thiserror::Error;
 
 pub use config::{Arch, GeneratorConfig, Metrics, Recipe};
 pub use model::Generator;
 pub use train::{TrainOptions, TrainPoint, TrainReport, train};
+pub use vjp::{InputVjp, Tape};
 
 /// Errors of neural-gen.
 #[derive(Debug, Error)]
