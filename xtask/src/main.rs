@@ -7,6 +7,7 @@ mod fixtures;
 mod gates;
 mod refine_gate;
 mod rng;
+mod skeleton_counts;
 mod train_fixture;
 
 const HELP: &str = "\
@@ -19,6 +20,9 @@ Tasks:
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json
   train-fixture        train the committed pen1 generator (fixtures/generator/; about 5 minutes)
+  skeleton-counts [--hanzi-data DIR] [--set FILE] [...]
+                       skeleton stroke counts against the medians on a character set
+                       (`cargo xtask skeleton-counts --help`)
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
                        (also target/bench-summary.md)
 ";
@@ -33,6 +37,7 @@ fn main() -> ExitCode {
         Some("fixtures") => fixtures::run(&args[1..]),
         Some("gates") => gates::run(&args[1..]),
         Some("bench") => bench::run(&args[1..]),
+        Some("skeleton-counts") => skeleton_counts::run(&args[1..]),
         Some("train-fixture") => train_fixture::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };

@@ -29,6 +29,22 @@ pub struct GraphOptions {
     /// On a closed chain (a box), split where a vertical leg turns right (竖折): the lower left
     /// corner of 口 or 日, whose bottom is a stroke of its own. Open chains keep 竖折 (山, 出).
     pub split_box_corners: bool,
+    /// An end point within this distance (em units) of a junction it is not joined to is joined
+    /// to it ([`LOOSE_END_EM`]).
+    pub loose_end_em: f64,
+    /// A corner spur points away from both legs of its corner by more than this (radians,
+    /// [`CORNER_SPUR_AWAY_RAD`]).
+    pub corner_spur_away_rad: f64,
+    /// How far each way the turn at a chain point is measured, in local half-widths
+    /// ([`CORNER_REACH`]).
+    pub corner_reach: f64,
+    /// A chain's end leg no longer than this many half-widths can be a hook ([`HOOK_WIDTHS`]).
+    pub hook_widths: f64,
+    /// ... when shorter than this fraction of the leg it turns from ([`HOOK_RATIO`]).
+    pub hook_ratio: f64,
+    /// Pieces no longer than this many half-widths that lie inside other strokes are dropped
+    /// ([`COVERED_MAX_WIDTHS`]).
+    pub covered_max_widths: f64,
 }
 
 impl Default for GraphOptions {
@@ -40,7 +56,44 @@ impl Default for GraphOptions {
             straight_min_rad: 125f64.to_radians(),
             corner_rad: 50f64.to_radians(),
             split_box_corners: true,
+            loose_end_em: LOOSE_END_EM,
+            corner_spur_away_rad: CORNER_SPUR_AWAY_RAD,
+            corner_reach: CORNER_REACH,
+            hook_widths: HOOK_WIDTHS,
+            hook_ratio: HOOK_RATIO,
+            covered_max_widths: COVERED_MAX_WIDTHS,
         }
+    }
+}
+
+impl GraphOptions {
+    /// Sets one option by name, for sweeps (`cargo xtask skeleton-counts --opts`): the field
+    /// names above, with angles in degrees and named `*_deg` instead of `*_rad`
+    /// (`straight_min_deg`, `corner_deg`, `corner_spur_away_deg`); `split_box_corners` takes 0
+    /// or 1.
+    ///
+    /// # Errors
+    /// A message naming the key when it is unknown or the value is not finite.
+    pub fn set(&mut self, key: &str, value: f64) -> Result<(), String> {
+        if !value.is_finite() {
+            return Err(format!("option {key}: {value} is not a finite number"));
+        }
+        match key {
+            "spur_factor" => self.spur_factor = value,
+            "corner_spur_factor" => self.corner_spur_factor = value,
+            "merge_factor" => self.merge_factor = value,
+            "straight_min_deg" => self.straight_min_rad = value.to_radians(),
+            "corner_deg" => self.corner_rad = value.to_radians(),
+            "split_box_corners" => self.split_box_corners = value != 0.0,
+            "loose_end_em" => self.loose_end_em = value,
+            "corner_spur_away_deg" => self.corner_spur_away_rad = value.to_radians(),
+            "corner_reach" => self.corner_reach = value,
+            "hook_widths" => self.hook_widths = value,
+            "hook_ratio" => self.hook_ratio = value,
+            "covered_max_widths" => self.covered_max_widths = value,
+            _ => return Err(format!("unknown skeleton option `{key}`")),
+        }
+        Ok(())
     }
 }
 
@@ -72,7 +125,7 @@ const N8: [(isize, isize); 8] = [(0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 
 /// usual writing rules.
 pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
     let mut g = build_graph(skel, dt, n);
-    attach_loose_ends(&mut g, LOOSE_END_EM * n as f64 / 1024.0);
+    attach_loose_ends(&mut g, opts.loose_end_em * n as f64 / 1024.0);
     prune_spurs(&mut g, opts);
     merge_junctions(&mut g, opts);
     prune_spurs(&mut g, opts);
@@ -87,19 +140,53 @@ pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions
     let strokes: Vec<Vec<Point>> =
         pair_and_chain(&g, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts)).collect();
     let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > 1.5).collect();
-    let strokes = drop_covered(strokes, dt, n);
+    let strokes = drop_covered(strokes, dt, n, opts.covered_max_widths);
     order_strokes(strokes)
+}
+
+/// A glyph's skeleton on the analysis raster: the thinned mask and the distance transform of the
+/// glyph mask (`n × n`, pixel centres at `i + 0.5`), as [`crate::centre_lines`] computes them
+/// for [`crate::Method::Skeleton`].
+#[derive(Clone, Debug)]
+pub struct Skeleton {
+    /// One-pixel-wide skeleton, row-major.
+    pub skel: Vec<bool>,
+    /// Distance to the background, px.
+    pub dt: Vec<f32>,
+    /// Side, px.
+    pub n: usize,
+}
+
+impl Skeleton {
+    /// Rasterises `g` at `analysis_px`², thins it (Zhang–Suen, staircase removal) and takes its
+    /// distance transform; `None` when the glyph has no ink there.
+    pub fn of(g: &crate::Glyph, analysis_px: u32) -> Option<Skeleton> {
+        let n = analysis_px as usize;
+        let mask = crate::raster::mask_of(&crate::raster::render_glyph(g, analysis_px));
+        if !mask.iter().any(|&b| b) {
+            return None;
+        }
+        let dt = crate::distance::distance_to_background(&mask, n, n);
+        let mut skel = mask;
+        crate::thinning::zhang_suen(&mut skel, n, n);
+        crate::thinning::remove_staircases(&mut skel, n, n);
+        Some(Skeleton { skel, dt, n })
+    }
+
+    /// The strokes found with `opts` ([`skeleton_strokes`]), in pixels.
+    pub fn strokes(&self, opts: &GraphOptions) -> Vec<Vec<Point>> {
+        skeleton_strokes(&self.skel, &self.dt, self.n, opts)
+    }
 }
 
 /// A piece no longer than this many half-widths, all of whose points lie within one local
 /// half-width of another stroke's centre line, is dropped by [`drop_covered`].
-const COVERED_MAX_WIDTHS: f64 = 3.0;
+pub const COVERED_MAX_WIDTHS: f64 = 3.0;
 
 /// Drops short pieces that lie wholly inside the ink of other strokes (a crossing that thinning
 /// drew as two junctions leaves such a piece between them): they add no ink of their own, and
 /// counted as strokes they would be wrong.
-fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize) -> Vec<Vec<Point>> {
-    let k = COVERED_MAX_WIDTHS;
+fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize, k: f64) -> Vec<Vec<Point>> {
     let width = |p: Point| crate::distance::sample(dt, n, n, p.x, p.y).max(1.0);
     let near = |p: Point, s: &[Point]| {
         s.windows(2)
@@ -281,7 +368,7 @@ fn build_graph(skel: &[bool], dt: &[f32], n: usize) -> Graph {
 }
 
 /// How near a junction (em units) an end point is taken to belong to it.
-const LOOSE_END_EM: f64 = 9.0;
+pub const LOOSE_END_EM: f64 = 9.0;
 
 /// Thinning sometimes leaves a branch a pixel or two short of the junction it leaves (an end
 /// point right beside a junction cluster, typically where two strokes cross): an end within
@@ -361,7 +448,7 @@ fn corner_spur(g: &Graph, k: usize, junction: usize, opts: &GraphOptions) -> boo
     }
     let e = &g.edges[k];
     let s = leaving(g, e, e.a == junction);
-    let lim = CORNER_SPUR_AWAY_RAD.cos();
+    let lim = opts.corner_spur_away_rad.cos();
     s.dot(others[0]) < lim && s.dot(others[1]) < lim
 }
 
@@ -524,12 +611,12 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
 
 /// A chain's end leg no longer than this many local half-widths can be a hook (钩) of the
 /// stroke it turns from rather than a stroke of its own...
-const HOOK_WIDTHS: f64 = 5.0;
+pub const HOOK_WIDTHS: f64 = 5.0;
 /// ... when it is shorter than this fraction of that stroke's leg, or rises away from the corner.
-const HOOK_RATIO: f64 = 0.4;
+pub const HOOK_RATIO: f64 = 0.4;
 /// How far each way the turn at a chain point is measured, in local half-widths (a skeleton
 /// corner is rounded over about one width).
-const CORNER_REACH: f64 = 2.5;
+pub const CORNER_REACH: f64 = 2.5;
 
 /// The direction a line of direction `v` (either sign; raster y down) is written in: rightward
 /// if it is nearly horizontal, otherwise downward (撇 and 捺 both go down; 提, the rising
@@ -572,7 +659,7 @@ fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions) -> V
         let i = s.partition_point(|&x| x <= t).clamp(1, m) - 1;
         p[i]
     };
-    let reach: Vec<f64> = p.iter().map(|&q| (CORNER_REACH * width(q)).max(3.0)).collect();
+    let reach: Vec<f64> = p.iter().map(|&q| (opts.corner_reach * width(q)).max(3.0)).collect();
     let turn: Vec<f64> = (0..m)
         .map(|i| {
             if !closed && (s[i] < reach[i] || s[m - 1] - s[i] < reach[i]) {
@@ -625,7 +712,7 @@ fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions) -> V
                 let (len_in, len_out) = (s[i] - prev.unwrap_or(0.0), next.unwrap_or(s[m - 1]) - s[i]);
                 let w = width(p[i]);
                 let hook = |len: f64, other: f64, outward: Vec2| {
-                    len < HOOK_WIDTHS * w && (len < HOOK_RATIO * other || outward.y < -0.2 * outward.hypot())
+                    len < opts.hook_widths * w && (len < opts.hook_ratio * other || outward.y < -0.2 * outward.hypot())
                 };
                 let first = corners.first() == Some(&i);
                 let last = corners.last() == Some(&i);
@@ -925,7 +1012,7 @@ mod tests {
             pl(&[(20.0, 20.0), (26.0, 24.0)]), // a dot on its own
             pl(&[(70.0, 50.0), (72.0, 58.0)]), // short, but leaves the horizontal's ink
         ];
-        let kept = drop_covered(strokes.clone(), &dt, n);
+        let kept = drop_covered(strokes.clone(), &dt, n, COVERED_MAX_WIDTHS);
         assert_eq!(kept.len(), 4);
         assert!(!kept.contains(&strokes[2]));
     }
