@@ -1,7 +1,7 @@
 //! The coverage image type and its PNG/SVG forms.
 
 use std::io::Cursor;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ExtendedColorType, ImageEncoder};
@@ -15,7 +15,7 @@ pub const MAX_SIDE: u32 = 16384;
 pub const MAX_LOAD_PIXELS: u64 = 1 << 26;
 
 /// Limits for decoding a user's image: sides up to [`MAX_SIDE`], at most 1 GiB for the decoder.
-/// The pixel count is checked separately against [`MAX_LOAD_PIXELS`] (see [`open_image`]).
+/// The pixel count is checked separately against [`MAX_LOAD_PIXELS`] (see [`decode_image`]).
 pub fn image_limits() -> image::Limits {
     let mut l = image::Limits::default();
     l.max_image_width = Some(MAX_SIDE);
@@ -24,65 +24,127 @@ pub fn image_limits() -> image::Limits {
     l
 }
 
+/// Why an image file cannot be used. The message does not name the file: the error that
+/// wraps it ([`RasterError::Read`], or the caller's) does.
+#[derive(Debug, Error)]
+pub enum ImageFileError {
+    /// The file cannot be opened or read (missing, a permission, a read failure).
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// The path is a directory or another non-file.
+    #[error("not a regular file")]
+    NotAFile,
+    /// The file has no bytes.
+    #[error("the file is empty")]
+    Empty,
+    /// The bytes are neither PNG nor JPEG.
+    #[error("not an image (expected PNG or JPEG)")]
+    UnknownFormat,
+    /// The header or the pixels cannot be decoded.
+    #[error("not a readable image")]
+    Decode(#[source] image::ImageError),
+    /// More pixels than [`MAX_LOAD_PIXELS`] or a side beyond [`MAX_SIDE`].
+    #[error("image is {width}×{height} px; the limit is {MAX_SIDE} px a side and {} Mpx in all", MAX_LOAD_PIXELS >> 20)]
+    TooLarge {
+        /// Width, px.
+        width: u32,
+        /// Height, px.
+        height: u32,
+    },
+    /// A side of zero pixels.
+    #[error("image is {width}×{height} px; each side must be 1..={MAX_SIDE} px")]
+    BadSize {
+        /// Width, px.
+        width: u32,
+        /// Height, px.
+        height: u32,
+    },
+}
+
+impl ImageFileError {
+    /// The error as one line, with the decoder's own message after a decode failure (what
+    /// [`open_image`] and [`probe_image`] return).
+    pub fn message(&self) -> String {
+        match self {
+            ImageFileError::Decode(e) => format!("{self}: {e}"),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// Opens and decodes an image file with [`image_limits`], refusing more than
-/// [`MAX_LOAD_PIXELS`] from the header's dimensions before decoding. The message says what is
-/// wrong: missing or unreadable file, empty file, not an image, or too large.
+/// [`MAX_LOAD_PIXELS`] from the header's dimensions before decoding ([`image_header`] first).
+///
+/// # Errors
+/// [`ImageFileError`]: missing or unreadable file, empty file, not an image, too large, or
+/// pixels that do not decode.
+pub fn decode_image(path: &Path) -> Result<image::DynamicImage, ImageFileError> {
+    image_header(path)?;
+    let mut reader = image::ImageReader::open(path)?.with_guessed_format()?;
+    reader.limits(image_limits());
+    reader.decode().map_err(ImageFileError::Decode)
+}
+
+/// Checks, from the file and its header only, that an image file can be decoded by
+/// [`decode_image`]: it exists, is not empty, is PNG or JPEG, and is within the size limits.
+/// Returns its width and height, px.
+///
+/// # Errors
+/// [`ImageFileError`] saying which check failed.
+pub fn image_header(path: &Path) -> Result<(u32, u32), ImageFileError> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(ImageFileError::NotAFile);
+    }
+    if meta.len() == 0 {
+        return Err(ImageFileError::Empty);
+    }
+    let reader = image::ImageReader::open(path)?.with_guessed_format()?;
+    if reader.format().is_none() {
+        return Err(ImageFileError::UnknownFormat);
+    }
+    let (width, height) = reader.into_dimensions().map_err(ImageFileError::Decode)?;
+    if width as u64 * height as u64 > MAX_LOAD_PIXELS || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(ImageFileError::TooLarge { width, height });
+    }
+    Ok((width, height))
+}
+
+/// [`decode_image`] with the error as one line ([`ImageFileError::message`]), for callers that
+/// keep a message; new code uses [`decode_image`] and keeps the error as a source.
 ///
 /// # Errors
 /// A one-line reason (without the path; callers add it).
 pub fn open_image(path: &Path) -> Result<image::DynamicImage, String> {
-    probe_image(path)?;
-    let mut reader =
-        image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
-    reader.limits(image_limits());
-    reader.decode().map_err(|e| format!("not a readable image: {e}"))
+    decode_image(path).map_err(|e| e.message())
 }
 
-/// Checks, from the file and its header only, that an image file can be opened by
-/// [`open_image`]: it exists, is not empty, is PNG or JPEG, and is within the size limits.
-/// Returns its width and height.
+/// [`image_header`] with the error as one line ([`ImageFileError::message`]), for callers
+/// that keep a message; new code uses [`image_header`].
 ///
 /// # Errors
 /// A one-line reason (without the path; callers add it).
 pub fn probe_image(path: &Path) -> Result<(u32, u32), String> {
-    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err("not a regular file".into());
-    }
-    if meta.len() == 0 {
-        return Err("the file is empty".into());
-    }
-    let reader =
-        image::ImageReader::open(path).map_err(|e| e.to_string())?.with_guessed_format().map_err(|e| e.to_string())?;
-    if reader.format().is_none() {
-        return Err("not an image (expected PNG or JPEG)".into());
-    }
-    let (w, h) = reader.into_dimensions().map_err(|e| format!("not a readable image: {e}"))?;
-    if w as u64 * h as u64 > MAX_LOAD_PIXELS || w > MAX_SIDE || h > MAX_SIDE {
-        return Err(format!(
-            "image is {w}×{h} px; the limit is {MAX_SIDE} px a side and {} Mpx in all",
-            MAX_LOAD_PIXELS >> 20
-        ));
-    }
-    Ok((w, h))
+    image_header(path).map_err(|e| e.message())
 }
 
 /// Errors from image I/O.
 #[derive(Debug, Error)]
 pub enum RasterError {
     /// The file could not be read or decoded.
-    #[error("{path}: cannot read image: {message}")]
+    #[error("{}: cannot read image", path.display())]
     Read {
         /// The file.
-        path: String,
+        path: PathBuf,
         /// Why.
-        message: String,
+        #[source]
+        source: ImageFileError,
     },
     /// Encoding failed.
-    #[error("cannot encode PNG: {0}")]
-    Encode(String),
+    #[error("cannot encode PNG")]
+    Encode(#[source] image::ImageError),
     /// A size was zero or too large.
-    #[error("bad image size {0}×{1} (each side must be 1..=16384 px)")]
+    #[error("bad image size {0}×{1} (each side must be 1..={MAX_SIDE} px)")]
     BadSize(u32, u32),
 }
 
@@ -177,7 +239,7 @@ impl Coverage {
         let mut out = Vec::with_capacity(self.data.len() / 4 + 128);
         PngEncoder::new_with_quality(Cursor::new(&mut out), CompressionType::Fast, FilterType::Sub)
             .write_image(&self.to_gray8(), self.width, self.height, ExtendedColorType::L8)
-            .map_err(|e| RasterError::Encode(e.to_string()))?;
+            .map_err(RasterError::Encode)?;
         Ok(out)
     }
 
@@ -187,12 +249,12 @@ impl Coverage {
     /// # Errors
     /// [`RasterError::Read`] naming the file when it cannot be opened or decoded.
     pub fn load(path: &Path) -> Result<Self, RasterError> {
-        let err = |message: String| RasterError::Read { path: path.display().to_string(), message };
-        let img = open_image(path).map_err(err)?;
+        let err = |source| RasterError::Read { path: path.to_path_buf(), source };
+        let img = decode_image(path).map_err(err)?;
         let la = img.to_luma_alpha8();
-        let (w, h) = la.dimensions();
+        let (width, height) = la.dimensions();
         let data = la.pixels().map(|p| (1.0 - p.0[0] as f32 / 255.0) * (p.0[1] as f32 / 255.0)).collect();
-        Self::from_vec(w, h, data).map_err(|e| err(e.to_string()))
+        Self::from_vec(width, height, data).map_err(|_| err(ImageFileError::BadSize { width, height }))
     }
 }
 
@@ -224,6 +286,6 @@ pub fn overlay_png(reference: &Coverage, render: &Coverage) -> Result<Vec<u8>, R
     let mut out = Vec::new();
     PngEncoder::new_with_quality(Cursor::new(&mut out), CompressionType::Fast, FilterType::Sub)
         .write_image(&rgb, reference.width, reference.height, ExtendedColorType::Rgb8)
-        .map_err(|e| RasterError::Encode(e.to_string()))?;
+        .map_err(RasterError::Encode)?;
     Ok(out)
 }

@@ -34,17 +34,20 @@
 //! assert!((ink as f64 - area_px).abs() < 0.02 * area_px);
 //! ```
 
-pub mod batch;
+#![warn(unreachable_pub)]
+
+mod batch;
+// `binary` and `coverage` are namespaces of helpers (binary analysis; image files, PNG/SVG).
 pub mod binary;
-pub mod canvas;
+mod canvas;
 pub mod coverage;
-pub mod dataset;
-pub mod models;
-pub mod raster;
+mod dataset;
+mod models;
+mod raster;
 
 pub use batch::{Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps};
 pub use canvas::StrokeCanvas;
-pub use coverage::{Coverage, RasterError};
+pub use coverage::{Coverage, ImageFileError, RasterError};
 pub use dataset::{DatasetSpec, Sample};
-pub use models::{Bsm, Circle, Ellipse, Line, ModelKind, Qbc, StrokeModel};
+pub use models::{Bsm, Circle, Ellipse, Line, ModelKind, QBC_DISCS, Qbc, StrokeModel};
 pub use raster::Rasterizer;

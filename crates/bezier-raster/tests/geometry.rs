@@ -193,6 +193,19 @@ fn png_round_trip_and_bad_files() {
     std::fs::write(&bad, b"not a png").unwrap();
     assert!(Coverage::load(&bad).unwrap_err().to_string().contains("bad.png"));
     assert!(Coverage::load(&dir.path().join("missing.png")).is_err());
+    // The causes are kept: the I/O error for a missing file, "not an image" for text.
+    let e = Coverage::load(&dir.path().join("missing.png")).unwrap_err();
+    let Some(bezier_raster::ImageFileError::Io(io)) =
+        std::error::Error::source(&e).and_then(|c| c.downcast_ref::<bezier_raster::ImageFileError>())
+    else {
+        panic!("{e}: the image file error is the source")
+    };
+    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    let text = dir.path().join("text.dat");
+    std::fs::write(&text, "hello").unwrap();
+    let e = Coverage::load(&text).unwrap_err();
+    let cause = std::error::Error::source(&e).map(ToString::to_string).unwrap_or_default();
+    assert!(e.to_string().contains("text.dat") && cause.contains("not an image"), "{e}: {cause}");
 }
 
 #[test]
