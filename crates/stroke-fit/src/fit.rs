@@ -8,7 +8,7 @@
 //! `c` and the ink mask `m`, on a crop around the ink.
 
 use bezier_raster::{Bsm, Coverage, Rasterizer};
-use brush_model::{Footprint, PointMm};
+use brush_model::{Footprint, PointMm, wrap_angle_rad};
 use serde::Serialize;
 
 use crate::photo::InkMask;
@@ -142,8 +142,8 @@ fn nelder_mead(f: &mut impl FnMut(&[f64; 6]) -> f64, start: [f64; 6], step: [f64
             } else {
                 let best = pts[0].0;
                 for p in pts.iter_mut().skip(1) {
-                    for k in 0..6 {
-                        p.0[k] = best[k] + 0.5 * (p.0[k] - best[k]);
+                    for (x, b) in p.0.iter_mut().zip(best) {
+                        *x = b + 0.5 * (*x - b);
                     }
                     p.1 = f(&p.0);
                 }
@@ -154,41 +154,79 @@ fn nelder_mead(f: &mut impl FnMut(&[f64; 6]) -> f64, start: [f64; 6], step: [f64
     pts[0]
 }
 
-/// Fits the footprint to the mask; lengths are returned in mm using `px_per_mm`.
-pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
-    let (w, h) = (mask.width, mask.height);
-    let pts: Vec<(f64, f64)> =
-        (0..w * h).filter(|&i| mask.ink[i]).map(|i| ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)).collect();
-    let n = pts.len() as f64;
-    let (cx, cy) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
-    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-    for &(x, y) in &pts {
-        sxx += (x - cx) * (x - cx);
-        syy += (y - cy) * (y - cy);
-        sxy += (x - cx) * (y - cy);
+/// Bins along the principal axis for finding the belly (the widest place).
+const BINS: usize = 48;
+
+/// The moments start, px: the ink's centroid, its principal axis, its extent along that axis
+/// (measured from the centroid), and the belly's place and half-width.
+struct MomentStart {
+    cx: f64,
+    cy: f64,
+    /// Unit vector along the principal axis.
+    ux: f64,
+    uy: f64,
+    tmin: f64,
+    tmax: f64,
+    t_belly: f64,
+    half: f64,
+}
+
+impl MomentStart {
+    fn from_points(pts: &[(f64, f64)]) -> Self {
+        let n = pts.len() as f64;
+        let (cx, cy) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        for &(x, y) in pts {
+            sxx += (x - cx) * (x - cx);
+            syy += (y - cy) * (y - cy);
+            sxy += (x - cx) * (y - cy);
+        }
+        let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let (ux, uy) = (theta.cos(), theta.sin());
+        let proj: Vec<(f64, f64)> =
+            pts.iter().map(|&(x, y)| ((x - cx) * ux + (y - cy) * uy, -(x - cx) * uy + (y - cy) * ux)).collect();
+        let tmin = proj.iter().map(|p| p.0).fold(f64::INFINITY, f64::min) - 0.5;
+        let tmax = proj.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max) + 0.5;
+        let mut lo = [f64::INFINITY; BINS];
+        let mut hi = [f64::NEG_INFINITY; BINS];
+        for &(t, s) in &proj {
+            let b = (((t - tmin) / (tmax - tmin)) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
+            lo[b] = lo[b].min(s);
+            hi[b] = hi[b].max(s);
+        }
+        let (belly_bin, half) = (0..BINS)
+            .filter(|&b| hi[b] >= lo[b])
+            .map(|b| (b, 0.5 * (hi[b] - lo[b] + 1.0)))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let t_belly = tmin + (belly_bin as f64 + 0.5) / BINS as f64 * (tmax - tmin);
+        Self { cx, cy, ux, uy, tmin, tmax, t_belly, half }
     }
-    let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
-    let (ux, uy) = (theta.cos(), theta.sin());
-    let proj: Vec<(f64, f64)> =
-        pts.iter().map(|&(x, y)| ((x - cx) * ux + (y - cy) * uy, -(x - cx) * uy + (y - cy) * ux)).collect();
-    let tmin = proj.iter().map(|p| p.0).fold(f64::INFINITY, f64::min) - 0.5;
-    let tmax = proj.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max) + 0.5;
-    const BINS: usize = 48;
-    let mut lo = [f64::INFINITY; BINS];
-    let mut hi = [f64::NEG_INFINITY; BINS];
-    for &(t, s) in &proj {
-        let b = (((t - tmin) / (tmax - tmin)) * BINS as f64).floor().clamp(0.0, (BINS - 1) as f64) as usize;
-        lo[b] = lo[b].min(s);
-        hi[b] = hi[b].max(s);
+
+    /// The Nelder–Mead start `[x, y, β, ln lt, ln lh, ln lr]` (px) and its steps, with the
+    /// root at the low end of the axis (`root_at_min`) or the high end.
+    fn simplex(&self, root_at_min: bool) -> ([f64; 6], [f64; 6]) {
+        let len = self.tmax - self.tmin;
+        let (t_root, dir) = if root_at_min { (self.tmin, 1.0) } else { (self.tmax, -1.0) };
+        let lh = ((self.t_belly - t_root) * dir).clamp(0.05 * len, 0.95 * len);
+        let lt = (len - lh).max(0.05 * len);
+        let start = [
+            self.cx + t_root * self.ux,
+            self.cy + t_root * self.uy,
+            (dir * self.uy).atan2(dir * self.ux),
+            lt.ln(),
+            lh.ln(),
+            self.half.max(0.5).ln(),
+        ];
+        let step = [0.05 * len, 0.05 * len, 0.05, 0.1, 0.2, 0.1];
+        (start, step)
     }
-    let (belly_bin, half) = (0..BINS)
-        .filter(|&b| hi[b] >= lo[b])
-        .map(|b| (b, 0.5 * (hi[b] - lo[b] + 1.0)))
-        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-    let t_belly = tmin + (belly_bin as f64 + 0.5) / BINS as f64 * (tmax - tmin);
-    // Crop: the ink's bounding box with a margin of a quarter of its size.
+}
+
+/// The crop `(x0, y0, x1, y1)`, px (end exclusive): the ink's bounding box with a margin of a
+/// quarter of its size (at least 4 px), within the image.
+fn crop_box(pts: &[(f64, f64)], w: usize, h: usize) -> (usize, usize, usize, usize) {
     let (mut bx0, mut by0, mut bx1, mut by1) = (w, h, 0, 0);
-    for &(x, y) in &pts {
+    for &(x, y) in pts {
         bx0 = bx0.min(x as usize);
         by0 = by0.min(y as usize);
         bx1 = bx1.max(x as usize);
@@ -196,7 +234,16 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     }
     let m = ((bx1 - bx0).max(by1 - by0) / 4).max(4);
     let (x0, y0) = (bx0.saturating_sub(m), by0.saturating_sub(m));
-    let (x1, y1) = ((bx1 + m + 1).min(w), (by1 + m + 1).min(h));
+    (x0, y0, (bx1 + m + 1).min(w), (by1 + m + 1).min(h))
+}
+
+/// Fits the footprint to the mask; lengths are returned in mm using `px_per_mm`.
+pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
+    let (w, h) = (mask.width, mask.height);
+    let pts: Vec<(f64, f64)> =
+        (0..w * h).filter(|&i| mask.ink[i]).map(|i| ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)).collect();
+    let moments = MomentStart::from_points(&pts);
+    let (x0, y0, x1, y1) = crop_box(&pts, w, h);
     let mut prob = Problem {
         mask,
         x0,
@@ -206,15 +253,9 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
         raster: Rasterizer::new(),
         img: Coverage::new((x1 - x0) as u32, (y1 - y0) as u32),
     };
-    let len = tmax - tmin;
     let mut best: Option<([f64; 6], f64)> = None;
     for root_at_min in [true, false] {
-        let (t_root, dir) = if root_at_min { (tmin, 1.0) } else { (tmax, -1.0) };
-        let lh = ((t_belly - t_root) * dir).clamp(0.05 * len, 0.95 * len);
-        let lt = (len - lh).max(0.05 * len);
-        let start =
-            [cx + t_root * ux, cy + t_root * uy, (dir * uy).atan2(dir * ux), lt.ln(), lh.ln(), half.max(0.5).ln()];
-        let step = [0.05 * len, 0.05 * len, 0.05, 0.1, 0.2, 0.1];
+        let (start, step) = moments.simplex(root_at_min);
         let mut f = |p: &[f64; 6]| 1.0 - prob.soft_iou(p);
         let (mut p, mut v) = nelder_mead(&mut f, start, step, 400);
         // Restart once from the optimum with smaller steps (Nelder–Mead can stall).
@@ -234,7 +275,7 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
         lh_mm: p[4].exp() / px_per_mm,
         lr_mm: p[5].exp() / px_per_mm,
         anchor_mm: [p[0] / px_per_mm, p[1] / px_per_mm],
-        beta_rad: (p[2] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI,
+        beta_rad: wrap_angle_rad(p[2]),
         iou,
     }
 }

@@ -8,8 +8,20 @@
 //!
 //! The measurements then go to `brush_model::fit` as usual.
 
-pub mod fit;
-pub mod photo;
+#![warn(unreachable_pub)]
+
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`stroke_fit::brush_model::Press`).
+pub use bezier_raster;
+pub use brush_model;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
+mod fit;
+mod photo;
 pub mod synth;
 
 pub use fit::{StrokeFit, fit_footprint};

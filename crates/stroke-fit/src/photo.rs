@@ -1,15 +1,27 @@
 //! Loading a stroke photo: grey levels, scale from metadata, background flattening, Otsu
 //! threshold, and the one ink blob.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use bezier_raster::binary::{components, fill_holes, otsu_threshold};
+use bezier_raster::coverage::{ImageFileError, decode_image};
 use thiserror::Error;
 
 /// Errors from reading and normalising a photo. Each names the file.
 #[derive(Debug, Error)]
 pub enum PhotoError {
     /// The file cannot be read or decoded.
+    #[error("{}: cannot read image", path.display())]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: ImageFileError,
+    },
+    /// The file cannot be read or decoded, with the reason as text only: for callers that
+    /// check a file themselves ([`bezier_raster::coverage::probe_image`]); the library returns
+    /// [`PhotoError::Image`].
     #[error("{path}: cannot read image: {message}")]
     Unreadable {
         /// The file.
@@ -18,33 +30,34 @@ pub enum PhotoError {
         message: String,
     },
     /// The image shows no ink.
-    #[error("{path}: no ink found (the image has no dark stroke on light paper)")]
+    #[error("{}: no ink found (the image has no dark stroke on light paper)", path.display())]
     NoInk {
         /// The file.
-        path: String,
+        path: PathBuf,
     },
     /// The image is mostly ink.
-    #[error("{path}: {percent:.0}% of the image is ink; expected one dark stroke on light paper")]
+    #[error("{}: {percent:.0}% of the image is ink; expected one dark stroke on light paper", path.display())]
     AllInk {
         /// The file.
-        path: String,
+        path: PathBuf,
         /// Ink share, %.
         percent: f64,
     },
     /// More than one large ink blob.
     #[error(
-        "{path}: {count} large ink blobs (the second is {ratio:.0}% of the largest); expected one stroke per image"
+        "{}: {count} large ink blobs (the second is {ratio:.0}% of the largest); expected one stroke per image",
+        path.display()
     )]
     SeveralBlobs {
         /// The file.
-        path: String,
+        path: PathBuf,
         /// Blobs at least 20 % of the largest.
         count: usize,
         /// Second largest over largest, %.
         ratio: f64,
     },
     /// No scale given and none in the file.
-    #[error("{path}: no scale: pass --px-per-mm or save the image with its resolution (DPI)")]
+    #[error("{path}: no scale: none was given and the file stores no resolution (PNG pHYs or JPEG density)")]
     NoScale {
         /// The file.
         path: String,
@@ -94,20 +107,19 @@ pub fn scale_from_metadata(path: &Path) -> Option<f64> {
 /// # Errors
 /// [`PhotoError`] for unreadable files, no ink, mostly ink, or several large blobs.
 pub fn load_ink(path: &Path) -> Result<InkMask, PhotoError> {
-    let name = path.display().to_string();
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
-    let img = bezier_raster::coverage::open_image(path)
-        .map_err(|message| PhotoError::Unreadable { path: name.clone(), message })?;
+    let img = decode_image(path).map_err(|source| PhotoError::Image { path: path.to_path_buf(), source })?;
     let g = img.to_luma32f();
     let (w, h) = (g.width() as usize, g.height() as usize);
-    mask_from_gray(g.into_raw(), w, h, &name)
+    mask_from_gray(g.into_raw(), w, h, path)
 }
 
 /// As [`load_ink`], from grey levels in memory (0 black … 1 white); `name` labels errors.
 ///
 /// # Errors
 /// As [`load_ink`].
-pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: &str) -> Result<InkMask, PhotoError> {
+pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: impl AsRef<Path>) -> Result<InkMask, PhotoError> {
+    let name = name.as_ref();
     if w < 8 || h < 8 {
         return Err(PhotoError::NoInk { path: name.into() });
     }

@@ -45,6 +45,10 @@ impl Rng {
 
 /// A grey photo (`width × height`, 0 black … 1 white) of `fp` with its root at `anchor_mm`
 /// and direction `beta_rad`, at `px_per_mm`, spoiled by `d` with random `seed`.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "xtask's fixtures call this shape; grouping the placement (anchor, β) and the canvas (scale, size) is a change for both at once"
+)]
 pub fn photo(
     fp: &Footprint,
     anchor_mm: PointMm,

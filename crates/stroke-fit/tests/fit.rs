@@ -125,6 +125,6 @@ fn bad_photos_are_refused_with_reasons() {
     assert!(e.to_string().contains("two.png"));
     let junk = std::env::temp_dir().join(format!("junk-{}.png", std::process::id()));
     std::fs::write(&junk, b"nope").unwrap();
-    assert!(matches!(load_ink(&junk), Err(PhotoError::Unreadable { .. })));
+    assert!(matches!(load_ink(&junk), Err(PhotoError::Image { .. })));
     std::fs::remove_file(&junk).unwrap();
 }
