@@ -36,6 +36,17 @@
 
 #![warn(unreachable_pub)]
 
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`bezier_raster::brush_model::Press`).
+pub use brush_model;
+pub use image;
+pub use kurbo;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 mod batch;
 // `binary` and `coverage` are namespaces of helpers (binary analysis; image files, PNG/SVG).
 pub mod binary;

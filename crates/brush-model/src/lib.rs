@@ -25,6 +25,11 @@
 
 #![warn(unreachable_pub)]
 
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 mod footprint;
 mod measurements;
 // `motion` and `profile` stay public only for callers that still name items through them

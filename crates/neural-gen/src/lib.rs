@@ -18,6 +18,18 @@
 //!   [`Generator::images_and_vjps`]), for track refinement.
 //! * [`ltp`]: the LearningToPaint-sized renderer network, kept as a speed reference.
 
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`neural_gen::brush_model::Press`).
+pub use bezier_raster;
+pub use brush_model;
+pub use candle_core;
+pub use stroke_metrics;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 pub mod adam;
 pub mod compose;
 pub mod config;

@@ -47,7 +47,6 @@ struct Stage {
 pub struct InputVjp {
     fcs: Vec<Fc>,
     stages: Vec<Stage>,
-    seed_channels: usize,
     seed_side: usize,
     size: usize,
     slopes: [f64; 3],
@@ -166,7 +165,6 @@ impl InputVjp {
         Ok(Self {
             fcs,
             stages,
-            seed_channels: a.seed_channels,
             seed_side: a.seed_side,
             size: g.config.size as usize,
             slopes: g.config.normalise_slopes(),

@@ -26,6 +26,16 @@
 //! assert!((pose.0[0] - 0.45).abs() < 1e-12 && (pose.0[1] - 0.08).abs() < 1e-12 && (pose.0[2] - 0.005).abs() < 1e-12);
 //! ```
 
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`robot_io::brush_model::Press`).
+pub use brush_model;
+pub use nalgebra;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 pub mod aubo;
 pub mod export;
 pub mod frame;

@@ -23,6 +23,11 @@
 //! assert!((csim(img, img).unwrap() - 1.0).abs() < 1e-12);
 //! ```
 
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 mod ssim;
 mod summary;
 

@@ -29,6 +29,17 @@
 //! Deterministic: no randomness, and every parallel sum runs over fixed chunks in a fixed
 //! order, so the result is the same for any thread count.
 
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`track_refine::brush_model::Press`).
+pub use brush_model;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
+#[cfg(feature = "generator")]
+pub mod generator;
 pub mod problem;
 pub mod soft;
 
@@ -62,6 +73,9 @@ pub enum RefineError {
     /// The profile refused a press of the track.
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    /// The generator (the generator path) could not be used.
+    #[error("generator: {0}")]
+    Generator(String),
     /// The loss stopped being a number.
     #[error("the loss became {value} at iteration {iteration} (expected a finite value)")]
     NotFinite {
@@ -157,6 +171,22 @@ pub struct RefineOptions {
     /// sample it aims at (the forward model's rule with that sample held), instead of holding
     /// the angle fixed.
     pub aim_coupling: bool,
+    /// Where the image term and its gradient come from (the judge is never this: callers
+    /// score with the analytic renderer and the executed simulation).
+    pub gradients: Gradients,
+}
+
+/// Where the footprint images of the image term and their gradients come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Gradients {
+    /// The analytic soft footprint ([`soft`]) with closed-form derivatives: the default.
+    #[default]
+    Analytic,
+    /// The B-BSMG generator's images (the committed pen1 checkpoint), gradients from the
+    /// network's VJP and the images' spatial gradients (`generator` module; needs the cargo
+    /// feature `generator`, else [`RefineError::BadOption`]).
+    Generator,
 }
 
 impl Default for RefineOptions {
@@ -175,6 +205,7 @@ impl Default for RefineOptions {
             grad_floor: 10.0,
             gradient_sigma_mm: 8.0,
             aim_coupling: true,
+            gradients: Gradients::Analytic,
         }
     }
 }
@@ -245,7 +276,28 @@ pub fn refine(
     opts: &RefineOptions,
 ) -> Result<Refined, RefineError> {
     let t0 = Instant::now();
-    let problem = Problem::new(track, profile, target, opts)?;
+    run(Problem::new(track, profile, target, opts)?, opts, t0)
+}
+
+/// As [`refine`] on the generator path with a given generator (the generator path of
+/// [`refine`] uses the committed pen1 checkpoint).
+///
+/// # Errors
+/// As [`refine`]; [`RefineError::Generator`] when the generator was trained for another profile.
+#[cfg(feature = "generator")]
+pub fn refine_with_generator(
+    track: &Track,
+    profile: &BrushProfile,
+    target: &Target,
+    opts: &RefineOptions,
+    generator: std::sync::Arc<generator::GenModel>,
+) -> Result<Refined, RefineError> {
+    let t0 = Instant::now();
+    let analytic = RefineOptions { gradients: Gradients::Analytic, ..*opts };
+    run(Problem::new(track, profile, target, &analytic)?.with_generator(generator)?, opts, t0)
+}
+
+fn run(problem: Problem<'_>, opts: &RefineOptions, t0: Instant) -> Result<Refined, RefineError> {
     let mut theta = problem.initial();
     let steps = problem.steps();
     let mut adam = Adam::new(theta.len());

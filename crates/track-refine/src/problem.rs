@@ -63,7 +63,7 @@ pub struct LossTerms {
 
 /// Footprints per parallel chunk of the image sum (a fixed size, so that the order of the
 /// floating-point sums, and hence the result, does not depend on the thread count).
-const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 
 /// A point of the flattened track.
 #[derive(Clone, Copy, Debug)]
@@ -76,9 +76,13 @@ struct Slot {
 
 /// One footprint prepared for the image sums.
 #[derive(Clone, Copy, Debug)]
-struct Fp {
-    x: f64,
-    y: f64,
+pub(crate) struct Fp {
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+    /// Depth, mm; tilt, rad; direction (root → tip), rad.
+    pub(crate) h: f64,
+    pub(crate) alpha: f64,
+    pub(crate) beta: f64,
     cb: f64,
     sb: f64,
     shape: Shape,
@@ -87,10 +91,10 @@ struct Fp {
     /// `∂(lt, lh, lr)/∂α`.
     da: [f64; 3],
     /// Pixel bounds, inclusive: columns `i0..=i1`, rows `j0..=j1` (empty when `i0 > i1`).
-    i0: i64,
-    i1: i64,
-    j0: i64,
-    j1: i64,
+    pub(crate) i0: i64,
+    pub(crate) i1: i64,
+    pub(crate) j0: i64,
+    pub(crate) j1: i64,
 }
 
 /// Directions of the pressed points (rad), in the order of the problem's pressed points, plus
@@ -135,6 +139,9 @@ pub struct Problem<'a> {
     ink_sum: f64,
     /// Edge half-width, mm.
     edge_mm: f64,
+    /// The generator the image term uses ([`crate::Gradients::Generator`]).
+    #[cfg(feature = "generator")]
+    generator: Option<std::sync::Arc<crate::generator::GenModel>>,
 }
 
 impl<'a> Problem<'a> {
@@ -216,7 +223,50 @@ impl<'a> Problem<'a> {
             alpha_range,
             ink_sum,
             edge_mm,
+            #[cfg(feature = "generator")]
+            generator: None,
         })
+        .and_then(|p| p.choose_generator())
+    }
+
+    /// Takes the committed generator when the options ask for the generator path.
+    fn choose_generator(self) -> Result<Self, RefineError> {
+        match self.opts.gradients {
+            crate::Gradients::Analytic => Ok(self),
+            #[cfg(feature = "generator")]
+            crate::Gradients::Generator => {
+                let g = crate::generator::GenModel::committed()?;
+                self.with_generator(g)
+            }
+            #[cfg(not(feature = "generator"))]
+            crate::Gradients::Generator => Err(RefineError::BadOption {
+                name: "gradients",
+                value: "generator".into(),
+                expected: "`analytic` (track-refine was built without its `generator` feature)",
+            }),
+        }
+    }
+
+    /// The same problem with the image term on `generator` (the generator path): footprint
+    /// images from the network, gradients from its VJP and the images' spatial gradients.
+    ///
+    /// # Errors
+    /// [`RefineError::Generator`] when the generator was trained for another brush profile.
+    #[cfg(feature = "generator")]
+    pub fn with_generator(
+        mut self,
+        generator: std::sync::Arc<crate::generator::GenModel>,
+    ) -> Result<Self, RefineError> {
+        if generator.profile_name() != self.profile.name {
+            return Err(RefineError::Generator(format!(
+                "the generator was trained for brush profile `{}`, the track uses `{}`",
+                generator.profile_name(),
+                self.profile.name
+            )));
+        }
+        self.generator = Some(generator);
+        self.opts.gradients = crate::Gradients::Generator;
+        Ok(self)
     }
 
     /// Number of variables: 2 per position group, 1 per pressed point, 1 per tilt group.
@@ -488,6 +538,9 @@ impl<'a> Problem<'a> {
                 Fp {
                     x,
                     y,
+                    h,
+                    alpha,
+                    beta,
                     cb,
                     sb,
                     shape,
@@ -563,6 +616,10 @@ impl<'a> Problem<'a> {
 
     /// The soft union image `U` at an iterate (for inspection and tests).
     pub fn soft_image(&self, theta: &[f64], dirs: &Directions) -> Vec<f64> {
+        #[cfg(feature = "generator")]
+        if let Some(g) = &self.generator {
+            return g.image_term(&self.raster(), &self.footprints(theta, dirs), false).union;
+        }
         let (s, sat) = self.union(&self.footprints(theta, dirs));
         s.iter().zip(&sat).map(|(&s, &n)| if n > 0 { 1.0 } else { 1.0 - s.exp() }).collect()
     }
@@ -577,10 +634,42 @@ impl<'a> Problem<'a> {
         self.evaluate(theta, dirs, true)
     }
 
+    #[cfg(feature = "generator")]
+    fn raster(&self) -> crate::generator::Raster<'_> {
+        let t = self.target;
+        crate::generator::Raster {
+            width: t.width as usize,
+            height: t.height as usize,
+            origin: [t.origin_mm.x_mm, t.origin_mm.y_mm],
+            mm_per_px: t.mm_per_px,
+            ink: &t.ink,
+            ink_sum: self.ink_sum,
+        }
+    }
+
     fn evaluate(&self, theta: &[f64], dirs: &Directions, want_grad: bool) -> (LossTerms, Vec<f64>) {
         let mut grad = vec![0.0; if want_grad { theta.len() } else { 0 }];
         let fps = self.footprints(theta, dirs);
-        let (s, sat) = self.union(&fps);
+        let (image, per_fp) = self.image_term(&fps, want_grad);
+        if want_grad {
+            self.scatter(theta, dirs, &fps, &per_fp, &mut grad);
+        }
+        let smooth = self.smoothness(theta, &mut grad, want_grad);
+        let spacing = self.spacing(theta, &mut grad, want_grad);
+        let barrier = self.barrier(theta, &mut grad, want_grad);
+        let total = image + smooth + spacing + barrier;
+        (LossTerms { total, image, smooth, spacing, barrier }, grad)
+    }
+
+    /// The image term and, when `want_grad`, each footprint's `∂/∂(x, y, h, α, β)`: on the
+    /// generator when the problem has one, else analytic.
+    fn image_term(&self, fps: &[Fp], want_grad: bool) -> (f64, Vec<[f64; 5]>) {
+        #[cfg(feature = "generator")]
+        if let Some(g) = &self.generator {
+            let t = g.image_term(&self.raster(), fps, want_grad);
+            return (t.image, t.per_fp);
+        }
+        let (s, sat) = self.union(fps);
         // Image term and ∂L/∂U.
         let mut image = 0.0;
         let mut q = vec![0.0f64; s.len()];
@@ -593,9 +682,10 @@ impl<'a> Problem<'a> {
             q[k] = 2.0 * r / self.ink_sum * prod;
         }
         image /= self.ink_sum;
+        let mut per_fp = Vec::new();
         if want_grad {
             let e = self.edge_mm;
-            let per_fp: Vec<[f64; 5]> = fps
+            per_fp = fps
                 .par_iter()
                 .map(|f| {
                     let mut g = [0.0f64; 5];
@@ -622,6 +712,14 @@ impl<'a> Problem<'a> {
                     g
                 })
                 .collect();
+        }
+        (image, per_fp)
+    }
+
+    /// Adds the footprints' partials to the variables' gradient (through the aim coupling of
+    /// each direction).
+    fn scatter(&self, theta: &[f64], dirs: &Directions, fps: &[Fp], per_fp: &[[f64; 5]], grad: &mut [f64]) {
+        {
             let (ho, ao) = (self.h_off(), self.a_off());
             for (k, &(si, pi)) in self.pressed.iter().enumerate() {
                 let slot = self.slots[si][pi];
@@ -651,11 +749,6 @@ impl<'a> Problem<'a> {
                 }
             }
         }
-        let smooth = self.smoothness(theta, &mut grad, want_grad);
-        let spacing = self.spacing(theta, &mut grad, want_grad);
-        let barrier = self.barrier(theta, &mut grad, want_grad);
-        let total = image + smooth + spacing + barrier;
-        (LossTerms { total, image, smooth, spacing, barrier }, grad)
     }
 
     fn smoothness(&self, theta: &[f64], grad: &mut [f64], want_grad: bool) -> f64 {

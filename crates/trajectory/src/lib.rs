@@ -29,6 +29,18 @@
 //! assert_eq!(built.track.strokes.len(), 2);
 //! ```
 
+// The crates whose types this crate's API takes or returns, so that a project depending on
+// this crate alone can name them (`trajectory::brush_model::Press`).
+pub use bezier_raster;
+pub use brush_model;
+pub use image;
+pub use kurbo;
+
+// The README's examples run as doctests (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 pub mod distance;
 pub mod glyph;
 pub mod graph;

@@ -1,0 +1,110 @@
+//! The generator path (cargo feature `generator`) on a tiny generator: its gradient against
+//! finite differences, one step lowers the loss, and the option without the feature.
+#![cfg(feature = "generator")]
+
+use std::sync::Arc;
+
+use brush_model::{BrushProfile, PointMm, Stroke, Track, TrackPoint};
+use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
+use track_refine::generator::GenModel;
+use track_refine::{Gradients, Problem, RefineOptions, Target, refine_with_generator};
+
+fn pen1() -> BrushProfile {
+    BrushProfile::builtin("pen1").unwrap()
+}
+
+/// A tiny 32² generator after a few training steps (so that its images look like footprints).
+fn tiny() -> Arc<GenModel> {
+    let mut g = Generator::new(GeneratorConfig::new(pen1(), Arch::tiny_32()), 5).unwrap();
+    let opts = TrainOptions { steps: 30, batch: 16, lr: 3e-3, val_every: 1_000_000, ..Default::default() };
+    neural_gen::train(&mut g, &opts, |_| {}).unwrap();
+    Arc::new(GenModel::new(&g).unwrap())
+}
+
+/// A bent stroke along +x at y ≈ 30 mm, x 10 → 50 mm, 1 mm spacing, depth rising from `h`.
+fn line_track(h: f64, alpha: f64) -> Track {
+    let mut points = vec![TrackPoint { x_mm: 10.0, y_mm: 30.0, h_mm: 0.01, alpha_rad: alpha, beta_rad: 0.0 }];
+    let n = 40;
+    for i in 0..=n {
+        let x = 10.0 + 40.0 * i as f64 / n as f64;
+        let y = 30.0 + 2.0 * ((x - 10.0) / 40.0 * std::f64::consts::PI).sin();
+        points.push(TrackPoint {
+            x_mm: x,
+            y_mm: y,
+            h_mm: h + 2.0 * i as f64 / n as f64,
+            alpha_rad: alpha,
+            beta_rad: 0.0,
+        });
+    }
+    Track { strokes: vec![Stroke { points }] }
+}
+
+fn bar_target(px: u32) -> Target {
+    let mm = 64.0 / px as f64;
+    let mut ink = vec![0f32; (px * px) as usize];
+    for j in 0..px {
+        for i in 0..px {
+            let (x, y) = ((i as f64 + 0.5) * mm, (j as f64 + 0.5) * mm);
+            if (8.0..48.0).contains(&x) && (26.0..36.0).contains(&y) {
+                ink[(j * px + i) as usize] = 1.0;
+            }
+        }
+    }
+    Target::new(px, px, ink, PointMm::new(0.0, 0.0), mm).unwrap()
+}
+
+#[test]
+fn generator_gradients_match_finite_differences() {
+    let profile = pen1();
+    let target = bar_target(64);
+    let net = tiny();
+    for alpha in [0.0, 5f64.to_radians()] {
+        let track = line_track(12.0, alpha);
+        let p = Problem::new(&track, &profile, &target, &RefineOptions::default())
+            .unwrap()
+            .with_generator(net.clone())
+            .unwrap();
+        let mut theta = p.initial();
+        for (i, v) in theta.iter_mut().enumerate() {
+            *v += 0.05 * ((i * 7919) % 13) as f64 / 13.0;
+        }
+        p.project(&mut theta);
+        let dirs = p.directions(&theta);
+        let (_, g) = p.loss_grad(&theta, &dirs);
+        let n = theta.len();
+        let (mut checked, mut largest) = (0, 0.0f64);
+        // Positions (the spatial gradient through the placement), depths and tilts (the VJP
+        // plus the anchor's move in the canvas).
+        for i in (0..n).step_by(7).chain([n - 1, n / 2]) {
+            let eps = 1e-4;
+            let (mut a, mut b) = (theta.clone(), theta.clone());
+            a[i] += eps;
+            b[i] -= eps;
+            let fd = (p.loss(&a, &dirs).total - p.loss(&b, &dirs).total) / (2.0 * eps);
+            // Bilinear sampling has kinks at canvas pixel edges and the images are f32.
+            let tol = 0.03 * g[i].abs().max(fd.abs()) + 1e-4;
+            assert!((g[i] - fd).abs() <= tol, "α {alpha}: variable {i} of {n}: {} vs finite difference {fd}", g[i]);
+            checked += 1;
+            largest = largest.max(fd.abs());
+        }
+        assert!(checked > 10 && largest > 1e-3, "{checked} checked, largest {largest}");
+    }
+}
+
+#[test]
+fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
+    let profile = pen1();
+    let target = bar_target(64);
+    let opts = RefineOptions { iterations: 1, ..RefineOptions::default() };
+    let out = refine_with_generator(&line_track(11.5, 0.0), &profile, &target, &opts, tiny()).unwrap();
+    assert_eq!(out.curve.len(), 2);
+    assert!(out.curve[1].image < out.curve[0].image, "{:?}", out.curve);
+    assert!(out.curve[1].total < out.curve[0].total, "{:?}", out.curve);
+    // The committed generator is the default for the option.
+    let o = RefineOptions { gradients: Gradients::Generator, ..RefineOptions::default() };
+    assert!(Problem::new(&line_track(12.0, 0.0), &profile, &target, &o).is_ok());
+    // A generator trained for another profile is refused.
+    let pen2 = BrushProfile::builtin("pen2").unwrap();
+    let e = Problem::new(&line_track(12.0, 0.0), &pen2, &target, &o).err().unwrap();
+    assert!(e.to_string().contains("pen1"), "{e}");
+}
