@@ -114,14 +114,13 @@ impl AuboClient {
     /// # Errors
     /// [`RobotError::Io`] if the address does not resolve or the connection fails.
     pub fn connect_with(addr: &str, transport: Transport, timeout: Duration) -> Result<Self, RobotError> {
-        let addrs: Vec<SocketAddr> =
-            addr.to_socket_addrs().map_err(|e| RobotError::Io(format!("{addr}: {e}")))?.collect();
+        let addrs: Vec<SocketAddr> = addr.to_socket_addrs().map_err(|e| io_at(addr, e))?.collect();
         let mut last = None;
         for a in addrs {
             match TcpStream::connect_timeout(&a, timeout) {
                 Ok(stream) => {
-                    stream.set_read_timeout(Some(timeout)).map_err(|e| RobotError::Io(e.to_string()))?;
-                    stream.set_write_timeout(Some(timeout)).map_err(|e| RobotError::Io(e.to_string()))?;
+                    stream.set_read_timeout(Some(timeout)).map_err(|e| io_at(addr, e))?;
+                    stream.set_write_timeout(Some(timeout)).map_err(|e| io_at(addr, e))?;
                     let _ = stream.set_nodelay(true);
                     return Ok(Self {
                         stream,
@@ -138,7 +137,8 @@ impl AuboClient {
                 Err(e) => last = Some(e),
             }
         }
-        Err(RobotError::Io(format!("{addr}: {}", last.map_or("no address".to_string(), |e| e.to_string()))))
+        let e = last.unwrap_or_else(|| std::io::Error::new(std::io::ErrorKind::AddrNotAvailable, "no address"));
+        Err(io_at(addr, e))
     }
 
     /// Connects as `link` says and does the handshake ([`AuboClient::handshake`]); returns the
@@ -306,13 +306,16 @@ impl AuboClient {
         self.stream.set_read_timeout(Some(wait)).map_err(|e| io_err(method, e))?;
         let mut chunk = vec![0u8; 64 * 1024];
         match self.stream.read(&mut chunk) {
-            Ok(0) => Err(RobotError::Io(match self.frames.incomplete() {
-                Some(what) if self.transport == Transport::Framed => format!("{method}: {what}"),
-                _ if !self.buf.is_empty() => {
-                    format!("{method}: the connection closed in the middle of an answer ({} bytes)", self.buf.len())
-                }
-                _ => format!("{method}: connection closed by the controller"),
-            })),
+            Ok(0) => {
+                let what = match self.frames.incomplete() {
+                    Some(what) if self.transport == Transport::Framed => what,
+                    _ if !self.buf.is_empty() => {
+                        format!("the connection closed in the middle of an answer ({} bytes)", self.buf.len())
+                    }
+                    _ => "connection closed by the controller".to_string(),
+                };
+                Err(io_at(method, std::io::Error::new(std::io::ErrorKind::UnexpectedEof, what)))
+            }
             Ok(n) => {
                 chunk.truncate(n);
                 Ok(chunk)
@@ -335,11 +338,9 @@ impl AuboClient {
         match self.transport {
             Transport::Framed => {
                 let p = self.read_frame(method, deadline)?;
-                serde_json::from_slice(&p).map_err(|e| {
-                    RobotError::Protocol(format!(
-                        "{method}: the frame is not JSON ({e}): {}",
-                        wire::show_bytes(&p[..p.len().min(40)])
-                    ))
+                serde_json::from_slice(&p).map_err(|source| RobotError::BadJson {
+                    context: format!("{method}: the frame is not JSON: {}", wire::show_bytes(&p[..p.len().min(40)])),
+                    source,
                 })
             }
             Transport::Http => loop {
@@ -353,7 +354,7 @@ impl AuboClient {
                         )));
                     }
                     return serde_json::from_slice(&body)
-                        .map_err(|e| RobotError::Protocol(format!("{method}: the HTTP body is not JSON: {e}")));
+                        .map_err(|source| bad_json(method, "the HTTP body is not JSON", source));
                 }
                 let more = self.fill(method, deadline)?;
                 self.buf.extend_from_slice(&more);
@@ -371,9 +372,7 @@ impl AuboClient {
                         }
                         Some(Err(e)) if e.is_eof() => {}
                         Some(Err(e)) => {
-                            return Err(RobotError::Protocol(format!(
-                                "{method}: malformed JSON from the controller: {e}"
-                            )));
+                            return Err(bad_json(method, "malformed JSON from the controller", e));
                         }
                         None => {}
                     }
@@ -418,7 +417,7 @@ impl AuboClient {
     pub fn robot_names(&mut self) -> Result<Vec<String>, RobotError> {
         let p = self.params(Value::Null, json!([]));
         let r = self.call("getRobotNames", p)?;
-        serde_json::from_value(r).map_err(|e| RobotError::Protocol(format!("getRobotNames: {e}")))
+        serde_json::from_value(r).map_err(|e| bad_json("getRobotNames", "expected a list of names", e))
     }
 
     /// `<robot>.RobotConfig.setTcpOffset`: the tool centre point in the flange frame
@@ -465,7 +464,7 @@ impl AuboClient {
     fn six(&mut self, m: &str) -> Result<[f64; 6], RobotError> {
         let p = self.params(Value::Null, json!([]));
         let r = self.call(m, p)?;
-        let v: Vec<f64> = serde_json::from_value(r).map_err(|e| RobotError::Protocol(format!("{m}: {e}")))?;
+        let v: Vec<f64> = serde_json::from_value(r).map_err(|e| bad_json(m, "expected numbers", e))?;
         v.try_into().map_err(|_| RobotError::Protocol(format!("{m}: expected 6 numbers")))
     }
 
@@ -541,8 +540,18 @@ impl AuboClient {
 fn io_err(method: &str, e: std::io::Error) -> RobotError {
     match e.kind() {
         std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut => RobotError::Timeout(method.to_string()),
-        _ => RobotError::Io(format!("{method}: {e}")),
+        _ => io_at(method, e),
     }
+}
+
+/// [`RobotError::Io`] while doing `context` (an address or a method).
+fn io_at(context: &str, source: std::io::Error) -> RobotError {
+    RobotError::Io { context: context.to_string(), source }
+}
+
+/// [`RobotError::BadJson`]: `method`'s answer, and what was wrong with it.
+fn bad_json(method: &str, what: &str, source: serde_json::Error) -> RobotError {
+    RobotError::BadJson { context: format!("{method}: {what}"), source }
 }
 
 /// Sends a Lua script to the controller's script port, framed by `\r\n\r\n`.
@@ -552,7 +561,7 @@ fn io_err(method: &str, e: std::io::Error) -> RobotError {
 pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), RobotError> {
     let c = AuboClient::connect(addr, timeout)?;
     let mut s = c.stream;
-    s.write_all(script.as_bytes()).and_then(|_| s.write_all(b"\r\n\r\n")).map_err(|e| RobotError::Io(e.to_string()))
+    s.write_all(script.as_bytes()).and_then(|_| s.write_all(b"\r\n\r\n")).map_err(|e| io_at(addr, e))
 }
 
 /// How the runner behaves on faults.
@@ -681,7 +690,7 @@ fn run_stroke(s: &mut Session, st: &StrokeProgram, idle_limit: Duration, stop: &
 }
 
 fn is_fault(e: &RobotError) -> bool {
-    matches!(e, RobotError::Io(_) | RobotError::Timeout(_))
+    matches!(e, RobotError::Io { .. } | RobotError::Timeout(_))
 }
 
 /// Runs a program on a controller (or the simulator) at `addr`, stroke by stroke.
@@ -707,139 +716,167 @@ pub fn run_program(
     opts: &RunOptions<'_>,
     mut progress: impl FnMut(&RunReport),
 ) -> Result<RunReport, RobotError> {
-    let mut report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
+    let report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
     let idle_limit = opts.timeout * 100;
     let session = open(addr, program, opts, robot_name)?;
-    let mut session = Some(session);
-    match drive(addr, program, robot_name, opts, &mut session, &mut report, &mut progress, idle_limit) {
-        Ok(()) => Ok(report),
-        Err(cause) => {
-            // Lift on the open link; if it is down (or fails), reconnect once and lift.
-            let mut outcome = match session.as_mut() {
-                Some(s) => lift(s, program, opts.lift_m, idle_limit),
-                None => Err(RobotError::Io("not connected".into())),
-            };
-            // A broken stream (a fault, or bytes out of frame) is left for a fresh connection.
-            if outcome.as_ref().is_err_and(|e| is_fault(e) || matches!(e, RobotError::Framing(_))) {
-                outcome = open(addr, program, opts, robot_name)
-                    .and_then(|mut s| lift(&mut s, program, opts.lift_m, idle_limit));
-            }
-            let (lifted, lift) = match outcome {
-                Ok(words) => (true, words),
-                Err(e) => (false, format!("could not lift the brush ({e}): it may still touch the paper")),
-            };
-            Err(RobotError::RunStopped {
-                cause: Box::new(cause),
-                completed: report.strokes_completed.len(),
-                total: report.strokes_total,
-                reconnects: report.reconnects,
-                lifted,
-                lift,
-            })
-        }
+    let mut run = Runner { addr, program, robot_name, opts, idle_limit, session: Some(session), report };
+    match run.drive(&mut progress) {
+        Ok(()) => Ok(run.report),
+        Err(cause) => Err(run.retreat(cause)),
     }
 }
 
-/// The run after the connection is open; any error returned leaves the retreat to the caller.
-#[allow(clippy::too_many_arguments)]
-fn drive(
-    addr: &str,
-    program: &Program,
-    robot_name: Option<&str>,
-    opts: &RunOptions<'_>,
-    session: &mut Option<Session>,
-    report: &mut RunReport,
-    progress: &mut impl FnMut(&RunReport),
+/// A run in progress: where it sends, what, and how far it got.
+struct Runner<'a, 'o> {
+    addr: &'a str,
+    program: &'a Program,
+    robot_name: Option<&'a str>,
+    opts: &'a RunOptions<'o>,
+    /// How long to wait for the controller to finish the moves it was sent.
     idle_limit: Duration,
-) -> Result<(), RobotError> {
-    {
-        let s = session.as_mut().expect("open");
-        s.client.send_move(&s.robot, &program.start)?;
-        s.client.wait_idle(&s.robot, idle_limit)?;
-    }
-    let mut k = 0;
-    let mut faults_stroke = 0;
-    let mut backoff = opts.backoff;
-    let mut fault: Option<RobotError> = None;
-    while k < program.strokes.len() {
-        if opts.stop.load(Ordering::SeqCst) {
-            return Err(RobotError::Interrupted);
+    /// The open connection (`None` after a fault, until reconnected).
+    session: Option<Session>,
+    report: RunReport,
+}
+
+/// The fault budget of the stroke being written.
+struct StrokeFaults {
+    /// Faults on this stroke.
+    count: usize,
+    /// The wait before the next reconnection attempt.
+    backoff: Duration,
+}
+
+impl Runner<'_, '_> {
+    /// The run after the connection is open; any error returned leaves the retreat to
+    /// [`Runner::retreat`].
+    fn drive(&mut self, progress: &mut impl FnMut(&RunReport)) -> Result<(), RobotError> {
+        {
+            let s = self.session.as_mut().expect("open");
+            s.client.send_move(&s.robot, &self.program.start)?;
+            s.client.wait_idle(&s.robot, self.idle_limit)?;
         }
-        let st = &program.strokes[k];
-        let result = match fault.take() {
-            // Recover from the last fault: reconnect, then see where the brush is.
-            Some(e) => {
-                report.faults += 1;
-                faults_stroke += 1;
-                *session = None;
-                if faults_stroke > opts.max_retries_per_stroke || report.faults > opts.max_retries_total {
-                    return Err(RobotError::GaveUp {
-                        stroke: st.index,
-                        faults_stroke,
-                        max_stroke: opts.max_retries_per_stroke,
-                        faults_total: report.faults,
-                        max_total: opts.max_retries_total,
-                        last: Box::new(e),
-                    });
+        let program = self.program;
+        let mut k = 0;
+        let mut faults = StrokeFaults { count: 0, backoff: self.opts.backoff };
+        let mut fault: Option<RobotError> = None;
+        while k < program.strokes.len() {
+            if self.opts.stop.load(Ordering::SeqCst) {
+                return Err(RobotError::Interrupted);
+            }
+            let st = &program.strokes[k];
+            let result = match fault.take() {
+                Some(e) => self.recover(st, &mut faults, e),
+                None => {
+                    let s = self.session.as_mut().expect("connected");
+                    run_stroke(s, st, self.idle_limit, self.opts.stop).map(|()| true)
                 }
-                let mut attempt = 0;
-                let s = loop {
-                    sleep_unless(backoff, opts.stop);
-                    backoff = (backoff * 2).min(opts.max_backoff);
-                    if opts.stop.load(Ordering::SeqCst) {
-                        return Err(RobotError::Interrupted);
-                    }
-                    attempt += 1;
-                    match open(addr, program, opts, robot_name) {
-                        Ok(s) => break s,
-                        Err(e2) if is_fault(&e2) && attempt < opts.max_reconnects => continue,
-                        Err(e2) if is_fault(&e2) => {
-                            return Err(RobotError::GaveUp {
-                                stroke: st.index,
-                                faults_stroke,
-                                max_stroke: opts.max_retries_per_stroke,
-                                faults_total: report.faults,
-                                max_total: opts.max_retries_total,
-                                last: Box::new(RobotError::Io(format!(
-                                    "{attempt} connection attempt(s) failed, the last: {e2}"
-                                ))),
-                            });
-                        }
-                        Err(e2) => return Err(e2),
-                    }
-                };
-                report.reconnects += 1;
-                let s = session.insert(s);
-                // Did the stroke finish before the fault? Then its lift pose is where we are.
-                s.client.tcp_pose(&s.robot).and_then(|here| {
-                    let Move::Line { pose: end, .. } = st.lift else { unreachable!("lift is a line move") };
-                    let done = here.position().iter().zip(end.position()).all(|(a, b)| (a - b).abs() < 1e-6);
-                    if done {
-                        Ok(true)
-                    } else {
-                        lift(s, program, opts.lift_m, idle_limit)?;
-                        report.strokes_resumed += 1;
-                        Ok(false)
-                    }
-                })
+            };
+            match result {
+                Ok(true) => {
+                    self.report.strokes_completed.push(st.index);
+                    progress(&self.report);
+                    k += 1;
+                    faults = StrokeFaults { count: 0, backoff: self.opts.backoff };
+                }
+                Ok(false) => {} // recovered: run the stroke again
+                Err(e) if is_fault(&e) => fault = Some(e),
+                Err(e) => return Err(e),
             }
-            None => {
-                let s = session.as_mut().expect("connected");
-                run_stroke(s, st, idle_limit, opts.stop).map(|()| true)
+        }
+        Ok(())
+    }
+
+    /// After fault `e` on stroke `st`: counts it against the budgets, reconnects, and sees
+    /// where the brush is. `Ok(true)`: the stroke had finished (its lift pose is where the
+    /// brush is); `Ok(false)`: the brush was lifted and the stroke is to run again.
+    fn recover(&mut self, st: &StrokeProgram, faults: &mut StrokeFaults, e: RobotError) -> Result<bool, RobotError> {
+        self.report.faults += 1;
+        faults.count += 1;
+        self.session = None;
+        let over_budget =
+            faults.count > self.opts.max_retries_per_stroke || self.report.faults > self.opts.max_retries_total;
+        if over_budget {
+            return Err(self.gave_up(st, faults, 0, e));
+        }
+        let s = self.reconnect(st, faults)?;
+        self.report.reconnects += 1;
+        let s = self.session.insert(s);
+        // Did the stroke finish before the fault? Then its lift pose is where we are.
+        let here = s.client.tcp_pose(&s.robot)?;
+        let Move::Line { pose: end, .. } = st.lift else { unreachable!("a stroke's lift is a line move") };
+        let done = here.position().iter().zip(end.position()).all(|(a, b)| (a - b).abs() < 1e-6);
+        if !done {
+            lift(s, self.program, self.opts.lift_m, self.idle_limit)?;
+            self.report.strokes_resumed += 1;
+        }
+        Ok(done)
+    }
+
+    /// Reconnects, waiting the back-off (doubled each time, up to the maximum) before each of
+    /// at most `max_reconnects` attempts.
+    fn reconnect(&mut self, st: &StrokeProgram, faults: &mut StrokeFaults) -> Result<Session, RobotError> {
+        let opts = self.opts;
+        let mut attempt = 0;
+        loop {
+            sleep_unless(faults.backoff, opts.stop);
+            faults.backoff = (faults.backoff * 2).min(opts.max_backoff);
+            if opts.stop.load(Ordering::SeqCst) {
+                return Err(RobotError::Interrupted);
             }
-        };
-        match result {
-            Ok(true) => {
-                report.strokes_completed.push(st.index);
-                progress(report);
-                k += 1;
-                faults_stroke = 0;
-                backoff = opts.backoff;
+            attempt += 1;
+            match open(self.addr, self.program, opts, self.robot_name) {
+                Ok(s) => return Ok(s),
+                Err(e) if is_fault(&e) && attempt < opts.max_reconnects => continue,
+                Err(e) if is_fault(&e) => return Err(self.gave_up(st, faults, attempt, e)),
+                Err(e) => return Err(e),
             }
-            Ok(false) => {} // recovered: run the stroke again
-            Err(e) if is_fault(&e) => fault = Some(e),
-            Err(e) => return Err(e),
         }
     }
-    Ok(())
+
+    /// [`RobotError::GaveUp`] on stroke `st` with the budgets as they stand.
+    fn gave_up(
+        &self,
+        st: &StrokeProgram,
+        faults: &StrokeFaults,
+        reconnect_attempts: usize,
+        last: RobotError,
+    ) -> RobotError {
+        RobotError::GaveUp {
+            stroke: st.index,
+            faults_stroke: faults.count,
+            max_stroke: self.opts.max_retries_per_stroke,
+            faults_total: self.report.faults,
+            max_total: self.opts.max_retries_total,
+            reconnect_attempts,
+            last: Box::new(last),
+        }
+    }
+
+    /// After the run stopped on `cause`: lifts the brush on the open link, or (if it is down or
+    /// fails) on a fresh one, and says how far the run got.
+    fn retreat(mut self, cause: RobotError) -> RobotError {
+        let (program, opts, idle_limit) = (self.program, self.opts, self.idle_limit);
+        let mut outcome = match self.session.as_mut() {
+            Some(s) => lift(s, program, opts.lift_m, idle_limit),
+            None => Err(io_at("lift", std::io::Error::new(std::io::ErrorKind::NotConnected, "not connected"))),
+        };
+        // A broken stream (a fault, or bytes out of frame) is left for a fresh connection.
+        if outcome.as_ref().is_err_and(|e| is_fault(e) || matches!(e, RobotError::Framing(_))) {
+            outcome = open(self.addr, program, opts, self.robot_name)
+                .and_then(|mut s| lift(&mut s, program, opts.lift_m, idle_limit));
+        }
+        let (lifted, lift) = match outcome {
+            Ok(words) => (true, words),
+            Err(e) => (false, format!("could not lift the brush ({e}): it may still touch the paper")),
+        };
+        RobotError::RunStopped {
+            cause: Box::new(cause),
+            completed: self.report.strokes_completed.len(),
+            total: self.report.strokes_total,
+            reconnects: self.report.reconnects,
+            lifted,
+            lift,
+        }
+    }
 }

@@ -48,13 +48,13 @@ impl PaperFrame {
     /// Loads `paper.json` and fits the frame.
     ///
     /// # Errors
-    /// [`RobotError::Config`] naming the file for unreadable or invalid JSON, too few or collinear
-    /// points, or a residual above the tolerance.
+    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file for an unreadable file or
+    /// invalid JSON; [`RobotError::Config`] naming it for too few or collinear points, or a
+    /// residual above the tolerance.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
-        let name = path.display().to_string();
         let file: PaperFile = crate::load_json(path)?;
         Self::fit(&file).map_err(|e| match e {
-            RobotError::Config { message, .. } => RobotError::Config { file: name, message },
+            RobotError::Config { message, .. } => RobotError::Config { file: path.to_path_buf(), message },
             other => other,
         })
     }

@@ -7,6 +7,7 @@
 //! been checked against a controller: treat absolute joint angles as assumed and use the
 //! kinematics for what it is for here, checking that poses are reachable.
 
+use brush_model::wrap_angle_rad;
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::pose::Pose;
@@ -86,7 +87,7 @@ fn solve_from(goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> O
         let step = (jt * j + Matrix6::identity() * lambda).try_inverse()? * jt * e;
         let mut cand = q;
         for k in 0..6 {
-            cand[k] = wrap(cand[k] + step[k]);
+            cand[k] = wrap_angle_rad(cand[k] + step[k]);
         }
         let e2 = error(goal, &forward(&cand, tcp));
         if e2.norm() < e.norm() {
@@ -101,8 +102,4 @@ fn solve_from(goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> O
         }
     }
     None
-}
-
-fn wrap(a: f64) -> f64 {
-    (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
 }

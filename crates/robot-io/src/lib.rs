@@ -26,6 +26,8 @@
 //! assert!((pose.0[0] - 0.45).abs() < 1e-12 && (pose.0[1] - 0.08).abs() < 1e-12 && (pose.0[2] - 0.005).abs() < 1e-12);
 //! ```
 
+#![warn(unreachable_pub)]
+
 // The crates whose types this crate's API takes or returns, so that a project depending on
 // this crate alone can name them (`robot_io::brush_model::Press`).
 pub use brush_model;
@@ -45,23 +47,56 @@ pub mod program;
 pub mod sim;
 pub mod wire;
 
-use std::path::Path;
+pub use aubo::{AuboClient, Link, RunOptions, RunReport, Transport, run_program, send_script};
+pub use export::{aubo_lua, gcode, gcode_chars, urscript};
+pub use frame::{PaperFile, PaperFrame, TouchPoint};
+pub use pose::{Pose, brush_pose};
+pub use program::{
+    Approach, CheckReport, DipStation, InkStation, Limits, Move, Program, Reload, RobotConfig, StrokeProgram,
+    build_program, build_program_chars,
+};
+pub use sim::{Faults, Listen, SimOptions, Simulator, TraceEntry, TraceKind, execute_program, trace_to_states};
 
-use brush_model::{BrushProfile, Stroke, Track};
+use std::path::{Path, PathBuf};
+
+use brush_model::{BrushProfile, ProfileError, Stroke, Track};
 use serde::Deserialize;
 use thiserror::Error;
 
 /// Errors of robot-io.
 #[derive(Debug, Error)]
 pub enum RobotError {
-    /// A configuration file is unreadable or invalid.
-    #[error("{file}: {message}")]
+    /// A configuration file cannot be read.
+    #[error("{}: cannot read", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A configuration file is not the JSON expected (serde's message, the source, names the
+    /// field, line and column).
+    #[error("{}: cannot parse", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The parser's error.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A configuration value is invalid (`file` names the file, or the configuration when
+    /// there is none).
+    #[error("{}: {message}", file.display())]
     Config {
         /// The file.
-        file: String,
+        file: PathBuf,
         /// What is wrong.
         message: String,
     },
+    /// The brush profile in a track file is invalid.
+    #[error(transparent)]
+    Profile(#[from] ProfileError),
     /// The program would leave the safety envelope; nothing was sent.
     #[error("refused{}{}: {reason}", stroke.map_or(String::new(), |s| format!(" at stroke {}", s + 1)), point.map_or(String::new(), |p| format!(", point {}", p + 1)))]
     Unsafe {
@@ -72,15 +107,30 @@ pub enum RobotError {
         /// Why.
         reason: String,
     },
-    /// The connection failed or was lost.
-    #[error("connection: {0}")]
-    Io(String),
+    /// The connection failed, was lost or closed (`context`: the address or the call).
+    #[error("connection: {context}")]
+    Io {
+        /// What was being done: the address or the method called.
+        context: String,
+        /// The I/O error (a closed connection is [`std::io::ErrorKind::UnexpectedEof`]).
+        #[source]
+        source: std::io::Error,
+    },
     /// A call did not answer in time.
     #[error("timeout waiting for {0}")]
     Timeout(String),
     /// The controller's answer is not valid JSON-RPC.
     #[error("protocol: {0}")]
     Protocol(String),
+    /// The controller's answer is not JSON, or not the JSON the call expects.
+    #[error("protocol: {context}")]
+    BadJson {
+        /// The method called and what was being read.
+        context: String,
+        /// The parser's error.
+        #[source]
+        source: serde_json::Error,
+    },
     /// The byte stream is not in the transport's format (a frame without `SOF`, an unknown
     /// frame type, a length beyond the limit, a malformed HTTP message); the connection cannot
     /// be used further.
@@ -115,10 +165,12 @@ pub enum RobotError {
     /// The run was stopped on request (Ctrl-C).
     #[error("interrupted (Ctrl-C)")]
     Interrupted,
-    /// The link kept failing: the retry budget per stroke or for the whole run is spent.
+    /// The link kept failing: the retry budget per stroke or for the whole run is spent, or
+    /// reconnecting failed `reconnect_attempts` times. The last fault is the source.
     #[error(
-        "gave up on the flaky link at stroke {}: {faults_stroke} fault(s) on this stroke (at most {max_stroke}), {faults_total} in the run (at most {max_total}); last fault: {last}",
-        stroke + 1
+        "gave up on the flaky link at stroke {}: {faults_stroke} fault(s) on this stroke (at most {max_stroke}), {faults_total} in the run (at most {max_total}){}; last fault",
+        stroke + 1,
+        if *reconnect_attempts > 0 { format!(", then {reconnect_attempts} connection attempt(s) failed") } else { String::new() }
     )]
     GaveUp {
         /// Zero-based index of the stroke that could not be finished.
@@ -131,14 +183,19 @@ pub enum RobotError {
         faults_total: usize,
         /// The budget for the whole run.
         max_total: usize,
+        /// Failed reconnection attempts after the last fault (0: the budget was spent first).
+        reconnect_attempts: usize,
         /// The last fault.
+        #[source]
         last: Box<RobotError>,
     },
     /// A run on the controller ended before the program finished, after the brush may have
-    /// moved; says why, how far it got and whether the brush was lifted to the safe height.
-    #[error("{cause}; stopped after {completed} of {total} strokes ({reconnects} reconnect(s)); {lift}")]
+    /// moved; says how far it got and whether the brush was lifted to the safe height. The
+    /// cause is the source.
+    #[error("stopped after {completed} of {total} strokes ({reconnects} reconnect(s)); {lift}")]
     RunStopped {
         /// Why the run stopped.
+        #[source]
         cause: Box<RobotError>,
         /// Strokes completed.
         completed: usize,
@@ -153,12 +210,11 @@ pub enum RobotError {
     },
 }
 
-/// Reads and parses a JSON file; errors are [`RobotError::Config`] naming the file (serde's
-/// message names the field, line and column).
+/// Reads and parses a JSON file; errors are [`RobotError::Read`] and [`RobotError::Json`]
+/// naming the file.
 pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RobotError> {
-    let config = |message: String| RobotError::Config { file: path.display().to_string(), message };
-    let text = std::fs::read_to_string(path).map_err(|e| config(e.to_string()))?;
-    serde_json::from_str(&text).map_err(|e| config(e.to_string()))
+    let text = std::fs::read_to_string(path).map_err(|source| RobotError::Read { path: path.to_path_buf(), source })?;
+    serde_json::from_str(&text).map_err(|source| RobotError::Json { path: path.to_path_buf(), source })
 }
 
 /// `track.json` as `maobi write` writes it: the brush profile and the strokes (other fields
@@ -182,11 +238,11 @@ impl TrackFile {
     /// Loads and validates `track.json`.
     ///
     /// # Errors
-    /// [`RobotError::Config`] naming the file.
+    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Profile`]
+    /// (naming the file) for an invalid brush profile.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
-        let name = path.display().to_string();
         let t: TrackFile = load_json(path)?;
-        t.brush.validate(&name).map_err(|e| RobotError::Config { file: name.clone(), message: e.to_string() })?;
+        t.brush.validate(&path.display().to_string())?;
         Ok(t)
     }
 

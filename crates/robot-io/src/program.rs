@@ -225,11 +225,11 @@ impl RobotConfig {
     /// Loads and validates `robot.json` (missing fields take the defaults).
     ///
     /// # Errors
-    /// [`RobotError::Config`] naming the file and field.
+    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Config`]
+    /// naming the file and field.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
-        let name = path.display().to_string();
         let c: RobotConfig = crate::load_json(path)?;
-        c.validate().map_err(|m| RobotError::Config { file: name, message: m })?;
+        c.validate().map_err(|message| RobotError::Config { file: path.to_path_buf(), message })?;
         Ok(c)
     }
 
@@ -363,7 +363,7 @@ impl RobotConfig {
 pub fn pressed_mm(points: &[TrackPoint]) -> f64 {
     points
         .windows(2)
-        .filter(|w| w[0].h_mm > 0.0 && w[1].h_mm > 0.0)
+        .filter(|w| w[0].is_pressed() && w[1].is_pressed())
         .map(|w| (w[1].x_mm - w[0].x_mm).hypot(w[1].y_mm - w[0].y_mm))
         .sum()
 }
@@ -403,7 +403,7 @@ pub fn dip_plan(track: &Track, stroke_chars: Option<&[usize]>, station: &InkStat
                     return Err(RobotError::Unsafe {
                         stroke: None,
                         point: None,
-                        reason: "robot.json ink.reload = before_each_char needs the track's character boundaries (a sheet track.json from `maobi write` with several characters has stroke_chars); this track has none: use {\"every_mm\": L} or {\"every_strokes\": N}".into(),
+                        reason: "robot.json ink.reload = before_each_char needs the track's character boundaries (its stroke_chars), and this track has none".into(),
                     });
                 };
                 first || last_char != Some(c[si])
@@ -663,7 +663,7 @@ fn check_segment(
     peaks: &mut Peaks,
     at: impl Fn(String) -> RobotError,
 ) -> Result<(), RobotError> {
-    let pressed = a.h_mm > 0.0 && b.h_mm > 0.0;
+    let pressed = a.is_pressed() && b.is_pressed();
     if !pressed {
         return Ok(());
     }
@@ -736,21 +736,18 @@ pub fn build_program_chars(
     frame: &PaperFrame,
     cfg: &RobotConfig,
 ) -> Result<(Program, CheckReport), RobotError> {
-    cfg.validate().map_err(|m| RobotError::Unsafe { stroke: None, point: None, reason: format!("robot.json: {m}") })?;
+    let refuse = |reason: String| RobotError::Unsafe { stroke: None, point: None, reason };
+    cfg.validate().map_err(|m| refuse(format!("robot.json: {m}")))?;
     if track.strokes.is_empty() || track.point_count() == 0 {
-        return Err(RobotError::Unsafe { stroke: None, point: None, reason: "the track has no points".into() });
+        return Err(refuse("the track has no points".into()));
     }
     let tcp_offset_m = profile.brush.length_mm / 1000.0;
     if !(tcp_offset_m.is_finite() && (0.0..CONTROLLER_MAX_TCP_OFFSET_M).contains(&tcp_offset_m)) {
-        return Err(RobotError::Unsafe {
-            stroke: None,
-            point: None,
-            reason: format!(
-                "the brush length {} mm (the tool offset) is beyond what the controller accepts (0 ≤ offset < {} mm)",
-                profile.brush.length_mm,
-                CONTROLLER_MAX_TCP_OFFSET_M * 1000.0
-            ),
-        });
+        return Err(refuse(format!(
+            "the brush length {} mm (the tool offset) is beyond what the controller accepts (0 ≤ offset < {} mm)",
+            profile.brush.length_mm,
+            CONTROLLER_MAX_TCP_OFFSET_M * 1000.0
+        )));
     }
     let normal_angle = check_approach(frame, &cfg.approach)?;
     let station = cfg.station();
@@ -758,139 +755,113 @@ pub fn build_program_chars(
         Some(s) => dip_plan(track, stroke_chars, s)?,
         None => vec![false; track.strokes.len()],
     };
-    let mut dip_count = 0usize;
-    let mut dip_m = 0.0f64;
-    let tcp = tcp_iso(tcp_offset_m);
-    let lift_m = cfg.lift_mm / 1000.0;
-    let mut seed: Option<[f64; 6]> = None;
-    let mut reach = |pose: &Pose, si: usize, pi: usize, what: &str| -> Result<[f64; 6], RobotError> {
-        let q = kinematics::inverse(pose, &tcp, seed.as_ref()).ok_or_else(|| RobotError::Unsafe {
-            stroke: Some(si),
-            point: Some(pi),
-            reason: format!(
-                "{what} pose {:?} is not reachable by the AUBO-i5 with this brush orientation",
-                pose.0.map(|v| (v * 1e4).round() / 1e4)
-            ),
-        })?;
-        seed = Some(q);
-        Ok(q)
-    };
-    let mut strokes = Vec::with_capacity(track.strokes.len());
-    let mut checked: Vec<Checked> = Vec::new();
-    let mut start = None;
-    let mut start_pose = None;
-    let (mut max_press, mut path_m, mut travel_m) = (0.0f64, 0.0f64, 0.0f64);
-    let mut peaks = Peaks::default();
-    let mut last_up: Option<Pose> = None;
+    let mut b = Builder::new(profile, frame, cfg, tcp_offset_m);
     for (si, stroke) in track.strokes.iter().enumerate() {
         if stroke.points.is_empty() {
             continue;
         }
-        for (pi, p) in stroke.points.iter().enumerate() {
-            check_point(p, profile, frame, cfg, |reason| unsafe_at(si, Some(pi), reason))?;
-            max_press = max_press.max(p.h_mm);
-            peaks.tilt = peaks.tilt.max(p.alpha_rad.abs());
+        b.stroke(si, &stroke.points, station.as_ref().filter(|_| dips[si]))?;
+    }
+    b.check_envelope()?;
+    Ok(b.finish(track, normal_angle, station.map_or(0.0, |s| s.dwell_s)))
+}
+
+/// The program as it is built, stroke by stroke, with what the envelope check needs.
+struct Builder<'a> {
+    profile: &'a BrushProfile,
+    frame: &'a PaperFrame,
+    cfg: &'a RobotConfig,
+    tcp_offset_m: f64,
+    tcp: Isometry3<f64>,
+    lift_m: f64,
+    /// The last inverse-kinematics solution: the seed of the next, so joints move little.
+    seed: Option<[f64; 6]>,
+    /// The joint move to the first safe pose, and that pose.
+    start: Option<(Move, Pose)>,
+    strokes: Vec<StrokeProgram>,
+    /// Every commanded line move in the order they run, with what the envelope allows there.
+    checked: Vec<Checked>,
+    /// The pose above the end of the last stroke.
+    last_up: Option<Pose>,
+    peaks: Peaks,
+    totals: Totals,
+}
+
+/// Running totals for the report: the deepest press and the distances, m.
+#[derive(Default)]
+struct Totals {
+    max_press_mm: f64,
+    pressed_m: f64,
+    travel_m: f64,
+    dip_m: f64,
+    dips: usize,
+}
+
+impl<'a> Builder<'a> {
+    fn new(profile: &'a BrushProfile, frame: &'a PaperFrame, cfg: &'a RobotConfig, tcp_offset_m: f64) -> Self {
+        Self {
+            profile,
+            frame,
+            cfg,
+            tcp_offset_m,
+            tcp: tcp_iso(tcp_offset_m),
+            lift_m: cfg.lift_mm / 1000.0,
+            seed: None,
+            start: None,
+            strokes: Vec::new(),
+            checked: Vec::new(),
+            last_up: None,
+            peaks: Peaks::default(),
+            totals: Totals::default(),
         }
-        let first = &stroke.points[0];
-        let up = lifted_pose(frame, first, lift_m);
-        let q_up = reach(&up, si, 0, "approach")?;
-        if start.is_none() {
-            start = Some(Move::Joint { q: q_up, a: cfg.joint_acc_rad_s2, v: cfg.joint_speed_rad_s });
-            start_pose = Some(up);
+    }
+
+    /// Solves the inverse kinematics for `pose`, seeded by the last solution.
+    fn reach(&mut self, pose: &Pose, si: usize, pi: usize, what: &str) -> Result<[f64; 6], RobotError> {
+        let q = kinematics::inverse(pose, &self.tcp, self.seed.as_ref()).ok_or_else(|| {
+            unsafe_at(
+                si,
+                Some(pi),
+                format!(
+                    "{what} pose {:?} is not reachable by the AUBO-i5 with this brush orientation",
+                    pose.0.map(|v| (v * 1e4).round() / 1e4)
+                ),
+            )
+        })?;
+        self.seed = Some(q);
+        Ok(q)
+    }
+
+    /// One stroke: its points checked, then travel above the first point (after a dip when
+    /// `dip` is given), descent, the pressed moves and the lift.
+    fn stroke(&mut self, si: usize, points: &[TrackPoint], dip: Option<&InkStation>) -> Result<(), RobotError> {
+        let cfg = self.cfg;
+        for (pi, p) in points.iter().enumerate() {
+            check_point(p, self.profile, self.frame, cfg, |reason| unsafe_at(si, Some(pi), reason))?;
+            self.totals.max_press_mm = self.totals.max_press_mm.max(p.h_mm);
+            self.peaks.tilt = self.peaks.tilt.max(p.alpha_rad.abs());
         }
-        if let Some(prev) = last_up {
-            travel_m += dist(&prev, &up);
+        let first = &points[0];
+        let up = lifted_pose(self.frame, first, self.lift_m);
+        let q_up = self.reach(&up, si, 0, "approach")?;
+        if self.start.is_none() {
+            self.start = Some((Move::Joint { q: q_up, a: cfg.joint_acc_rad_s2, v: cfg.joint_speed_rad_s }, up));
         }
-        let mut dip = Vec::new();
-        if let Some(d) = &station {
-            if dips[si] {
-                let above = Pose(d.pose);
-                let down = above.raised(-d.depth_mm / 1000.0);
-                let soak = down.raised(-DWELL_SINK_MM / 1000.0);
-                reach(&above, si, 0, "dip station")?;
-                reach(&down, si, 0, "dip station")?;
-                let (vt, vd) = (cfg.travel_speed_m_s, cfg.travel_speed_m_s * 0.5);
-                dip = vec![
-                    Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vt, blend_m: 0.0 },
-                    Move::Line { pose: down, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 },
-                ];
-                if d.dwell_s > 0.0 {
-                    reach(&soak, si, 0, "dip station")?;
-                    // The dwell: sink DWELL_SINK_MM further over dwell_s.
-                    let v = DWELL_SINK_MM / 1000.0 / d.dwell_s;
-                    dip.push(Move::Line { pose: soak, a: cfg.travel_acc_m_s2, v, blend_m: 0.0 });
-                }
-                dip.push(Move::Line { pose: above, a: cfg.travel_acc_m_s2, v: vd, blend_m: 0.0 });
-                dip_count += 1;
-                dip_m += dist(last_up.as_ref().unwrap_or(&above), &above) + dist(&above, &up);
-                dip_m += 2.0 * (d.depth_mm + if d.dwell_s > 0.0 { DWELL_SINK_MM } else { 0.0 }) / 1000.0 * 2.0;
-                // The station must be off the sheet if it lies below the paper's plane, and
-                // the pose above the ink must be above that plane (travel reaches it straight).
-                let off_sheet = |pose: &Pose| {
-                    let q = frame.to_paper(pose.position());
-                    !frame.contains(q[0], q[1])
-                };
-                let in_ink = if off_sheet(&down) && off_sheet(&soak) { None } else { Some(0.0) };
-                let mut steps = vec![
-                    (above, "dip station (above the ink)", vt, Some(0.0)),
-                    (down, "dip station (in the ink)", vd, in_ink),
-                ];
-                if d.dwell_s > 0.0 {
-                    steps.push((soak, "dip station (in the ink)", DWELL_SINK_MM / 1000.0 / d.dwell_s, in_ink));
-                }
-                steps.push((above, "dip station (above the ink)", vd, Some(0.0)));
-                for (pose, what, v_m_s, max_depth_mm) in steps {
-                    checked.push(Checked { stroke: si, point: None, what, pose, v_m_s, max_depth_mm });
-                }
-                reach(&up, si, 0, "approach")?;
-            }
+        if let Some(prev) = self.last_up {
+            self.totals.travel_m += dist(&prev, &up);
         }
-        checked.push(Checked {
-            stroke: si,
-            point: Some(0),
-            what: "travel (above the first point)",
-            pose: up,
-            v_m_s: cfg.travel_speed_m_s,
-            max_depth_mm: Some(0.0),
-        });
-        let mut press = Vec::with_capacity(stroke.points.len());
-        let mut prev: Option<(Pose, &TrackPoint)> = None;
-        for (pi, p) in stroke.points.iter().enumerate() {
-            let pose = brush_pose(frame, p);
-            reach(&pose, si, pi, "pressed")?;
-            if let Some((pp, pt)) = prev {
-                path_m += dist(&pp, &pose);
-                check_segment(pt, p, &pp, &pose, &cfg.limits, &mut peaks, |reason| unsafe_at(si, Some(pi), reason))?;
-            }
-            let last = pi + 1 == stroke.points.len();
-            let blend = if last || pi == 0 { 0.0 } else { cfg.blend_mm / 1000.0 };
-            if pi > 0 {
-                press.push(Move::Line { pose, a: cfg.write_acc_m_s2, v: cfg.write_speed_m_s, blend_m: blend });
-            }
-            checked.push(Checked {
-                stroke: si,
-                point: Some(pi),
-                what: if pi == 0 { "descent onto the first point" } else { "pressed" },
-                pose,
-                v_m_s: cfg.write_speed_m_s,
-                max_depth_mm: Some(p.h_mm),
-            });
-            prev = Some((pose, p));
-        }
-        let first_pose = brush_pose(frame, first);
-        let last_i = stroke.points.len() - 1;
-        let last_p = &stroke.points[last_i];
-        let end_up = lifted_pose(frame, last_p, lift_m);
-        reach(&end_up, si, last_i, "lift")?;
-        checked.push(Checked {
-            stroke: si,
-            point: Some(last_i),
-            what: "lift",
-            pose: end_up,
-            v_m_s: cfg.travel_speed_m_s,
-            max_depth_mm: Some(0.0),
-        });
-        strokes.push(StrokeProgram {
+        let dip = match dip {
+            Some(station) => self.dip(si, station, &up)?,
+            None => Vec::new(),
+        };
+        self.check(si, Some(0), "travel (above the first point)", up, cfg.travel_speed_m_s, Some(0.0));
+        let press = self.press(si, points)?;
+        let first_pose = brush_pose(self.frame, first);
+        let last_i = points.len() - 1;
+        let end_up = lifted_pose(self.frame, &points[last_i], self.lift_m);
+        self.reach(&end_up, si, last_i, "lift")?;
+        self.check(si, Some(last_i), "lift", end_up, cfg.travel_speed_m_s, Some(0.0));
+        self.strokes.push(StrokeProgram {
             index: si,
             dip,
             approach: vec![
@@ -900,15 +871,99 @@ pub fn build_program_chars(
             press,
             lift: Move::Line { pose: end_up, a: cfg.travel_acc_m_s2, v: cfg.travel_speed_m_s, blend_m: 0.0 },
         });
-        last_up = Some(end_up);
+        self.last_up = Some(end_up);
+        Ok(())
     }
-    // The envelope over every commanded line move, in the order they run: nothing deeper than
-    // the track asks there, and no faster wrist than the limit at the move's speed.
-    let mut prev = start_pose.expect("at least one stroke");
-    for c in &checked {
-        let depth = frame.to_paper(c.pose.position())[2];
-        if let Some(max) = c.max_depth_mm {
-            if depth > max + 1e-6 {
+
+    /// The dip before stroke `si`: above the ink, down into it, the dwell, back up; then `up`
+    /// (above the stroke's first point) must still be reachable.
+    fn dip(&mut self, si: usize, d: &InkStation, up: &Pose) -> Result<Vec<Move>, RobotError> {
+        let cfg = self.cfg;
+        let above = Pose(d.pose);
+        let down = above.raised(-d.depth_mm / 1000.0);
+        let soak = down.raised(-DWELL_SINK_MM / 1000.0);
+        let dwells = d.dwell_s > 0.0;
+        self.reach(&above, si, 0, "dip station")?;
+        self.reach(&down, si, 0, "dip station")?;
+        let (vt, vd) = (cfg.travel_speed_m_s, cfg.travel_speed_m_s * 0.5);
+        // The dwell: sink DWELL_SINK_MM further over dwell_s.
+        let v_soak = DWELL_SINK_MM / 1000.0 / d.dwell_s;
+        let a = cfg.travel_acc_m_s2;
+        let mut moves =
+            vec![Move::Line { pose: above, a, v: vt, blend_m: 0.0 }, Move::Line { pose: down, a, v: vd, blend_m: 0.0 }];
+        if dwells {
+            self.reach(&soak, si, 0, "dip station")?;
+            moves.push(Move::Line { pose: soak, a, v: v_soak, blend_m: 0.0 });
+        }
+        moves.push(Move::Line { pose: above, a, v: vd, blend_m: 0.0 });
+        self.totals.dips += 1;
+        self.totals.dip_m += dist(self.last_up.as_ref().unwrap_or(&above), &above) + dist(&above, up);
+        self.totals.dip_m += 2.0 * (d.depth_mm + if dwells { DWELL_SINK_MM } else { 0.0 }) / 1000.0 * 2.0;
+        // The station must be off the sheet if it lies below the paper's plane, and the pose
+        // above the ink must be above that plane (travel reaches it straight).
+        let off_sheet = |pose: &Pose| {
+            let q = self.frame.to_paper(pose.position());
+            !self.frame.contains(q[0], q[1])
+        };
+        let in_ink = if off_sheet(&down) && off_sheet(&soak) { None } else { Some(0.0) };
+        self.check(si, None, "dip station (above the ink)", above, vt, Some(0.0));
+        self.check(si, None, "dip station (in the ink)", down, vd, in_ink);
+        if dwells {
+            self.check(si, None, "dip station (in the ink)", soak, v_soak, in_ink);
+        }
+        self.check(si, None, "dip station (above the ink)", above, vd, Some(0.0));
+        self.reach(up, si, 0, "approach")?;
+        Ok(moves)
+    }
+
+    /// The pressed moves of a stroke (the first point is reached by the descent), each pose
+    /// reachable and each segment within the pressed limits.
+    fn press(&mut self, si: usize, points: &[TrackPoint]) -> Result<Vec<Move>, RobotError> {
+        let cfg = self.cfg;
+        let mut press = Vec::with_capacity(points.len());
+        let mut prev: Option<(Pose, &TrackPoint)> = None;
+        for (pi, p) in points.iter().enumerate() {
+            let pose = brush_pose(self.frame, p);
+            self.reach(&pose, si, pi, "pressed")?;
+            if let Some((pp, pt)) = prev {
+                self.totals.pressed_m += dist(&pp, &pose);
+                check_segment(pt, p, &pp, &pose, &cfg.limits, &mut self.peaks, |reason| {
+                    unsafe_at(si, Some(pi), reason)
+                })?;
+            }
+            let is_end = pi == 0 || pi + 1 == points.len();
+            let blend_m = if is_end { 0.0 } else { cfg.blend_mm / 1000.0 };
+            if pi > 0 {
+                press.push(Move::Line { pose, a: cfg.write_acc_m_s2, v: cfg.write_speed_m_s, blend_m });
+            }
+            let what = if pi == 0 { "descent onto the first point" } else { "pressed" };
+            self.check(si, Some(pi), what, pose, cfg.write_speed_m_s, Some(p.h_mm));
+            prev = Some((pose, p));
+        }
+        Ok(press)
+    }
+
+    /// Records a commanded line move for the envelope check.
+    fn check(
+        &mut self,
+        stroke: usize,
+        point: Option<usize>,
+        what: &'static str,
+        pose: Pose,
+        v_m_s: f64,
+        max_depth_mm: Option<f64>,
+    ) {
+        self.checked.push(Checked { stroke, point, what, pose, v_m_s, max_depth_mm });
+    }
+
+    /// The envelope over every commanded line move, in the order they run: nothing deeper
+    /// than the track asks there, and no faster wrist than the limit at the move's speed.
+    fn check_envelope(&mut self) -> Result<(), RobotError> {
+        let max_rate = self.cfg.limits.max_wrist_rate_rad_s;
+        let mut prev = self.start.expect("at least one stroke").1;
+        for c in &self.checked {
+            let depth = self.frame.to_paper(c.pose.position())[2];
+            if let Some(max) = c.max_depth_mm.filter(|&max| depth > max + 1e-6) {
                 return Err(unsafe_at(
                     c.stroke,
                     c.point,
@@ -918,54 +973,60 @@ pub fn build_program_chars(
                     ),
                 ));
             }
-        }
-        let len_mm = dist(&prev, &c.pose) * 1000.0;
-        if len_mm >= IN_PLACE_MM {
-            let turn = prev.to_iso().rotation.angle_to(&c.pose.to_iso().rotation);
-            let rate = turn * c.v_m_s * 1000.0 / len_mm;
-            peaks.wrist = peaks.wrist.max(rate);
-            if rate > cfg.limits.max_wrist_rate_rad_s {
-                return Err(unsafe_at(
-                    c.stroke,
-                    c.point,
-                    format!(
-                        "the {} move turns the brush {turn:.4} rad ({:.1}°) over {len_mm:.3} mm at {} m/s: {rate:.2} rad/s, beyond limits.max_wrist_rate_rad_s = {}",
-                        c.what,
-                        turn.to_degrees(),
-                        c.v_m_s,
-                        cfg.limits.max_wrist_rate_rad_s
-                    ),
-                ));
+            let len_mm = dist(&prev, &c.pose) * 1000.0;
+            if len_mm >= IN_PLACE_MM {
+                let turn = prev.to_iso().rotation.angle_to(&c.pose.to_iso().rotation);
+                let rate = turn * c.v_m_s * 1000.0 / len_mm;
+                self.peaks.wrist = self.peaks.wrist.max(rate);
+                if rate > max_rate {
+                    return Err(unsafe_at(
+                        c.stroke,
+                        c.point,
+                        format!(
+                            "the {} move turns the brush {turn:.4} rad ({:.1}°) over {len_mm:.3} mm at {} m/s: {rate:.2} rad/s, beyond limits.max_wrist_rate_rad_s = {max_rate}",
+                            c.what,
+                            turn.to_degrees(),
+                            c.v_m_s,
+                        ),
+                    ));
+                }
             }
+            prev = c.pose;
         }
-        prev = c.pose;
+        Ok(())
     }
-    let program = Program {
-        tcp_offset_m,
-        speed_fraction: cfg.speed_fraction,
-        start: start.expect("at least one stroke"),
-        strokes,
-        paper_to_base: frame.iso,
-        retreat_speed_m_s: cfg.travel_speed_m_s,
-        retreat_acc_m_s2: cfg.travel_acc_m_s2,
-    };
-    let report = CheckReport {
-        strokes: program.strokes.len(),
-        points: track.point_count(),
-        moves: program.move_count(),
-        max_press_mm: max_press,
-        frame_residual_mm: frame.residual_mm,
-        paper_normal_angle_rad: normal_angle,
-        max_tilt_rad: peaks.tilt,
-        max_turn_rad_per_mm: peaks.turn_per_mm,
-        max_wrist_rate_rad_s: peaks.wrist,
-        max_depth_change_per_mm: peaks.depth_per_mm,
-        estimated_seconds: path_m / cfg.write_speed_m_s
-            + (travel_m + dip_m + 2.0 * lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s
-            + station.map_or(0.0, |s| s.dwell_s) * dip_count as f64,
-        dips: dip_count,
-    };
-    Ok((program, report))
+
+    /// The program and the report (`dwell_s`: the station's dwell per dip, s).
+    fn finish(self, track: &Track, normal_angle_rad: f64, dwell_s: f64) -> (Program, CheckReport) {
+        let cfg = self.cfg;
+        let t = self.totals;
+        let program = Program {
+            tcp_offset_m: self.tcp_offset_m,
+            speed_fraction: cfg.speed_fraction,
+            start: self.start.expect("at least one stroke").0,
+            strokes: self.strokes,
+            paper_to_base: self.frame.iso,
+            retreat_speed_m_s: cfg.travel_speed_m_s,
+            retreat_acc_m_s2: cfg.travel_acc_m_s2,
+        };
+        let report = CheckReport {
+            strokes: program.strokes.len(),
+            points: track.point_count(),
+            moves: program.move_count(),
+            max_press_mm: t.max_press_mm,
+            frame_residual_mm: self.frame.residual_mm,
+            paper_normal_angle_rad: normal_angle_rad,
+            max_tilt_rad: self.peaks.tilt,
+            max_turn_rad_per_mm: self.peaks.turn_per_mm,
+            max_wrist_rate_rad_s: self.peaks.wrist,
+            max_depth_change_per_mm: self.peaks.depth_per_mm,
+            estimated_seconds: t.pressed_m / cfg.write_speed_m_s
+                + (t.travel_m + t.dip_m + 2.0 * self.lift_m * program.strokes.len() as f64) / cfg.travel_speed_m_s
+                + dwell_s * t.dips as f64,
+            dips: t.dips,
+        };
+        (program, report)
+    }
 }
 
 fn dist(a: &Pose, b: &Pose) -> f64 {

@@ -240,9 +240,10 @@ impl Simulator {
         let mut listeners = Vec::new();
         let mut addrs = Vec::new();
         for l in listen {
-            let listener = TcpListener::bind(&l.bind).map_err(|e| RobotError::Io(format!("{}: {e}", l.bind)))?;
-            let addr = listener.local_addr().map_err(|e| RobotError::Io(e.to_string()))?;
-            listener.set_nonblocking(true).map_err(|e| RobotError::Io(e.to_string()))?;
+            let io = |source| RobotError::Io { context: l.bind.to_string(), source };
+            let listener = TcpListener::bind(&l.bind).map_err(io)?;
+            let addr = listener.local_addr().map_err(io)?;
+            listener.set_nonblocking(true).map_err(io)?;
             addrs.push((l.transport, addr));
             listeners.push((listener, l.transport));
         }

@@ -198,14 +198,18 @@ fn a_connection_dropped_mid_frame_says_so() {
         s.shutdown(std::net::Shutdown::Both).unwrap();
     });
     let e = client(&addr).exec_id("rob1").unwrap_err();
-    assert!(matches!(&e, RobotError::Io(m) if m.contains("closed in the middle of a frame")), "{e}");
+    assert!(
+        matches!(&e, RobotError::Io { source, .. } if source.to_string().contains("closed in the middle of a frame")),
+        "{e}"
+    );
     // Dropped inside the header.
     let addr = peer(1, |_, s, _| {
         s.write_all(b"SOF\x01\x00").unwrap();
         s.shutdown(std::net::Shutdown::Both).unwrap();
     });
     let e = client(&addr).exec_id("rob1").unwrap_err();
-    assert!(e.to_string().contains("middle of a frame header (5 bytes)"), "{e}");
+    let cause = std::error::Error::source(&e).map(ToString::to_string).unwrap_or_default();
+    assert!(cause.contains("middle of a frame header (5 bytes)"), "{e}: {cause}");
 }
 
 #[test]

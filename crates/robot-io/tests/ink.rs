@@ -169,7 +169,18 @@ fn ink_settings_are_validated_and_the_example_loads() {
         r#"{"ink": {"pose": [0.6, 0.1, 0.07, 3.14, 0, 0], "depth_mm": 5, "reload": {"every_char": 1}}}"#,
     )
     .unwrap();
-    let e = RobotConfig::load(&bad).unwrap_err().to_string();
+    let e = chain(&RobotConfig::load(&bad).unwrap_err());
     assert!(e.contains("robot.json") && e.contains("every_char"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The error and its causes, joined as `anyhow` prints them with `{:#}`.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s += &format!(": {c}");
+        cause = c.source();
+    }
+    s
 }

@@ -138,7 +138,7 @@ fn the_wrong_port_or_a_failing_server_is_a_clear_error() {
     assert!(matches!(&e, RobotError::Framing(m) if m.contains("SOF")), "{e}");
     // Lines to the framed-only port: the simulator hangs up.
     let mut c = AuboClient::connect(&port_of(&s, Transport::Framed), t).unwrap();
-    assert!(matches!(c.robot_names(), Err(RobotError::Io(_))));
+    assert!(matches!(c.robot_names(), Err(RobotError::Io { .. })));
     // An HTTP server answering 500: the status is reported.
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let addr = listener.local_addr().unwrap().to_string();

@@ -124,7 +124,7 @@ fn every_call_sends_the_sdks_bytes() {
     };
     let mut rec = Recorder::start();
     let mut c = AuboClient::connect_with(&rec.addr, Transport::Framed, Duration::from_secs(5)).unwrap();
-    let mut check = |rec: &mut Recorder, what: &str, sdk: Vec<Vec<u8>>| {
+    let check = |rec: &mut Recorder, what: &str, sdk: Vec<Vec<u8>>| {
         let ours = rec.new_frames();
         assert_eq!(ours.len(), sdk.len(), "{what}: frames sent");
         for (o, s) in ours.iter().zip(&sdk) {
