@@ -1,6 +1,9 @@
 //! The ink station and its reload rule: dips only between strokes, at the rule's points, carried
 //! by the simulator's execution and by the Lua, URScript and G-code exports.
 
+// Poses written as a teach pendant shows them: rx = 3.14 rad (the tool flipped), not π.
+#![allow(clippy::approx_constant, reason = "3.14 rad is a pendant-style rx, deliberately not π")]
+
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{

@@ -1,6 +1,9 @@
 //! robot-io: frames, poses, kinematics, the safety envelope, exporters, and full runs against the
 //! simulator on loopback (including a dropped connection mid-stroke).
 
+// Poses written as a teach pendant shows them: rx = 3.14 rad (the tool flipped), not π.
+#![allow(clippy::approx_constant, reason = "3.14 rad is a pendant-style rx, deliberately not π")]
+
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
