@@ -8,6 +8,7 @@ mod gates;
 mod refine_gate;
 mod rng;
 mod skeleton_counts;
+mod styles;
 mod train_fixture;
 
 const HELP: &str = "\
@@ -20,6 +21,8 @@ Tasks:
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json
   train-fixture        train the committed pen1 generator (fixtures/generator/; about 5 minutes)
+  styles --font F [...] compare centre-line methods (skeleton, template) on a font's glyphs
+                       and synthetic scans of them (`cargo xtask styles --help`)
   skeleton-counts [--hanzi-data DIR] [--set FILE] [...]
                        skeleton stroke counts against the medians on a character set
                        (`cargo xtask skeleton-counts --help`)
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
         Some("gates") => gates::run(&args[1..]),
         Some("bench") => bench::run(&args[1..]),
         Some("skeleton-counts") => skeleton_counts::run(&args[1..]),
+        Some("styles") => styles::run(&args[1..]),
         Some("train-fixture") => train_fixture::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };

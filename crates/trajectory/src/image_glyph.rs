@@ -1,10 +1,12 @@
-//! Photos and scans of a character: Otsu threshold and cleaning.
+//! Photos and scans of a character: the paper's uneven light divided out, Otsu threshold and
+//! cleaning.
 
 use std::path::Path;
 
 use bezier_raster::binary::{components, fill_holes, otsu_threshold};
+use image::GrayImage;
 
-use crate::glyph::GlyphError;
+use crate::glyph::{Glyph, GlyphError, GlyphSource, Shape};
 
 /// Loads, thresholds and cleans an image; returns the square side and the binary ink (1/0).
 pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
@@ -12,12 +14,95 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
     let img =
         bezier_raster::coverage::open_image(path).map_err(|message| GlyphError::Io { path: name.clone(), message })?;
-    let img = if img.width().max(img.height()) > 1024 {
-        img.resize(1024, 1024, image::imageops::FilterType::Triangle)
-    } else {
-        img
+    clean_gray(&name, img.to_luma8())
+}
+
+/// A glyph from an 8-bit grey photo or scan already in memory (dark ink on light paper), cleaned
+/// as [`crate::glyph::from_image`] cleans a file; `name` labels the source in messages and in
+/// [`GlyphSource::Image`].
+///
+/// # Errors
+/// [`GlyphError::BadImage`] for an image too small, without contrast, or with no usable ink.
+pub fn glyph_from_gray(ch: char, name: &str, gray: &GrayImage) -> Result<Glyph, GlyphError> {
+    let (size, ink) = clean_gray(name, gray.clone())?;
+    Ok(Glyph {
+        ch,
+        source: GlyphSource::Image(name.to_string()),
+        shape: Shape::Bitmap { size, ink },
+        stroke_outlines: None,
+        medians: None,
+    })
+}
+
+/// The paper's brightness under each pixel of a `w × h` grey image: per block (1/32 of the
+/// longer side) the 90th percentile, the brightest within ±2 blocks (so ink up to about four
+/// blocks wide is bridged), smoothed, never below 0.45 of the whole image's 90th percentile,
+/// interpolated bilinearly between block centres.
+fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
+    let b = (w.max(h) / 32).max(4);
+    let (gw, gh) = (w.div_ceil(b), h.div_ceil(b));
+    let pct90 = |vals: &mut Vec<u8>| -> f32 {
+        vals.sort_unstable();
+        vals[((vals.len() - 1) as f64 * 0.9).round() as usize] as f32
     };
-    let gray = img.to_luma8();
+    let floor = 0.45 * pct90(&mut raw.to_vec());
+    let mut grid = vec![0.0f32; gw * gh];
+    let mut vals = Vec::with_capacity(b * b);
+    for gy in 0..gh {
+        for gx in 0..gw {
+            vals.clear();
+            for y in gy * b..((gy + 1) * b).min(h) {
+                vals.extend_from_slice(&raw[y * w + gx * b..y * w + ((gx + 1) * b).min(w)]);
+            }
+            grid[gy * gw + gx] = pct90(&mut vals);
+        }
+    }
+    let filt = |g: &[f32], r: i64, max: bool| -> Vec<f32> {
+        let mut out = vec![0.0f32; gw * gh];
+        for y in 0..gh as i64 {
+            for x in 0..gw as i64 {
+                let (mut acc, mut k) = (if max { 0.0f32 } else { 0.0 }, 0);
+                for yy in (y - r).max(0)..=(y + r).min(gh as i64 - 1) {
+                    for xx in (x - r).max(0)..=(x + r).min(gw as i64 - 1) {
+                        let v = g[yy as usize * gw + xx as usize];
+                        if max { acc = acc.max(v) } else { acc += v }
+                        k += 1;
+                    }
+                }
+                out[y as usize * gw + x as usize] = if max { acc } else { acc / k as f32 };
+            }
+        }
+        out
+    };
+    let grid = filt(&filt(&filt(&grid, 2, true), 1, false), 1, false);
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let fy = ((y as f64 + 0.5) / b as f64 - 0.5).clamp(0.0, (gh - 1) as f64);
+        let (y0, ty) = (fy.floor() as usize, fy - fy.floor());
+        let y1 = (y0 + 1).min(gh - 1);
+        for x in 0..w {
+            let fx = ((x as f64 + 0.5) / b as f64 - 0.5).clamp(0.0, (gw - 1) as f64);
+            let (x0, tx) = (fx.floor() as usize, fx - fx.floor());
+            let x1 = (x0 + 1).min(gw - 1);
+            let at = |i: usize, j: usize| grid[j * gw + i] as f64;
+            let v = (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty) + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty;
+            out.push((v as f32).max(floor).max(1.0));
+        }
+    }
+    out
+}
+
+/// Thresholds and cleans a grey image (see [`load_clean`]).
+fn clean_gray(name: &str, gray: GrayImage) -> Result<(u32, Vec<f32>), GlyphError> {
+    let name = name.to_string();
+    let gray = if gray.width().max(gray.height()) > 1024 {
+        // Longer side to 1024 px, aspect kept (as `DynamicImage::resize` does).
+        let k = 1024.0 / gray.width().max(gray.height()) as f64;
+        let (nw, nh) = (((gray.width() as f64 * k).round() as u32).max(1), ((gray.height() as f64 * k).round() as u32).max(1));
+        image::imageops::resize(&gray, nw, nh, image::imageops::FilterType::Triangle)
+    } else {
+        gray
+    };
     let (w, h) = (gray.width() as usize, gray.height() as usize);
     if w < 16 || h < 16 {
         return Err(GlyphError::BadImage {
@@ -29,6 +114,9 @@ pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     if hi - lo < 32 {
         return Err(GlyphError::BadImage { path: name, message: "no ink: the image has almost no contrast".into() });
     }
+    // Divide out uneven light (a lamp to one side, a vignette) so one threshold fits the page.
+    let paper = paper_level(&raw, w, h);
+    let raw: Vec<u8> = raw.iter().zip(&paper).map(|(&v, &p)| (255.0 * (v as f32 / p).min(1.0)).round() as u8).collect();
     let t = otsu_threshold(&raw);
     let mut ink: Vec<bool> = raw.iter().map(|&v| v <= t).collect();
     let frac = ink.iter().filter(|&&b| b).count() as f64 / (w * h) as f64;

@@ -46,6 +46,8 @@ pub mod glyph;
 pub mod graph;
 mod image_glyph;
 pub mod raster;
+pub mod scan;
+pub mod template;
 pub mod thinning;
 pub mod track;
 
@@ -54,6 +56,8 @@ use thiserror::Error;
 
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
 pub use graph::GraphOptions;
+pub use image_glyph::glyph_from_gray;
+pub use template::{Registration, StrokeFit, TemplateOptions};
 pub use track::{
     BuiltTrack, CharBox, DEFAULT_SPACING_MM, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, chamfer_pct,
     find_corners,
@@ -71,6 +75,9 @@ pub enum Method {
     Medians,
     /// A skeleton of the glyph image.
     Skeleton,
+    /// A stroke template (hanzi-writer medians of the same character) registered onto the glyph
+    /// ([`template`], [`centre_lines_from_template`]).
+    Template,
 }
 
 impl Method {
@@ -79,6 +86,7 @@ impl Method {
         match self {
             Method::Medians => "medians",
             Method::Skeleton => "skeleton",
+            Method::Template => "template",
         }
     }
 }
@@ -89,7 +97,8 @@ impl std::str::FromStr for Method {
         match s {
             "medians" => Ok(Method::Medians),
             "skeleton" => Ok(Method::Skeleton),
-            _ => Err(format!("unknown method `{s}` (expected medians or skeleton)")),
+            "template" => Ok(Method::Template),
+            _ => Err(format!("unknown method `{s}` (expected medians, skeleton or template)")),
         }
     }
 }
@@ -108,13 +117,20 @@ pub enum TrajectoryError {
 /// The stroke centre lines of a glyph with half-widths, in writing order, using `method` on an
 /// `analysis_px × analysis_px` raster of the em box.
 ///
+/// [`Method::Template`] here registers the glyph's own medians onto its own shape (the glyph is
+/// its own template); for a font or image glyph use [`centre_lines_from_template`].
+///
 /// # Errors
-/// [`TrajectoryError::NoMedians`] for [`Method::Medians`] on a source without medians;
-/// [`TrajectoryError::Empty`] for a blank glyph.
+/// [`TrajectoryError::NoMedians`] for [`Method::Medians`] or [`Method::Template`] on a source
+/// without medians; [`TrajectoryError::Empty`] for a blank glyph.
 pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<StrokePath>, TrajectoryError> {
     let n = analysis_px as usize;
     let px_to_em = glyph::EM / analysis_px as f64;
     match method {
+        Method::Template => {
+            let opts = TemplateOptions { analysis_px, ..TemplateOptions::default() };
+            Ok(template::register(g, &template::shape_only(g), &opts)?.paths)
+        }
         Method::Medians => {
             let medians = g.medians.as_ref().ok_or_else(|| TrajectoryError::NoMedians(g.source.kind().to_string()))?;
             let outlines = g.stroke_outlines.as_ref();
@@ -157,6 +173,23 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
                 .collect())
         }
     }
+}
+
+/// Registers the stroke template `template` (a glyph with medians: embedded or a hanzi-writer
+/// folder) onto `target` (a font or image glyph of the same character) and returns its centre
+/// lines, in the template's stroke count and order, with what the registration found per stroke
+/// ([`Registration::strokes`]: strokes that found no ink are kept and flagged there). Analysis on
+/// an `analysis_px²` raster of the em box; otherwise [`TemplateOptions::default`].
+///
+/// # Errors
+/// [`TrajectoryError::NoMedians`] when the template has no medians; [`TrajectoryError::Empty`]
+/// when either glyph is blank.
+pub fn centre_lines_from_template(
+    template: &Glyph,
+    target: &Glyph,
+    analysis_px: u32,
+) -> Result<Registration, TrajectoryError> {
+    template::register(template, target, &TemplateOptions { analysis_px, ..TemplateOptions::default() })
 }
 
 /// Inserts points so no segment is longer than `step` (em units).

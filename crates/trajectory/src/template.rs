@@ -1,0 +1,700 @@
+//! Stroke templates registered onto a target glyph (`--from template`).
+//!
+//! A character's stroke medians (hanzi-writer-data: the *template*) are carried onto another
+//! glyph of the same character (a font outline or an image bitmap: the *target*) in three steps,
+//! all in the em frame (1024 units, y down; docs/contracts.md §2):
+//!
+//! 1. **Global affine fit.** Both glyphs are rasterised at [`TemplateOptions::fit_px`]; the start
+//!    maps the template ink's centroid and per-axis spread onto the target's, then Nelder–Mead
+//!    maximises the symmetric overlap of the two inks, each blurred by a Gaussian (coarse, then
+//!    fine): the mean of the target's blurred ink under the moved template ink plus the mean of
+//!    the template's blurred ink under the target ink pulled back.
+//! 2. **Non-rigid fit.** Coherent point drift (Myronenko & Song 2010, the non-rigid form) moves
+//!    the template's median points (after step 1) onto the target's skeleton points, a Gaussian
+//!    displacement field of width [`TemplateOptions::cpd_beta_em`] regularised by
+//!    [`TemplateOptions::cpd_lambda`], with an outlier weight for skeleton spurs.
+//! 3. **Ridge snap.** Each moved stroke is resampled, points off the target's ink at the ends are
+//!    trimmed, every point climbs across the stroke to the nearest ridge of the target ink's
+//!    distance transform, the shifts are smoothed along the stroke, and the ridge height is the
+//!    half-width. Ends run out into the end caps and corners into their knobs as for the other
+//!    methods.
+//!
+//! Stroke count and order are the template's. A stroke with too little target ink under it
+//! after step 2 is kept (moved, not snapped, with a typical width) and reported in
+//! [`StrokeFit::found_ink`]; a stroke that lies along another one after snapping is reported in
+//! [`StrokeFit::doubled_with`]. Everything is deterministic (no randomness, fixed iteration
+//! counts).
+
+use kurbo::{Affine, Point, Vec2};
+use nalgebra::DMatrix;
+
+use crate::glyph::{EM, Glyph, Shape};
+use crate::{StrokePath, TrajectoryError, distance, raster, thinning};
+
+/// Settings of [`register`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TemplateOptions {
+    /// Raster (px per em box) of the target's ink, distance transform and ridge snap.
+    pub analysis_px: u32,
+    /// Raster (px per em box) of the global fit.
+    pub fit_px: u32,
+    /// Raster (px per em box) of the target skeleton that the non-rigid fit pulls towards.
+    pub skeleton_px: u32,
+    /// Width of the Gaussian displacement kernel of the non-rigid fit, em units.
+    pub cpd_beta_em: f64,
+    /// Smoothness weight of the non-rigid fit (larger: stiffer).
+    pub cpd_lambda: f64,
+    /// Outlier weight of the non-rigid fit, 0..1 (the share of target points explained by noise).
+    pub cpd_outlier: f64,
+    /// Iterations of the non-rigid fit (0 skips it).
+    pub cpd_iters: usize,
+    /// A stroke with less than this share of its moved centre line on the target ink is reported
+    /// as finding no ink.
+    pub min_ink_fraction: f64,
+}
+
+impl Default for TemplateOptions {
+    fn default() -> Self {
+        Self {
+            analysis_px: crate::DEFAULT_ANALYSIS_PX,
+            fit_px: 128,
+            skeleton_px: 256,
+            cpd_beta_em: 160.0,
+            cpd_lambda: 8.0,
+            cpd_outlier: 0.2,
+            cpd_iters: 40,
+            min_ink_fraction: 0.5,
+        }
+    }
+}
+
+/// What registration found for one template stroke (index = its place in writing order, from 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrokeFit {
+    /// Share (0..1) of the stroke's moved centre line (after steps 1 and 2) lying on target ink.
+    pub ink_fraction: f64,
+    /// Whether that share reached [`TemplateOptions::min_ink_fraction`]; a stroke without ink is
+    /// kept in the output where the template put it, not snapped.
+    pub found_ink: bool,
+    /// Another stroke (index from 0) along which this one lies after snapping (most of its points
+    /// within half its width of that stroke's centre line): two template strokes landed on one
+    /// target stroke.
+    pub doubled_with: Option<usize>,
+    /// Mean distance the ridge snap moved the stroke's points, em units.
+    pub snap_em: f64,
+}
+
+/// The result of [`register`]: centre lines as [`crate::centre_lines`] returns them, plus what
+/// the registration measured.
+#[derive(Clone, Debug)]
+pub struct Registration {
+    /// Centre lines with half-widths, one per template stroke, in the template's order.
+    pub paths: Vec<StrokePath>,
+    /// Per stroke, in the same order.
+    pub strokes: Vec<StrokeFit>,
+    /// The global fit, template em frame → target em frame, as kurbo's affine coefficients
+    /// `[a, b, c, d, e, f]`: `x' = a·x + c·y + e`, `y' = b·x + d·y + f`.
+    pub affine: [f64; 6],
+    /// Symmetric blurred-ink overlap (0..1) of the start and of the global fit.
+    pub overlap_start: f64,
+    /// See [`Registration::overlap_start`].
+    pub overlap_fit: f64,
+    /// Mean displacement of the non-rigid fit over the template's median points, em units.
+    pub nonrigid_mean_em: f64,
+}
+
+impl Registration {
+    /// Indices (from 0) of strokes that found no ink under them.
+    pub fn missing(&self) -> Vec<usize> {
+        self.strokes.iter().enumerate().filter(|(_, s)| !s.found_ink).map(|(i, _)| i).collect()
+    }
+
+    /// Whether every stroke found ink and none lies along another: the template's stroke count
+    /// holds on the target.
+    pub fn strokes_ok(&self) -> bool {
+        self.strokes.iter().all(|s| s.found_ink && s.doubled_with.is_none())
+    }
+}
+
+/// The glyph as a target: its shape only (no medians or per-stroke outlines), as a font or an
+/// image would give it. Used to register a hanzi-writer glyph onto itself.
+pub fn shape_only(g: &Glyph) -> Glyph {
+    let shape = match &g.shape {
+        Shape::Outlines(o) => Shape::Outlines(o.clone()),
+        Shape::Bitmap { size, ink } => Shape::Bitmap { size: *size, ink: ink.clone() },
+    };
+    Glyph { ch: g.ch, source: g.source.clone(), shape, stroke_outlines: None, medians: None }
+}
+
+/// Registers the stroke medians of `template` onto `target` (see the module docs).
+///
+/// # Errors
+/// [`TrajectoryError::NoMedians`] when the template has no medians; [`TrajectoryError::Empty`]
+/// when either glyph has no ink at the fit raster.
+pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Result<Registration, TrajectoryError> {
+    let medians =
+        template.medians.as_ref().ok_or_else(|| TrajectoryError::NoMedians(template.source.kind().to_string()))?;
+    // 1. Global affine fit.
+    let fit_n = opts.fit_px.max(32) as usize;
+    let t_cov = raster::render_glyph(template, fit_n as u32);
+    let g_cov = raster::render_glyph(target, fit_n as u32);
+    let t_ink = ink_points(t_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(template.ch))?;
+    let g_ink = ink_points(g_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(target.ch))?;
+    let start = moment_start(t_cov.data(), g_cov.data(), fit_n);
+    let mut q = start.as_coeffs();
+    let mut overlap_start = None;
+    let mut overlap_fit = 0.0;
+    for sigma_px in [4.0, 1.5] {
+        let tb = gaussian_blur(t_cov.data(), fit_n, sigma_px);
+        let gb = gaussian_blur(g_cov.data(), fit_n, sigma_px);
+        let score = |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
+        overlap_start.get_or_insert_with(|| score(&q));
+        let steps = [0.05, 0.05, 0.05, 0.05, 12.0, 12.0];
+        let (best, val) = nelder_mead(|c| -score(c), &q, &steps, 160);
+        q = best.try_into().expect("six coefficients");
+        overlap_fit = -val;
+    }
+    let affine = Affine::new(q);
+    // 2. Non-rigid fit of the moved medians onto the target skeleton.
+    let moved: Vec<Vec<Point>> = medians.iter().map(|m| m.iter().map(|&p| affine * p).collect()).collect();
+    // Like with like: the template's skeleton (moved) against the target's, so a glyph registered
+    // onto itself stays put; the field then carries the medians.
+    let sk_n = opts.skeleton_px.max(32) as usize;
+    // Both thinned on one grid (cells of the same size), so the two samplings have one density.
+    let (t_skel, g_skel) = (skeleton_points(template, sk_n), skeleton_points(target, sk_n));
+    let px_em = EM / sk_n as f64;
+    let cell = (1..=16).find(|&c| grid_thin(&t_skel, c, px_em).len() <= 400).unwrap_or(16);
+    let ctrl: Vec<Point> = grid_thin(&t_skel, cell, px_em).into_iter().map(|p| affine * p).collect();
+    let skel = grid_thin(&g_skel, cell, px_em);
+    let field = if opts.cpd_iters > 0 && !skel.is_empty() && ctrl.len() >= 3 {
+        Some(Cpd::fit(&ctrl, &skel, opts))
+    } else {
+        None
+    };
+    let nonrigid_mean_em = field.as_ref().map_or(0.0, |f| {
+        ctrl.iter().map(|&p| f.displacement(p).hypot()).sum::<f64>() / ctrl.len() as f64
+    });
+    // 3. Snap onto the target's distance ridge.
+    let n = opts.analysis_px.max(32) as usize;
+    let px_to_em = EM / n as f64;
+    let mask = raster::mask_of(&raster::render_glyph(target, n as u32));
+    if !mask.iter().any(|&b| b) {
+        return Err(TrajectoryError::Empty(target.ch));
+    }
+    let dt = distance::distance_to_background(&mask, n, n);
+    let at = |p: Point| distance::sample(&dt, n, n, p.x / px_to_em, p.y / px_to_em);
+    // Distance to the nearest ink, for the check after the global fit.
+    let paper: Vec<bool> = mask.iter().map(|&b| !b).collect();
+    let to_ink = distance::distance_to_background(&paper, n, n);
+    let ink_near = |p: Point| distance::sample(&to_ink, n, n, p.x / px_to_em, p.y / px_to_em) * px_to_em <= NEAR_INK_EM;
+    let warp = |p: Point| {
+        let q = affine * p;
+        field.as_ref().map_or(q, |f| q + f.displacement(q))
+    };
+    let mut lines = Vec::with_capacity(moved.len());
+    let mut fits = Vec::with_capacity(moved.len());
+    for (i, m) in moved.iter().enumerate() {
+        let placed = super::densify(m, 8.0);
+        let near = placed.iter().filter(|&&p| ink_near(p)).count() as f64 / placed.len() as f64;
+        let pts: Vec<Point> =
+            placed.iter().map(|&p| field.as_ref().map_or(p, |f| p + f.displacement(p))).collect();
+        let on_ink = pts.iter().filter(|&&p| at(p) >= 1.0).count();
+        let ink_fraction = on_ink as f64 / pts.len() as f64;
+        // No ink near where the global fit put it, or none under it after the non-rigid fit (which
+        // can drag a stroke with no counterpart onto a neighbour's ink: the first test).
+        let found_ink = near >= opts.min_ink_fraction && ink_fraction >= opts.min_ink_fraction && on_ink >= 2;
+        if !found_ink {
+            lines.push((pts, None));
+            fits.push(StrokeFit { ink_fraction: ink_fraction.min(near), found_ink, doubled_with: None, snap_em: 0.0 });
+            continue;
+        }
+        // Keep the longest run on ink (gaps of up to two points bridged): the ends that hang off
+        // the ink (the template stroke was longer than the target's) go, and so does a piece the
+        // non-rigid fit pulled across paper onto a neighbouring stroke.
+        let (first, last) = longest_ink_run(&pts, |p| at(p) >= 1.0);
+        let pts = pts[first..=last].to_vec();
+        let (snapped, _) = snap_to_ridge(&pts, &dt, n, px_to_em);
+        let snap_em = pts.iter().zip(&snapped).map(|(a, b)| a.distance(*b)).sum::<f64>() / pts.len() as f64;
+        // The stroke's own ink: the target's ink near the template's stroke outline carried over by
+        // both fits, so a crossing stroke neither widens it nor lets its ends run on.
+        let own = template.stroke_outlines.as_ref().and_then(|o| o.get(i)).and_then(|o| {
+            let warped = warp_path(o, &warp);
+            let omask = raster::mask_of(&raster::render_outlines(std::slice::from_ref(&warped), n as u32));
+            let outside: Vec<bool> = omask.iter().map(|&b| !b).collect();
+            let to_outline = distance::distance_to_background(&outside, n, n);
+            let margin_px = OWN_INK_MARGIN_EM / px_to_em;
+            let region: Vec<bool> = mask.iter().zip(&to_outline).map(|(&m, &d)| m && (d as f64) <= margin_px).collect();
+            region.iter().any(|&b| b).then(|| distance::distance_to_background(&region, n, n))
+        });
+        let sdt = own.as_ref().unwrap_or(&dt);
+        let (p, w) = super::centre_on_ridge(&snapped, sdt, n, px_to_em);
+        lines.push((p, Some((w, own))));
+        fits.push(StrokeFit { ink_fraction, found_ink, doubled_with: None, snap_em });
+    }
+    // Strokes without ink get the median half-width of the others.
+    let mut all_w: Vec<f64> = lines.iter().filter_map(|(_, w)| w.as_ref()).flat_map(|(w, _)| w.iter()).copied().collect();
+    all_w.sort_by(f64::total_cmp);
+    let typical = if all_w.is_empty() { 20.0 } else { all_w[all_w.len() / 2] };
+    let mut paths = Vec::with_capacity(lines.len());
+    for (pts, widths) in lines {
+        match widths {
+            Some((w, own)) => {
+                let sdt = own.as_ref().unwrap_or(&dt);
+                let (p, w) = super::extend_ends(pts, w, sdt, n, px_to_em);
+                paths.push(super::knob_corners(p, w, sdt, n, px_to_em));
+            }
+            None => {
+                let w = vec![typical; pts.len()];
+                paths.push(StrokePath::new(pts, w));
+            }
+        }
+    }
+    mark_doubled(&paths, &mut fits);
+    Ok(Registration { paths, strokes: fits, affine: q, overlap_start: overlap_start.unwrap_or(0.0), overlap_fit, nonrigid_mean_em })
+}
+
+/// A stroke with less than [`TemplateOptions::min_ink_fraction`] of its centre line within this
+/// distance of target ink after the global fit (em units, about a stroke's width) finds no ink.
+const NEAR_INK_EM: f64 = 24.0;
+
+/// A stroke's own ink is the target's ink within this distance of the template's stroke outline
+/// carried over by both fits, em units.
+const OWN_INK_MARGIN_EM: f64 = 10.0;
+
+/// A path with every point moved by `f`.
+fn warp_path(p: &kurbo::BezPath, f: &impl Fn(Point) -> Point) -> kurbo::BezPath {
+    use kurbo::PathEl;
+    p.elements()
+        .iter()
+        .map(|el| match *el {
+            PathEl::MoveTo(a) => PathEl::MoveTo(f(a)),
+            PathEl::LineTo(a) => PathEl::LineTo(f(a)),
+            PathEl::QuadTo(a, b) => PathEl::QuadTo(f(a), f(b)),
+            PathEl::CurveTo(a, b, c) => PathEl::CurveTo(f(a), f(b), f(c)),
+            PathEl::ClosePath => PathEl::ClosePath,
+        })
+        .collect()
+}
+
+/// The first and last index of the longest run of points (by arc length) that are on ink, runs
+/// joined across gaps of at most two points off ink.
+fn longest_ink_run(p: &[Point], on: impl Fn(Point) -> bool) -> (usize, usize) {
+    let ink: Vec<bool> = p.iter().map(|&q| on(q)).collect();
+    let (mut best, mut best_len) = ((0, p.len() - 1), -1.0);
+    let mut i = 0;
+    while i < p.len() {
+        if !ink[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        let mut end = i;
+        let mut j = i + 1;
+        while j < p.len() {
+            if ink[j] {
+                end = j;
+                j += 1;
+            } else if j + 2 < p.len() && (ink[j + 1] || ink[j + 2]) {
+                j += 1;
+            } else {
+                break;
+            }
+        }
+        let len: f64 = p[start..=end].windows(2).map(|w| w[0].distance(w[1])).sum();
+        if len > best_len {
+            best = (start, end);
+            best_len = len;
+        }
+        i = end + 1;
+    }
+    best
+}
+
+/// Ink pixel centres (coverage ≥ 0.5) of an `n × n` em-box raster, em units, at most `cap` of
+/// them (every k-th in raster order). `None` if there is no ink.
+fn ink_points(cov: &[f32], n: usize, cap: usize) -> Option<Vec<Point>> {
+    let s = EM / n as f64;
+    let all: Vec<Point> = (0..n * n)
+        .filter(|&i| cov[i] >= 0.5)
+        .map(|i| Point::new(((i % n) as f64 + 0.5) * s, ((i / n) as f64 + 0.5) * s))
+        .collect();
+    if all.is_empty() {
+        return None;
+    }
+    let k = all.len().div_ceil(cap);
+    Some(all.into_iter().step_by(k).collect())
+}
+
+/// Ink centroid and per-axis standard deviation of a raster, em units.
+fn moments(cov: &[f32], n: usize) -> (Point, Vec2) {
+    let s = EM / n as f64;
+    let (mut m0, mut mx, mut my) = (0.0, 0.0, 0.0);
+    for (i, &v) in cov.iter().enumerate() {
+        let v = v as f64;
+        m0 += v;
+        mx += v * ((i % n) as f64 + 0.5) * s;
+        my += v * ((i / n) as f64 + 0.5) * s;
+    }
+    let c = Point::new(mx / m0.max(1e-9), my / m0.max(1e-9));
+    let (mut vx, mut vy) = (0.0, 0.0);
+    for (i, &v) in cov.iter().enumerate() {
+        let v = v as f64;
+        vx += v * (((i % n) as f64 + 0.5) * s - c.x).powi(2);
+        vy += v * (((i / n) as f64 + 0.5) * s - c.y).powi(2);
+    }
+    (c, Vec2::new((vx / m0.max(1e-9)).sqrt(), (vy / m0.max(1e-9)).sqrt()))
+}
+
+/// The start of the global fit: template ink centroid onto the target's, per-axis spread matched.
+fn moment_start(t: &[f32], g: &[f32], n: usize) -> Affine {
+    let (ct, st) = moments(t, n);
+    let (cg, sg) = moments(g, n);
+    let sx = (sg.x / st.x.max(1e-9)).clamp(0.3, 3.0);
+    let sy = (sg.y / st.y.max(1e-9)).clamp(0.3, 3.0);
+    Affine::new([sx, 0.0, 0.0, sy, cg.x - sx * ct.x, cg.y - sy * ct.y])
+}
+
+/// Symmetric blurred overlap of template and target under `a` (template → target).
+fn overlap(a: Affine, t_ink: &[Point], g_ink: &[Point], tb: &[f32], gb: &[f32], n: usize) -> f64 {
+    let det = a.determinant();
+    if !(0.05..20.0).contains(&det) {
+        return 0.0;
+    }
+    let inv = a.inverse();
+    let s = n as f64 / EM;
+    let fwd = t_ink.iter().map(|&p| {
+        let q = a * p;
+        distance::sample(gb, n, n, q.x * s, q.y * s)
+    });
+    let back = g_ink.iter().map(|&p| {
+        let q = inv * p;
+        distance::sample(tb, n, n, q.x * s, q.y * s)
+    });
+    0.5 * (fwd.sum::<f64>() / t_ink.len() as f64 + back.sum::<f64>() / g_ink.len() as f64)
+}
+
+/// Separable Gaussian blur (σ in px, kernel ±3σ, zero outside) of an `n × n` raster, normalised
+/// so a raster that is all ink stays 1 inside.
+fn gaussian_blur(src: &[f32], n: usize, sigma: f64) -> Vec<f32> {
+    let r = (3.0 * sigma).ceil() as i64;
+    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
+    let norm: f64 = k.iter().sum();
+    let mut tmp = vec![0.0f32; n * n];
+    for y in 0..n {
+        for x in 0..n {
+            let mut acc = 0.0;
+            for (j, w) in k.iter().enumerate() {
+                let xx = x as i64 + j as i64 - r;
+                if (0..n as i64).contains(&xx) {
+                    acc += w * src[y * n + xx as usize] as f64;
+                }
+            }
+            tmp[y * n + x] = (acc / norm) as f32;
+        }
+    }
+    let mut out = vec![0.0f32; n * n];
+    for y in 0..n {
+        for x in 0..n {
+            let mut acc = 0.0;
+            for (j, w) in k.iter().enumerate() {
+                let yy = y as i64 + j as i64 - r;
+                if (0..n as i64).contains(&yy) {
+                    acc += w * tmp[yy as usize * n + x] as f64;
+                }
+            }
+            out[y * n + x] = (acc / norm) as f32;
+        }
+    }
+    out
+}
+
+/// Nelder–Mead minimisation of `f` from `x0` with initial steps `steps`, `iters` iterations.
+/// Returns the best point and its value. Deterministic.
+fn nelder_mead(f: impl Fn(&[f64]) -> f64, x0: &[f64], steps: &[f64], iters: usize) -> (Vec<f64>, f64) {
+    let d = x0.len();
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(d + 1);
+    simplex.push((x0.to_vec(), f(x0)));
+    for i in 0..d {
+        let mut x = x0.to_vec();
+        x[i] += steps[i];
+        let v = f(&x);
+        simplex.push((x, v));
+    }
+    let lerp = |a: &[f64], b: &[f64], t: f64| -> Vec<f64> { a.iter().zip(b).map(|(a, b)| a + t * (b - a)).collect() };
+    for _ in 0..iters {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let mut centroid = vec![0.0; d];
+        for (x, _) in &simplex[..d] {
+            for (c, v) in centroid.iter_mut().zip(x) {
+                *c += v / d as f64;
+            }
+        }
+        let worst = simplex[d].clone();
+        let refl = lerp(&centroid, &worst.0, -1.0);
+        let fr = f(&refl);
+        if fr < simplex[0].1 {
+            let exp = lerp(&centroid, &worst.0, -2.0);
+            let fe = f(&exp);
+            simplex[d] = if fe < fr { (exp, fe) } else { (refl, fr) };
+        } else if fr < simplex[d - 1].1 {
+            simplex[d] = (refl, fr);
+        } else {
+            let con = if fr < worst.1 { lerp(&centroid, &refl, 0.5) } else { lerp(&centroid, &worst.0, 0.5) };
+            let fc = f(&con);
+            if fc < worst.1.min(fr) {
+                simplex[d] = (con, fc);
+            } else {
+                let best = simplex[0].0.clone();
+                for s in simplex.iter_mut().skip(1) {
+                    let x = lerp(&best, &s.0, 0.5);
+                    let v = f(&x);
+                    *s = (x, v);
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex.swap_remove(0)
+}
+
+/// A glyph's skeleton pixels (Zhang–Suen at `n²`): pixel centres, px.
+fn skeleton_points(target: &Glyph, n: usize) -> Vec<(usize, usize)> {
+    let mut mask = raster::mask_of(&raster::render_glyph(target, n as u32));
+    thinning::zhang_suen(&mut mask, n, n);
+    thinning::remove_staircases(&mut mask, n, n);
+    (0..n * n).filter(|&i| mask[i]).map(|i| (i % n, i / n)).collect()
+}
+
+/// Keeps the first pixel of each `cell × cell` block (an even sampling along lines of any
+/// direction, where every k-th pixel in raster order would alias); returns the kept pixel
+/// centres in em units (`px_em` em units per pixel).
+fn grid_thin(px: &[(usize, usize)], cell: usize, px_em: f64) -> Vec<Point> {
+    let mut seen = std::collections::HashSet::new();
+    px.iter()
+        .filter(|&&(x, y)| seen.insert((x / cell, y / cell)))
+        .map(|&(x, y)| Point::new((x as f64 + 0.5) * px_em, (y as f64 + 0.5) * px_em))
+        .collect()
+}
+
+/// The smallest CPD σ², normalised (σ = 12 em units): correspondences stay soft over about a
+/// stroke's width, so points do not snap onto single skeleton pixels of the wrong stroke.
+const SIGMA_FLOOR2: f64 = (12.0 / EM) * (12.0 / EM);
+
+/// Ridge on the CPD's weights, relative to the mean diagonal of the data term.
+const CPD_RIDGE: f64 = 1e-2;
+
+/// Side of the squares the CPD's kernel centres are thinned to, em units.
+const CENTRE_CELL_EM: f64 = 40.0;
+
+/// The CPD's starting σ, em units (about two stroke widths).
+const SIGMA_START_EM: f64 = 40.0;
+
+/// A fitted coherent-point-drift displacement field (coordinates normalised by the em).
+struct Cpd {
+    /// The kernel centres (the template points before the fit), normalised.
+    centres: Vec<Point>,
+    /// Per centre, the displacement weight, normalised.
+    weights: Vec<Vec2>,
+    /// 2β², normalised.
+    two_beta2: f64,
+}
+
+impl Cpd {
+    /// Non-rigid CPD of `y` (template points, moved) onto `x` (target points), em units.
+    fn fit(y_em: &[Point], x_em: &[Point], opts: &TemplateOptions) -> Self {
+        let y: Vec<Point> = y_em.iter().map(|p| Point::new(p.x / EM, p.y / EM)).collect();
+        let x: Vec<Point> = x_em.iter().map(|p| Point::new(p.x / EM, p.y / EM)).collect();
+        let (m, n) = (y.len(), x.len());
+        let beta = opts.cpd_beta_em / EM;
+        let two_beta2 = 2.0 * beta * beta;
+        // Kernel centres: the template points thinned to one per CENTRE_CELL_EM square. A kernel
+        // at every point (plain CPD) is so ill-conditioned at this width that the field swings
+        // wildly between the points, and it must hold off them (stroke outlines are carried too).
+        let cell = CENTRE_CELL_EM / EM;
+        let mut seen = std::collections::HashSet::new();
+        let centres: Vec<Point> = y
+            .iter()
+            .copied()
+            .filter(|p| seen.insert(((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)))
+            .collect();
+        let k = centres.len();
+        let kern = |a: Point, b: Point| (-(a - b).hypot2() / two_beta2).exp();
+        let gyc = DMatrix::from_fn(m, k, |i, j| kern(y[i], centres[j]));
+        let gcc = DMatrix::from_fn(k, k, |i, j| kern(centres[i], centres[j]));
+        let mut t = y.clone();
+        // The global fit has done the coarse work: start at σ = SIGMA_START_EM rather than at
+        // the spread of all pairs, which first shrinks the template towards its centroid.
+        let mut sigma2 = (SIGMA_START_EM / EM).powi(2);
+        let w = opts.cpd_outlier.clamp(0.0, 0.99);
+        let mut wmat = DMatrix::<f64>::zeros(k, 2);
+        let mut e = vec![0.0; m];
+        for _ in 0..opts.cpd_iters {
+            let c = 2.0 * std::f64::consts::PI * sigma2 * w / (1.0 - w) * m as f64 / n as f64;
+            let mut p1 = vec![0.0; m];
+            let mut px = vec![Vec2::ZERO; m];
+            let (mut np, mut sx2) = (0.0, 0.0);
+            for xn in &x {
+                let mut den = c;
+                for (k, tm) in t.iter().enumerate() {
+                    e[k] = (-(*xn - *tm).hypot2() / (2.0 * sigma2)).exp();
+                    den += e[k];
+                }
+                let mut pt1 = 0.0;
+                for k in 0..m {
+                    let p = e[k] / den;
+                    p1[k] += p;
+                    px[k] += xn.to_vec2() * p;
+                    pt1 += p;
+                }
+                np += pt1;
+                sx2 += pt1 * xn.to_vec2().hypot2();
+            }
+            if np < 1e-9 {
+                break;
+            }
+            // (Gycᵀ·diag(P1)·Gyc + λσ²·Gcc)·W = Gycᵀ·(P·X − diag(P1)·Y)
+            let dg = DMatrix::from_fn(m, k, |i, j| p1[i] * gyc[(i, j)]);
+            let mut a = gyc.transpose() * &dg;
+            // A ridge on the weights themselves: the Gaussian kernel matrix alone leaves directions
+            // of huge, cancelling weights that fit the points and swing wildly off them.
+            let ridge = CPD_RIDGE * (0..k).map(|i| a[(i, i)]).sum::<f64>() / k as f64;
+            a += &gcc * (opts.cpd_lambda * sigma2);
+            for i in 0..k {
+                a[(i, i)] += ridge;
+            }
+            let r = DMatrix::from_fn(m, 2, |i, j| {
+                let v = px[i] - y[i].to_vec2() * p1[i];
+                if j == 0 { v.x } else { v.y }
+            });
+            match a.lu().solve(&(gyc.transpose() * r)) {
+                Some(sol) => wmat = sol,
+                None => break,
+            }
+            let gw = &gyc * &wmat;
+            for k in 0..m {
+                t[k] = y[k] + Vec2::new(gw[(k, 0)], gw[(k, 1)]);
+            }
+            let mut cross = 0.0;
+            let mut tt = 0.0;
+            for k in 0..m {
+                cross += px[k].dot(t[k].to_vec2());
+                tt += p1[k] * t[k].to_vec2().hypot2();
+            }
+            sigma2 = ((sx2 - 2.0 * cross + tt) / (2.0 * np)).max(SIGMA_FLOOR2);
+        }
+        let weights = (0..k).map(|i| Vec2::new(wmat[(i, 0)], wmat[(i, 1)])).collect();
+        Self { centres, weights, two_beta2 }
+    }
+
+    /// The displacement at an em-frame point, em units.
+    fn displacement(&self, p: Point) -> Vec2 {
+        let q = Point::new(p.x / EM, p.y / EM);
+        let mut d = Vec2::ZERO;
+        for (c, w) in self.centres.iter().zip(&self.weights) {
+            d += *w * (-(q - *c).hypot2() / self.two_beta2).exp();
+        }
+        d * EM
+    }
+}
+
+/// Moves each point across the stroke to the nearest ridge of the distance transform `dt`
+/// (`n × n`): off the ink it first steps to the nearest ink along the normal, then climbs while
+/// the distance grows. The shifts are smoothed along the stroke (window 5). Returns the moved
+/// points and the ridge heights (half-widths), em units.
+fn snap_to_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
+    let at = |q: Point| distance::sample(dt, n, n, q.x / px_to_em, q.y / px_to_em);
+    let step = 0.5 * px_to_em;
+    let normal_at = |i: usize| {
+        let (a, b) = (p[i.saturating_sub(1)], p[(i + 1).min(p.len() - 1)]);
+        let d = b - a;
+        let len = d.hypot();
+        if len < 1e-9 { None } else { Some(Vec2::new(-d.y / len, d.x / len)) }
+    };
+    let mut shifts = Vec::with_capacity(p.len());
+    for i in 0..p.len() {
+        let Some(nrm) = normal_at(i) else {
+            shifts.push(0.0);
+            continue;
+        };
+        let mut off = 0.0;
+        if at(p[i]) < 0.5 {
+            // Nearest ink along the normal, within 12 px.
+            let found = (1..=24).find_map(|k| {
+                let o = k as f64 * step;
+                if at(p[i] + nrm * o) >= 0.5 {
+                    Some(o)
+                } else if at(p[i] - nrm * o) >= 0.5 {
+                    Some(-o)
+                } else {
+                    None
+                }
+            });
+            match found {
+                Some(o) => off = o,
+                None => {
+                    shifts.push(0.0);
+                    continue;
+                }
+            }
+        }
+        // Climb on the uphill side until clearly past the ridge (a raster's distance transform
+        // has small dips along a line), then take the middle of the points near the top.
+        let dir = if at(p[i] + nrm * (off + 2.0 * step)) >= at(p[i] + nrm * (off - 2.0 * step)) { 1.0 } else { -1.0 };
+        let mut prof = vec![(off, at(p[i] + nrm * off))];
+        let mut best = prof[0].1;
+        let mut o = off;
+        for _ in 0..160 {
+            o += dir * step;
+            let v = at(p[i] + nrm * o);
+            if v < best - 1.0 || v <= 0.0 {
+                break;
+            }
+            best = best.max(v);
+            prof.push((o, v));
+        }
+        let top: Vec<f64> = prof.iter().filter(|(_, v)| *v >= best - 0.3).map(|(o, _)| *o).collect();
+        shifts.push(top.iter().sum::<f64>() / top.len() as f64);
+    }
+    let mut out = Vec::with_capacity(p.len());
+    let mut widths = Vec::with_capacity(p.len());
+    for i in 0..p.len() {
+        let (lo, hi) = (i.saturating_sub(2), (i + 2).min(p.len() - 1));
+        let off = shifts[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64;
+        let q = match normal_at(i) {
+            Some(nrm) => p[i] + nrm * off,
+            None => p[i],
+        };
+        out.push(q);
+        widths.push(at(q) * px_to_em);
+    }
+    (out, widths)
+}
+
+/// Marks strokes lying along another stroke: at least 70 % of the points of the shorter one
+/// within half its local width of the other's centre line.
+fn mark_doubled(paths: &[StrokePath], fits: &mut [StrokeFit]) {
+    let len = |p: &StrokePath| p.points.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
+    for i in 0..paths.len() {
+        if !fits[i].found_ink || paths[i].points.is_empty() {
+            continue;
+        }
+        for j in 0..paths.len() {
+            if i == j || !fits[j].found_ink || paths[j].points.is_empty() || len(&paths[i]) > len(&paths[j]) {
+                continue;
+            }
+            if len(&paths[i]) == len(&paths[j]) && i < j {
+                continue;
+            }
+            let near = paths[i]
+                .points
+                .iter()
+                .zip(&paths[i].half_widths)
+                .filter(|&(p, w)| paths[j].points.iter().any(|q| p.distance(*q) <= 0.5 * w.max(4.0)))
+                .count();
+            if near as f64 >= 0.7 * paths[i].points.len() as f64 {
+                fits[i].doubled_with = Some(j);
+                break;
+            }
+        }
+    }
+}

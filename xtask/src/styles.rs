@@ -1,0 +1,311 @@
+//! `cargo xtask styles`: how well maobi writes in a font's style, per method (skeleton,
+//! template), on the font's glyphs and optionally on synthetic scans of them.
+//!
+//! For every character that both the font and the stroke data (embedded or `--hanzi-data`)
+//! have: centre lines by the method, a track built and rendered as `maobi evaluate` does
+//! (`maobi::pipeline::write_char`, pen1 nominal, B-BSM, auto char box, 512²), scored against the
+//! font glyph. "Strokes right" compares the stroke count with the template's; for the template
+//! method (whose count is the template's by construction) a character counts as right only when
+//! every stroke found ink under it and no two strokes landed on one.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use anyhow::{Context, Result, bail};
+use brush_model::BrushProfile;
+use maobi::pipeline::{Prepared, WriteOptions, write_char};
+use rayon::prelude::*;
+use serde::Serialize;
+use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
+use trajectory::{CharBox, Glyph, GlyphError, Method, glyph};
+
+const HELP: &str = "\
+cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --chars-file FILE]
+                   [--skip N] [--take N] [--methods skeleton,template] [--scan] [--execute]
+                   [--size PX] [--json OUT]
+
+  --font F       a TrueType/OpenType file (a .ttc: its first font) or a folder of them; given
+                 several times, each character comes from the first file that has it
+  --hanzi-data   stroke data (unpacked hanzi-writer-data); default: the embedded subset
+  --chars        the characters (default: the embedded subset in frequency order); @FILE or
+  --chars-file   read them from a file (whitespace and lines starting with # ignored)
+  --skip/--take  a slice of that list (e.g. tune on --take 100, report on --skip 100)
+  --scan         also score each method on a synthetic scan of the font glyph (seeded per char)
+  --execute      score the executed program like `maobi evaluate` (slower); default: the plan
+  --json OUT     write every character's row and the summary
+";
+
+#[derive(Clone, Debug, Serialize)]
+struct Row {
+    font: String,
+    char: String,
+    method: &'static str,
+    scan: bool,
+    strokes_expected: usize,
+    strokes_found: usize,
+    strokes_ok: bool,
+    missing: Vec<usize>,
+    doubled: Vec<usize>,
+    csim: f64,
+    ssim: f64,
+    iou: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+struct Summary {
+    font: String,
+    method: &'static str,
+    scan: bool,
+    chars: usize,
+    strokes_right_pct: f64,
+    mean_csim: f64,
+    worst_csim: f64,
+    mean_iou: f64,
+}
+
+/// The font files to search, in order.
+fn font_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for s in specs {
+        if s.is_dir() {
+            let mut v: Vec<PathBuf> = std::fs::read_dir(s)
+                .with_context(|| format!("{}", s.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                        matches!(e.to_ascii_lowercase().as_str(), "ttf" | "otf" | "ttc" | "otc" | "woff" | "woff2")
+                    })
+                })
+                .collect();
+            v.sort();
+            out.extend(v);
+        } else {
+            out.push(s.clone());
+        }
+    }
+    if out.is_empty() {
+        bail!("--font: no font files found");
+    }
+    Ok(out)
+}
+
+/// The glyph of `c` from the first font that has it.
+fn font_glyph(files: &[PathBuf], c: char) -> Result<Option<Glyph>> {
+    for f in files {
+        match glyph::from_font(f, c) {
+            Ok(g) => return Ok(Some(g)),
+            Err(GlyphError::Unknown { .. }) => continue,
+            Err(GlyphError::Malformed { .. }) if f.extension().is_some_and(|e| e.to_string_lossy().starts_with("woff")) => {
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok(None)
+}
+
+fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
+    let r = match dir {
+        Some(d) => glyph::from_hanzi_dir(d, c),
+        None => glyph::embedded(c),
+    };
+    match r {
+        Ok(g) => Ok(Some(g)),
+        Err(GlyphError::Unknown { .. }) => Ok(None),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// One method on one target glyph: centre lines, track, render, scores.
+fn score(
+    font: &str,
+    template: &Glyph,
+    target: Glyph,
+    method: Method,
+    scan: bool,
+    pen: &BrushProfile,
+    opts: &WriteOptions,
+) -> Result<Row> {
+    let expected = template.medians.as_ref().map_or(0, Vec::len);
+    let (paths, missing, doubled, fits_ok) = match method {
+        Method::Template => {
+            let r = trajectory::centre_lines_from_template(template, &target, trajectory::DEFAULT_ANALYSIS_PX)?;
+            let doubled = r.strokes.iter().enumerate().filter(|(_, s)| s.doubled_with.is_some()).map(|(i, _)| i).collect();
+            let ok = r.strokes_ok();
+            (r.paths.clone(), r.missing(), doubled, ok)
+        }
+        _ => (trajectory::centre_lines(&target, method, trajectory::DEFAULT_ANALYSIS_PX)?, vec![], vec![], true),
+    };
+    let p = Prepared { glyph: target, method, paths };
+    let mm = trajectory::auto_char_mm(&p.paths, pen, 0.0);
+    let r = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?.report;
+    let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));
+    Ok(Row {
+        font: font.to_string(),
+        char: r.char,
+        method: method.name(),
+        scan,
+        strokes_expected: expected,
+        strokes_found: r.strokes_found,
+        strokes_ok: fits_ok && r.strokes_found == expected,
+        missing,
+        doubled,
+        csim: sim.0,
+        ssim: sim.1,
+        iou: sim.2,
+    })
+}
+
+/// A stable per-character seed for the synthetic scan.
+fn seed_of(c: char) -> u64 {
+    0x9E37_79B9 ^ (c as u64).wrapping_mul(0x1000_0000_01B3)
+}
+
+/// Runs `cargo xtask styles`.
+pub fn run(args: &[String]) -> Result<()> {
+    let mut fonts = Vec::new();
+    let (mut hanzi, mut chars, mut skip, mut take, mut json) = (None, None, 0usize, usize::MAX, None);
+    let mut methods = vec![Method::Skeleton, Method::Template];
+    let (mut do_scan, mut execute, mut size) = (false, false, 512u32);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().with_context(|| format!("{a} needs a value\n\n{HELP}"));
+        match a.as_str() {
+            "--font" => fonts.push(PathBuf::from(val()?)),
+            "--hanzi-data" => hanzi = Some(PathBuf::from(val()?)),
+            "--chars" => {
+                let v = val()?;
+                chars = Some(match v.strip_prefix('@') {
+                    Some(f) => std::fs::read_to_string(f).with_context(|| f.to_string())?,
+                    None => v.clone(),
+                });
+            }
+            "--chars-file" => {
+                let f = val()?;
+                chars = Some(std::fs::read_to_string(f).with_context(|| f.to_string())?);
+            }
+            "--skip" => skip = val()?.parse().context("--skip")?,
+            "--take" => take = val()?.parse().context("--take")?,
+            "--methods" => {
+                methods = val()?.split(',').map(|m| m.parse::<Method>().map_err(anyhow::Error::msg)).collect::<Result<_>>()?
+            }
+            "--scan" => do_scan = true,
+            "--execute" => execute = true,
+            "--size" => size = val()?.parse().context("--size")?,
+            "--json" => json = Some(PathBuf::from(val()?)),
+            "--help" | "-h" => {
+                print!("{HELP}");
+                return Ok(());
+            }
+            other => bail!("unknown argument `{other}`\n\n{HELP}"),
+        }
+    }
+    if fonts.is_empty() {
+        bail!("--font is required\n\n{HELP}");
+    }
+    let files = font_files(&fonts)?;
+    let font_name = fonts.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join("+");
+    let list: Vec<char> = match &chars {
+        Some(s) => s
+            .lines()
+            .filter(|l| !l.trim_start().starts_with('#'))
+            .flat_map(|l| l.chars())
+            .filter(|c| !c.is_whitespace())
+            .collect(),
+        None => glyph::embedded_chars(),
+    };
+    let list: Vec<char> = list.into_iter().skip(skip).take(take).collect();
+    let pen = BrushProfile::builtin("pen1")?;
+    let opts = WriteOptions { size, free_widths: false, execute, ..WriteOptions::default() };
+    // The characters both sources have.
+    let jobs: Vec<(char, Glyph, Glyph)> = list
+        .iter()
+        .filter_map(|&c| match (template_glyph(hanzi.as_deref(), c), font_glyph(&files, c)) {
+            (Ok(Some(t)), Ok(Some(g))) => Some(Ok((c, t, g))),
+            (Err(e), _) | (_, Err(e)) => Some(Err(e)),
+            _ => None,
+        })
+        .collect::<Result<_>>()?;
+    eprintln!(
+        "styles: {} of {} characters in both the font ({}) and the stroke data; methods {}{}",
+        jobs.len(),
+        list.len(),
+        font_name,
+        methods.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "),
+        if do_scan { ", font glyphs and synthetic scans" } else { "" }
+    );
+    let done = AtomicUsize::new(0);
+    let total = jobs.len();
+    let rows: Vec<Row> = jobs
+        .par_iter()
+        .map(|(c, t, g)| {
+            let mut out = Vec::new();
+            let mut targets = vec![(g.clone(), false)];
+            if do_scan {
+                let bytes = synth_scan(g, &ScanOptions::seeded(seed_of(*c)))?;
+                let gray = decode_gray(&bytes)?;
+                targets.push((trajectory::glyph_from_gray(*c, &format!("scan of {c}"), &gray)?, true));
+            }
+            for (target, scan) in targets {
+                for &m in &methods {
+                    let row = score(&font_name, t, target.clone(), m, scan, &pen, &opts)
+                        .with_context(|| format!("{c} ({}, {})", m.name(), if scan { "scan" } else { "font" }))?;
+                    out.push(row);
+                }
+            }
+            let k = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if k % 10 == 0 || k == total {
+                eprintln!("styles: {k}/{total}");
+            }
+            Ok(out)
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect();
+    let mut summaries = Vec::new();
+    for scan in if do_scan { vec![false, true] } else { vec![false] } {
+        for &m in &methods {
+            let r: Vec<&Row> = rows.iter().filter(|r| r.method == m.name() && r.scan == scan).collect();
+            if r.is_empty() {
+                continue;
+            }
+            let n = r.len() as f64;
+            summaries.push(Summary {
+                font: font_name.clone(),
+                method: m.name(),
+                scan,
+                chars: r.len(),
+                strokes_right_pct: 100.0 * r.iter().filter(|x| x.strokes_ok).count() as f64 / n,
+                mean_csim: r.iter().map(|x| x.csim).sum::<f64>() / n,
+                worst_csim: r.iter().map(|x| x.csim).fold(f64::INFINITY, f64::min),
+                mean_iou: r.iter().map(|x| x.iou).sum::<f64>() / n,
+            });
+        }
+    }
+    println!("| font | target | method | chars | strokes right | mean CSIM | worst CSIM | mean IoU |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for s in &summaries {
+        println!(
+            "| {} | {} | {} | {} | {:.1} % | {:.3} | {:.3} | {:.3} |",
+            s.font,
+            if s.scan { "synthetic scan" } else { "font glyph" },
+            s.method,
+            s.chars,
+            s.strokes_right_pct,
+            s.mean_csim,
+            s.worst_csim,
+            s.mean_iou
+        );
+    }
+    if let Some(path) = json {
+        let doc = serde_json::json!({
+            "fonts": fonts, "hanzi_data": hanzi, "skip": skip, "take": take, "size": size,
+            "scored": if execute { "executed" } else { "planned" }, "summary": summaries, "chars": rows,
+        });
+        let tmp = path.with_extension("json.tmp");
+        std::fs::write(&tmp, serde_json::to_string_pretty(&doc)?).with_context(|| tmp.display().to_string())?;
+        std::fs::rename(&tmp, &path).with_context(|| path.display().to_string())?;
+    }
+    Ok(())
+}
