@@ -239,6 +239,15 @@ impl RobotConfig {
     /// # Errors
     /// A one-line description of the first bad field.
     pub fn validate(&self) -> Result<(), String> {
+        self.check_controller_ranges()?;
+        self.check_limits()?;
+        self.check_approach_settings()?;
+        self.check_ink()
+    }
+
+    /// Every speed, acceleration and blend positive and within what the controller accepts;
+    /// the heights and rates positive.
+    fn check_controller_ranges(&self) -> Result<(), String> {
         let l = &self.limits;
         // (field, value, controller's upper bound, unit)
         let positive = [
@@ -276,6 +285,12 @@ impl RobotConfig {
                 return Err(format!("{f} must be a positive number, got {v}"));
             }
         }
+        Ok(())
+    }
+
+    /// The settings within [`Limits`], and the limits themselves sane.
+    fn check_limits(&self) -> Result<(), String> {
+        let l = &self.limits;
         if !(l.alpha_tolerance_rad.is_finite() && l.alpha_tolerance_rad >= 0.0) {
             return Err(format!("limits.alpha_tolerance_rad must be ≥ 0, got {}", l.alpha_tolerance_rad));
         }
@@ -304,6 +319,11 @@ impl RobotConfig {
         if self.lift_mm < l.min_lift_mm {
             return Err(format!("lift_mm = {} is below the limit min_lift_mm = {}", self.lift_mm, l.min_lift_mm));
         }
+        Ok(())
+    }
+
+    /// The robot name, and the approach direction and angle.
+    fn check_approach_settings(&self) -> Result<(), String> {
         if self.robot_name.as_deref().is_some_and(|n| n.trim().is_empty()) {
             return Err("robot_name must not be empty (omit it to use the controller's first robot)".into());
         }
@@ -318,6 +338,11 @@ impl RobotConfig {
         if !(a.max_angle_rad.is_finite() && a.max_angle_rad > 0.0 && a.max_angle_rad <= std::f64::consts::FRAC_PI_2) {
             return Err(format!("approach.max_angle_rad must be in (0, π/2], got {}", a.max_angle_rad));
         }
+        Ok(())
+    }
+
+    /// The ink station (`dip` or `ink`, not both) and its reload rule.
+    fn check_ink(&self) -> Result<(), String> {
         if let Some(d) = &self.dip {
             if d.every_strokes == 0
                 || !(d.depth_mm.is_finite() && d.depth_mm > 0.0)

@@ -15,7 +15,10 @@ use serde_json::{Value, json};
 use crate::RobotError;
 use crate::kinematics;
 use crate::pose::Pose;
-use crate::program::tcp_iso;
+use crate::program::{
+    CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
+    CONTROLLER_MAX_TCP_OFFSET_M, tcp_iso,
+};
 use crate::wire;
 pub use crate::wire::Transport;
 
@@ -574,6 +577,87 @@ fn arity(params: &Value, names: &[&str], optional: &[&str]) -> bool {
     }
 }
 
+/// A fault the simulator injects on a move request.
+enum MoveFault {
+    /// Drop the connection without answering.
+    Drop,
+    /// Answer that the motion queue is full.
+    QueueFull,
+}
+
+/// The arguments of `moveJoint` (`target`: joints, rad) or `moveLine` (`target`: the TCP pose).
+struct MoveArgs {
+    joint: bool,
+    target: [f64; 6],
+    /// Speed, m/s or rad/s.
+    v: f64,
+}
+
+impl MoveArgs {
+    /// Parses the params, `None` when they are not what the controller accepts (the names or
+    /// count, the ranges of acceleration, speed and blend radius).
+    fn parse(params: &Value, joint: bool) -> Option<Self> {
+        let target = if joint { "q" } else { "pose" };
+        if !arity(params, &[target, "a", "v", "blend_radius", "duration"], &["duration"]) {
+            return None;
+        }
+        let num = |name: &str, pos: usize| arg(params, name, pos).and_then(Value::as_f64);
+        let (a, v, blend) = (num("a", 1)?, num("v", 2)?, num("blend_radius", 3)?);
+        let accepted = a > 0.0
+            && a <= CONTROLLER_MAX_ACC
+            && v > 0.0
+            && v <= CONTROLLER_MAX_SPEED
+            && (0.0..=CONTROLLER_MAX_BLEND_M).contains(&blend);
+        if !accepted {
+            return None;
+        }
+        let target = arg(params, target, 0).and_then(numbers::<6>)?;
+        Some(Self { joint, target, v })
+    }
+}
+
+impl State {
+    /// Counts a move request and says whether a fault is injected on it.
+    fn move_fault(&mut self) -> Option<MoveFault> {
+        self.moves_seen += 1;
+        let n = self.moves_seen;
+        if self.faults.drop_after_moves == Some(n) && !self.dropped {
+            self.dropped = true;
+            return Some(MoveFault::Drop);
+        }
+        match self.faults.queue_full_every {
+            Some(k) if k > 0 && n % k == 0 => Some(MoveFault::QueueFull),
+            _ => None,
+        }
+    }
+
+    /// Executes a move at once, recording its trace; returns the status (0, or
+    /// [`UNREACHABLE`]).
+    fn execute(&mut self, m: &MoveArgs) -> i64 {
+        let tcp = tcp_iso(self.tcp_offset_m);
+        let v = m.v * self.speed_fraction;
+        if m.joint {
+            let q = m.target;
+            if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
+                return UNREACHABLE;
+            }
+            let samples = joint_motion(&self.joints, &q, v, &tcp, self.time_s);
+            self.joints = q;
+            self.pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
+            self.record(samples);
+        } else {
+            let pose = Pose(m.target);
+            let seed = self.joints;
+            let Some(q) = kinematics::inverse(&pose, &tcp, Some(&seed)) else { return UNREACHABLE };
+            let samples = line_motion(&self.pose, &pose, v, self.time_s);
+            self.joints = q;
+            self.pose = pose;
+            self.record(samples);
+        }
+        0
+    }
+}
+
 fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     let id = v.get("id").cloned().unwrap_or(Value::Null);
     if v.get("jsonrpc") != Some(&json!("2.0"))
@@ -603,7 +687,7 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
     }
     match rest {
         "RobotConfig.setTcpOffset" => match arg(params, "offset", 0).and_then(numbers::<6>) {
-            Some(o) if arity(params, &["offset"], &[]) && o[2] >= 0.0 && o[2] < 0.5 => {
+            Some(o) if arity(params, &["offset"], &[]) && (0.0..CONTROLLER_MAX_TCP_OFFSET_M).contains(&o[2]) => {
                 st.tcp_offset_m = o[2];
                 let q = st.joints;
                 st.pose = Pose::from_iso(&kinematics::forward(&q, &tcp_iso(o[2])));
@@ -612,7 +696,7 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
             _ => ok(&id, json!(INVALID_ARGUMENT)),
         },
         "MotionControl.setSpeedFraction" => match arg(params, "fraction", 0).and_then(Value::as_f64) {
-            Some(f) if arity(params, &["fraction"], &[]) && f > 0.0 && f <= 1.0 => {
+            Some(f) if arity(params, &["fraction"], &[]) && f > 0.0 && f <= CONTROLLER_MAX_SPEED_FRACTION => {
                 st.speed_fraction = f;
                 ok(&id, json!(0))
             }
@@ -624,53 +708,17 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
         "RobotState.getTcpPose" => ok(&id, json!(st.pose.0)),
         "RobotState.getJointPositions" => ok(&id, json!(st.joints)),
         "MotionControl.moveJoint" | "MotionControl.moveLine" => {
-            st.moves_seen += 1;
-            let n = st.moves_seen;
-            if let Some(k) = st.faults.drop_after_moves {
-                if n == k && !st.dropped {
-                    st.dropped = true;
-                    return Reply::Drop;
-                }
+            let joint = rest == "MotionControl.moveJoint";
+            if let Some(fault) = st.move_fault() {
+                return match fault {
+                    MoveFault::Drop => Reply::Drop,
+                    MoveFault::QueueFull => ok(&id, json!(crate::aubo::QUEUE_FULL)),
+                };
             }
-            if let Some(k) = st.faults.queue_full_every {
-                if k > 0 && n % k == 0 {
-                    return ok(&id, json!(crate::aubo::QUEUE_FULL));
-                }
-            }
-            let target = if rest == "MotionControl.moveJoint" { "q" } else { "pose" };
-            if !arity(params, &[target, "a", "v", "blend_radius", "duration"], &["duration"]) {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            }
-            let num = |name: &str, pos: usize| arg(params, name, pos).and_then(Value::as_f64);
-            let (Some(a), Some(vv), Some(blend)) = (num("a", 1), num("v", 2), num("blend_radius", 3)) else {
+            let Some(m) = MoveArgs::parse(params, joint) else {
                 return ok(&id, json!(INVALID_ARGUMENT));
             };
-            if !(a > 0.0 && a <= 20.0 && vv > 0.0 && vv <= 3.2 && (0.0..=0.1).contains(&blend)) {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            }
-            let Some(target) = arg(params, target, 0).and_then(numbers::<6>) else {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            };
-            let tcp = tcp_iso(st.tcp_offset_m);
-            if rest == "MotionControl.moveJoint" {
-                let q = target;
-                if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
-                    return ok(&id, json!(UNREACHABLE));
-                }
-                let samples = joint_motion(&st.joints, &q, vv * st.speed_fraction, &tcp, st.time_s);
-                st.joints = q;
-                st.pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
-                st.record(samples);
-            } else {
-                let pose = Pose(target);
-                let seed = st.joints;
-                let Some(q) = kinematics::inverse(&pose, &tcp, Some(&seed)) else { return ok(&id, json!(UNREACHABLE)) };
-                let samples = line_motion(&st.pose, &pose, vv * st.speed_fraction, st.time_s);
-                st.joints = q;
-                st.pose = pose;
-                st.record(samples);
-            }
-            ok(&id, json!(0))
+            ok(&id, json!(st.execute(&m)))
         }
         _ => err(&id, -32601, &format!("method not found: {method}")),
     }
