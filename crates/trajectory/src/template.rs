@@ -226,8 +226,12 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
             let region: Vec<bool> = mask.iter().zip(&to_outline).map(|(&m, &d)| m && (d as f64) <= margin_px).collect();
             region.iter().any(|&b| b).then(|| distance::distance_to_background(&region, n, n))
         });
-        let sdt = own.as_ref().unwrap_or(&dt);
-        let (p, w) = super::centre_on_ridge(&snapped, sdt, n, px_to_em);
+        // On the stroke's own ink, re-centre from where the fits put it (the snap on the whole
+        // ink bends towards a crossing stroke's ridge and leaves kinks that read as corners).
+        let (p, w) = match &own {
+            Some(sdt) => super::centre_on_ridge(&pts, sdt, n, px_to_em),
+            None => super::centre_on_ridge(&snapped, &dt, n, px_to_em),
+        };
         lines.push((p, Some((w, own))));
         fits.push(StrokeFit { ink_fraction, found_ink, doubled_with: None, snap_em });
     }

@@ -96,13 +96,12 @@ fn the_ukai_font_fixture_registers_with_every_stroke() {
         assert!(reg.strokes_ok(), "{c}: {:?}", reg.strokes);
         let skel = centre_lines(&target, Method::Skeleton, PX).unwrap();
         let (ct, cs) = (csim(&reg.paths, &target), csim(&skel, &target));
-        eprintln!("{c}: template {ct:.3} skeleton {cs:.3} overlap {:.3}->{:.3} nonrigid {:.1}", reg.overlap_start, reg.overlap_fit, reg.nonrigid_mean_em);
         sum_t += ct;
         sum_s += cs;
     }
     let n = CHARS.chars().count() as f64;
-    eprintln!("mean template {:.3} skeleton {:.3}", sum_t / n, sum_s / n);
-    assert!(sum_t / n > 0.85, "mean CSIM {:.3}", sum_t / n);
+    // Measured when written: template 0.910, skeleton 0.895 (these ten are the development set).
+    assert!(sum_t / n > 0.89 && sum_t > sum_s, "mean CSIM template {:.3}, skeleton {:.3}", sum_t / n, sum_s / n);
 }
 
 #[test]
