@@ -188,7 +188,7 @@ fn character_render(ch: char, method: trajectory::Method) -> Result<Vec<u8>> {
     let pen1 = BrushProfile::builtin("pen1")?;
     let p = prepare(trajectory::glyph::embedded(ch)?, Some(method))?;
     let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
-    let opts = WriteOptions { size: 256, upper_bound: false, ..WriteOptions::default() };
+    let opts = WriteOptions { size: 256, free_widths: false, ..WriteOptions::default() };
     let r = write_char(&p, &pen1, trajectory::CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
     Ok(r.render.encode_png()?)
 }

@@ -161,7 +161,7 @@ pub fn character_figures() -> Result<Figures> {
         for model in ModelKind::ALL {
             // The executed figures (the program run as the simulator moves) for the B-BSM only.
             let execute = model == ModelKind::Bsm;
-            let opts = WriteOptions { model, size: 256, upper_bound: false, execute, ..WriteOptions::default() };
+            let opts = WriteOptions { model, size: 256, free_widths: false, execute, ..WriteOptions::default() };
             let reports = prepared
                 .par_iter()
                 .map(|p| {

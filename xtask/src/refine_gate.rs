@@ -26,7 +26,7 @@ pub fn refine_figures() -> Result<Figures> {
     let pen1 = BrushProfile::builtin("pen1")?;
     let opts = WriteOptions {
         size: 256,
-        upper_bound: false,
+        free_widths: false,
         refine: Some(RefineOptions::default()),
         ..WriteOptions::default()
     };

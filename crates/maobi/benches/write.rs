@@ -9,7 +9,7 @@ use trajectory::{CharBox, Method, glyph};
 
 fn bench(c: &mut Criterion) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let opts = WriteOptions { upper_bound: false, ..WriteOptions::default() };
+    let opts = WriteOptions { free_widths: false, ..WriteOptions::default() };
     for (name, method) in [("write_yong_medians_512", Method::Medians), ("write_yong_skeleton_512", Method::Skeleton)] {
         c.bench_function(name, |b| {
             b.iter(|| {

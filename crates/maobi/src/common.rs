@@ -212,6 +212,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// `profile.predict` for a command with `--extrapolate`: outside the calibrated range the error
+/// names the flag (`hint`: what to say, e.g. "give --extrapolate to use it anyway").
+pub fn predict_or_hint(
+    profile: &BrushProfile,
+    press: &brush_model::Press,
+    ex: brush_model::Extrapolation,
+    hint: &str,
+) -> Result<brush_model::Footprint> {
+    profile.predict(press, ex).map_err(|e| match e {
+        brush_model::ProfileError::OutOfRange { profile, quantity, value, min, max } => anyhow::anyhow!(
+            "{quantity} = {value:.4} is outside the calibrated range [{min:.4}, {max:.4}] of profile `{profile}` ({hint})"
+        ),
+        e => e.into(),
+    })
+}
+
 /// Prints a value as pretty JSON on stdout.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
     outln!("{}", serde_json::to_string_pretty(value)?)
@@ -236,6 +252,88 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
+/// Progress of a long loop (`maobi train`): an indicatif bar when stderr is a terminal; otherwise
+/// (a log file, a pipe, CI) one line on stderr each time another `every_pct` percent is done, with
+/// the step, the caller's figures, the elapsed time and an estimate of the time left.
+pub struct StepProgress {
+    bar: Option<indicatif::ProgressBar>,
+    what: &'static str,
+    total: u64,
+    every_pct: u64,
+    next_pct: u64,
+    start: std::time::Instant,
+}
+
+impl StepProgress {
+    /// A progress report over `total` steps, named `what` (`train`).
+    pub fn new(total: u64, what: &'static str, every_pct: u64) -> Self {
+        use std::io::IsTerminal;
+        let bar = std::io::stderr().is_terminal().then(|| {
+            let pb = indicatif::ProgressBar::new(total);
+            pb.set_style(
+                indicatif::ProgressStyle::with_template(&format!(
+                    "{what} [{{bar:40}}] {{pos}}/{{len}} {{msg}} ({{per_sec}}, {{eta}})"
+                ))
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
+            pb
+        });
+        let every_pct = every_pct.clamp(1, 100);
+        StepProgress {
+            bar,
+            what,
+            total: total.max(1),
+            every_pct,
+            next_pct: every_pct,
+            start: std::time::Instant::now(),
+        }
+    }
+
+    /// Step `done` (1-based) of the total is finished; `detail` is what to show with it
+    /// (`loss 0.00123  validation 0.00110`).
+    pub fn step(&mut self, done: u64, detail: &str) {
+        if let Some(pb) = &self.bar {
+            pb.set_message(detail.to_string());
+            pb.set_position(done);
+            return;
+        }
+        let pct = done.min(self.total) * 100 / self.total;
+        if pct < self.next_pct && done < self.total {
+            return;
+        }
+        while self.next_pct <= pct {
+            self.next_pct += self.every_pct;
+        }
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let eta = elapsed * (self.total - done.min(self.total)) as f64 / done.max(1) as f64;
+        eprintln!(
+            "{}: step {done}/{} ({pct}%)  {detail}  elapsed {}  ETA {}",
+            self.what,
+            self.total,
+            clock(elapsed),
+            clock(eta)
+        );
+    }
+
+    /// Removes the bar (the lines stay).
+    pub fn finish(self) {
+        if let Some(pb) = self.bar {
+            pb.finish_and_clear();
+        }
+    }
+}
+
+/// Seconds as `m:ss` (or `h:mm:ss` from an hour).
+pub fn clock(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    if s >= 3600 {
+        format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+    } else {
+        format!("{}:{:02}", s / 60, s % 60)
+    }
+}
+
 /// The `--brush` argument shared by most commands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct BrushArg {
@@ -244,14 +342,56 @@ pub struct BrushArg {
     pub brush: String,
 }
 
-/// The `--model` argument: a stroke model name.
-pub fn parse_model(s: &str) -> std::result::Result<bezier_raster::ModelKind, String> {
-    s.parse()
+/// A flag value parsed by its type's `FromStr` (whose error message is kept), with the names
+/// that parse listed by `--help` as the possible values.
+#[derive(Clone)]
+pub struct Named<T> {
+    names: Vec<&'static str>,
+    _t: std::marker::PhantomData<fn() -> T>,
 }
 
-/// The `--from` argument: a centre-line method name.
-pub fn parse_method(s: &str) -> std::result::Result<trajectory::Method, String> {
-    s.parse()
+impl<T: std::str::FromStr> Named<T> {
+    /// The parser; of `candidates`, `--help` lists the ones `T` accepts.
+    pub fn new(candidates: &[&'static str]) -> Self {
+        Named { names: candidates.iter().copied().filter(|n| n.parse::<T>().is_ok()).collect(), _t: Default::default() }
+    }
+}
+
+impl<T> clap::builder::TypedValueParser for Named<T>
+where
+    T: std::str::FromStr<Err = String> + Clone + Send + Sync + 'static,
+{
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> std::result::Result<T, clap::Error> {
+        let flag = arg.map_or_else(|| "the value".to_string(), |a| format!("'{a}'"));
+        let s = value.to_str().ok_or_else(|| {
+            clap::Error::raw(clap::error::ErrorKind::InvalidUtf8, format!("invalid UTF-8 in {flag}\n"))
+        })?;
+        s.parse().map_err(|e| {
+            clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("invalid value '{s}' for {flag}: {e}\n"))
+        })
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(self.names.iter().map(|n| clap::builder::PossibleValue::new(*n))))
+    }
+}
+
+/// The `--model` argument: a stroke model name (help lists `ModelKind::ALL`).
+pub fn parse_model() -> Named<bezier_raster::ModelKind> {
+    let names: Vec<&'static str> = bezier_raster::ModelKind::ALL.iter().map(|m| m.name()).collect();
+    Named::new(&names)
+}
+
+/// The `--from` argument: a centre-line method name (help lists those this build knows).
+pub fn parse_method() -> Named<trajectory::Method> {
+    Named::new(&["medians", "skeleton", "template"])
 }
 
 /// The press arguments shared by `footprint` and `stroke`: depth in mm, angles in degrees.
@@ -341,20 +481,46 @@ pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
     Ok(out)
 }
 
-/// `--renderer analytic|neural` and `--generator`, shared by `stroke` and `write`.
+/// `--renderer analytic|neural` and `--generator` of `maobi write`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct RendererArgs {
-    /// `analytic` (the stroke model) or `neural` (the trained generator; for `stroke` PNG only,
-    /// at the generator's own size and scale; for `write` batched along the track, and its brush
-    /// must be the one written with).
+    /// Who draws the character: `analytic` (the --model stroke model) or `neural` (the trained
+    /// generator, batched along the track; it must have been trained for --brush).
     #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
     pub renderer: String,
-    /// Generator weights for `--renderer neural` (default: the committed pen1 model).
-    #[arg(long)]
+    /// Generator weights (`.safetensors`, its `.json` config beside) for `--renderer neural`
+    /// (default: the committed pen1 generator).
+    #[arg(long, value_name = "FILE")]
     pub generator: Option<std::path::PathBuf>,
 }
 
 impl RendererArgs {
+    /// Whether the neural generator draws.
+    pub fn neural(&self) -> bool {
+        self.renderer == "neural"
+    }
+
+    /// The generator asked for (or the committed pen1 model).
+    pub fn generator(&self) -> Result<neural_gen::Generator> {
+        maobi::generator::load_generator(self.generator.as_deref())
+    }
+}
+
+/// `--renderer analytic|neural` and `--generator` of `maobi stroke`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct StrokeRendererArgs {
+    /// Who draws the footprint: `analytic` (the --model stroke model, PNG or SVG at any size and
+    /// scale) or `neural` (the trained generator: PNG only, at its own size and scale, inside its
+    /// training range).
+    #[arg(long, default_value = "analytic", value_parser = ["analytic", "neural"])]
+    pub renderer: String,
+    /// Generator weights (`.safetensors`, its `.json` config beside) for `--renderer neural`
+    /// (default: the committed pen1 generator).
+    #[arg(long, value_name = "FILE")]
+    pub generator: Option<std::path::PathBuf>,
+}
+
+impl StrokeRendererArgs {
     /// Whether the neural generator draws.
     pub fn neural(&self) -> bool {
         self.renderer == "neural"

@@ -32,8 +32,8 @@ pub struct WriteOptions {
     pub alpha_rad: f64,
     /// Track point spacing, mm.
     pub spacing_mm: f64,
-    /// Also score an unconstrained run (footprints sized freely from the glyph).
-    pub upper_bound: bool,
+    /// Also score the plan with footprints sized freely from the glyph ([`CharReport::free_widths`]).
+    pub free_widths: bool,
     /// Also run the track as a robot program (default paper frame and `robot.json`, the
     /// simulator's motion) and score what it writes.
     pub execute: bool,
@@ -50,7 +50,7 @@ impl Default for WriteOptions {
             size: 512,
             alpha_rad: 0.0,
             spacing_mm: trajectory::DEFAULT_SPACING_MM,
-            upper_bound: true,
+            free_widths: true,
             execute: true,
             refine: None,
         }
@@ -138,8 +138,10 @@ pub struct CharReport {
     pub clamped_low: usize,
     /// See `clamped_low`.
     pub clamped_high: usize,
-    /// The same scores for footprints sized freely from the glyph (upper bound of the model).
-    pub upper_bound: Option<Similarity>,
+    /// The plan's scores with every footprint sized freely from the glyph's width (h unclamped,
+    /// extrapolating beyond the brush's calibrated range). Not a bound: clamping can score higher
+    /// on some characters (an overshooting free width costs more than a clamped one).
+    pub free_widths: Option<Similarity>,
     /// What the robot would write (the program executed as the simulator moves, through the
     /// forward model) against the glyph: the headline figure.
     pub executed: Option<Similarity>,
@@ -273,7 +275,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let sim = similarity(&reference, &render)?;
     let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
     let millis = t0.elapsed().as_secs_f64() * 1e3;
-    let upper_bound = if opts.upper_bound {
+    let free_widths = if opts.free_widths {
         let free = build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
         let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
         Some(similarity(&reference, &img)?)
@@ -303,7 +305,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         char_mm: char_box.size_mm,
         clamped_low: built.clamped_low,
         clamped_high: built.clamped_high,
-        upper_bound,
+        free_widths,
         executed,
         agreement,
         refine: None,

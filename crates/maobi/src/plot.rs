@@ -1,4 +1,5 @@
-//! Pictures of results: regression plots (the paper's Fig. 9) and training curves.
+//! Pictures of results: regression plots (the paper's Fig. 9), training curves and the stroke
+//! models side by side.
 
 use std::sync::Once;
 
@@ -144,6 +145,100 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
             .label_font(("sans-serif", 14))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    to_png(buf, w, h)
+}
+
+/// Every stroke model's outline of one press side by side (the figure `maobi models --plot`
+/// writes): one panel per model, named, with x and y axes in paper millimetres (y down, as on
+/// the paper; the root end of the footprint at the origin) and a title naming the brush and the
+/// press.
+///
+/// # Errors
+/// When the press is outside the profile's calibrated range, or drawing or encoding fails.
+pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<Vec<u8>> {
+    use bezier_raster::ModelKind;
+    register_font();
+    let fp = profile.predict(press, brush_model::Extrapolation::Refuse)?;
+    let anchor = brush_model::PointMm::new(0.0, 0.0);
+    // Each model's outline as closed polygons, mm.
+    let outlines: Vec<(&str, Vec<Vec<(f64, f64)>>)> = ModelKind::ALL
+        .iter()
+        .map(|m| {
+            let path = m.model().outline(&fp, anchor, press.beta_rad);
+            let mut polys: Vec<Vec<(f64, f64)>> = Vec::new();
+            kurbo::flatten(&path, 0.01, |el| match el {
+                kurbo::PathEl::MoveTo(p) => polys.push(vec![(p.x, p.y)]),
+                kurbo::PathEl::LineTo(p) => {
+                    if let Some(last) = polys.last_mut() {
+                        last.push((p.x, p.y));
+                    }
+                }
+                _ => {}
+            });
+            (m.name(), polys)
+        })
+        .collect();
+    // One frame for all panels: the union of the outlines, with a margin.
+    let pts = outlines.iter().flat_map(|(_, p)| p.iter().flatten());
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y) in pts {
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+    }
+    let pad = 0.08 * (x1 - x0).max(y1 - y0).max(1.0);
+    let (x0, x1, y0, y1) = (x0 - pad, x1 + pad, y0 - pad, y1 + pad);
+    // Equal scales on x and y (a circle looks round): the plot area of a panel is about
+    // PANEL_W − 61 px wide; its height follows from the spans (at least 200 px, the y span
+    // widened to match), plus about 110 px of title, caption and labels.
+    const PANEL_W: u32 = 300;
+    let plot_w = f64::from(PANEL_W - 61);
+    let plot_h = (plot_w * (y1 - y0) / (x1 - x0)).max(200.0);
+    let (yc, half) = (0.5 * (y0 + y1), 0.5 * (x1 - x0) * plot_h / plot_w);
+    let (y0, y1) = (yc - half, yc + half);
+    let (w, h) = (PANEL_W * outlines.len() as u32, plot_h.round() as u32 + 110);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let root = root
+            .titled(
+                &format!(
+                    "{}: h = {:.1} mm, α = {:.1}°, β = {:.1}° (lt {:.2}, lh {:.2}, lr {:.2} mm)",
+                    profile.name,
+                    press.h_mm,
+                    press.alpha_rad.to_degrees(),
+                    press.beta_rad.to_degrees(),
+                    fp.lt_mm,
+                    fp.lh_mm,
+                    fp.lr_mm
+                ),
+                ("sans-serif", 20),
+            )
+            .map_err(|e| anyhow!("{e}"))?;
+        let cells = root.split_evenly((1, outlines.len()));
+        for (cell, (name, polys)) in cells.iter().zip(&outlines) {
+            // y runs down the page, as on the paper.
+            let mut chart = ChartBuilder::on(cell)
+                .caption(*name, ("sans-serif", 18))
+                .margin(8)
+                .x_label_area_size(35)
+                .y_label_area_size(45)
+                .build_cartesian_2d(x0..x1, y1..y0)
+                .map_err(|e| anyhow!("{e}"))?;
+            chart
+                .configure_mesh()
+                .x_desc("x (mm)")
+                .y_desc("y (mm)")
+                .x_labels(5)
+                .y_labels(5)
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(|e| anyhow!("{e}"))?;
+            chart
+                .draw_series(polys.iter().map(|p| Polygon::new(p.clone(), BLACK.filled())))
+                .map_err(|e| anyhow!("{e}"))?;
+        }
         root.present().map_err(|e| anyhow!("{e}"))?;
     }
     to_png(buf, w, h)

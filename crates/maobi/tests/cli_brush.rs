@@ -30,6 +30,14 @@ fn calibrate_writes_a_profile_that_footprint_can_use() {
     for key in ["std_err", "t"] {
         assert!(report["outputs"]["lt_mm"][key]["alpha_rad"].is_number());
     }
+    // The profile is named after the file it was written to, and says so.
+    let profile: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(profile["name"], "p");
+    assert!(stderr(&o).contains(&format!("profile `p` written to {}", out.display())), "{}", stderr(&o));
+    // The table prints the outputs in the footprint's order.
+    let table = String::from_utf8_lossy(&maobi(&["calibrate", sample().to_str().unwrap()]).stdout).into_owned();
+    let at = |n: &str| table.find(n).unwrap_or_else(|| panic!("{n}: {table}"));
+    assert!(at("lt_mm:") < at("lh_mm:") && at("lh_mm:") < at("lr_mm:"), "{table}");
     let o = maobi(&["footprint", "--h", "15", "--alpha", "5", "--brush", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let fp: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();

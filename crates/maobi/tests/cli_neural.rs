@@ -8,7 +8,7 @@ use common::{fails, maobi, ok, s};
 fn train_a_tiny_generator_and_use_it() {
     let dir = tempfile::tempdir().unwrap();
     let m = dir.path().join("g/tiny.safetensors");
-    let out = ok(&maobi(&[
+    let run = maobi(&[
         "train",
         "--arch",
         "tiny",
@@ -22,8 +22,16 @@ fn train_a_tiny_generator_and_use_it() {
         "16",
         "-o",
         s(&m),
-    ]));
+    ]);
+    let out = ok(&run);
     assert!(out.contains("30 steps"), "{out}");
+    // stderr is a pipe here, not a terminal: a progress line every 5 % instead of a bar.
+    let err = String::from_utf8_lossy(&run.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("train: step ")).collect();
+    assert!(lines.len() >= 10 && lines.len() <= 21, "{err}");
+    assert!(lines.iter().all(|l| l.contains("loss ") && l.contains("elapsed ") && l.contains("ETA ")), "{err}");
+    assert!(lines.iter().any(|l| l.contains("validation 0.")), "{err}");
+    assert!(lines.last().unwrap().starts_with("train: step 30/30 (100%)"), "{err}");
     for f in ["tiny.safetensors", "tiny.json", "loss.csv", "loss.png"] {
         assert!(dir.path().join("g").join(f).is_file(), "{f}");
     }
@@ -34,7 +42,7 @@ fn train_a_tiny_generator_and_use_it() {
     assert_eq!(cfg["recipe"]["steps"], 30);
     assert!(cfg["metrics"]["ssim_mean"].as_f64().is_some());
     let j: serde_json::Value =
-        serde_json::from_str(&ok(&maobi(&["eval-generator", "--model", s(&m), "--n", "16", "--json"]))).unwrap();
+        serde_json::from_str(&ok(&maobi(&["eval-generator", "--generator", s(&m), "--n", "16", "--json"]))).unwrap();
     assert_eq!(j["n"], 16);
     assert!(j["models"]["b-bsmg"]["csim"]["mean"].as_f64().unwrap() > 0.0);
     // Resume continues from the checkpoint.
@@ -55,7 +63,7 @@ fn train_a_tiny_generator_and_use_it() {
     ]));
     // A corrupted checkpoint is a clear error.
     std::fs::write(&m, b"not weights").unwrap();
-    fails(&maobi(&["eval-generator", "--model", s(&m), "--n", "4"]), "safetensors");
+    fails(&maobi(&["eval-generator", "--generator", s(&m), "--n", "4"]), "safetensors");
     fails(&maobi(&["train", "--steps", "0", "-o", s(&m)]), "--steps 0: expected 1..");
     fails(&maobi(&["train", "--steps", "3", "-o", s(&dir.path().join("g.bin"))]), ".safetensors");
 }
@@ -91,7 +99,7 @@ fn the_committed_generator_renders_strokes_and_characters() {
         "PNG only",
     );
     let w = dir.path().join("w");
-    ok(&maobi(&["write", "十", "--renderer", "neural", "--size", "128", "--out", s(&w)]));
+    ok(&maobi(&["write", "十", "--renderer", "neural", "--size", "128", "-o", s(&w)]));
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(w.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["model"], "b-bsmg");
     assert!(r["csim"].as_f64().unwrap() > 0.7, "{r}");

@@ -75,7 +75,10 @@ fn bad_photos_are_listed_or_refused() {
     }
     img.save(&two).unwrap();
     fails(&maobi(&["fit-stroke", s(&two), "--px-per-mm", "8"]), "2 large ink blobs");
-    fails(&maobi(&["fit-stroke", s(&blank)]), "no scale: pass --px-per-mm");
+    fails(
+        &maobi(&["fit-stroke", s(&blank)]),
+        "no scale: none was given and the file stores no resolution (PNG pHYs or JPEG density); give the scale (--px-per-mm)",
+    );
     let junk = dir.path().join("junk.png");
     std::fs::write(&junk, b"nope").unwrap();
     fails(&maobi(&["fit-stroke", s(&junk), "--px-per-mm", "8"]), "junk.png");

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{fails, maobi, ok_json, s};
+use common::{fails, maobi, ok, ok_json, s};
 
 #[test]
 fn stroke_writes_the_footprint_described_by_its_json() {
@@ -27,10 +27,11 @@ fn stroke_writes_the_footprint_described_by_its_json() {
     let col = (u + lh * k).floor() as u32;
     let tall = (0..128).map(|y| 1.0 - img.get_pixel(col, y).0[0] as f64 / 255.0).sum::<f64>();
     assert!((tall - 2.0 * lr * k).abs() < 0.5, "{tall} vs {}", 2.0 * lr * k);
-    // SVG too.
+    // SVG too; without --json it says what it wrote, where.
     let svg = dir.path().join("f.svg");
-    ok_json(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "ellipse", "-o", s(&svg)]));
+    let said = ok(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "ellipse", "-o", s(&svg)]));
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<path d=\"M"));
+    assert!(said.starts_with(&format!("wrote {}: ellipse footprint", svg.display())), "{said}");
 }
 
 #[test]
@@ -68,7 +69,7 @@ fn compare_refuses_bad_inputs() {
 fn stroke_refuses_bad_inputs_without_writing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.png");
-    fails(&maobi(&["stroke", "--h", "40", "--alpha", "5", "-o", s(&out)]), "outside the calibrated range");
+    fails(&maobi(&["stroke", "--h", "40", "--alpha", "5", "-o", s(&out)]), "give --extrapolate to use it anyway");
     fails(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--model", "brushy", "-o", s(&out)]), "brushy");
     fails(&maobi(&["stroke", "--h", "15", "--alpha", "5", "-o", s(&dir.path().join("x.gif"))]), ".png or .svg");
     fails(&maobi(&["stroke", "--h", "15", "--alpha", "5", "--px-per-mm", "-1", "-o", s(&out)]), "--px-per-mm");
@@ -111,6 +112,26 @@ fn models_table_ranks_the_baselines_below_identity() {
     // The circle ignores the footprint's length: it is the worst by CSIM.
     let mean = |m: &str| j["models"][m]["csim"]["mean"].as_f64().unwrap();
     assert!(mean("circle") < mean("ellipse") && mean("circle") < mean("qbc"));
+}
+
+#[test]
+fn models_plot_draws_the_five_models_with_axes() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("models.png");
+    let o = maobi(&["models", "--n", "2", "--size", "64", "--plot", s(&png)]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains(&format!("wrote {}", png.display())));
+    let img = image::open(&png).unwrap().to_rgb8();
+    // Five panels, 300 px each; each holds some ink (the outline) and some paper.
+    assert_eq!(img.width(), 1500);
+    for k in 0..5 {
+        let dark = (k * 300..(k + 1) * 300)
+            .flat_map(|x| (0..img.height()).map(move |y| (x, y)))
+            .filter(|&(x, y)| img.get_pixel(x, y).0[0] < 40)
+            .count();
+        assert!(dark > 500, "panel {k}: {dark} dark pixels");
+    }
+    fails(&maobi(&["models", "--n", "2", "--plot", s(&dir.path().join("m.jpg"))]), "--plot");
 }
 
 #[test]

@@ -27,7 +27,8 @@ fn check_and_export_a_written_character() {
     for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
         let out = dir.path().join(format!("prog.{fmt}"));
         let o = maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&out)]);
-        ok(&o);
+        let said = ok(&o);
+        assert!(said.contains(&format!("{fmt} program of")) && said.contains(&out.display().to_string()), "{said}");
         assert!(std::fs::read_to_string(&out).unwrap().contains(needle), "{fmt}");
         if fmt == "gcode" {
             assert!(String::from_utf8_lossy(&o.stderr).contains("β is ignored"));

@@ -225,7 +225,7 @@ fn nan_generator_weights_are_refused() {
     std::fs::write(&w, bytes).unwrap();
     std::fs::copy(src.join("pen1.json"), dir.path().join("nan.json")).unwrap();
     let needle = format!("tensor `{name}` holds NaN or infinite weights");
-    refused(&["eval-generator", "--model", s(&w), "--n", "4"], &needle);
+    refused(&["eval-generator", "--generator", s(&w), "--n", "4"], &needle);
     let png = dir.path().join("nn.png");
     refused(
         &["stroke", "--h", "15", "--alpha", "5", "--renderer", "neural", "--generator", s(&w), "-o", s(&png)],

@@ -42,6 +42,9 @@ fn one_character_gets_all_five_outputs() {
     assert!(r["executed"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     assert!(r["agreement"]["csim"].as_f64().unwrap() > 0.97, "{r}");
     assert!((r["executed"]["csim"].as_f64().unwrap() - r["csim"].as_f64().unwrap()).abs() < 0.02, "{r}");
+    // The plan with footprints sized freely from the glyph, named for what it is (not a bound).
+    assert!(r["free_widths"]["csim"].as_f64().unwrap() > 0.7, "{r}");
+    assert!(r.get("upper_bound").is_none(), "{r}");
     // The track parses back into brush-model's Track and sits inside the char box.
     let t = json(&out.join("track.json"));
     let b: Vec<f64> = t["char_box_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
@@ -88,7 +91,7 @@ fn several_characters_make_a_sheet() {
 fn skeleton_font_and_image_sources() {
     let dir = tempfile::tempdir().unwrap();
     let sk = dir.path().join("sk");
-    ok(&maobi(&["write", "十", "--from", "skeleton", "--size", "128", "--out", s(&sk)]));
+    ok(&maobi(&["write", "十", "--from", "skeleton", "--size", "128", "-o", s(&sk)]));
     let r = json(&sk.join("report.json"));
     assert_eq!(r["method"], "skeleton");
     assert_eq!(r["strokes_found"], 2);
@@ -116,7 +119,7 @@ fn bad_input_fails_cleanly_without_output() {
     fails(&maobi(&["write", "永𪚥", "--out", s(&out)]), "U+2A6A5");
     let junk = dir.path().join("junk.ttf");
     std::fs::write(&junk, b"not a font").unwrap();
-    fails(&maobi(&["write", "永", "--font", s(&junk), "--out", s(&out)]), "not a TrueType");
+    fails(&maobi(&["write", "永", "--font", s(&junk), "--out", s(&out)]), "not a font: expected a TrueType");
     let font = fixtures().join("fonts/ukai-subset.ttf");
     fails(&maobi(&["write", "永", "--font", s(&font), "--from", "medians", "--out", s(&out)]), "no stroke medians");
     fails(&maobi(&["write", "我", "--font", s(&font), "--out", s(&out)]), "ukai-subset.ttf");
@@ -141,6 +144,8 @@ fn evaluate_reports_means_and_refuses_unknown_characters() {
     let mean = (j["chars"][0]["csim"].as_f64().unwrap() + j["chars"][1]["csim"].as_f64().unwrap()) / 2.0;
     assert!((j["summary"]["csim"].as_f64().unwrap() - mean).abs() < 1e-12);
     assert_eq!(j["summary"]["strokes_match_fraction"], 1.0);
+    assert!(j["summary"]["free_widths"]["csim"].as_f64().unwrap() > 0.5, "{j}");
+    assert!(j["summary"].get("unconstrained").is_none(), "{j}");
     fails(&maobi(&["evaluate", "--chars", "十𪚥"]), "not in the embedded subset");
     fails(&maobi(&["evaluate", "--chars", "十", "--from", "bones"]), "unknown method");
 }

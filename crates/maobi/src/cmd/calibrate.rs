@@ -32,7 +32,8 @@ pub struct Args {
     /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON.
     #[arg(long, default_value = "pen1")]
     brush: String,
-    /// Name of the new profile (default: the measurements file's stem).
+    /// Name of the new profile (default: the output file's stem, e.g. `pen1-cal` for
+    /// `-o pen1-cal.json`).
     #[arg(long)]
     name: Option<String>,
     /// Print the fit report as JSON instead of a table.
@@ -85,8 +86,15 @@ pub fn run(args: Args) -> Result<()> {
         alpha_rad: span(|m| m.press.alpha_rad),
         beta_rad: span(|m| m.press.beta_rad),
     };
+    // Named after the file it is written to (`-o out/pen1-cal.json` → `pen1-cal`), so the name
+    // and the file agree; without -o after the input.
     let name = args.name.clone().unwrap_or_else(|| {
-        source.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into())
+        args.output
+            .as_deref()
+            .unwrap_or(&source)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "calibrated".into())
     });
     if let Some(out) = &args.output {
         let profile = BrushProfile::calibrated(&name, brush, ranges, report.clone());
@@ -97,10 +105,14 @@ pub fn run(args: Args) -> Result<()> {
         if args.images.is_some() {
             let plot = out.with_file_name("regression.png");
             write_atomic(&plot, &maobi::plot::regression_png(&rows, &profile)?)?;
+            eprintln!("wrote {} and {}", out.with_file_name("measurements.csv").display(), plot.display());
         }
     }
     if args.json {
         print_json(&report)?;
+        if let Some(out) = &args.output {
+            eprintln!("profile `{name}` written to {}", out.display());
+        }
     } else {
         crate::out!("{report}")?;
         if let Some(out) = &args.output {

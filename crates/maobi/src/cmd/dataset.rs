@@ -25,10 +25,10 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Stroke model to draw with.
-    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
     /// Output folder (created if missing).
-    #[arg(short, long)]
+    #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
 }
 

@@ -15,9 +15,10 @@ use crate::common::{check_range, gray, print_json};
 /// Arguments of `maobi eval-generator`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Generator weights (`.safetensors`, config beside); default: the committed pen1 model.
-    #[arg(long)]
-    model: Option<PathBuf>,
+    /// Generator weights (`.safetensors`, its `.json` config beside); default: the committed
+    /// pen1 generator.
+    #[arg(long, value_name = "FILE")]
+    generator: Option<PathBuf>,
     /// Held-out presses.
     #[arg(long, default_value_t = 500)]
     n: usize,
@@ -29,7 +30,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_range("--n", args.n, 1, 100_000, "presses")?;
-    let g = maobi::generator::load_generator(args.model.as_deref())?;
+    let g = maobi::generator::load_generator(args.generator.as_deref())?;
     let t0 = std::time::Instant::now();
     let (gc, gs) = neural_gen::eval::evaluate(&g, args.n)?;
     let secs = t0.elapsed().as_secs_f64();

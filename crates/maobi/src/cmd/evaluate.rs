@@ -19,12 +19,12 @@ pub struct Args {
     #[arg(long)]
     limit: Option<usize>,
     /// Centre-line method.
-    #[arg(long = "from", default_value = "medians", value_parser = parse_method)]
+    #[arg(long = "from", default_value = "medians", value_parser = parse_method())]
     method: Method,
     #[command(flatten)]
     brush: BrushArg,
-    /// Stroke model.
-    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    /// Stroke model that draws the footprints.
+    #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
     /// Image side, px.
     #[arg(long, default_value_t = 512)]
@@ -82,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
     let opts = WriteOptions {
         model: args.model,
         size: args.size,
-        upper_bound: true,
+        free_widths: true,
         alpha_rad,
         refine,
         ..WriteOptions::default()
@@ -131,7 +131,7 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
     let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.strokes_expected.is_some()).collect();
     let strokes_ok = with_medians.iter().filter(|c| c.strokes_expected == Some(c.strokes_found)).count();
     let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
-    let ub: Vec<_> = r.iter().filter_map(|c| c.upper_bound).collect();
+    let fw: Vec<_> = r.iter().filter_map(|c| c.free_widths).collect();
     let mean_sim = |v: Vec<maobi::pipeline::Similarity>| {
         let k = v.len() as f64;
         if v.is_empty() {
@@ -155,10 +155,11 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
         "millis_mean": mean(&|c| c.millis),
         "executed": mean_sim(r.iter().filter_map(|c| c.executed).collect()),
         "agreement": mean_sim(r.iter().filter_map(|c| c.agreement).collect()),
-        "unconstrained": if ub.is_empty() { serde_json::Value::Null } else { json!({
-            "csim": ub.iter().map(|u| u.csim).sum::<f64>() / ub.len() as f64,
-            "ssim": ub.iter().map(|u| u.ssim).sum::<f64>() / ub.len() as f64,
-            "iou": ub.iter().map(|u| u.iou).sum::<f64>() / ub.len() as f64,
+        // The plan with footprints sized freely from the glyph (not a bound: see CharReport).
+        "free_widths": if fw.is_empty() { serde_json::Value::Null } else { json!({
+            "csim": fw.iter().map(|u| u.csim).sum::<f64>() / fw.len() as f64,
+            "ssim": fw.iter().map(|u| u.ssim).sum::<f64>() / fw.len() as f64,
+            "iou": fw.iter().map(|u| u.iou).sum::<f64>() / fw.len() as f64,
         })},
     })
 }

@@ -31,8 +31,10 @@ pub fn scale_for(photo: &Path, given: Option<f64>, what: &str) -> Result<f64> {
     match given {
         Some(s) => check_range(what, s, MIN_PX_PER_MM, MAX_PX_PER_MM, "px/mm"),
         None => {
-            let s = scale_from_metadata(photo)
-                .ok_or_else(|| anyhow::Error::from(PhotoError::NoScale { path: photo.display().to_string() }))?;
+            let s = scale_from_metadata(photo).ok_or_else(|| {
+                let e = PhotoError::NoScale { path: photo.display().to_string() };
+                anyhow::anyhow!("{e}; give the scale ({what})")
+            })?;
             check_range(
                 &format!("{}: the resolution in the file,", photo.display()),
                 s,
@@ -75,6 +77,10 @@ pub fn run(args: Args) -> Result<()> {
             fit.beta_rad.to_degrees(),
             fit.iou
         )?;
+    }
+    if let Some(out) = &args.overlay {
+        let line = format!("overlay written to {}", out.display());
+        if args.json { eprintln!("{line}") } else { crate::outln!("{line}")? }
     }
     Ok(())
 }

@@ -26,7 +26,7 @@ pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush)?;
     let press = args.press.press(&profile)?;
     let extrapolation = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
-    let fp = profile.predict(&press, extrapolation)?;
+    let fp = crate::common::predict_or_hint(&profile, &press, extrapolation, "give --extrapolate to use it anyway")?;
     if args.json {
         print_json(&fp)?;
     } else {

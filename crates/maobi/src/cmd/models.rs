@@ -35,6 +35,10 @@ pub struct Args {
     /// Print JSON instead of the table.
     #[arg(long)]
     json: bool,
+    /// Also draw every model's footprint of one press side by side, with axes in mm, to this PNG
+    /// (the press: the middle of the brush's calibrated h and α ranges, β = 0).
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
 }
 
 /// CSIM and SSIM summaries of one model.
@@ -67,6 +71,19 @@ pub fn run(args: Args) -> Result<()> {
     check_range("--n", args.n, 1, 1_000_000, "presses")?;
     check_range("--size", args.size, 8, 4096, "px")?;
     let profile = load_brush(&args.brush.brush)?;
+    if let Some(plot) = &args.plot {
+        if plot.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("png") {
+            bail!("--plot {}: expected a .png file name", plot.display());
+        }
+        let r = &profile.ranges;
+        let press = Press {
+            h_mm: 0.5 * (r.h_mm.min + r.h_mm.max),
+            alpha_rad: 0.5 * (r.alpha_rad.min + r.alpha_rad.max),
+            beta_rad: 0.0,
+        };
+        crate::common::write_atomic(plot, &maobi::plot::models_png(&profile, &press)?)?;
+        eprintln!("wrote {}: every stroke model's footprint of one press, axes in mm", plot.display());
+    }
     let (targets, size, models, reference) = match &args.reference {
         None => {
             let spec = DatasetSpec::new(profile.clone(), args.size, args.seed);

@@ -73,18 +73,19 @@ pub struct CheckArgs {
 
 /// Arguments of `maobi robot export`.
 #[derive(clap::Args, Debug)]
+#[group(id = "destination", required = true, multiple = true)]
 pub struct ExportArgs {
     #[command(flatten)]
     program: ProgramArgs,
     /// Output format.
     #[arg(long, value_parser = ["aubo-lua", "urscript", "gcode"])]
     format: String,
-    /// Output file.
-    #[arg(short, long, required_unless_present = "send_script")]
+    /// Output file (required unless --send-script is given; both may be).
+    #[arg(short, long, group = "destination")]
     output: Option<PathBuf>,
-    /// Send the aubo-lua script to this controller's script port instead (HOST or HOST:PORT,
-    /// default port 30002), framed by `\r\n\r\n`.
-    #[arg(long)]
+    /// Send the aubo-lua script to this controller's script port instead of (or as well as)
+    /// writing it (HOST or HOST:PORT, default port 30002), framed by `\r\n\r\n`.
+    #[arg(long, group = "destination", value_name = "HOST[:PORT]")]
     send_script: Option<String>,
 }
 
@@ -227,6 +228,7 @@ fn export(a: ExportArgs) -> Result<()> {
     }
     if let Some(out) = &a.output {
         write_atomic(out, text.as_bytes())?;
+        println!("{} program of {} moves written to {}", a.format, program.move_count(), out.display());
     }
     Ok(())
 }
@@ -265,7 +267,8 @@ fn send(a: SendArgs) -> Result<()> {
         Ok(r) => r,
         Err(e) if matches!(&e, RobotError::RunStopped { cause, .. } if matches!(**cause, RobotError::Interrupted)) => {
             // Ctrl-C: not a success; the conventional status of a run ended by SIGINT.
-            eprintln!("error: running on {addr}: {e}");
+            // The cause first (RunStopped's own text says how far it got and the lift).
+            eprintln!("error: running on {addr}: {}; {e}", RobotError::Interrupted);
             std::process::exit(130);
         }
         Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", a.transport)),

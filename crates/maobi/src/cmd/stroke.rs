@@ -8,8 +8,8 @@ use brush_model::Extrapolation;
 use serde_json::json;
 
 use crate::common::{
-    BrushArg, MAX_PX_PER_MM, MIN_PX_PER_MM, PressArgs, RendererArgs, check_range, load_brush, parse_model, print_json,
-    write_atomic,
+    BrushArg, MAX_PX_PER_MM, MIN_PX_PER_MM, PressArgs, StrokeRendererArgs, check_range, load_brush, parse_model,
+    print_json, write_atomic,
 };
 
 /// Arguments of `maobi stroke`.
@@ -19,8 +19,8 @@ pub struct Args {
     press: PressArgs,
     #[command(flatten)]
     brush: BrushArg,
-    /// Stroke model: bsm, circle, ellipse, line or qbc.
-    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    /// Stroke model that draws the footprint (`--renderer analytic`).
+    #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
     /// Canvas side, px.
     #[arg(long, default_value_t = 128)]
@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     #[command(flatten)]
-    renderer: RendererArgs,
+    renderer: StrokeRendererArgs,
 }
 
 /// Runs the command.
@@ -58,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let press = args.press.press(&profile)?;
     let ex = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
-    let fp = profile.predict(&press, ex)?;
+    let fp = crate::common::predict_or_hint(&profile, &press, ex, "give --extrapolate to use it anyway")?;
     let anchor = canvas.anchor_mm(&fp, press.beta_rad);
     let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = match ext.as_deref() {
@@ -84,7 +84,12 @@ pub fn run(args: Args) -> Result<()> {
             "model": args.model.name(),
         }))?;
     }
-    Ok(())
+    let what = if ext.as_deref() == Some("svg") {
+        format!("{:.1} mm square SVG", canvas.size_mm())
+    } else {
+        format!("{0}×{0} px PNG at {1:.3} px/mm", args.size, canvas.px_per_mm)
+    };
+    wrote(&args, &format!("{} footprint, {what}", args.model.name()))
 }
 
 fn run_neural(args: &Args) -> Result<()> {
@@ -100,7 +105,12 @@ fn run_neural(args: &Args) -> Result<()> {
     }
     let press = args.press.press(&g.config.profile)?;
     // The generator only knows its training range.
-    let fp = g.config.profile.predict(&press, Extrapolation::Refuse)?;
+    let fp = crate::common::predict_or_hint(
+        &g.config.profile,
+        &press,
+        Extrapolation::Refuse,
+        "the generator knows only its training range: --extrapolate works with --renderer analytic",
+    )?;
     let img = g.render(&[press])?.remove(0);
     write_atomic(&args.output, &img.encode_png()?)?;
     if args.json {
@@ -114,5 +124,16 @@ fn run_neural(args: &Args) -> Result<()> {
             "model": "b-bsmg",
         }))?;
     }
-    Ok(())
+    wrote(args, &format!("generator footprint, {0}×{0} px PNG at {1:.3} px/mm", g.config.size, g.config.px_per_mm))
+}
+
+/// Says what was written where: on stdout, or on stderr when stdout carries `--json`.
+fn wrote(args: &Args, what: &str) -> Result<()> {
+    let line = format!("wrote {}: {what}", args.output.display());
+    if args.json {
+        eprintln!("{line}");
+        Ok(())
+    } else {
+        crate::outln!("{line}")
+    }
 }

@@ -31,12 +31,12 @@ pub struct Args {
     image: Option<PathBuf>,
     /// Centre lines from the source's medians or from a skeleton (default: medians when the
     /// source has them).
-    #[arg(long = "from", value_parser = parse_method)]
+    #[arg(long = "from", value_parser = parse_method())]
     method: Option<Method>,
     #[command(flatten)]
     brush: BrushArg,
-    /// Stroke model used to render the track.
-    #[arg(long, default_value = "bsm", value_parser = parse_model)]
+    /// Stroke model that draws the footprints (`--renderer analytic`).
+    #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
     /// Side of each character's images, px.
     #[arg(long, default_value_t = 512)]
@@ -67,9 +67,10 @@ pub struct Args {
     #[arg(long, default_value = "none")]
     grid: Grid,
     /// Output folder. An existing non-empty folder is refused unless --force is given.
-    #[arg(long)]
-    out: PathBuf,
-    /// Replace an existing --out folder (the old contents are removed once the new run is complete).
+    #[arg(short, long, visible_alias = "out", value_name = "DIR")]
+    output: PathBuf,
+    /// Replace an existing output folder (the old contents are removed once the new run is
+    /// complete).
     #[arg(long)]
     force: bool,
     /// Print the summary as JSON on stdout.
@@ -133,7 +134,7 @@ pub fn run(args: Args) -> Result<()> {
         check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
     }
     check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
-    check_out(&args.out, args.force)?;
+    check_out(&args.output, args.force)?;
     let flow = if args.rows { Flow::Rows } else { Flow::Columns };
     let sheet = args.sheet.as_deref().map(parse_sheet).transpose()?;
     // With a sheet the layout (and so the sheet image's size) is known before any glyph work
@@ -228,9 +229,9 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let single = results.len() == 1;
-    // Everything goes to a staging folder beside --out, swapped in at the end: a run never
+    // Everything goes to a staging folder beside --output, swapped in at the end: a run never
     // mixes with an older one, and a failed run leaves the old folder as it was.
-    let stage = Stage::new(&args.out)?;
+    let stage = Stage::new(&args.output)?;
     for (i, r) in results.iter().enumerate() {
         let dir = if single { stage.path.clone() } else { stage.path.join(format!("{:02}-{}", i + 1, r.report.char)) };
         write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
@@ -271,7 +272,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let preview = crate::cmd::preview::sheet_preview(&sheet_track, None, None)?;
     write_atomic(&stage.path.join("preview.html"), preview.as_bytes())?;
-    stage.commit(&args.out)?;
+    stage.commit(&args.output)?;
     if args.json {
         print_json(&summary)?;
     } else {
@@ -316,7 +317,7 @@ pub fn run(args: Args) -> Result<()> {
             lay.sheet.width_mm,
             lay.sheet.height_mm,
             summary["brush_fit"]["note"].as_str().unwrap_or(""),
-            args.out.display()
+            args.output.display()
         );
     }
     Ok(())
@@ -396,32 +397,32 @@ fn check_sheet_px(l: &Layout, size: u32) -> Result<()> {
     Ok(())
 }
 
-/// Refuses an existing non-empty `--out` (a file, or a folder with anything in it) unless
+/// Refuses an existing non-empty `--output` (a file, or a folder with anything in it) unless
 /// `--force`.
 fn check_out(out: &Path, force: bool) -> Result<()> {
     let meta = match std::fs::symlink_metadata(out) {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => bail!("--out {}: {e}", out.display()),
+        Err(e) => bail!("--output {}: {e}", out.display()),
     };
     if force {
         if !meta.is_dir() {
-            bail!("--out {}: exists and is not a folder; --force replaces folders only", out.display());
+            bail!("--output {}: exists and is not a folder; --force replaces folders only", out.display());
         }
         return Ok(());
     }
     let empty = meta.is_dir()
-        && std::fs::read_dir(out).with_context(|| format!("--out {}: cannot read", out.display()))?.next().is_none();
+        && std::fs::read_dir(out).with_context(|| format!("--output {}: cannot read", out.display()))?.next().is_none();
     if !empty {
         bail!(
-            "--out {}: already exists and is not empty; give --force to replace it (a run never mixes with an older one)",
+            "--output {}: already exists and is not empty; give --force to replace it (a run never mixes with an older one)",
             out.display()
         );
     }
     Ok(())
 }
 
-/// A staging folder beside `--out`; `commit` swaps it in, dropping it uncommitted removes it.
+/// A staging folder beside `--output`; `commit` swaps it in, dropping it uncommitted removes it.
 struct Stage {
     path: PathBuf,
     done: bool,
