@@ -1,4 +1,6 @@
-//! Renders a pen1 footprint with every stroke model side by side into `out/models.png`.
+//! Renders a pen1 footprint with every stroke model side by side into `out/models.png`: five
+//! unlabelled 128 px cells, left to right bsm, circle, ellipse, line, qbc (the scale is printed).
+//! `maobi models --plot FILE` draws the same comparison with named panels and axes in mm.
 //!
 //! `cargo run -p bezier-raster --example render`
 
@@ -27,5 +29,8 @@ fn main() {
     }
     std::fs::create_dir_all("out").expect("out/");
     std::fs::write("out/models.png", sheet.image().encode_png().expect("encodes")).expect("writes");
-    println!("wrote out/models.png (bsm, circle, ellipse, line, qbc)");
+    println!(
+        "wrote out/models.png: cells of {cell_mm:.1} mm ({:.2} px/mm), left to right bsm, circle, ellipse, line, qbc",
+        canvas.px_per_mm
+    );
 }
