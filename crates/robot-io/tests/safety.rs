@@ -515,6 +515,37 @@ fn ctrl_c_mid_stroke_stops_lifts_and_is_an_error() {
 }
 
 #[test]
+fn a_controller_that_stays_away_ends_in_gave_up_with_the_connection_error_as_cause() {
+    let f = paper();
+    let (prog, _) = build_program(&rows(2, 30), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
+    // One connection only, dropped after 20 requests (mid stroke 1); then nothing listens.
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    let upstream = sim.addr;
+    let proxy = std::thread::spawn(move || {
+        let (client, _) = listener.accept().unwrap();
+        drop(listener);
+        let server = TcpStream::connect(upstream).unwrap();
+        let end = Instant::now() + Duration::from_secs(30);
+        let (total, drops, stop) =
+            (Arc::new(AtomicUsize::new(0)), Arc::new(AtomicUsize::new(0)), Arc::new(AtomicBool::new(false)));
+        relay(client, server, Some(20), None, total, drops, stop, end);
+    });
+    let stop = AtomicBool::new(false);
+    let e = run_program(&addr.to_string(), &prog, None, &opts(&stop), |_| {}).unwrap_err();
+    let msg = chain(&e);
+    let (cause, completed, lifted, _) = stopped(e);
+    let RobotError::GaveUp { reconnect_attempts, last, .. } = cause else { panic!("{msg}") };
+    assert_eq!(reconnect_attempts, 5, "{msg}");
+    assert!(matches!(*last, RobotError::Io { .. }), "{msg}");
+    assert!(msg.contains("then 5 connection attempt(s) failed; last fault: connection: "), "{msg}");
+    assert_eq!(completed, 0);
+    assert!(!lifted, "{msg}");
+    proxy.join().unwrap();
+}
+
+#[test]
 fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifted() {
     let f = paper();
     // Short strokes (about 20 requests each): every 50th request dropped, the run finishes;
