@@ -2,17 +2,17 @@
 //!
 //! Footprints to pixels, exactly and fast.
 //!
-//! * [`models`]: the [`StrokeModel`] trait: the analytic B-BSM outline ([`Bsm`]) and the paper's
+//! * Stroke models: the [`StrokeModel`] trait ([`ModelKind`] names them): the analytic B-BSM outline ([`Bsm`]) and the paper's
 //!   baselines ([`Circle`], [`Ellipse`], [`Line`], [`Qbc`]), all built from the same
 //!   [`Footprint`](brush_model::Footprint) and anchor so comparisons are fair. Outlines are kurbo
 //!   [`BezPath`](kurbo::BezPath)s in paper millimetres.
-//! * [`raster`]: a reusable [`Rasterizer`] that fills a path, scaled by `px_per_mm`, into a
+//! * Rasterising: a reusable [`Rasterizer`] that fills a path, scaled by `px_per_mm`, into a
 //!   [`Coverage`] image with tiny-skia's anti-aliasing (ink = 1), either replacing the image or
 //!   stamping into it by per-pixel max (docs/contracts.md §6).
-//! * [`canvas`]: the single-footprint canvas convention shared by `maobi stroke`, the dataset and
+//! * The single-footprint canvas convention shared by `maobi stroke`, the dataset and
 //!   the neural generator ([`StrokeCanvas`]).
-//! * [`batch`]: parallel rendering with rayon and the [`Compositor`] for many stamps.
-//! * [`dataset`]: deterministic random presses over a profile's range and their images.
+//! * Batches: parallel rendering with rayon ([`render_batch`], [`render_track`]) and the [`Compositor`] for many stamps.
+//! * Datasets ([`DatasetSpec`]): deterministic random presses over a profile's range and their images.
 //! * [`binary`]: Otsu's threshold and connected components for binary analysis.
 //! * [`coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG.
 //!

@@ -2,13 +2,13 @@
 //!
 //! The physical core of maobi: how a hairy brush pressed into paper leaves a footprint.
 //!
-//! * [`units`]: unit-carrying types ([`Brush`], [`Press`], [`TrackPoint`], [`Track`]); lengths
+//! * Units: unit-carrying types ([`Brush`], [`Press`], [`TrackPoint`], [`Track`]); lengths
 //!   in mm, angles in radians, units in every field name.
-//! * [`footprint`]: the B-BSM footprint ([`Footprint`]: tip length `lt`, root length `lh`, belly
+//! * The B-BSM footprint ([`Footprint`]: tip length `lt`, root length `lh`, belly
 //!   half-width `lr`) as two mirrored cubic Béziers, placed on the paper by an anchor and `β`.
-//! * [`regression`]: the least-squares fits from measured presses to footprints (the paper's
+//! * Regression ([`fit_general`], [`fit_paper`], [`FitReport`]): the least-squares fits from measured presses to footprints (the paper's
 //!   general Eq. 6 and its Eq. 1–5 form) with a statsmodels-style report.
-//! * [`measurements`]: the measurements CSV.
+//! * The measurements CSV ([`load_measurements`], [`Measurement`]).
 //! * [`motion`]: the forward model of the moving brush ([`ForwardModel`]): from the brush's
 //!   commanded path (position, depth, tilt) to the footprints it leaves and which way they point.
 //! * [`profile`]: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction

@@ -180,7 +180,7 @@ impl Skeleton {
 }
 
 /// A piece no longer than this many half-widths, all of whose points lie within one local
-/// half-width of another stroke's centre line, is dropped by [`drop_covered`].
+/// half-width of another stroke's centre line, is dropped by `drop_covered`.
 pub const COVERED_MAX_WIDTHS: f64 = 3.0;
 
 /// Drops short pieces that lie wholly inside the ink of other strokes (a crossing that thinning
