@@ -95,7 +95,9 @@ fn font_glyph(files: &[PathBuf], c: char) -> Result<Option<Glyph>> {
         match glyph::from_font(f, c) {
             Ok(g) => return Ok(Some(g)),
             Err(GlyphError::Unknown { .. }) => continue,
-            Err(GlyphError::Malformed { .. }) if f.extension().is_some_and(|e| e.to_string_lossy().starts_with("woff")) => {
+            Err(GlyphError::Malformed { .. })
+                if f.extension().is_some_and(|e| e.to_string_lossy().starts_with("woff")) =>
+            {
                 continue;
             }
             Err(e) => return Err(e.into()),
@@ -130,7 +132,8 @@ fn score(
     let (paths, missing, doubled, fits_ok) = match method {
         Method::Template => {
             let r = trajectory::centre_lines_from_template(template, &target, trajectory::DEFAULT_ANALYSIS_PX)?;
-            let doubled = r.strokes.iter().enumerate().filter(|(_, s)| s.doubled_with.is_some()).map(|(i, _)| i).collect();
+            let doubled =
+                r.strokes.iter().enumerate().filter(|(_, s)| s.doubled_with.is_some()).map(|(i, _)| i).collect();
             let ok = r.strokes_ok();
             (r.paths.clone(), r.missing(), doubled, ok)
         }
@@ -187,7 +190,8 @@ pub fn run(args: &[String]) -> Result<()> {
             "--skip" => skip = val()?.parse().context("--skip")?,
             "--take" => take = val()?.parse().context("--take")?,
             "--methods" => {
-                methods = val()?.split(',').map(|m| m.parse::<Method>().map_err(anyhow::Error::msg)).collect::<Result<_>>()?
+                methods =
+                    val()?.split(',').map(|m| m.parse::<Method>().map_err(anyhow::Error::msg)).collect::<Result<_>>()?
             }
             "--scan" => do_scan = true,
             "--execute" => execute = true,

@@ -65,7 +65,11 @@ fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
                 for yy in (y - r).max(0)..=(y + r).min(gh as i64 - 1) {
                     for xx in (x - r).max(0)..=(x + r).min(gw as i64 - 1) {
                         let v = g[yy as usize * gw + xx as usize];
-                        if max { acc = acc.max(v) } else { acc += v }
+                        if max {
+                            acc = acc.max(v)
+                        } else {
+                            acc += v
+                        }
                         k += 1;
                     }
                 }
@@ -85,7 +89,8 @@ fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
             let (x0, tx) = (fx.floor() as usize, fx - fx.floor());
             let x1 = (x0 + 1).min(gw - 1);
             let at = |i: usize, j: usize| grid[j * gw + i] as f64;
-            let v = (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty) + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty;
+            let v = (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
+                + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty;
             out.push((v as f32).max(floor).max(1.0));
         }
     }
@@ -98,7 +103,8 @@ fn clean_gray(name: &str, gray: GrayImage) -> Result<(u32, Vec<f32>), GlyphError
     let gray = if gray.width().max(gray.height()) > 1024 {
         // Longer side to 1024 px, aspect kept (as `DynamicImage::resize` does).
         let k = 1024.0 / gray.width().max(gray.height()) as f64;
-        let (nw, nh) = (((gray.width() as f64 * k).round() as u32).max(1), ((gray.height() as f64 * k).round() as u32).max(1));
+        let (nw, nh) =
+            (((gray.width() as f64 * k).round() as u32).max(1), ((gray.height() as f64 * k).round() as u32).max(1));
         image::imageops::resize(&gray, nw, nh, image::imageops::FilterType::Triangle)
     } else {
         gray

@@ -157,14 +157,16 @@ fn blur(src: &[f32], n: usize, sigma: f64) -> Vec<f32> {
     let mut tmp = vec![0.0f32; n * n];
     for y in 0..n {
         for x in 0..n {
-            let acc: f64 = k.iter().enumerate().map(|(j, w)| w * src[y * n + clamp(x as i64 + j as i64 - r)] as f64).sum();
+            let acc: f64 =
+                k.iter().enumerate().map(|(j, w)| w * src[y * n + clamp(x as i64 + j as i64 - r)] as f64).sum();
             tmp[y * n + x] = (acc / norm) as f32;
         }
     }
     let mut out = vec![0.0f32; n * n];
     for y in 0..n {
         for x in 0..n {
-            let acc: f64 = k.iter().enumerate().map(|(j, w)| w * tmp[clamp(y as i64 + j as i64 - r) * n + x] as f64).sum();
+            let acc: f64 =
+                k.iter().enumerate().map(|(j, w)| w * tmp[clamp(y as i64 + j as i64 - r) * n + x] as f64).sum();
             out[y * n + x] = (acc / norm) as f32;
         }
     }
@@ -207,11 +209,11 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
     for y in 0..n {
         for x in 0..n {
             let (px, py) = ((x as f64 + 0.5 - c) / c, (y as f64 + 0.5 - c) / c);
-            let light = 1.0 - o.light_gradient * (0.5 + 0.5 * (px * lc + py * ls).clamp(-1.0, 1.0))
+            let light = 1.0
+                - o.light_gradient * (0.5 + 0.5 * (px * lc + py * ls).clamp(-1.0, 1.0))
                 - o.vignette * (px * px + py * py) / 2.0;
             let grain = r.unit() * 2.0 - 1.0;
-            let tex = 1.0
-                + o.texture * (0.6 * fibres[y * n + x] as f64 + 0.3 * fine[y * n + x] as f64 + 0.3 * grain);
+            let tex = 1.0 + o.texture * (0.6 * fibres[y * n + x] as f64 + 0.3 * fine[y * n + x] as f64 + 0.3 * grain);
             let paper = 0.93 * light * tex;
             let v = paper * (1.0 - (1.0 - o.ink_level) * ink[y * n + x] as f64);
             gray.push((v * 255.0).round().clamp(0.0, 255.0) as u8);

@@ -147,7 +147,8 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
     for sigma_px in [4.0, 1.5] {
         let tb = gaussian_blur(t_cov.data(), fit_n, sigma_px);
         let gb = gaussian_blur(g_cov.data(), fit_n, sigma_px);
-        let score = |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
+        let score =
+            |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
         overlap_start.get_or_insert_with(|| score(&q));
         let steps = [0.05, 0.05, 0.05, 0.05, 12.0, 12.0];
         let (best, val) = nelder_mead(|c| -score(c), &q, &steps, 160);
@@ -171,9 +172,9 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
     } else {
         None
     };
-    let nonrigid_mean_em = field.as_ref().map_or(0.0, |f| {
-        ctrl.iter().map(|&p| f.displacement(p).hypot()).sum::<f64>() / ctrl.len() as f64
-    });
+    let nonrigid_mean_em = field
+        .as_ref()
+        .map_or(0.0, |f| ctrl.iter().map(|&p| f.displacement(p).hypot()).sum::<f64>() / ctrl.len() as f64);
     // 3. Snap onto the target's distance ridge.
     let n = opts.analysis_px.max(32) as usize;
     let px_to_em = EM / n as f64;
@@ -196,8 +197,7 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
     for (i, m) in moved.iter().enumerate() {
         let placed = super::densify(m, 8.0);
         let near = placed.iter().filter(|&&p| ink_near(p)).count() as f64 / placed.len() as f64;
-        let pts: Vec<Point> =
-            placed.iter().map(|&p| field.as_ref().map_or(p, |f| p + f.displacement(p))).collect();
+        let pts: Vec<Point> = placed.iter().map(|&p| field.as_ref().map_or(p, |f| p + f.displacement(p))).collect();
         let on_ink = pts.iter().filter(|&&p| at(p) >= 1.0).count();
         let ink_fraction = on_ink as f64 / pts.len() as f64;
         // No ink near where the global fit put it, or none under it after the non-rigid fit (which
@@ -236,7 +236,8 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         fits.push(StrokeFit { ink_fraction, found_ink, doubled_with: None, snap_em });
     }
     // Strokes without ink get the median half-width of the others.
-    let mut all_w: Vec<f64> = lines.iter().filter_map(|(_, w)| w.as_ref()).flat_map(|(w, _)| w.iter()).copied().collect();
+    let mut all_w: Vec<f64> =
+        lines.iter().filter_map(|(_, w)| w.as_ref()).flat_map(|(w, _)| w.iter()).copied().collect();
     all_w.sort_by(f64::total_cmp);
     let typical = if all_w.is_empty() { 20.0 } else { all_w[all_w.len() / 2] };
     let mut paths = Vec::with_capacity(lines.len());
@@ -254,7 +255,14 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         }
     }
     mark_doubled(&paths, &mut fits);
-    Ok(Registration { paths, strokes: fits, affine: q, overlap_start: overlap_start.unwrap_or(0.0), overlap_fit, nonrigid_mean_em })
+    Ok(Registration {
+        paths,
+        strokes: fits,
+        affine: q,
+        overlap_start: overlap_start.unwrap_or(0.0),
+        overlap_fit,
+        nonrigid_mean_em,
+    })
 }
 
 /// A stroke with less than [`TemplateOptions::min_ink_fraction`] of its centre line within this

@@ -65,7 +65,11 @@ fn on_its_own_outline_the_template_gives_the_medians_result() {
         let reg = register(&g, &target, &opts()).unwrap();
         // The global fit finds the identity.
         let [a, b, cc, d, e, f] = reg.affine;
-        assert!((a - 1.0).abs() < 0.03 && (d - 1.0).abs() < 0.03 && b.abs() < 0.03 && cc.abs() < 0.03, "{c}: {:?}", reg.affine);
+        assert!(
+            (a - 1.0).abs() < 0.03 && (d - 1.0).abs() < 0.03 && b.abs() < 0.03 && cc.abs() < 0.03,
+            "{c}: {:?}",
+            reg.affine
+        );
         assert!(e.abs() < 15.0 && f.abs() < 15.0, "{c}: {:?}", reg.affine);
         // Same strokes in the same order, every one on ink.
         assert_eq!(reg.paths.len(), medians.len(), "{c}");

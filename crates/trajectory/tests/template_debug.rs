@@ -11,9 +11,9 @@ use trajectory::{glyph, raster};
 #[test]
 #[ignore]
 fn overlays() {
-    let font = std::env::var("TEMPLATE_DEBUG_FONT").map(PathBuf::from).unwrap_or_else(|_| {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf")
-    });
+    let font = std::env::var("TEMPLATE_DEBUG_FONT")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf"));
     let chars = std::env::var("TEMPLATE_DEBUG_CHARS").unwrap_or_else(|_| "永字八法十口人丁山水".into());
     let out = std::env::temp_dir().join("template-debug");
     std::fs::create_dir_all(&out).unwrap();
@@ -68,7 +68,12 @@ fn probe() {
     for k in (0..p.points.len()).step_by(10) {
         let q = p.points[k];
         let prof: Vec<String> = (-10..=10)
-            .map(|o| format!("{:.1}", trajectory::distance::sample(&dt, n, n, q.x / 2.0 + o as f64 * 0.7, q.y / 2.0 - o as f64 * 0.7)))
+            .map(|o| {
+                format!(
+                    "{:.1}",
+                    trajectory::distance::sample(&dt, n, n, q.x / 2.0 + o as f64 * 0.7, q.y / 2.0 - o as f64 * 0.7)
+                )
+            })
             .collect();
         eprintln!("{:?} w {:.1} {}", q, p.half_widths[k], prof.join(" "));
     }
@@ -86,8 +91,16 @@ fn probe2() {
     let med = trajectory::centre_lines(&g, trajectory::Method::Medians, 512).unwrap();
     for (i, (a, b)) in reg.paths.iter().zip(&med).enumerate() {
         let f = |p: &trajectory::StrokePath| {
-            format!("n{} first ({:.0},{:.0}) last ({:.0},{:.0}) corners {:?} wmean {:.1}", p.points.len(), p.points[0].x, p.points[0].y,
-                p.points.last().unwrap().x, p.points.last().unwrap().y, p.corners, p.half_widths.iter().sum::<f64>() / p.half_widths.len() as f64)
+            format!(
+                "n{} first ({:.0},{:.0}) last ({:.0},{:.0}) corners {:?} wmean {:.1}",
+                p.points.len(),
+                p.points[0].x,
+                p.points[0].y,
+                p.points.last().unwrap().x,
+                p.points.last().unwrap().y,
+                p.corners,
+                p.half_widths.iter().sum::<f64>() / p.half_widths.len() as f64
+            )
         };
         eprintln!("{i} T {}\n  M {}\n  raw {:?}", f(a), f(b), g.medians.as_ref().unwrap()[i]);
     }
