@@ -51,8 +51,7 @@ proptest! {
         prop_assert!((tip.distance(anchor) - f.length_mm()).abs() < 1e-9 * f.length_mm().max(1.0));
         // Direction of the axis is beta.
         let dir = (tip.y_mm - y).atan2(tip.x_mm - x);
-        let d = (dir - beta).rem_euclid(std::f64::consts::TAU);
-        prop_assert!(d < 1e-9 || (std::f64::consts::TAU - d) < 1e-9);
+        prop_assert!(brush_model::wrap_angle_rad(dir - beta).abs() < 1e-9);
         // Distances between curve points are preserved.
         let (p, q) = (f.upper().eval(t), f.lower().eval(t));
         let (pp, qq) = (o.upper.eval(t), o.lower.eval(t));

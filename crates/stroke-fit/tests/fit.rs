@@ -61,10 +61,7 @@ fn recovers_lengths_within_3_percent_and_direction_within_1_degree() {
         let grow = c.d.bleed_px / c.px_per_mm;
         let rel = |a: f64, b: f64| (a - b).abs() / b;
         let errs = [rel(f.lt_mm, fp.lt_mm + grow), rel(f.lh_mm, fp.lh_mm + grow), rel(f.lr_mm, fp.lr_mm + grow)];
-        let dbeta = ((f.beta_rad - beta + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-            - std::f64::consts::PI)
-            .abs()
-            .to_degrees();
+        let dbeta = brush_model::wrap_angle_rad(f.beta_rad - beta).abs().to_degrees();
         println!(
             "case {i}: lt {:.3}/{:.3} lh {:.3}/{:.3} lr {:.3}/{:.3} β err {dbeta:.3}° IoU {:.4}",
             f.lt_mm, fp.lt_mm, f.lh_mm, fp.lh_mm, f.lr_mm, fp.lr_mm, f.iou
