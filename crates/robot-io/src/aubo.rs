@@ -544,6 +544,19 @@ fn io_err(method: &str, e: std::io::Error) -> RobotError {
     }
 }
 
+/// An error and its causes on one line, `: `-separated (for a message that keeps a second
+/// error beside the one returned).
+fn with_causes(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        cause = c.source();
+    }
+    s
+}
+
 /// [`RobotError::Io`] while doing `context` (an address or a method).
 fn io_at(context: &str, source: std::io::Error) -> RobotError {
     RobotError::Io { context: context.to_string(), source }
@@ -868,7 +881,7 @@ impl Runner<'_, '_> {
         }
         let (lifted, lift) = match outcome {
             Ok(words) => (true, words),
-            Err(e) => (false, format!("could not lift the brush ({e}): it may still touch the paper")),
+            Err(e) => (false, format!("could not lift the brush ({}): it may still touch the paper", with_causes(&e))),
         };
         RobotError::RunStopped {
             cause: Box::new(cause),
