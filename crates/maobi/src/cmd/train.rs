@@ -156,5 +156,12 @@ pub fn run(args: Args) -> Result<()> {
         ssim.worst,
         csim.mean
     )?;
+    crate::outln!(
+        "wrote {} (config beside it: {}), {} and {}",
+        args.output.display(),
+        neural_gen::model::config_path(&args.output).display(),
+        dir.join("loss.csv").display(),
+        dir.join("loss.png").display()
+    )?;
     Ok(())
 }
