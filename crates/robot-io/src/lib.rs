@@ -39,6 +39,7 @@ pub use nalgebra;
 struct ReadmeDoctests;
 
 pub mod aubo;
+mod config;
 pub mod export;
 pub mod frame;
 pub mod kinematics;
