@@ -61,7 +61,7 @@ fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
         let mut out = vec![0.0f32; gw * gh];
         for y in 0..gh as i64 {
             for x in 0..gw as i64 {
-                let (mut acc, mut k) = (if max { 0.0f32 } else { 0.0 }, 0);
+                let (mut acc, mut k) = (0.0f32, 0);
                 for yy in (y - r).max(0)..=(y + r).min(gh as i64 - 1) {
                     for xx in (x - r).max(0)..=(x + r).min(gw as i64 - 1) {
                         let v = g[yy as usize * gw + xx as usize];

@@ -69,7 +69,8 @@ impl Default for TemplateOptions {
 }
 
 /// What registration found for one template stroke (index = its place in writing order, from 0).
-#[derive(Clone, Debug, PartialEq)]
+/// Serialises as the `report.json` entry (`{"ink_fraction", "found_ink", "doubled_with", "snap_em"}`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct StrokeFit {
     /// Share (0..1) of the stroke's moved centre line (after steps 1 and 2) lying on target ink.
     pub ink_fraction: f64,
@@ -613,6 +614,7 @@ impl Cpd {
 /// (`n × n`): off the ink it first steps to the nearest ink along the normal, then climbs while
 /// the distance grows. The shifts are smoothed along the stroke (window 5). Returns the moved
 /// points and the ridge heights (half-widths), em units.
+#[allow(clippy::needless_range_loop)] // indices address p, its normals and the shifts together
 fn snap_to_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
     let at = |q: Point| distance::sample(dt, n, n, q.x / px_to_em, q.y / px_to_em);
     let step = 0.5 * px_to_em;
