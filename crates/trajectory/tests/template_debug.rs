@@ -1,6 +1,8 @@
 //! Overlays for looking at registrations by eye (ignored; `cargo test -p trajectory --test
 //! template_debug -- --ignored`, images in `$TMPDIR/template-debug/`, fonts from
-//! `TEMPLATE_DEBUG_FONT` or the UKai fixture, characters from `TEMPLATE_DEBUG_CHARS`).
+//! `TEMPLATE_DEBUG_FONT` or the UKai fixture, characters from `TEMPLATE_DEBUG_CHARS`; with
+//! `TEMPLATE_DEBUG_SELF` set, the template onto its own outline). Grey: the target; yellow: the
+//! template before any fit; coloured dots: the registered centre lines, a square at each start.
 
 use std::path::PathBuf;
 
@@ -52,56 +54,5 @@ fn overlays() {
         }
         img.save(out.join(format!("{c}.png"))).unwrap();
         eprintln!("{c}: affine {:?} nonrigid {:.1} {:?}", reg.affine, reg.nonrigid_mean_em, reg.strokes);
-    }
-}
-
-#[test]
-#[ignore]
-fn probe() {
-    let g = glyph::embedded('永').unwrap();
-    let t = trajectory::template::shape_only(&g);
-    let reg = register(&g, &t, &TemplateOptions::default()).unwrap();
-    let n = 512usize;
-    let mask = raster::mask_of(&raster::render_glyph(&t, n as u32));
-    let dt = trajectory::distance::distance_to_background(&mask, n, n);
-    let p = &reg.paths[4];
-    for k in (0..p.points.len()).step_by(10) {
-        let q = p.points[k];
-        let prof: Vec<String> = (-10..=10)
-            .map(|o| {
-                format!(
-                    "{:.1}",
-                    trajectory::distance::sample(&dt, n, n, q.x / 2.0 + o as f64 * 0.7, q.y / 2.0 - o as f64 * 0.7)
-                )
-            })
-            .collect();
-        eprintln!("{:?} w {:.1} {}", q, p.half_widths[k], prof.join(" "));
-    }
-}
-
-#[test]
-#[ignore]
-fn probe2() {
-    let c = std::env::var("TEMPLATE_DEBUG_CHARS").unwrap_or_else(|_| "法".into()).chars().next().unwrap();
-    let g = glyph::embedded(c).unwrap();
-    let t = trajectory::template::shape_only(&g);
-    let iters = std::env::var("CPD_ITERS").map(|v| v.parse().unwrap()).unwrap_or(40);
-    let reg = register(&g, &t, &TemplateOptions { cpd_iters: iters, ..TemplateOptions::default() }).unwrap();
-    eprintln!("nonrigid {:.1}", reg.nonrigid_mean_em);
-    let med = trajectory::centre_lines(&g, trajectory::Method::Medians, 512).unwrap();
-    for (i, (a, b)) in reg.paths.iter().zip(&med).enumerate() {
-        let f = |p: &trajectory::StrokePath| {
-            format!(
-                "n{} first ({:.0},{:.0}) last ({:.0},{:.0}) corners {:?} wmean {:.1}",
-                p.points.len(),
-                p.points[0].x,
-                p.points[0].y,
-                p.points.last().unwrap().x,
-                p.points.last().unwrap().y,
-                p.corners,
-                p.half_widths.iter().sum::<f64>() / p.half_widths.len() as f64
-            )
-        };
-        eprintln!("{i} T {}\n  M {}\n  raw {:?}", f(a), f(b), g.medians.as_ref().unwrap()[i]);
     }
 }
