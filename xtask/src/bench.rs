@@ -17,6 +17,8 @@ const BENCHES: &[(&str, &str)] = &[
     ("maobi", "write"),
     ("neural-gen", "generator"),
     ("neural-gen", "ltp"),
+    ("neural-gen", "gen_vjp"),
+    ("track-refine", "refine"),
 ];
 
 /// (criterion id, label).
@@ -42,6 +44,11 @@ const ROWS: &[(&str, &str)] = &[
     ("ltp_inference/batch_64_maobi", "LearningToPaint-size net, inference batch 64, maobi kernels"),
     ("ltp_inference/batch_1_candle", "LearningToPaint-size net, inference batch 1, stock candle"),
     ("ltp_inference/batch_64_candle", "LearningToPaint-size net, inference batch 64, stock candle"),
+    ("generator_vjp/batch_64_direct", "generator forward + VJP to the presses, batch 64, maobi kernels (InputVjp)"),
+    ("generator_vjp/batch_64_forward_direct", "generator forward alone, batch 64, maobi kernels"),
+    ("generator_vjp/batch_64_candle_autograd", "generator forward + VJP to the presses, batch 64, candle autograd"),
+    ("refine/永 default", "refining 永 at the defaults (analytic gradients, 20 steps)"),
+    ("refine/字 default", "refining 字 at the defaults (analytic gradients, 20 steps)"),
 ];
 
 fn estimate_ns(dir: &Path, id: &str) -> Option<f64> {
@@ -115,11 +122,38 @@ pub fn run(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// The PyTorch reference for the LearningToPaint-size network (`benches/ltp_torch.py`, 2
-/// threads), when python3 with torch is installed; one row saying so otherwise.
+/// The Python that runs the PyTorch references: `$MAOBI_PYTHON`, else `python3`.
+fn python() -> String {
+    std::env::var("MAOBI_PYTHON").unwrap_or_else(|_| "python3".to_string())
+}
+
+/// The PyTorch references (2 threads): the LearningToPaint-size network
+/// (`benches/ltp_torch.py`) and the generator's forward + VJP (`benches/gen_vjp_torch.py`),
+/// when the Python (`$MAOBI_PYTHON` or python3) has torch; rows saying "not run" otherwise.
 fn torch_rows(root: &Path) -> String {
+    let mut rows = ltp_torch_row(root);
+    let script = root.join("crates/neural-gen/benches/gen_vjp_torch.py");
+    let out = Command::new(python()).arg(&script).args(["--threads", "2", "--json"]).output();
+    let parsed = out
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| serde_json::from_slice::<serde_json::Value>(&o.stdout).ok());
+    match parsed {
+        Some(v) => rows.push_str(&format!(
+            "| generator forward + VJP to the presses, batch 64, PyTorch {} CPU (2 threads) | {} |\n\
+             | generator forward alone, batch 64, PyTorch (2 threads) | {} |\n",
+            v["torch"].as_str().unwrap_or("?"),
+            human(v["forward_vjp_s"].as_f64().unwrap_or(f64::NAN) * 1e9),
+            human(v["forward_s"].as_f64().unwrap_or(f64::NAN) * 1e9),
+        )),
+        None => rows.push_str("| generator forward + VJP, batch 64, PyTorch | not run (no Python with torch) |\n"),
+    }
+    rows
+}
+
+fn ltp_torch_row(root: &Path) -> String {
     let script = root.join("crates/neural-gen/benches/ltp_torch.py");
-    let out = Command::new("python3").arg(&script).args(["--threads", "2", "--steps", "10", "--json"]).output();
+    let out = Command::new(python()).arg(&script).args(["--threads", "2", "--steps", "10", "--json"]).output();
     let parsed = out
         .ok()
         .filter(|o| o.status.success())

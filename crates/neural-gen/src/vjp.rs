@@ -223,6 +223,80 @@ impl InputVjp {
         Tape { batch: b, fc_masks, stage_masks, images: x }
     }
 
+    /// The Jacobian of each image with respect to its press by forward-mode differentiation
+    /// (three tangents through the network, the forward pass's ReLU masks reused):
+    /// `len() × 3 × size²` values, per image `∂image/∂h` (per mm), `∂image/∂α`, `∂image/∂β`
+    /// (per rad). `Σ upstream · ∂image/∂p` equals [`InputVjp::vjp`]'s, and with the Jacobian
+    /// a press shared by many uses gives each use its own product without another pass.
+    pub fn jacobian(&self, tape: &Tape) -> Vec<f32> {
+        self.jacobian_of(tape, [true; 3])
+    }
+
+    /// As [`InputVjp::jacobian`] for the inputs marked in `which` (h, α, β) only; the columns
+    /// of the others are left zero (one tangent pass per marked input).
+    pub fn jacobian_of(&self, tape: &Tape, which: [bool; 3]) -> Vec<f32> {
+        let b = tape.batch;
+        let sel: Vec<usize> = (0..3).filter(|&k| which[k]).collect();
+        let ss = self.size * self.size;
+        let ns = sel.len();
+        if b == 0 || ns == 0 {
+            return vec![0f32; b * 3 * ss];
+        }
+        let t = ns * b;
+        // Tangent rows (image r / ns, input sel[r % ns]): the unit step of that input in
+        // normalised units.
+        let mut x = vec![0f32; t * 3];
+        for r in 0..t {
+            let k = sel[r % ns];
+            x[r * 3 + k] = self.slopes[k] as f32;
+        }
+        let last_fc = self.fcs.len() - 1;
+        for (li, fc) in self.fcs.iter().enumerate() {
+            let mut y = vec![0f32; t * fc.out];
+            y.par_chunks_mut(fc.out).zip(x.par_chunks(fc.inp)).enumerate().for_each(|(r, (yo, xi))| {
+                let mask = (li < last_fc).then(|| &tape.fc_masks[li][(r / ns) * fc.out..(r / ns + 1) * fc.out]);
+                for (o, v) in yo.iter_mut().enumerate() {
+                    if mask.is_none_or(|m| m[o] != 0) {
+                        *v = dot(&fc.w[o * fc.inp..(o + 1) * fc.inp], xi);
+                    }
+                }
+            });
+            x = y;
+        }
+        let mut n = self.seed_side;
+        let last = self.stages.len() - 1;
+        for (si, st) in self.stages.iter().enumerate() {
+            let pd = Padded { c: st.cin, hp: n + 2, wp: n + 2, k: 3 };
+            let xp = pad_planes(&x, t * st.cin, (n, n), 1);
+            let mut y = direct_forward(pd, t, st.cout, &xp, &st.w);
+            let per = st.cout * n * n;
+            if si < last {
+                y.par_chunks_mut(per).enumerate().for_each(|(r, img)| {
+                    let m = &tape.stage_masks[si][(r / ns) * per..(r / ns + 1) * per];
+                    img.iter_mut().zip(m).for_each(|(v, &k)| {
+                        if k == 0 {
+                            *v = 0.0;
+                        }
+                    });
+                });
+            }
+            let mut sh = vec![0f32; y.len()];
+            sh.par_chunks_mut(per).zip(y.par_chunks(per)).for_each(|(d, src)| shuffle(src, d, st.cout / 4, n, false));
+            x = sh;
+            n *= 2;
+        }
+        let mut out = vec![0f32; b * 3 * ss];
+        x.par_chunks_mut(ss).enumerate().for_each(|(r, j)| {
+            let img = tape.image(r / ns);
+            j.iter_mut().zip(img).for_each(|(v, y)| *v *= y * (1.0 - y));
+        });
+        for (r, j) in x.chunks_exact(ss).enumerate() {
+            let (i, k) = (r / ns, sel[r % ns]);
+            out[(i * 3 + k) * ss..(i * 3 + k + 1) * ss].copy_from_slice(j);
+        }
+        out
+    }
+
     /// The gradient of `Σ upstream · image` with respect to each press `(h [per mm], α [per
     /// rad], β [per rad])`, `upstream` holding `size²` values per image of the tape.
     ///

@@ -50,6 +50,28 @@ fn batched_vjps_equal_the_single_press_vjp() {
     let part = net.vjp(&tape, &up[s * s..3 * s * s]).unwrap();
     assert_eq!(part[0], grads[1]);
     assert_eq!(tape.image(1), imgs[2].data());
+    // The forward-mode Jacobian gives the same products.
+    let jac = net.jacobian(&net.forward(&ps));
+    for i in 0..ps.len() {
+        for k in 0..3 {
+            let col = &jac[(i * 3 + k) * s * s..(i * 3 + k + 1) * s * s];
+            let p: f64 = col.iter().zip(&up[i * s * s..(i + 1) * s * s]).map(|(a, b)| *a as f64 * *b as f64).sum();
+            let tol = 1e-3 * grads[i][k].abs().max(1.0);
+            assert!((p - grads[i][k]).abs() < tol, "press {i} ∂{k}: Jacobian {p} vs VJP {}", grads[i][k]);
+        }
+    }
+    // Only the marked columns, the same numbers.
+    let some = net.jacobian_of(&net.forward(&ps), [true, false, true]);
+    for i in 0..ps.len() {
+        for k in 0..3 {
+            let col = (i * 3 + k) * s * s..(i * 3 + k + 1) * s * s;
+            if k == 1 {
+                assert!(some[col].iter().all(|&v| v == 0.0));
+            } else {
+                assert_eq!(some[col.clone()], jac[col]);
+            }
+        }
+    }
     assert!(g.images_and_vjps(&ps, &up[1..]).is_err());
     assert!(net.vjp(&tape, &up).is_err());
 }

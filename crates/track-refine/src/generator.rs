@@ -40,7 +40,33 @@ pub struct GenModel {
     px_per_mm: f64,
     beta: Range,
     profile: BrushProfile,
+    mode: Mode,
 }
+
+/// How the network's derivatives with respect to the press are taken.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mode {
+    /// One image per footprint and one reverse-mode VJP per footprint (each footprint's
+    /// upstream image holds its own pixels' `∂L/∂c`): one forward and one backward pass per
+    /// batch of [`BATCH`] footprints. Exact, and slow: a character has thousands of footprints.
+    Vjp,
+    /// Presses rounded to multiples of `quantum` (h in mm, α and β in rad; 0 keeps a value
+    /// exact); footprints whose presses round alike share one image and its Jacobian
+    /// `∂image/∂(h, α, β)` (forward mode, three tangents: `InputVjp::jacobian`), and each
+    /// footprint's derivative is its own pixels' `Σ ∂L/∂c · ∂c/∂press` read from the Jacobian
+    /// images. A character's thousands of footprints need a few hundred network evaluations.
+    /// The derivative at a rounded press is the network's there (straight through the
+    /// rounding).
+    Shared {
+        /// Rounding step of h (mm), α (rad), β (rad).
+        quantum: [f64; 3],
+    },
+}
+
+/// The default mode: [`Mode::Shared`] at 0.05 mm in h and 0.05° in α and β (pen1's lengths
+/// move by under 0.05 mm per step, a tenth of a pixel of the default 128² analysis raster).
+pub const DEFAULT_MODE: Mode =
+    Mode::Shared { quantum: [0.05, 0.05 * std::f64::consts::PI / 180.0, 0.05 * std::f64::consts::PI / 180.0] };
 
 impl GenModel {
     /// Prepares a generator (copies its weights).
@@ -54,7 +80,51 @@ impl GenModel {
             px_per_mm: g.config.px_per_mm,
             beta: g.config.ranges.beta_rad,
             profile: g.config.profile.clone(),
+            mode: DEFAULT_MODE,
         })
+    }
+
+    /// The same generator with another [`Mode`].
+    pub fn with_mode(mut self, mode: Mode) -> Self {
+        self.mode = mode;
+        self
+    }
+
+    /// Each footprint's image source: the presses that go into the network and, per
+    /// footprint, the index of its press.
+    fn sources(&self, fps: &[Fp], places: &[Place]) -> (Vec<Press>, Vec<usize>) {
+        match self.mode {
+            Mode::Vjp => (
+                fps.iter().zip(places).map(|(f, p)| Press::new(f.h, f.alpha, p.beta_gen)).collect(),
+                (0..fps.len()).collect(),
+            ),
+            Mode::Shared { quantum } => {
+                let mut uniq: std::collections::BTreeMap<[i64; 3], (Press, Vec<usize>)> =
+                    std::collections::BTreeMap::new();
+                for (k, (f, p)) in fps.iter().zip(places).enumerate() {
+                    let v = [f.h, f.alpha, p.beta_gen];
+                    let (mut r, mut key) = ([0.0; 3], [0i64; 3]);
+                    for i in 0..3 {
+                        if quantum[i] > 0.0 {
+                            let q = (v[i] / quantum[i]).round();
+                            (r[i], key[i]) = (q * quantum[i], q as i64);
+                        } else {
+                            (r[i], key[i]) = (v[i], v[i].to_bits() as i64);
+                        }
+                    }
+                    uniq.entry(key).or_insert_with(|| (Press::new(r[0], r[1], r[2]), Vec::new())).1.push(k);
+                }
+                let mut which = vec![0usize; fps.len()];
+                let mut presses = Vec::with_capacity(uniq.len());
+                for (u, (press, members)) in uniq.into_values().enumerate() {
+                    presses.push(press);
+                    for k in members {
+                        which[k] = u;
+                    }
+                }
+                (presses, which)
+            }
+        }
     }
 
     /// The committed pen1 generator, loaded once per process.
@@ -184,9 +254,9 @@ impl GenModel {
     /// The image term (see [`ImageTerm`]).
     pub(crate) fn image_term(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> ImageTerm {
         let places = self.places(fps, want_grad);
-        let presses: Vec<Press> = fps.iter().zip(&places).map(|(f, p)| Press::new(f.h, f.alpha, p.beta_gen)).collect();
+        let (presses, which) = self.sources(fps, &places);
         let tapes: Vec<Tape> = presses.chunks(BATCH).map(|c| self.net.forward(c)).collect();
-        let img = |k: usize| tapes[k / BATCH].image(k % BATCH);
+        let img = |k: usize| tapes[which[k] / BATCH].image(which[k] % BATCH);
         let s = self.size;
         let n = r.width * r.height;
         // Σ ln(1 − c) per pixel, over fixed chunks summed in order.
@@ -223,7 +293,54 @@ impl GenModel {
         }
         image /= r.ink_sum;
         let mut per_fp = Vec::new();
-        if want_grad {
+        if want_grad && matches!(self.mode, Mode::Shared { .. }) {
+            // Tangents only for what varies: α where a footprint is tilted, β where the
+            // generator's β input follows the direction.
+            let need = [true, fps.iter().any(|f| f.alpha > 0.0), places.iter().any(|p| p.follows > 0.0)];
+            let jac: Vec<Vec<f32>> = tapes.iter().map(|t| self.net.jacobian_of(t, need)).collect();
+            let ss = s * s;
+            let kc = self.px_per_mm;
+            per_fp = fps
+                .par_iter()
+                .enumerate()
+                .map(|(k, f)| {
+                    let (u, pl) = (which[k], &places[k]);
+                    let src = img(k);
+                    let j = &jac[u / BATCH][(u % BATCH) * 3 * ss..(u % BATCH + 1) * 3 * ss];
+                    // x, y, θ, ∂L/∂a (2), ∂L/∂(h, α, βg) through the image (3).
+                    let mut g = [0.0f64; 8];
+                    self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
+                        let qk = q[p];
+                        if qk == 0.0 {
+                            return;
+                        }
+                        let c = bilerp(src, o, s, tx, ty);
+                        let w = qk / (1.0 - c.min(1.0 - 1e-7));
+                        let (v00, v10, v01, v11) =
+                            (src[o] as f64, src[o + 1] as f64, src[o + s] as f64, src[o + s + 1] as f64);
+                        let cgx = (1.0 - ty) * (v10 - v00) + ty * (v11 - v01);
+                        let cgy = (1.0 - tx) * (v01 - v00) + tx * (v11 - v10);
+                        let (gx, gy) = (w * cgx * kc, w * cgy * kc);
+                        g[0] += -gx * pl.cs + gy * pl.sn;
+                        g[1] += -gx * pl.sn - gy * pl.cs;
+                        g[2] += gx * ly - gy * lx;
+                        g[3] += gx;
+                        g[4] += gy;
+                        for i in 0..3 {
+                            g[5 + i] += w * bilerp(&j[i * ss..(i + 1) * ss], o, s, tx, ty);
+                        }
+                    });
+                    let an = |d: [f64; 2]| g[3] * d[0] + g[4] * d[1];
+                    [
+                        g[0],
+                        g[1],
+                        g[5] + an(pl.da[0]),
+                        g[6] + an(pl.da[1]),
+                        g[2] * (1.0 - pl.follows) + pl.follows * (g[7] + an(pl.da[2])),
+                    ]
+                })
+                .collect();
+        } else if want_grad {
             let kc = self.px_per_mm;
             per_fp.reserve(fps.len());
             for (bi, tape) in tapes.iter().enumerate() {

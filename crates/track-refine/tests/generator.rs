@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use brush_model::{BrushProfile, PointMm, Stroke, Track, TrackPoint};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
-use track_refine::generator::GenModel;
+use track_refine::generator::{GenModel, Mode};
 use track_refine::{Gradients, Problem, RefineOptions, Target, refine_with_generator};
 
 fn pen1() -> BrushProfile {
@@ -14,11 +14,11 @@ fn pen1() -> BrushProfile {
 }
 
 /// A tiny 32² generator after a few training steps (so that its images look like footprints).
-fn tiny() -> Arc<GenModel> {
+fn tiny(mode: Mode) -> Arc<GenModel> {
     let mut g = Generator::new(GeneratorConfig::new(pen1(), Arch::tiny_32()), 5).unwrap();
     let opts = TrainOptions { steps: 30, batch: 16, lr: 3e-3, val_every: 1_000_000, ..Default::default() };
     neural_gen::train(&mut g, &opts, |_| {}).unwrap();
-    Arc::new(GenModel::new(&g).unwrap())
+    Arc::new(GenModel::new(&g).unwrap().with_mode(mode))
 }
 
 /// A bent stroke along +x at y ≈ 30 mm, x 10 → 50 mm, 1 mm spacing, depth rising from `h`.
@@ -57,8 +57,11 @@ fn bar_target(px: u32) -> Target {
 fn generator_gradients_match_finite_differences() {
     let profile = pen1();
     let target = bar_target(64);
-    let net = tiny();
-    for alpha in [0.0, 5f64.to_radians()] {
+    // Reverse mode per footprint, and shared exact presses with the forward-mode Jacobian.
+    for (mode, alpha) in
+        [(Mode::Vjp, 0.0), (Mode::Vjp, 5f64.to_radians()), (Mode::Shared { quantum: [0.0; 3] }, 5f64.to_radians())]
+    {
+        let net = tiny(mode);
         let track = line_track(12.0, alpha);
         let p = Problem::new(&track, &profile, &target, &RefineOptions::default())
             .unwrap()
@@ -83,7 +86,11 @@ fn generator_gradients_match_finite_differences() {
             let fd = (p.loss(&a, &dirs).total - p.loss(&b, &dirs).total) / (2.0 * eps);
             // Bilinear sampling has kinks at canvas pixel edges and the images are f32.
             let tol = 0.03 * g[i].abs().max(fd.abs()) + 1e-4;
-            assert!((g[i] - fd).abs() <= tol, "α {alpha}: variable {i} of {n}: {} vs finite difference {fd}", g[i]);
+            assert!(
+                (g[i] - fd).abs() <= tol,
+                "{mode:?} α {alpha}: variable {i} of {n}: {} vs finite difference {fd}",
+                g[i]
+            );
             checked += 1;
             largest = largest.max(fd.abs());
         }
@@ -96,7 +103,14 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     let profile = pen1();
     let target = bar_target(64);
     let opts = RefineOptions { iterations: 1, ..RefineOptions::default() };
-    let out = refine_with_generator(&line_track(11.5, 0.0), &profile, &target, &opts, tiny()).unwrap();
+    let out = refine_with_generator(
+        &line_track(11.5, 0.0),
+        &profile,
+        &target,
+        &opts,
+        tiny(track_refine::generator::DEFAULT_MODE),
+    )
+    .unwrap();
     assert_eq!(out.curve.len(), 2);
     assert!(out.curve[1].image < out.curve[0].image, "{:?}", out.curve);
     assert!(out.curve[1].total < out.curve[0].total, "{:?}", out.curve);
