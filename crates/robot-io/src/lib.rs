@@ -45,6 +45,7 @@ pub mod frame;
 pub mod kinematics;
 pub mod pose;
 pub mod program;
+mod run;
 pub mod sim;
 pub mod wire;
 
