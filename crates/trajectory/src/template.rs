@@ -712,3 +712,48 @@ fn mark_doubled(paths: &[StrokePath], fits: &mut [StrokeFit]) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nelder_mead_finds_a_quadratic_minimum() {
+        let f = |x: &[f64]| (x[0] - 3.0).powi(2) + 2.0 * (x[1] + 1.0).powi(2) + 1.0;
+        let (x, v) = nelder_mead(f, &[0.0, 0.0], &[1.0, 1.0], 200);
+        assert!((x[0] - 3.0).abs() < 1e-4 && (x[1] + 1.0).abs() < 1e-4 && (v - 1.0).abs() < 1e-8, "{x:?} {v}");
+    }
+
+    #[test]
+    fn the_longest_ink_run_bridges_short_gaps() {
+        let p: Vec<Point> = (0..20).map(|i| Point::new(i as f64, 0.0)).collect();
+        // Ink at 0..=3, 5..=9 (one-point gap at 4: bridged), then 13..=15 after a three-point gap.
+        let ink = |q: Point| matches!(q.x as i64, 0..=3 | 5..=9 | 13..=15);
+        assert_eq!(longest_ink_run(&p, ink), (0, 9));
+        assert_eq!(longest_ink_run(&p, |q| q.x >= 17.0), (17, 19));
+    }
+
+    #[test]
+    fn cpd_recovers_a_shift_on_and_off_the_points() {
+        // An L of points, and the same L moved by (14, −9) em units with its foot bent a little.
+        let mut y = Vec::new();
+        for i in 0..40 {
+            y.push(Point::new(300.0, 200.0 + 10.0 * i as f64));
+        }
+        for i in 1..40 {
+            y.push(Point::new(300.0 + 10.0 * i as f64, 590.0));
+        }
+        let x: Vec<Point> = y.iter().map(|p| Point::new(p.x + 14.0, p.y - 9.0 + 0.02 * (p.x - 300.0))).collect();
+        let f = Cpd::fit(&y, &x, &TemplateOptions::default());
+        // Point-to-curve matching sees motion across a line, not along it: check each arm's
+        // normal component (the vertical arm's x, the horizontal arm's y).
+        for (k, (a, b)) in y.iter().zip(&x).enumerate() {
+            let moved = *a + f.displacement(*a);
+            let err = if k < 40 { moved.x - b.x } else { moved.y - b.y };
+            assert!(err.abs() < 3.0, "{k}: {a:?} → {moved:?}, want {b:?}");
+        }
+        // Beside the points (where stroke outlines lie) the field moves as it does on them.
+        let d = f.displacement(Point::new(325.0, 400.0));
+        assert!((d.x - 14.0).abs() < 3.0, "{d:?}");
+    }
+}
