@@ -79,9 +79,12 @@ struct Slot {
 pub(crate) struct Fp {
     pub(crate) x: f64,
     pub(crate) y: f64,
-    /// Depth, mm; tilt, rad; direction (root → tip), rad.
+    /// Depth, mm; tilt, rad; direction (root → tip), rad (read by the generator path).
+    #[cfg_attr(not(feature = "generator"), allow(dead_code))]
     pub(crate) h: f64,
+    #[cfg_attr(not(feature = "generator"), allow(dead_code))]
     pub(crate) alpha: f64,
+    #[cfg_attr(not(feature = "generator"), allow(dead_code))]
     pub(crate) beta: f64,
     cb: f64,
     sb: f64,
