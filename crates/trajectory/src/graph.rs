@@ -45,6 +45,20 @@ pub struct GraphOptions {
     /// Pieces no longer than this many half-widths that lie inside other strokes are dropped
     /// ([`COVERED_MAX_WIDTHS`]).
     pub covered_max_widths: f64,
+    /// At a junction of three or more branches, two branches continue each other only if the
+    /// thinner one's half-width (measured one to three junction half-widths out) is at least this
+    /// fraction of the thicker one's: a tapering tip (the end of a 提 or 撇) that touches the
+    /// start of another stroke is not its continuation. 0 turns the test off.
+    pub pair_width_ratio: f64,
+    /// Split a vertical leg turning right (竖折) on open chains too, when the vertical leg is at
+    /// least this many times as long as the horizontal one (0: never). The bottom of a box
+    /// (口, 日, 甘, 自) is a stroke of its own; 竖折 (山, 出, 区) tends to have a short vertical leg
+    /// and a long horizontal one.
+    pub open_box_min_ratio: f64,
+    /// A leg rising to the right out of a downward one is 提 (竖提, one stroke) when it rises by
+    /// more than this much per unit run; a box's bottom (口, 日) rises a little too and is a
+    /// stroke of its own.
+    pub ti_min_rise: f64,
 }
 
 impl Default for GraphOptions {
@@ -52,7 +66,7 @@ impl Default for GraphOptions {
         Self {
             spur_factor: 2.0,
             corner_spur_factor: 3.0,
-            merge_factor: 1.5,
+            merge_factor: 2.0,
             straight_min_rad: 125f64.to_radians(),
             corner_rad: 50f64.to_radians(),
             split_box_corners: true,
@@ -62,6 +76,9 @@ impl Default for GraphOptions {
             hook_widths: HOOK_WIDTHS,
             hook_ratio: HOOK_RATIO,
             covered_max_widths: COVERED_MAX_WIDTHS,
+            pair_width_ratio: 0.5,
+            open_box_min_ratio: 0.5,
+            ti_min_rise: 0.4,
         }
     }
 }
@@ -91,6 +108,9 @@ impl GraphOptions {
             "hook_widths" => self.hook_widths = value,
             "hook_ratio" => self.hook_ratio = value,
             "covered_max_widths" => self.covered_max_widths = value,
+            "pair_width_ratio" => self.pair_width_ratio = value,
+            "open_box_min_ratio" => self.open_box_min_ratio = value,
+            "ti_min_rise" => self.ti_min_rise = value,
             _ => return Err(format!("unknown skeleton option `{key}`")),
         }
         Ok(())
@@ -137,8 +157,11 @@ pub fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions
             eprintln!("edge {} - {} len {:.1}", e.a, e.b, length(&e.pts));
         }
     }
+    // Where three or more branches meet (chains that end there end against other strokes).
+    let junctions: Vec<Point> =
+        (0..g.nodes.len()).filter(|&v| g.nodes[v].alive && degree(&g, v) >= 3).map(|v| g.nodes[v].pos).collect();
     let strokes: Vec<Vec<Point>> =
-        pair_and_chain(&g, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts)).collect();
+        pair_and_chain(&g, dt, n, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts, &junctions)).collect();
     let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > 1.5).collect();
     let strokes = drop_covered(strokes, dt, n, opts.covered_max_widths);
     order_strokes(strokes)
@@ -541,7 +564,27 @@ fn ends_at(g: &Graph, v: usize) -> Vec<(usize, Vec2)> {
     out
 }
 
-fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
+/// The mean half-width (px) of the branch leaving node `v` along edge `e`, sampled from one to
+/// three of the node's half-widths out (past the junction blob).
+fn branch_width(g: &Graph, e: &Edge, at_a: bool, dt: &[f32], n: usize) -> f64 {
+    let v = if at_a { e.a } else { e.b };
+    let w = g.nodes[v].width.max(1.0);
+    let pts: Vec<Point> = if at_a { e.pts.clone() } else { e.pts.iter().rev().copied().collect() };
+    let (mut acc, mut sum, mut k) = (0.0, 0.0, 0usize);
+    for p in pts.windows(2) {
+        acc += p[0].distance(p[1]);
+        if acc >= w && acc <= 3.0 * w {
+            sum += crate::distance::sample(dt, n, n, p[1].x, p[1].y);
+            k += 1;
+        }
+        if acc > 3.0 * w {
+            break;
+        }
+    }
+    if k == 0 { crate::distance::sample(dt, n, n, pts[pts.len() - 1].x, pts[pts.len() - 1].y) } else { sum / k as f64 }
+}
+
+fn pair_and_chain(g: &Graph, dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
     let live: Vec<usize> = (0..g.edges.len()).filter(|&k| g.edges[k].alive).collect();
     // End id: 2k (end a) or 2k+1 (end b) of edge k.
     let mut partner = vec![usize::MAX; 2 * g.edges.len()];
@@ -553,9 +596,17 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
         if ends.len() < 2 {
             continue;
         }
+        let widths: Vec<f64> = if opts.pair_width_ratio > 0.0 && ends.len() >= 3 {
+            ends.iter().map(|&(end, _)| branch_width(g, &g.edges[end / 2], end % 2 == 0, dt, n)).collect()
+        } else {
+            Vec::new()
+        };
         let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
         for i in 0..ends.len() {
             for j in i + 1..ends.len() {
+                if !widths.is_empty() && widths[i].min(widths[j]) < opts.pair_width_ratio * widths[i].max(widths[j]) {
+                    continue;
+                }
                 pairs.push((ends[i].1.dot(ends[j].1), ends[i].0, ends[j].0));
             }
         }
@@ -613,7 +664,7 @@ fn pair_and_chain(g: &Graph, opts: &GraphOptions) -> Vec<Vec<Point>> {
 /// stroke it turns from rather than a stroke of its own...
 pub const HOOK_WIDTHS: f64 = 5.0;
 /// ... when it is shorter than this fraction of that stroke's leg, or rises away from the corner.
-pub const HOOK_RATIO: f64 = 0.4;
+pub const HOOK_RATIO: f64 = 0.5;
 /// How far each way the turn at a chain point is measured, in local half-widths (a skeleton
 /// corner is rounded over about one width).
 pub const CORNER_REACH: f64 = 2.5;
@@ -637,7 +688,7 @@ fn writing_direction(v: Vec2) -> Vec2 {
 /// chain, vertical-into-rightward corners split too when `split_box_corners` is set. Legs
 /// shorter than two half-widths never split, nor do hooks at a chain's ends ([`HOOK_WIDTHS`],
 /// [`HOOK_RATIO`]). A closed chain (a box drawn as one loop) is cut at its splitting corners.
-fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions, junctions: &[Point]) -> Vec<Vec<Point>> {
     let m = p.len();
     if m < 5 {
         return vec![p.to_vec()];
@@ -687,55 +738,95 @@ fn split_at_corners(p: &[Point], dt: &[f32], n: usize, opts: &GraphOptions) -> V
             corners.push(i);
         }
     }
+    // Per corner: stays, splits, or an open box corner that splits if the horizontal leg's far
+    // end (the neighbouring corner's index or the chain's end) lies against other strokes: a
+    // splitting corner or a junction.
+    enum Verdict {
+        Stay,
+        Split,
+        OpenBox(usize),
+    }
+    let decide = |i: usize| -> Verdict {
+        let d_in = p[i] - at(s[i] - reach[i]);
+        let d_out = at(s[i] + reach[i]) - p[i];
+        let (w_in, w_out) = (writing_direction(d_in), writing_direction(d_out));
+        let forward_in = w_in.dot(d_in) > 0.0;
+        let forward_out = w_out.dot(d_out) > 0.0;
+        // The legs up to the neighbouring corners (or the chain's ends).
+        let prev =
+            corners.iter().rev().find(|&&c| c < i).map_or(if closed { None } else { Some(0.0) }, |&c| Some(s[c]));
+        let next = corners.iter().find(|&&c| c > i).map_or(if closed { None } else { Some(s[m - 1]) }, |&c| Some(s[c]));
+        let min_leg = 2.0 * width(p[i]);
+        let long = prev.is_none_or(|a| s[i] - a >= min_leg) && next.is_none_or(|b| b - s[i] >= min_leg);
+        if !long {
+            return Verdict::Stay;
+        }
+        // A hook: a chain's first or last leg that is much shorter than the leg it turns
+        // from, or short and rising away from the corner (every 钩 points up).
+        if !closed {
+            let (len_in, len_out) = (s[i] - prev.unwrap_or(0.0), next.unwrap_or(s[m - 1]) - s[i]);
+            let w = width(p[i]);
+            let hook = |len: f64, other: f64, outward: Vec2| {
+                len < opts.hook_widths * w && (len < opts.hook_ratio * other || outward.y < -0.2 * outward.hypot())
+            };
+            let first = corners.first() == Some(&i);
+            let last = corners.last() == Some(&i);
+            if (first && hook(len_in, len_out, -d_in)) || (last && hook(len_out, len_in, d_out)) {
+                return Verdict::Stay;
+            }
+        }
+        // 提 rises to the right out of a downward leg (竖提, 横折提): one stroke, whichever
+        // way the chain runs.
+        let down = |v: Vec2| v.y > 0.6 * v.x.abs();
+        let rising = |v: Vec2| v.x > 0.0 && v.y < -opts.ti_min_rise * v.x;
+        if (down(d_in) && rising(d_out)) || (down(-d_out) && rising(-d_in)) {
+            return Verdict::Stay;
+        }
+        if forward_in != forward_out {
+            return Verdict::Split;
+        }
+        // As written: which leg comes first. A vertical leg turning right is a box corner.
+        let (first, second) = if forward_in { (d_in, d_out) } else { (-d_out, -d_in) };
+        let vertical = |v: Vec2| v.y > 2.0 * v.x.abs();
+        let right = |v: Vec2| v.x > 0.0 && v.y.abs() <= 0.6 * v.x;
+        if !(vertical(first) && right(second)) {
+            return Verdict::Stay;
+        }
+        if closed {
+            return if opts.split_box_corners { Verdict::Split } else { Verdict::Stay };
+        }
+        // The legs as written: the vertical one, then the horizontal one, which must run to
+        // the chain's end and end there against other strokes (the bottom of 口 ending at
+        // the right side), not at a free end or another corner.
+        let (len_in, len_out) = (s[i] - prev.unwrap_or(0.0), next.unwrap_or(s[m - 1]) - s[i]);
+        let (len_v, len_h) = if forward_in { (len_in, len_out) } else { (len_out, len_in) };
+        // A box side is upright and its bottom level (撇折 in 纟 and 幺 slants and rises).
+        let upright = first.x.abs() <= 0.3 * first.y && second.y >= -0.15 * second.x;
+        if !(opts.open_box_min_ratio > 0.0 && upright && len_v >= opts.open_box_min_ratio * len_h) {
+            return Verdict::Stay;
+        }
+        let far = if forward_in {
+            corners.iter().copied().find(|&c| c > i).unwrap_or(m - 1)
+        } else {
+            corners.iter().rev().copied().find(|&c| c < i).unwrap_or(0)
+        };
+        Verdict::OpenBox(far)
+    };
+    let verdicts: Vec<Verdict> = corners.iter().map(|&i| decide(i)).collect();
+    let base: Vec<usize> =
+        corners.iter().zip(&verdicts).filter(|(_, v)| matches!(v, Verdict::Split)).map(|(&c, _)| c).collect();
     let splits: Vec<usize> = corners
         .iter()
-        .copied()
-        .filter(|&i| {
-            let d_in = p[i] - at(s[i] - reach[i]);
-            let d_out = at(s[i] + reach[i]) - p[i];
-            let (w_in, w_out) = (writing_direction(d_in), writing_direction(d_out));
-            let forward_in = w_in.dot(d_in) > 0.0;
-            let forward_out = w_out.dot(d_out) > 0.0;
-            // The legs up to the neighbouring corners (or the chain's ends).
-            let prev =
-                corners.iter().rev().find(|&&c| c < i).map_or(if closed { None } else { Some(0.0) }, |&c| Some(s[c]));
-            let next =
-                corners.iter().find(|&&c| c > i).map_or(if closed { None } else { Some(s[m - 1]) }, |&c| Some(s[c]));
-            let min_leg = 2.0 * width(p[i]);
-            let long = prev.is_none_or(|a| s[i] - a >= min_leg) && next.is_none_or(|b| b - s[i] >= min_leg);
-            if !long {
-                return false;
+        .zip(&verdicts)
+        .filter(|(_, v)| match v {
+            Verdict::Split => true,
+            Verdict::OpenBox(far) => {
+                base.contains(far)
+                    || ((*far == 0 || *far == m - 1) && junctions.iter().any(|j| j.distance(p[*far]) < 1.5))
             }
-            // A hook: a chain's first or last leg that is much shorter than the leg it turns
-            // from, or short and rising away from the corner (every 钩 points up).
-            if !closed {
-                let (len_in, len_out) = (s[i] - prev.unwrap_or(0.0), next.unwrap_or(s[m - 1]) - s[i]);
-                let w = width(p[i]);
-                let hook = |len: f64, other: f64, outward: Vec2| {
-                    len < opts.hook_widths * w && (len < opts.hook_ratio * other || outward.y < -0.2 * outward.hypot())
-                };
-                let first = corners.first() == Some(&i);
-                let last = corners.last() == Some(&i);
-                if (first && hook(len_in, len_out, -d_in)) || (last && hook(len_out, len_in, d_out)) {
-                    return false;
-                }
-            }
-            // 提 rises to the right out of a downward leg (竖提, 横折提): one stroke, whichever
-            // way the chain runs.
-            let down = |v: Vec2| v.y > 0.6 * v.x.abs();
-            let rising = |v: Vec2| v.x > 0.0 && v.y < -0.2 * v.x;
-            if (down(d_in) && rising(d_out)) || (down(-d_out) && rising(-d_in)) {
-                return false;
-            }
-            if forward_in != forward_out {
-                return true;
-            }
-            // As written: which leg comes first. A vertical leg turning right is a box corner.
-            let (first, second) = if forward_in { (d_in, d_out) } else { (-d_out, -d_in) };
-            let vertical = |v: Vec2| v.y > 2.0 * v.x.abs();
-            let right = |v: Vec2| v.x > 0.0 && v.y.abs() <= 0.6 * v.x;
-            opts.split_box_corners && closed && vertical(first) && right(second)
+            Verdict::Stay => false,
         })
+        .map(|(&c, _)| c)
         .collect();
     if splits.is_empty() {
         return vec![p.to_vec()];
@@ -998,6 +1089,63 @@ mod tests {
         // Pruned only by the corner rule: as an ordinary spur the stub would stay.
         let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..GraphOptions::default() };
         assert!(strokes_with(m, n, &plain).len() > 1);
+    }
+
+    #[test]
+    fn the_bottom_of_an_open_box_is_its_own_stroke() {
+        // 甘 without its inner bar: a top bar crossed by two uprights, and a bottom between them.
+        // The left upright and the bottom form an open chain (the upright starts above the bar).
+        let segs = [
+            ((10.0, 30.0), (90.0, 30.0)),
+            ((30.0, 10.0), (30.0, 82.0)),
+            ((70.0, 10.0), (70.0, 82.0)),
+            ((30.0, 82.0), (70.0, 82.0)),
+        ];
+        let s = shape(100, &segs);
+        assert_eq!(s.len(), 4, "{s:?}");
+        let mut m = vec![false; 100 * 100];
+        for &(a, b) in &segs {
+            line(&mut m, 100, a, b, 4.0);
+        }
+        let old = GraphOptions { open_box_min_ratio: 0.0, ..GraphOptions::default() };
+        let o = strokes_with(m, 100, &old);
+        assert_eq!(o.len(), 3, "without the rule the left side and the bottom are one: {o:?}");
+        // 山: the 竖折's vertical leg is short against its bottom, so it stays one stroke.
+        let shan = shape(
+            128,
+            &[
+                ((64.0, 10.0), (64.0, 100.0)),
+                ((20.0, 64.0), (20.0, 100.0)),
+                ((20.0, 100.0), (108.0, 100.0)),
+                ((108.0, 40.0), (108.0, 100.0)),
+            ],
+        );
+        assert_eq!(shan.len(), 3, "{shan:?}");
+    }
+
+    #[test]
+    fn a_box_bottom_that_rises_a_little_is_not_a_ti() {
+        // 口 with its bottom rising 17° to the right, as kaishu writes it: still three strokes.
+        let segs = [
+            ((20.0, 20.0), (20.0, 80.0)),
+            ((20.0, 20.0), (80.0, 20.0)),
+            ((80.0, 20.0), (80.0, 66.0)),
+            ((20.0, 84.0), (80.0, 66.0)),
+        ];
+        assert_eq!(shape(100, &segs).len(), 3);
+        // A real 竖提 (rising steeply out of a vertical) stays one stroke.
+        assert_eq!(shape(100, &[((20.0, 10.0), (20.0, 80.0)), ((20.0, 80.0), (70.0, 50.0))]).len(), 1);
+    }
+
+    #[test]
+    fn options_are_set_by_name() {
+        let mut o = GraphOptions::default();
+        o.set("corner_deg", 45.0).unwrap();
+        assert!((o.corner_rad - 45f64.to_radians()).abs() < 1e-12);
+        o.set("split_box_corners", 0.0).unwrap();
+        assert!(!o.split_box_corners);
+        assert!(o.set("nope", 1.0).unwrap_err().contains("unknown skeleton option `nope`"));
+        assert!(o.set("hook_ratio", f64::NAN).is_err());
     }
 
     #[test]
