@@ -12,8 +12,8 @@ use stroke_metrics::GrayRef;
 pub use track_refine::RefineOptions;
 use track_refine::{LossTerms, Target};
 use trajectory::{
-    CharBox, Glyph, Method, Sizing, StrokePath, TrackOptions, build_track, centre_lines, chamfer_pct,
-    raster::render_glyph,
+    CharBox, Glyph, Method, Registration, Sizing, StrokeFit, StrokePath, TrackOptions, build_track, centre_lines,
+    centre_lines_from_template, chamfer_pct, raster::render_glyph,
 };
 
 /// Analysis raster for widths and skeletons, px per em box.
@@ -92,16 +92,78 @@ pub struct Prepared {
     pub method: Method,
     /// Its centre lines with half-widths.
     pub paths: Vec<StrokePath>,
+    /// What registration found when the centre lines came from a stroke template registered
+    /// onto a font or image glyph ([`prepare_with_template`]); `None` otherwise.
+    pub registration: Option<Registration>,
 }
 
-/// Finds the centre lines of a glyph.
+/// Finds the centre lines of a glyph with `method` (`None`: the source's medians when it has
+/// them, otherwise a skeleton).
 ///
 /// # Errors
 /// When the method cannot be used on this source, or the glyph is blank.
 pub fn prepare(glyph: Glyph, method: Option<Method>) -> Result<Prepared> {
-    let method = method.unwrap_or(if glyph.medians.is_some() { Method::Medians } else { Method::Skeleton });
-    let paths = centre_lines(&glyph, method, ANALYSIS_PX).with_context(|| format!("{:?}", glyph.ch))?;
-    Ok(Prepared { glyph, method, paths })
+    prepare_with_template(glyph, method, None)
+}
+
+/// Finds the centre lines of a glyph, registering `template` (a glyph of the same character
+/// with stroke medians: embedded or from a hanzi-writer-data folder) onto it for
+/// [`Method::Template`]. `method: None` picks the source's own medians when it has them, else
+/// the template when one is given, else a skeleton.
+///
+/// # Errors
+/// [`Method::Template`] on a glyph without medians and no `template` (nothing to register),
+/// a method that cannot be used on this source, or a blank glyph.
+pub fn prepare_with_template(glyph: Glyph, method: Option<Method>, template: Option<&Glyph>) -> Result<Prepared> {
+    let own_medians = glyph.medians.is_some();
+    let method = method.unwrap_or(if own_medians {
+        Method::Medians
+    } else if template.is_some() {
+        Method::Template
+    } else {
+        Method::Skeleton
+    });
+    let ch = glyph.ch;
+    if method == Method::Template && !own_medians {
+        let Some(t) = template else {
+            anyhow::bail!(
+                "{ch:?}: the template method needs the character's stroke data, and {ch:?} has none here (expected it in the embedded set or in a hanzi-writer-data folder)"
+            );
+        };
+        let reg = centre_lines_from_template(t, &glyph, ANALYSIS_PX).with_context(|| format!("{ch:?}"))?;
+        return Ok(Prepared { glyph, method, paths: reg.paths.clone(), registration: Some(reg) });
+    }
+    let paths = centre_lines(&glyph, method, ANALYSIS_PX).with_context(|| format!("{ch:?}"))?;
+    Ok(Prepared { glyph, method, paths, registration: None })
+}
+
+/// What template registration found for one character, as `report.json` shows it.
+#[derive(Clone, Debug, Serialize)]
+pub struct TemplateReport {
+    /// Strokes of the template (the strokes expected).
+    pub strokes: usize,
+    /// Strokes (from 1, in writing order) that found no ink under them: kept where the
+    /// template put them, not snapped.
+    pub missing: Vec<usize>,
+    /// Pairs of strokes (from 1) that landed on one target stroke.
+    pub doubled: Vec<[usize; 2]>,
+    /// Whether every stroke found its own ink (the stroke count holds on the target).
+    pub strokes_ok: bool,
+    /// Per stroke, in writing order.
+    pub fits: Vec<StrokeFit>,
+}
+
+impl TemplateReport {
+    /// The report of a registration.
+    pub fn of(r: &Registration) -> Self {
+        Self {
+            strokes: r.strokes.len(),
+            missing: r.missing().into_iter().map(|i| i + 1).collect(),
+            doubled: r.strokes.iter().enumerate().filter_map(|(i, s)| s.doubled_with.map(|j| [i + 1, j + 1])).collect(),
+            strokes_ok: r.strokes_ok(),
+            fits: r.strokes.clone(),
+        }
+    }
 }
 
 /// Everything `maobi write` reports for one character.
@@ -111,7 +173,7 @@ pub struct CharReport {
     pub char: String,
     /// Glyph source kind.
     pub source: &'static str,
-    /// `medians` or `skeleton`.
+    /// `medians`, `skeleton` or `template`.
     pub method: &'static str,
     /// Stroke model.
     pub model: &'static str,
@@ -152,6 +214,9 @@ pub struct CharReport {
     /// track was rejected).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refine: Option<RefineReport>,
+    /// What template registration found (`--from template` on a font or image glyph).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub template: Option<TemplateReport>,
 }
 
 /// What refinement did to one character.
@@ -298,7 +363,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         ssim: sim.ssim,
         iou: sim.iou,
         chamfer_pct: chamfer,
-        strokes_expected: p.glyph.medians.as_ref().map(Vec::len),
+        strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.registration.as_ref().map(|r| r.strokes.len())),
         strokes_found: built.track.strokes.len(),
         points: built.track.point_count(),
         millis,
@@ -309,6 +374,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         executed,
         agreement,
         refine: None,
+        template: p.registration.as_ref().map(TemplateReport::of),
     };
     let mut result =
         CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };

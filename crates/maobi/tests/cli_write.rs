@@ -98,10 +98,10 @@ fn skeleton_font_and_image_sources() {
     assert!(r["chamfer_pct"].as_f64().unwrap() < 3.0);
     let font = fixtures().join("fonts/ukai-subset.ttf");
     let f = dir.path().join("font");
-    ok(&maobi(&["write", "永", "--font", s(&font), "--size", "128", "--out", s(&f)]));
+    ok(&maobi(&["write", "永", "--font", s(&font), "--from", "skeleton", "--size", "128", "--out", s(&f)]));
     let r = json(&f.join("report.json"));
     assert_eq!((r["source"].as_str(), r["method"].as_str()), (Some("font"), Some("skeleton")));
-    assert!(r["chamfer_pct"].is_null() && r["strokes_expected"].is_null());
+    assert!(r["chamfer_pct"].is_null() && r["strokes_expected"].is_null() && r["template"].is_null());
     assert!(r["csim"].as_f64().unwrap() > 0.6);
     // A photo of a character: use the reference image written above.
     let img = dir.path().join("img");
@@ -132,7 +132,9 @@ fn bad_input_fails_cleanly_without_output() {
     fails(&maobi(&["write", "永", "--image", s(&dir.path().join("none.png")), "--out", s(&out)]), "none.png");
     fails(&maobi(&["write", "永", "--char-mm", "-3", "--out", s(&out)]), "--char-mm");
     fails(&maobi(&["write", "永", "--alpha", "30", "--out", s(&out)]), "--alpha");
-    fails(&maobi(&["write", "永", "--font", s(&font), "--hanzi-data", "x", "--out", s(&out)]), "cannot be used with");
+    fails(&maobi(&["write", "永", "--font", s(&font), "--image", "x.png", "--out", s(&out)]), "cannot be used with");
+    // With --font, --hanzi-data is where the stroke templates come from.
+    fails(&maobi(&["write", "永", "--font", s(&font), "--hanzi-data", "x", "--out", s(&out)]), "x: cannot read");
     assert!(!out.exists(), "nothing may be written on error");
 }
 

@@ -1,12 +1,13 @@
 //! `maobi evaluate`: the write pipeline over many characters, in parallel, with mean scores.
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
-use maobi::pipeline::{CharReport, WriteOptions, prepare, write_char};
+use maobi::pipeline::{CharReport, WriteOptions, write_char};
 use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
 
+use crate::cmd::write::{GlyphInput, prepare_loaded};
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
 
 /// Arguments of `maobi evaluate`.
@@ -18,9 +19,9 @@ pub struct Args {
     /// Only the first N characters.
     #[arg(long)]
     limit: Option<usize>,
-    /// Centre-line method.
-    #[arg(long = "from", default_value = "medians", value_parser = parse_method())]
-    method: Method,
+    /// Centre-line method (default: medians for stroke data; template for --font or --images).
+    #[arg(long = "from", value_parser = parse_method())]
+    method: Option<Method>,
     #[command(flatten)]
     brush: BrushArg,
     /// Stroke model that draws the footprints.
@@ -36,6 +37,19 @@ pub struct Args {
     /// embedded set; `--chars` then names them (e.g. characters outside the embedded set).
     #[arg(long)]
     hanzi_data: Option<std::path::PathBuf>,
+    /// Evaluate a font's glyphs: TTF, OTF, TTC/OTC, WOFF or WOFF2 files or folders of them
+    /// (repeatable; the first file covering a character is used). Stroke templates come from
+    /// the embedded set or --hanzi-data. Characters the fonts do not cover are skipped and
+    /// counted.
+    #[arg(long, group = "style", value_name = "FILE|DIR")]
+    font: Vec<std::path::PathBuf>,
+    /// Face of a font collection (TTC/OTC) given to --font, from 0.
+    #[arg(long, requires = "font")]
+    font_index: Option<u32>,
+    /// Evaluate photos or scans of characters: a folder of images named `<char>.png`,
+    /// `<char>.jpg` or `<char>.jpeg` (one character each, dark ink on light paper).
+    #[arg(long, group = "style", value_name = "DIR")]
+    images: Option<std::path::PathBuf>,
     /// Constant tilt α, degrees.
     #[arg(long, default_value_t = 0.0)]
     alpha: f64,
@@ -61,22 +75,42 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--limit 0: expected at least 1 character");
     }
     let profile = load_brush(&args.brush.brush)?;
+    let image_files = match &args.images {
+        Some(dir) => image_files(dir)?,
+        None => Vec::new(),
+    };
     let mut chars: Vec<char> = match &args.chars {
         Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
+        None if args.images.is_some() => image_files.iter().map(|(c, _)| *c).collect(),
         None => glyph::embedded_chars(),
     };
+    if args.images.is_some() {
+        let missing: Vec<char> = chars.iter().filter(|c| !image_files.iter().any(|(f, _)| f == *c)).copied().collect();
+        if !missing.is_empty() {
+            bail!(
+                "--images {}: no image for {} (expected files named <char>.png, .jpg or .jpeg)",
+                args.images.as_ref().map(|d| d.display().to_string()).unwrap_or_default(),
+                missing.iter().collect::<String>()
+            );
+        }
+    }
     if let Some(n) = args.limit {
         chars.truncate(n);
     }
     if chars.is_empty() {
         bail!("no characters to evaluate");
     }
-    if args.hanzi_data.is_some() && args.chars.is_none() {
+    let style = !args.font.is_empty() || args.images.is_some();
+    if args.hanzi_data.is_some() && args.chars.is_none() && !style {
         bail!("--hanzi-data needs --chars: name the characters to read from it");
     }
-    if !(args.alpha.is_finite() && (0.0..=30.0).contains(&args.alpha)) {
-        bail!("--alpha {}: expected 0..=30 degrees", args.alpha);
-    }
+    let input = if !args.font.is_empty() {
+        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
+    } else if args.images.is_some() {
+        GlyphInput::Images(image_files, args.hanzi_data.clone())
+    } else {
+        GlyphInput::Hanzi(args.hanzi_data.clone())
+    };
     let alpha_rad = args.alpha.to_radians();
     let refine = crate::cmd::write::refine_options(args.refine, args.iters)?;
     let opts = WriteOptions {
@@ -88,35 +122,47 @@ pub fn run(args: Args) -> Result<()> {
         ..WriteOptions::default()
     };
     let pb = progress(chars.len() as u64, "evaluate");
-    let reports: Vec<CharReport> = chars
+    // `None`: a font that does not cover the character (skipped and counted).
+    let reports: Vec<Option<CharReport>> = chars
         .par_iter()
         .map(|&c| {
-            let g = match &args.hanzi_data {
-                Some(dir) => glyph::from_hanzi_dir(dir, c)?,
-                None => glyph::embedded(c)?,
+            let loaded = match input.load(c) {
+                Err(e) if !args.font.is_empty() && is_uncovered(&e) => {
+                    pb.inc(1);
+                    return Ok(None);
+                }
+                r => r?,
             };
-            let p = prepare(g, Some(args.method))?;
+            let p = prepare_loaded(loaded, args.method, true)?;
             let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
             let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
             pb.inc(1);
-            Ok(r.report)
+            Ok(Some(r.report))
         })
         .collect::<Result<_>>()?;
+    let uncovered: String = chars.iter().zip(&reports).filter(|(_, r)| r.is_none()).map(|(c, _)| *c).collect();
+    let reports: Vec<CharReport> = reports.into_iter().flatten().collect();
+    if reports.is_empty() {
+        bail!("--font covers none of the {} characters asked for", chars.len());
+    }
     pb.finish_and_clear();
     let mut summary = summarize(&reports);
+    if !args.font.is_empty() {
+        summary["uncovered"] = json!({"count": uncovered.chars().count(), "chars": uncovered});
+    }
     if let Some(r) = refine_summary(&reports) {
         summary["refine"] = r;
     }
     if args.json {
         print_json(
-            &json!({"method": args.method.name(), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
+            &json!({"method": method_name(&reports), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
         )?;
     } else {
         println!(
             "{} characters, {} via {}, brush {}:",
             reports.len(),
             args.model.name(),
-            args.method.name(),
+            method_name(&reports),
             profile.name
         );
         println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -129,7 +175,12 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
     let n = r.len() as f64;
     let mean = |f: &dyn Fn(&CharReport) -> f64| r.iter().map(f).sum::<f64>() / n;
     let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.strokes_expected.is_some()).collect();
-    let strokes_ok = with_medians.iter().filter(|c| c.strokes_expected == Some(c.strokes_found)).count();
+    // A registered template always has the template's count: it is right when every stroke
+    // found its own ink.
+    let strokes_ok = with_medians
+        .iter()
+        .filter(|c| c.strokes_expected == Some(c.strokes_found) && c.template.as_ref().is_none_or(|t| t.strokes_ok))
+        .count();
     let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
     let fw: Vec<_> = r.iter().filter_map(|c| c.free_widths).collect();
     let mean_sim = |v: Vec<maobi::pipeline::Similarity>| {
@@ -192,4 +243,43 @@ fn refine_summary(r: &[CharReport]) -> Option<serde_json::Value> {
         "millis_mean": ms.iter().sum::<f64>() / ms.len() as f64,
         "millis_max": ms.iter().copied().fold(0.0, f64::max),
     }))
+}
+
+/// The method the reports used: one name, or the names joined by `+` when they differ.
+fn method_name(reports: &[CharReport]) -> String {
+    let mut names: Vec<&str> = reports.iter().map(|r| r.method).collect();
+    names.sort_unstable();
+    names.dedup();
+    names.join("+")
+}
+
+/// Whether a glyph error says the fonts do not cover the character.
+fn is_uncovered(e: &anyhow::Error) -> bool {
+    matches!(e.downcast_ref::<glyph::GlyphError>(), Some(glyph::GlyphError::Unknown { .. }))
+}
+
+/// The images of `--images DIR`: files `<char>.png|jpg|jpeg`, one character per name, sorted.
+fn image_files(dir: &std::path::Path) -> Result<Vec<(char, std::path::PathBuf)>> {
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("--images {}: cannot read the folder", dir.display()))?;
+    let mut out = Vec::new();
+    for e in entries {
+        let path = e.with_context(|| format!("--images {}", dir.display()))?.path();
+        let ext = path.extension().and_then(|x| x.to_str()).map(str::to_ascii_lowercase);
+        if !matches!(ext.as_deref(), Some("png" | "jpg" | "jpeg")) {
+            continue;
+        }
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        let mut cs = stem.chars();
+        match (cs.next(), cs.next()) {
+            (Some(c), None) => out.push((c, path)),
+            _ => bail!("{}: expected an image named after its one character (e.g. 永.png)", path.display()),
+        }
+    }
+    out.sort();
+    out.dedup_by(|a, b| a.0 == b.0);
+    if out.is_empty() {
+        bail!("--images {}: no <char>.png, .jpg or .jpeg files", dir.display());
+    }
+    Ok(out)
 }

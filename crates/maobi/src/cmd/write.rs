@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use bezier_raster::{ModelKind, coverage::overlay_png};
 use brush_model::{BrushProfile, Extrapolation, Track};
-use maobi::pipeline::{CharReport, CharResult, Prepared, WriteOptions, prepare, write_char};
+use maobi::pipeline::{CharReport, CharResult, Prepared, WriteOptions, prepare_with_template, write_char};
 use maobi::sheet::{Flow, Grid, Layout, Sheet, SheetTrack, layout_on_sheet, parse_sheet};
 use rayon::prelude::*;
 use serde_json::json;
@@ -20,17 +20,25 @@ use crate::common::{
 pub struct Args {
     /// The character(s) to write.
     text: String,
-    /// Glyphs from an unpacked hanzi-writer-data package (files `<char>.json`).
-    #[arg(long, group = "source")]
+    /// Glyphs from an unpacked hanzi-writer-data package (files `<char>.json`); with --font or
+    /// --image, the stroke templates registered onto their glyphs (`--from template`).
+    #[arg(long)]
     hanzi_data: Option<PathBuf>,
-    /// Glyphs from a TrueType/OpenType CJK font.
-    #[arg(long, group = "source")]
-    font: Option<PathBuf>,
+    /// Glyphs from fonts: TTF, OTF, TTC/OTC (see --font-index), WOFF or WOFF2 files, or folders
+    /// of them (a web font split into unicode-range subsets). Repeat for several; the first file
+    /// that covers a character is used.
+    #[arg(long, group = "source", value_name = "FILE|DIR")]
+    font: Vec<PathBuf>,
+    /// Face of a font collection (TTC/OTC) given to --font, from 0.
+    #[arg(long, requires = "font")]
+    font_index: Option<u32>,
     /// The glyph from a photo or scan of one character (dark ink on light paper).
     #[arg(long, group = "source")]
     image: Option<PathBuf>,
-    /// Centre lines from the source's medians or from a skeleton (default: medians when the
-    /// source has them).
+    /// Centre lines: the source's stroke medians, a skeleton of the glyph, or the character's
+    /// stroke template (embedded or --hanzi-data) registered onto a font or image glyph
+    /// (default: medians for stroke data; template for a font or image glyph whose character
+    /// has stroke data; skeleton otherwise).
     #[arg(long = "from", value_parser = parse_method())]
     method: Option<Method>,
     #[command(flatten)]
@@ -103,16 +111,75 @@ pub(crate) fn refine_options(refine: bool, iters: Option<usize>) -> Result<Optio
     Ok(Some(o))
 }
 
-fn load_glyph(args: &Args, ch: char) -> Result<glyph::Glyph> {
-    Ok(if let Some(dir) = &args.hanzi_data {
-        glyph::from_hanzi_dir(dir, ch)?
-    } else if let Some(font) = &args.font {
-        glyph::from_font(font, ch)?
-    } else if let Some(img) = &args.image {
-        glyph::from_image(img, ch)?
-    } else {
-        glyph::embedded(ch)?
-    })
+/// Where `write` and `evaluate` take glyphs from, opened once.
+pub(crate) enum GlyphInput {
+    /// The embedded set, or a hanzi-writer-data folder.
+    Hanzi(Option<PathBuf>),
+    /// Fonts, with hanzi stroke data (embedded, or the folder) as templates.
+    Fonts(glyph::FontSet, Option<PathBuf>),
+    /// Images, with hanzi stroke data as templates: one file (`write --image`) or, for
+    /// `evaluate --images`, a file per character.
+    Images(Vec<(char, PathBuf)>, Option<PathBuf>),
+}
+
+impl GlyphInput {
+    /// Opens the fonts of `--font` (files or folders; nothing decoded yet).
+    pub(crate) fn fonts(paths: &[PathBuf], face_index: Option<u32>, hanzi: Option<PathBuf>) -> Result<Self> {
+        let set = glyph::FontSet::open(paths, face_index).context("--font")?;
+        Ok(GlyphInput::Fonts(set, hanzi))
+    }
+
+    /// The glyph of `ch` and, for a font or image glyph, the character's stroke template when
+    /// there is one (`None` when neither the embedded set nor the folder has the character).
+    pub(crate) fn load(&self, ch: char) -> Result<(glyph::Glyph, Option<glyph::Glyph>)> {
+        let template = |dir: &Option<PathBuf>| -> Result<Option<glyph::Glyph>> {
+            let found = match dir {
+                Some(d) => glyph::from_hanzi_dir(d, ch),
+                None => glyph::embedded(ch),
+            };
+            match found {
+                Ok(g) => Ok(Some(g)),
+                Err(glyph::GlyphError::Unknown { .. }) => Ok(None),
+                Err(e) => Err(e).context("the stroke template"),
+            }
+        };
+        Ok(match self {
+            GlyphInput::Hanzi(Some(dir)) => (glyph::from_hanzi_dir(dir, ch)?, None),
+            GlyphInput::Hanzi(None) => (glyph::embedded(ch)?, None),
+            GlyphInput::Fonts(set, dir) => (set.glyph(ch)?, template(dir)?),
+            GlyphInput::Images(files, dir) => {
+                let path = files
+                    .iter()
+                    .find(|(c, _)| *c == ch)
+                    .map(|(_, p)| p)
+                    .with_context(|| format!("no image for {ch:?}"))?;
+                (glyph::from_image(path, ch)?, template(dir)?)
+            }
+        })
+    }
+}
+
+/// Finds the centre lines of a loaded glyph (see [`maobi::pipeline::prepare_with_template`]);
+/// prints the strokes a template registration found no ink for.
+pub(crate) fn prepare_loaded(
+    loaded: (glyph::Glyph, Option<glyph::Glyph>),
+    method: Option<Method>,
+    quiet: bool,
+) -> Result<Prepared> {
+    let (g, template) = loaded;
+    let p = prepare_with_template(g, method, template.as_ref())?;
+    if let (Some(r), false) = (&p.registration, quiet) {
+        let missing = r.missing();
+        if !missing.is_empty() {
+            let list: Vec<String> = missing.iter().map(|i| (i + 1).to_string()).collect();
+            eprintln!(
+                "{}: template stroke(s) {} found no ink under them (kept where the template put them; see report.json)",
+                p.glyph.ch,
+                list.join(", ")
+            );
+        }
+    }
+    Ok(p)
 }
 
 /// Runs the command.
@@ -158,8 +225,15 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     // Load and analyse every glyph before writing anything.
+    let input = if !args.font.is_empty() {
+        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
+    } else if let Some(img) = &args.image {
+        GlyphInput::Images(vec![(chars[0], img.clone())], args.hanzi_data.clone())
+    } else {
+        GlyphInput::Hanzi(args.hanzi_data.clone())
+    };
     let prepared: Vec<Prepared> =
-        chars.par_iter().map(|&c| prepare(load_glyph(&args, c)?, args.method)).collect::<Result<_>>()?;
+        chars.par_iter().map(|&c| prepare_loaded(input.load(c)?, args.method, args.json)).collect::<Result<_>>()?;
     for p in &prepared {
         if p.paths.is_empty() {
             let from = args.image.as_ref().map_or(String::new(), |i| format!(" in --image {}", i.display()));
