@@ -111,11 +111,14 @@ fn all() -> Vec<Fixture> {
     ]
 }
 
+/// A file's name and bytes.
+type NamedFile = (String, Vec<u8>);
+
 /// The synthetic calibration set: 12 pressed strokes of nominal pen1 on a grid of h × α (β
 /// alternating 0°/5°), photographed at 8 px/mm with blur, noise, an uneven background, specks,
 /// JPEG artefacts and a slight rotation, saved as PNG with their scale. Returns the labels CSV
 /// and the photos.
-fn photo_set() -> Result<(Vec<u8>, Vec<(String, Vec<u8>)>)> {
+fn photo_set() -> Result<(Vec<u8>, Vec<NamedFile>)> {
     use stroke_fit::synth::{Degradation, photo, png_with_scale};
     let pen1 = BrushProfile::builtin("pen1")?;
     let px = 8.0;
@@ -124,7 +127,7 @@ fn photo_set() -> Result<(Vec<u8>, Vec<(String, Vec<u8>)>)> {
     let mut k = 0u64;
     for h in [11.0, 14.0, 17.0, 20.0] {
         for a in [0.0, 5.0, 10.0] {
-            let b = if k % 2 == 0 { 0.0 } else { 5.0 };
+            let b = if k.is_multiple_of(2) { 0.0 } else { 5.0 };
             let press = Press::from_degrees(h, a, b);
             let fp = pen1.predict(&press, Extrapolation::Refuse)?;
             let turn = ((k as f64 * 0.37).sin() * 2.0).to_radians();

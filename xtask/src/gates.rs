@@ -223,7 +223,7 @@ pub fn run(args: &[String]) -> Result<()> {
         ("generator", generator_figures()?),
         ("refine", crate::refine_gate::refine_figures()?),
     ];
-    println!("{:<48} {:>12} {:>12} {:>10}  {}", "figure", "baseline", "now", "Δ", "");
+    println!("{:<48} {:>12} {:>12} {:>10}", "figure", "baseline", "now", "Δ");
     let mut failures = Vec::new();
     for (group, now) in &groups {
         let path = baseline_path(group);

@@ -24,6 +24,13 @@ fn to_png(rgb: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>> {
     Ok(out)
 }
 
+/// One output length of the regression plot: its label, how to read it from a measurement, and
+/// the fitted terms.
+type Output<'a> = (&'static str, fn(&Measurement) -> f64, &'a brush_model::Terms);
+
+/// A closed polygon, mm.
+type Ring = Vec<(f64, f64)>;
+
 /// The regression plot: each of lt, lh, lr (rows) against h and against α (columns), the
 /// measurements as points and the fitted model as a line (the other inputs held at their mean).
 ///
@@ -41,7 +48,7 @@ pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Ve
         let mean_h = rows.iter().map(|m| m.press.h_mm).sum::<f64>() / n;
         let mean_a = rows.iter().map(|m| m.press.alpha_rad).sum::<f64>() / n;
         let mean_b = rows.iter().map(|m| m.press.beta_rad).sum::<f64>() / n;
-        let outputs: [(&str, fn(&Measurement) -> f64, &brush_model::Terms); 3] = [
+        let outputs: [Output<'_>; 3] = [
             ("lt (mm)", |m| m.footprint.lt_mm, &profile.model.lt_mm),
             ("lh (mm)", |m| m.footprint.lh_mm, &profile.model.lh_mm),
             ("lr (mm)", |m| m.footprint.lr_mm, &profile.model.lr_mm),
@@ -163,11 +170,11 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
     let fp = profile.predict(press, brush_model::Extrapolation::Refuse)?;
     let anchor = brush_model::PointMm::new(0.0, 0.0);
     // Each model's outline as closed polygons, mm.
-    let outlines: Vec<(&str, Vec<Vec<(f64, f64)>>)> = ModelKind::ALL
+    let outlines: Vec<(&str, Vec<Ring>)> = ModelKind::ALL
         .iter()
         .map(|m| {
             let path = m.model().outline(&fp, anchor, press.beta_rad);
-            let mut polys: Vec<Vec<(f64, f64)>> = Vec::new();
+            let mut polys: Vec<Ring> = Vec::new();
             kurbo::flatten(&path, 0.01, |el| match el {
                 kurbo::PathEl::MoveTo(p) => polys.push(vec![(p.x, p.y)]),
                 kurbo::PathEl::LineTo(p) => {

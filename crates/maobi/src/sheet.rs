@@ -83,7 +83,7 @@ pub fn parse_sheet(spec: &str) -> Result<Sheet> {
 
 fn checked(sheet: Sheet, spec: &str) -> Result<Sheet> {
     for (what, v) in [("width", sheet.width_mm), ("height", sheet.height_mm)] {
-        if !(v.is_finite() && v >= 10.0 && v <= MAX_SHEET_MM) {
+        if !(v.is_finite() && (10.0..=MAX_SHEET_MM).contains(&v)) {
             bail!("--sheet {spec}: the {what} {v} mm is outside 10..={MAX_SHEET_MM} mm");
         }
     }
