@@ -65,6 +65,10 @@ pub struct LossTerms {
 /// floating-point sums, and hence the result, does not depend on the thread count).
 pub(crate) const CHUNK: usize = 256;
 
+/// Bins of a footprint's half-width bounds ([`crate::soft::WidthBounds`]): pixels they class as
+/// fully inside or outside skip the Newton solve.
+const WIDTH_BINS: usize = 32;
+
 /// A point of the flattened track.
 #[derive(Clone, Copy, Debug)]
 struct Slot {
@@ -594,7 +598,19 @@ impl<'a> Problem<'a> {
                 let mut s = vec![0.0f64; n];
                 let mut sat = vec![0u32; n];
                 for f in chunk {
+                    let wb = f.shape.width_bounds(WIDTH_BINS);
+                    let l = f.shape.length();
                     self.visit(f, |k, u, v| {
+                        if u > 0.0 && u < l {
+                            match wb.classify(u, v.abs(), e) {
+                                Some(true) => {
+                                    sat[k] += 1;
+                                    return;
+                                }
+                                Some(false) => return,
+                                None => {}
+                            }
+                        }
                         let (c, _) = edge(f.shape.measure(u, v), e);
                         if c >= 1.0 {
                             sat[k] += 1;
@@ -692,9 +708,12 @@ impl<'a> Problem<'a> {
                 .par_iter()
                 .map(|f| {
                     let mut g = [0.0f64; 5];
+                    let wb = f.shape.width_bounds(WIDTH_BINS);
+                    let l = f.shape.length();
                     self.visit(f, |k, u, v| {
                         let qk = q[k];
-                        if qk == 0.0 {
+                        // Fully inside or outside the soft edge: ∂c/∂d = 0.
+                        if qk == 0.0 || (u > 0.0 && u < l && wb.classify(u, v.abs(), e).is_some()) {
                             return;
                         }
                         let m = f.shape.measure_grad(u, v);

@@ -127,6 +127,56 @@ impl Shape {
     }
 }
 
+/// Bounds of a footprint's half-width over equal bins of `u ∈ (0, L)`, so that most pixels
+/// can be classed as fully inside or fully outside the soft edge without solving for `t*`
+/// (exactly: the half-width `4·lr·t(1 − t)` is unimodal in `t` and `t*(u)` is monotone, so its
+/// extremes over a bin are at the bin's ends or, where `t = ½` falls in the bin, `lr`).
+#[derive(Clone, Debug)]
+pub struct WidthBounds {
+    inv_du: f64,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl WidthBounds {
+    /// For `0 < u < L` and `|v|`: `Some(true)` when the coverage is surely 1 (`d ≥ e`),
+    /// `Some(false)` when surely 0 (`d ≤ −e`), `None` when the pixel is in the soft edge.
+    #[inline]
+    pub fn classify(&self, u: f64, abs_v: f64, e: f64) -> Option<bool> {
+        let k = ((u * self.inv_du) as usize).min(self.lo.len() - 1);
+        if abs_v <= self.lo[k] - e {
+            Some(true)
+        } else if abs_v >= self.hi[k] + e {
+            Some(false)
+        } else {
+            None
+        }
+    }
+}
+
+impl Shape {
+    /// The half-width's bounds over `bins` equal bins of `(0, L)` (at least 1).
+    pub fn width_bounds(&self, bins: usize) -> WidthBounds {
+        let n = bins.max(1);
+        let l = self.length();
+        let t: Vec<f64> = (0..=n)
+            .map(|k| match k {
+                0 => 0.0,
+                k if k == n => 1.0,
+                k => self.solve_t(l * k as f64 / n as f64),
+            })
+            .collect();
+        let w = |t: f64| 4.0 * self.lr * t * (1.0 - t);
+        let (mut lo, mut hi) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for k in 0..n {
+            let (a, b) = (t[k], t[k + 1]);
+            lo.push(w(a).min(w(b)));
+            hi.push(if a <= 0.5 && b >= 0.5 { self.lr } else { w(a).max(w(b)) });
+        }
+        WidthBounds { inv_du: n as f64 / l, lo, hi }
+    }
+}
+
 /// Coverage of a signed measure `d` with an edge half-width `e` (mm): a smoothstep from 0 at
 /// `d = −e` to 1 at `d = e`. Returns the coverage and `∂c/∂d`.
 pub fn edge(d: f64, e: f64) -> (f64, f64) {
@@ -188,6 +238,28 @@ mod tests {
                 assert!((g - d).abs() < 1e-5, "({u}, {v}) ∂{k}: {g} vs {d}");
             }
         }
+    }
+
+    #[test]
+    fn width_bounds_class_pixels_as_the_measure_does() {
+        let e = 0.3;
+        let b = SH.width_bounds(32);
+        let (mut classed, mut n) = (0, 0);
+        for i in 1..400 {
+            let u = SH.length() * i as f64 / 400.0;
+            for j in 0..80 {
+                let v = -4.0 + 8.0 * j as f64 / 79.0;
+                let (c, _) = edge(SH.measure(u, v), e);
+                n += 1;
+                match b.classify(u, v.abs(), e) {
+                    Some(true) => assert_eq!(c, 1.0, "({u}, {v})"),
+                    Some(false) => assert_eq!(c, 0.0, "({u}, {v})"),
+                    None => continue,
+                }
+                classed += 1;
+            }
+        }
+        assert!(classed * 2 > n, "{classed} of {n} classed");
     }
 
     #[test]
