@@ -184,65 +184,13 @@ pub(crate) fn prepare_loaded(
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let chars: Vec<char> = args.text.chars().filter(|c| !c.is_whitespace()).collect();
-    if chars.is_empty() {
-        bail!("TEXT is empty: give at least one character");
-    }
-    if args.image.is_some() && chars.len() != 1 {
-        bail!("--image holds one character; TEXT has {}", chars.len());
-    }
-    if !(64..=4096).contains(&args.size) {
-        bail!("--size {}: expected 64..=4096 px", args.size);
-    }
-    if args.per_line == Some(0) {
-        bail!("--per-line 0: expected at least 1");
-    }
-    if let Some(mm) = args.char_mm {
-        check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
-    }
-    check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
-    check_out(&args.output, args.force)?;
+    let chars = checked_chars(&args)?;
     let flow = if args.rows { Flow::Rows } else { Flow::Columns };
-    let sheet = args.sheet.as_deref().map(parse_sheet).transpose()?;
-    // With a sheet the layout (and so the sheet image's size) is known before any glyph work
-    // unless the size comes from the glyphs.
-    let sheet_layout = match &sheet {
-        Some(sh) => Some(layout_on_sheet(sh, chars.len(), flow, args.per_line, args.margin_mm, args.char_mm)?),
-        None => None,
-    };
-    match &sheet_layout {
-        Some(l) => check_sheet_px(l, args.size)?,
-        None => check_sheet_size(chars.len(), args.size, args.per_line.unwrap_or(4), args.rows)?,
-    }
+    let (sheet, sheet_layout) = planned_sheet(&args, chars.len(), flow)?;
     let profile = load_brush(&args.brush.brush)?;
-    let alpha_rad = args.alpha.to_radians();
-    if !profile.ranges.alpha_rad.contains(alpha_rad) {
-        bail!(
-            "--alpha {}: outside the brush's calibrated tilt range {:.1}–{:.1}°",
-            args.alpha,
-            profile.ranges.alpha_rad.min.to_degrees(),
-            profile.ranges.alpha_rad.max.to_degrees()
-        );
-    }
+    let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
     // Load and analyse every glyph before writing anything.
-    let input = if !args.font.is_empty() {
-        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
-    } else if let Some(img) = &args.image {
-        GlyphInput::Images(vec![(chars[0], img.clone())], args.hanzi_data.clone())
-    } else {
-        GlyphInput::Hanzi(args.hanzi_data.clone())
-    };
-    let prepared: Vec<Prepared> =
-        chars.par_iter().map(|&c| prepare_loaded(input.load(c)?, args.method, args.json)).collect::<Result<_>>()?;
-    for p in &prepared {
-        if p.paths.is_empty() {
-            let from = args.image.as_ref().map_or(String::new(), |i| format!(" in --image {}", i.display()));
-            bail!(
-                "{}: found no strokes{from} (is it one character, dark ink on light paper, strokes wider than a hair?)",
-                p.glyph.ch
-            );
-        }
-    }
+    let prepared = prepare_all(&args, &chars)?;
     let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
     let brush_mm = trajectory::auto_char_mm(&all, &profile, alpha_rad);
     let lay = match sheet_layout {
@@ -266,41 +214,7 @@ pub fn run(args: Args) -> Result<()> {
     pb.finish_and_clear();
     let mut results = results;
     if args.renderer.neural() {
-        let g = args.renderer.generator()?;
-        if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
-            bail!(
-                "--renderer neural: the generator was trained for brush `{}`, not `{}`",
-                g.config.profile.name,
-                profile.name
-            );
-        }
-        for r in results.iter_mut() {
-            let b = r.char_box;
-            let neural = |t: &brush_model::Track| {
-                neural_gen::compose::render_track(
-                    &g,
-                    t,
-                    brush_model::PointMm::new(b.x0_mm, b.y0_mm),
-                    args.size as f64 / b.size_mm,
-                    args.size,
-                    args.size,
-                    64,
-                )
-            };
-            let img = neural(&r.track)?;
-            let sim = maobi::pipeline::similarity(&r.reference, &img)?;
-            (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
-            if let Some(states) = &r.executed_states {
-                // The executed path through the same generator.
-                let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
-                let ex = neural(&executed)?;
-                r.report.executed = Some(maobi::pipeline::similarity(&r.reference, &ex)?);
-                r.report.agreement = Some(maobi::pipeline::similarity(&img, &ex)?);
-                r.executed = Some(ex);
-            }
-            r.report.model = "b-bsmg";
-            r.render = img;
-        }
+        rerender_neural(&args, &profile, &mut results)?;
     }
     let single = results.len() == 1;
     // Everything goes to a staging folder beside --output, swapped in at the end: a run never
@@ -311,26 +225,7 @@ pub fn run(args: Args) -> Result<()> {
         write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
-    let mean = |f: fn(&CharReport) -> f64| reports.iter().map(|r| f(r)).sum::<f64>() / reports.len() as f64;
-    let summary = json!({
-        "text": chars.iter().collect::<String>(),
-        "char_mm": char_mm,
-        "brush": profile.name,
-        "model": args.model.name(),
-        "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
-        "executed_mean": {
-            "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
-            "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
-            "iou": mean(|r| r.executed.map_or(f64::NAN, |s| s.iou)),
-        },
-        "agreement_mean": {"csim": mean(|r| r.agreement.map_or(f64::NAN, |s| s.csim))},
-        "sheet": {
-            "name": lay.sheet.name, "size_mm": [lay.sheet.width_mm, lay.sheet.height_mm],
-            "margin_mm": lay.margin_mm, "flow": flow, "per_line": lay.per_line, "lines": lay.lines,
-        },
-        "brush_fit": brush_fit(&reports, char_mm, brush_mm),
-        "chars": reports,
-    });
+    let summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
     let sheet_track = SheetTrack::new(
         &lay,
         flow,
@@ -351,39 +246,7 @@ pub fn run(args: Args) -> Result<()> {
         print_json(&summary)?;
     } else {
         for r in &reports {
-            // The executed figure (what the robot would write) is the headline.
-            let executed = match (r.executed, r.agreement) {
-                (Some(e), Some(a)) => format!(
-                    "executed CSIM {:.4}  SSIM {:.4}  IoU {:.4}  (planned CSIM {:.4}, planned vs executed {:.4})",
-                    e.csim, e.ssim, e.iou, r.csim, a.csim
-                ),
-                _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.csim, r.ssim, r.iou),
-            };
-            println!(
-                "{} ({} via {}, {}): {executed}{}  strokes {}{}  points {}  {:.1} ms",
-                r.char,
-                r.source,
-                r.method,
-                r.model,
-                r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
-                r.strokes_found,
-                r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
-                r.points,
-                r.millis
-            );
-            if let Some(rf) = &r.refine {
-                let fig = |s: Option<maobi::pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
-                println!(
-                    "  refined ({} steps, {:.0} ms): executed CSIM {} → {}, planned CSIM {:.4} → {:.4}{}",
-                    rf.options.iterations,
-                    rf.millis,
-                    fig(rf.executed_before),
-                    fig(rf.executed_after),
-                    rf.planned_before.csim,
-                    rf.planned_after.csim,
-                    rf.rejected.as_ref().map_or(String::new(), |w| format!("; not used: {w}"))
-                );
-            }
+            print_char(r);
         }
         println!(
             "{} sheet {:.0}×{:.0} mm, char box {char_mm:.1} mm ({}); outputs in {} (preview.html to watch it)",
@@ -395,6 +258,191 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The characters of TEXT, after checking every flag that needs no file.
+fn checked_chars(args: &Args) -> Result<Vec<char>> {
+    let chars: Vec<char> = args.text.chars().filter(|c| !c.is_whitespace()).collect();
+    if chars.is_empty() {
+        bail!("TEXT is empty: give at least one character");
+    }
+    if args.image.is_some() && chars.len() != 1 {
+        bail!("--image holds one character; TEXT has {}", chars.len());
+    }
+    if !(64..=4096).contains(&args.size) {
+        bail!("--size {}: expected 64..=4096 px", args.size);
+    }
+    if args.per_line == Some(0) {
+        bail!("--per-line 0: expected at least 1");
+    }
+    if let Some(mm) = args.char_mm {
+        check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
+    }
+    check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
+    check_out(&args.output, args.force)?;
+    Ok(chars)
+}
+
+/// Loads every character's glyph from the source the flags name and finds its centre lines.
+fn prepare_all(args: &Args, chars: &[char]) -> Result<Vec<Prepared>> {
+    let input = if !args.font.is_empty() {
+        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
+    } else if let Some(img) = &args.image {
+        GlyphInput::Images(vec![(chars[0], img.clone())], args.hanzi_data.clone())
+    } else {
+        GlyphInput::Hanzi(args.hanzi_data.clone())
+    };
+    let prepared: Vec<Prepared> =
+        chars.par_iter().map(|&c| prepare_loaded(input.load(c)?, args.method, args.json)).collect::<Result<_>>()?;
+    for p in &prepared {
+        if p.paths.is_empty() {
+            let from = args.image.as_ref().map_or(String::new(), |i| format!(" in --image {}", i.display()));
+            bail!(
+                "{}: found no strokes{from} (is it one character, dark ink on light paper, strokes wider than a hair?)",
+                p.glyph.ch
+            );
+        }
+    }
+    Ok(prepared)
+}
+
+/// Renders every result again through the B-BSMG generator (`--renderer neural`) and scores
+/// those images instead.
+fn rerender_neural(args: &Args, profile: &BrushProfile, results: &mut [CharResult]) -> Result<()> {
+    let g = args.renderer.generator()?;
+    if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
+        bail!(
+            "--renderer neural: the generator was trained for brush `{}`, not `{}`",
+            g.config.profile.name,
+            profile.name
+        );
+    }
+    for r in results.iter_mut() {
+        let b = r.char_box;
+        let neural = |t: &brush_model::Track| {
+            neural_gen::compose::render_track(
+                &g,
+                t,
+                brush_model::PointMm::new(b.x0_mm, b.y0_mm),
+                args.size as f64 / b.size_mm,
+                args.size,
+                args.size,
+                64,
+            )
+        };
+        let img = neural(&r.track)?;
+        let sim = maobi::pipeline::similarity(&r.reference, &img)?;
+        (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+        if let Some(states) = &r.executed_states {
+            // The executed path through the same generator.
+            let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
+            let ex = neural(&executed)?;
+            r.report.executed = Some(maobi::pipeline::similarity(&r.reference, &ex)?);
+            r.report.agreement = Some(maobi::pipeline::similarity(&img, &ex)?);
+            r.executed = Some(ex);
+        }
+        r.report.model = "b-bsmg";
+        r.render = img;
+    }
+    Ok(())
+}
+
+/// One character's line (and its refinement's) on stdout.
+fn print_char(r: &CharReport) {
+    // The executed figure (what the robot would write) is the headline.
+    let executed = match (r.executed, r.agreement) {
+        (Some(e), Some(a)) => format!(
+            "executed CSIM {:.4}  SSIM {:.4}  IoU {:.4}  (planned CSIM {:.4}, planned vs executed {:.4})",
+            e.csim, e.ssim, e.iou, r.csim, a.csim
+        ),
+        _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.csim, r.ssim, r.iou),
+    };
+    println!(
+        "{} ({} via {}, {}): {executed}{}  strokes {}{}  points {}  {:.1} ms",
+        r.char,
+        r.source,
+        r.method,
+        r.model,
+        r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
+        r.strokes_found,
+        r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
+        r.points,
+        r.millis
+    );
+    if let Some(rf) = &r.refine {
+        let fig = |s: Option<maobi::pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
+        println!(
+            "  refined ({} steps, {:.0} ms): executed CSIM {} → {}, planned CSIM {:.4} → {:.4}{}",
+            rf.options.iterations,
+            rf.millis,
+            fig(rf.executed_before),
+            fig(rf.executed_after),
+            rf.planned_before.csim,
+            rf.planned_after.csim,
+            rf.rejected.as_ref().map_or(String::new(), |w| format!("; not used: {w}"))
+        );
+    }
+}
+
+/// `--alpha` in radians, checked against the brush's calibrated tilt range.
+fn checked_alpha_rad(alpha_deg: f64, profile: &BrushProfile) -> Result<f64> {
+    let alpha_rad = alpha_deg.to_radians();
+    if !profile.ranges.alpha_rad.contains(alpha_rad) {
+        bail!(
+            "--alpha {alpha_deg}: outside the brush's calibrated tilt range {:.1}–{:.1}°",
+            profile.ranges.alpha_rad.min.to_degrees(),
+            profile.ranges.alpha_rad.max.to_degrees()
+        );
+    }
+    Ok(alpha_rad)
+}
+
+/// The `--sheet` and, with one, the layout on it (known before any glyph work unless the size
+/// comes from the glyphs); refuses a sheet image over the size limit either way.
+fn planned_sheet(args: &Args, n: usize, flow: Flow) -> Result<(Option<Sheet>, Option<Layout>)> {
+    let sheet = args.sheet.as_deref().map(parse_sheet).transpose()?;
+    let layout = match &sheet {
+        Some(sh) => Some(layout_on_sheet(sh, n, flow, args.per_line, args.margin_mm, args.char_mm)?),
+        None => None,
+    };
+    match &layout {
+        Some(l) => check_sheet_px(l, args.size)?,
+        None => check_sheet_size(n, args.size, args.per_line.unwrap_or(4), args.rows)?,
+    }
+    Ok((sheet, layout))
+}
+
+/// `summary.json`: the text, the sheet, the means and every character's report.
+fn summary_json(
+    args: &Args,
+    chars: &[char],
+    lay: &Layout,
+    flow: Flow,
+    profile: &BrushProfile,
+    reports: &[&CharReport],
+    brush_mm: f64,
+) -> serde_json::Value {
+    let char_mm = lay.char_mm;
+    let mean = |f: fn(&CharReport) -> f64| reports.iter().map(|r| f(r)).sum::<f64>() / reports.len() as f64;
+    json!({
+        "text": chars.iter().collect::<String>(),
+        "char_mm": char_mm,
+        "brush": profile.name,
+        "model": args.model.name(),
+        "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
+        "executed_mean": {
+            "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
+            "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
+            "iou": mean(|r| r.executed.map_or(f64::NAN, |s| s.iou)),
+        },
+        "agreement_mean": {"csim": mean(|r| r.agreement.map_or(f64::NAN, |s| s.csim))},
+        "sheet": {
+            "name": lay.sheet.name, "size_mm": [lay.sheet.width_mm, lay.sheet.height_mm],
+            "margin_mm": lay.margin_mm, "flow": flow, "per_line": lay.per_line, "lines": lay.lines,
+        },
+        "brush_fit": brush_fit(reports, char_mm, brush_mm),
+        "chars": reports,
+    })
 }
 
 /// The smallest character box a flag may ask for, mm.
