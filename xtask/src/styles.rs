@@ -46,6 +46,8 @@ struct Row {
     strokes_ok: bool,
     missing: Vec<usize>,
     doubled: Vec<usize>,
+    /// Template method: share of the glyph's ink no registered stroke explains.
+    uncovered_ink: Option<f64>,
     csim: f64,
     ssim: f64,
     iou: f64,
@@ -129,17 +131,17 @@ fn score(
     opts: &WriteOptions,
 ) -> Result<Row> {
     let expected = template.medians.as_ref().map_or(0, Vec::len);
-    let (paths, missing, doubled, fits_ok) = match method {
+    let (paths, missing, doubled, fits_ok, uncovered_ink) = match method {
         Method::Template => {
             let r = trajectory::centre_lines_from_template(template, &target, trajectory::DEFAULT_ANALYSIS_PX)?;
             let doubled =
                 r.strokes.iter().enumerate().filter(|(_, s)| s.doubled_with.is_some()).map(|(i, _)| i).collect();
             let ok = r.strokes_ok();
-            (r.paths.clone(), r.missing(), doubled, ok)
+            (r.paths.clone(), r.missing(), doubled, ok, Some(r.uncovered_ink))
         }
-        _ => (trajectory::centre_lines(&target, method, trajectory::DEFAULT_ANALYSIS_PX)?, vec![], vec![], true),
+        _ => (trajectory::centre_lines(&target, method, trajectory::DEFAULT_ANALYSIS_PX)?, vec![], vec![], true, None),
     };
-    let p = Prepared { glyph: target, method, paths };
+    let p = Prepared { glyph: target, method, paths, registration: None };
     let mm = trajectory::auto_char_mm(&p.paths, pen, 0.0);
     let r = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?.report;
     let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));
@@ -153,6 +155,7 @@ fn score(
         strokes_ok: fits_ok && r.strokes_found == expected,
         missing,
         doubled,
+        uncovered_ink,
         csim: sim.0,
         ssim: sim.1,
         iou: sim.2,

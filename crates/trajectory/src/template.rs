@@ -100,8 +100,12 @@ pub struct Registration {
     pub overlap_start: f64,
     /// See [`Registration::overlap_start`].
     pub overlap_fit: f64,
-    /// Mean displacement of the non-rigid fit over the template's median points, em units.
+    /// Mean displacement of the non-rigid fit over the template's skeleton points, em units.
     pub nonrigid_mean_em: f64,
+    /// Share (0..1) of the target's ink farther than 1.5 local half-widths (plus 2 px) from every
+    /// registered centre line: ink the template does not explain. High when the target draws
+    /// another form of the character (UKai's 真 is 眞) or has extra strokes.
+    pub uncovered_ink: f64,
 }
 
 impl Registration {
@@ -256,6 +260,7 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         }
     }
     mark_doubled(&paths, &mut fits);
+    let uncovered_ink = uncovered(&paths, &mask, n, px_to_em);
     Ok(Registration {
         paths,
         strokes: fits,
@@ -263,7 +268,32 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         overlap_start: overlap_start.unwrap_or(0.0),
         overlap_fit,
         nonrigid_mean_em,
+        uncovered_ink,
     })
+}
+
+/// The share of ink pixels of `mask` (`n × n`) outside discs of radius 1.5·half-width + 2 px
+/// around every centre-line point.
+fn uncovered(paths: &[StrokePath], mask: &[bool], n: usize, px_to_em: f64) -> f64 {
+    let mut cov = vec![false; n * n];
+    for p in paths {
+        for (q, w) in p.points.iter().zip(&p.half_widths) {
+            let r = 1.5 * w / px_to_em + 2.0;
+            let (cx, cy) = (q.x / px_to_em, q.y / px_to_em);
+            let (x0, x1) = ((cx - r).floor().max(0.0) as usize, ((cx + r).ceil().max(0.0) as usize).min(n));
+            let (y0, y1) = ((cy - r).floor().max(0.0) as usize, ((cy + r).ceil().max(0.0) as usize).min(n));
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    if (x as f64 + 0.5 - cx).powi(2) + (y as f64 + 0.5 - cy).powi(2) <= r * r {
+                        cov[y * n + x] = true;
+                    }
+                }
+            }
+        }
+    }
+    let ink = mask.iter().filter(|&&b| b).count();
+    let left = mask.iter().zip(&cov).filter(|&(&m, &c)| m && !c).count();
+    if ink == 0 { 0.0 } else { left as f64 / ink as f64 }
 }
 
 /// A stroke with less than [`TemplateOptions::min_ink_fraction`] of its centre line within this

@@ -74,6 +74,7 @@ fn on_its_own_outline_the_template_gives_the_medians_result() {
         // Same strokes in the same order, every one on ink.
         assert_eq!(reg.paths.len(), medians.len(), "{c}");
         assert!(reg.strokes_ok(), "{c}: {:?}", reg.strokes);
+        assert!(reg.uncovered_ink < 0.02, "{c}: {:.3} of the ink unexplained", reg.uncovered_ink);
         for (i, (t, m)) in reg.paths.iter().zip(&medians).enumerate() {
             let d = 0.5 * (mean_dist(&t.points, &m.points) + mean_dist(&m.points, &t.points));
             assert!(d < 10.0, "{c} stroke {}: centre lines {d:.1} em apart", i + 1);
@@ -134,4 +135,19 @@ fn registration_is_deterministic_and_template_is_a_method() {
     let font = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf");
     let f = glyph::from_font(&font, '字').unwrap();
     assert!(centre_lines(&f, Method::Template, PX).unwrap_err().to_string().contains("no stroke medians"));
+}
+
+#[test]
+fn ink_the_template_does_not_explain_is_reported() {
+    // 十 with an extra bar in the top left corner: two strokes found, the bar's ink unexplained.
+    use kurbo::Shape as _;
+    let g = glyph::embedded('十').unwrap();
+    let Shape::Outlines(mut o) = g.shape.clone() else { unreachable!() };
+    let plain = register(&g, &shape_only(&g), &opts()).unwrap();
+    o.push(kurbo::Rect::new(60.0, 40.0, 300.0, 90.0).to_path(0.1));
+    let target = Glyph { shape: Shape::Outlines(o), ..shape_only(&g) };
+    let reg = register(&g, &target, &opts()).unwrap();
+    assert_eq!(reg.paths.len(), 2);
+    assert!(plain.uncovered_ink < 0.02, "{}", plain.uncovered_ink);
+    assert!(reg.uncovered_ink > 0.1, "{}", reg.uncovered_ink);
 }

@@ -53,6 +53,9 @@ fn overlays() {
             }
         }
         img.save(out.join(format!("{c}.png"))).unwrap();
-        eprintln!("{c}: affine {:?} nonrigid {:.1} {:?}", reg.affine, reg.nonrigid_mean_em, reg.strokes);
+        eprintln!(
+            "{c}: uncovered {:.3} affine {:?} nonrigid {:.1} {:?}",
+            reg.uncovered_ink, reg.affine, reg.nonrigid_mean_em, reg.strokes
+        );
     }
 }
