@@ -83,7 +83,7 @@ const PROFILE_NUMBERS: [&str; 14] = [
 /// Whatever a profile parser accepts predicts bounded, positive footprints everywhere in its
 /// range, and the canvas built from it has a finite, positive scale.
 fn check_accepted_profile(p: &BrushProfile) {
-    assert!(p.brush.length_mm <= brush_model::profile::MAX_BRUSH_MM);
+    assert!(p.brush.length_mm <= brush_model::MAX_BRUSH_MM);
     for c in p.ranges.corners() {
         let f = p.predict(&c, Extrapolation::Refuse).expect("a validated profile predicts at its corners");
         for v in [f.lt_mm, f.lh_mm, f.lr_mm] {

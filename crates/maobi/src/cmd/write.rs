@@ -168,6 +168,28 @@ pub(crate) fn prepare_loaded(
 ) -> Result<Prepared> {
     let (g, template) = loaded;
     let p = prepare_with_template(g, method, template.as_ref())?;
+    // A registration where most strokes find no ink means the glyph is not this character (or
+    // not legible): writing the template where it landed would be a guess, not the glyph.
+    let missing = p.registration.as_ref().map_or((0, 0), |r| (r.missing().len(), r.strokes.len()));
+    let mostly_missing = missing.0 * 2 > missing.1;
+    if p.paths.is_empty() || mostly_missing {
+        let from = match &p.glyph.source {
+            glyph::GlyphSource::Image(path) => format!(" in --image {path}"),
+            _ => String::new(),
+        };
+        let why = if mostly_missing {
+            format!(
+                " for {} of the template's {} strokes (try --from skeleton if it is another character)",
+                missing.0, missing.1
+            )
+        } else {
+            String::new()
+        };
+        bail!(
+            "{}: found no strokes{from}{why} (is it one character, dark ink on light paper, strokes wider than a hair?)",
+            p.glyph.ch
+        );
+    }
     if let (Some(r), false) = (&p.registration, quiet) {
         let missing = r.missing();
         if !missing.is_empty() {
@@ -294,15 +316,6 @@ fn prepare_all(args: &Args, chars: &[char]) -> Result<Vec<Prepared>> {
     };
     let prepared: Vec<Prepared> =
         chars.par_iter().map(|&c| prepare_loaded(input.load(c)?, args.method, args.json)).collect::<Result<_>>()?;
-    for p in &prepared {
-        if p.paths.is_empty() {
-            let from = args.image.as_ref().map_or(String::new(), |i| format!(" in --image {}", i.display()));
-            bail!(
-                "{}: found no strokes{from} (is it one character, dark ink on light paper, strokes wider than a hair?)",
-                p.glyph.ch
-            );
-        }
-    }
     Ok(prepared)
 }
 
