@@ -994,7 +994,10 @@ mod tests {
         }
     }
 
-    fn shape(n: usize, segments: &[((f64, f64), (f64, f64))]) -> Vec<Vec<Point>> {
+    /// A segment's two ends, pixel units.
+    type Segment = ((f64, f64), (f64, f64));
+
+    fn shape(n: usize, segments: &[Segment]) -> Vec<Vec<Point>> {
         let mut m = vec![false; n * n];
         for &(a, b) in segments {
             line(&mut m, n, a, b, 4.0);

@@ -40,6 +40,9 @@ pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
                         continue;
                     }
                     let (p2, p4, p6, p8) = (p[0], p[2], p[4], p[6]);
+                    // Zhang & Suen (1984) state these as products that must vanish
+                    // (P2·P4·P6 = 0 and P4·P6·P8 = 0); written so, they read against the paper.
+                    #[allow(clippy::nonminimal_bool, reason = "the paper's conditions, term by term")]
                     let ok = if step == 0 {
                         !(p2 && p4 && p6) && !(p4 && p6 && p8)
                     } else {
@@ -73,7 +76,8 @@ pub fn remove_staircases(mask: &mut [bool], w: usize, h: usize) {
             }
             let p = ring(mask, w, h, x, y);
             let (n, e, s, wst) = (p[0], p[2], p[4], p[6]);
-            let corner = (n && e) || (e && s) || (s && wst) || (wst && n);
+            // A staircase corner: a horizontal and a vertical 4-neighbour, at right angles.
+            let corner = (e || wst) && (n || s);
             let count = p.iter().filter(|&&b| b).count();
             if corner && (2..=3).contains(&count) && neighbours_connected(&p) {
                 mask[y as usize * w + x as usize] = false;
@@ -161,7 +165,7 @@ mod tests {
             })
             .collect();
         zhang_suen(&mut m, w, h);
-        let (_, sizes) = bezier_raster::binary::components(&m.iter().map(|&b| b).collect::<Vec<_>>(), w, h, true);
+        let (_, sizes) = bezier_raster::binary::components(&m, w, h, true);
         // 4-connectivity may split diagonal steps, so check 8-connected reach instead: the arms'
         // tips are all inked and the centre is inked.
         assert!(sizes.len() >= 2);

@@ -91,8 +91,8 @@ pub(crate) fn corner_turns(p: &[Point]) -> Vec<(usize, (kurbo::Vec2, kurbo::Vec2
     };
     let mut out = Vec::new();
     let mut run: Option<(usize, f64, (kurbo::Vec2, kurbo::Vec2))> = None;
-    for i in 0..p.len() {
-        let d = if s[i] >= reach && s[i] <= total - reach { dirs(i) } else { None };
+    for (i, &si) in s.iter().enumerate() {
+        let d = if si >= reach && si <= total - reach { dirs(i) } else { None };
         match d.map(|(u, v)| (u.dot(v).clamp(-1.0, 1.0).acos(), (u, v))) {
             Some((a, uv)) if a > CORNER_RAD => {
                 if run.is_none_or(|(_, best, _)| a > best) {
@@ -272,7 +272,7 @@ pub fn build_track(
         // A brush easing up in place keeps its lean; it turns while gliding to the next press.
         for i in 1..points.len() {
             let (a, b) = (points[i - 1], points[i]);
-            if b.h_mm <= 0.0 && a.h_mm > 0.0 && a.x_mm == b.x_mm && a.y_mm == b.y_mm {
+            if !b.is_pressed() && a.is_pressed() && a.x_mm == b.x_mm && a.y_mm == b.y_mm {
                 points[i].beta_rad = a.beta_rad;
             }
         }
