@@ -149,6 +149,9 @@ pub struct TemplateReport {
     pub doubled: Vec<[usize; 2]>,
     /// Whether every stroke found its own ink (the stroke count holds on the target).
     pub strokes_ok: bool,
+    /// Share (0..1) of the target's ink that no registered stroke explains: a stroke the
+    /// template lacks, or another form of the character.
+    pub uncovered_ink: f64,
     /// Per stroke, in writing order.
     pub fits: Vec<StrokeFit>,
 }
@@ -161,6 +164,7 @@ impl TemplateReport {
             missing: r.missing().into_iter().map(|i| i + 1).collect(),
             doubled: r.strokes.iter().enumerate().filter_map(|(i, s)| s.doubled_with.map(|j| [i + 1, j + 1])).collect(),
             strokes_ok: r.strokes_ok(),
+            uncovered_ink: r.uncovered_ink,
             fits: r.strokes.clone(),
         }
     }

@@ -28,6 +28,7 @@ fn a_font_glyph_is_written_from_its_registered_template() {
     let t = &r["template"];
     assert_eq!(t["strokes"], 5);
     assert_eq!(t["fits"].as_array().unwrap().len(), 5);
+    assert!((0.0..0.5).contains(&t["uncovered_ink"].as_f64().unwrap()), "{t}");
     assert_eq!(t["strokes_ok"].as_bool(), Some(t["missing"].as_array().unwrap().is_empty()));
     assert!(r["executed"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     // The skeleton stays available and reports no template.
