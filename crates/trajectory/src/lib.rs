@@ -43,10 +43,16 @@ struct ReadmeDoctests;
 
 pub mod distance;
 pub mod glyph;
-pub mod graph;
+/// The skeleton method's public items under their older path (`trajectory::graph::Skeleton`);
+/// new code names them at the crate root.
+pub mod graph {
+    pub use crate::skeleton::{GraphOptions, Skeleton};
+}
 mod image_glyph;
+mod polyline;
 pub mod raster;
 pub mod scan;
+mod skeleton;
 pub mod template;
 pub mod thinning;
 pub mod track;
@@ -55,8 +61,8 @@ use kurbo::Point;
 use thiserror::Error;
 
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
-pub use graph::GraphOptions;
 pub use image_glyph::glyph_from_gray;
+pub use skeleton::{GraphOptions, Skeleton};
 pub use template::{Registration, StrokeFit, TemplateOptions};
 pub use track::{
     BuiltTrack, CharBox, DEFAULT_SPACING_MM, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, chamfer_pct,
@@ -160,7 +166,7 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
             let mut skel = mask;
             thinning::zhang_suen(&mut skel, n, n);
             thinning::remove_staircases(&mut skel, n, n);
-            let polys = graph::skeleton_strokes(&skel, &dt, n, &GraphOptions::default());
+            let polys = skeleton::skeleton_strokes(&skel, &dt, n, &GraphOptions::default());
             Ok(polys
                 .into_iter()
                 .map(|p| {

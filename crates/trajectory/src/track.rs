@@ -7,6 +7,7 @@ use kurbo::Point;
 use serde::{Deserialize, Serialize};
 
 use crate::glyph::EM;
+use crate::polyline::{arc_lengths, arc_lengths_by};
 
 /// Where a character sits on the paper: the em box maps onto the square
 /// `[x0, x0 + size] × [y0, y0 + size]` mm. Em point `(x', y')` (y down) is at
@@ -76,10 +77,7 @@ pub(crate) fn corner_turns(p: &[Point]) -> Vec<(usize, (kurbo::Vec2, kurbo::Vec2
     if p.len() < 3 {
         return Vec::new();
     }
-    let mut s = vec![0.0; p.len()];
-    for i in 1..p.len() {
-        s[i] = s[i - 1] + p[i].distance(p[i - 1]);
-    }
+    let s = arc_lengths(p);
     let total = s[s.len() - 1];
     let reach = CORNER_REACH_EM;
     let dirs = |i: usize| {
@@ -151,14 +149,6 @@ pub struct BuiltTrack {
     pub clamped_low: usize,
     /// Points whose wanted width needed an h above the range (clamped down).
     pub clamped_high: usize,
-}
-
-fn arc_lengths(p: &[PointMm]) -> Vec<f64> {
-    let mut s = vec![0.0; p.len()];
-    for i in 1..p.len() {
-        s[i] = s[i - 1] + p[i].distance(p[i - 1]);
-    }
-    s
 }
 
 /// The segment of the ascending arc lengths `s` holding `t` and the fraction along it, clamped
@@ -353,7 +343,7 @@ impl<'a> Placer<'a> {
         counts: &mut (usize, usize),
     ) -> Result<Vec<TrackPoint>, ProfileError> {
         let (alpha, step) = (self.opts.alpha_rad, self.opts.spacing_mm);
-        let s = arc_lengths(pts);
+        let s = arc_lengths_by(pts, PointMm::distance);
         let total = s[s.len() - 1];
         let n = (total / step).floor() as usize;
         let mut stations: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();

@@ -1,0 +1,136 @@
+//! From the cleaned graph to chains: at each node, branch ends that continue each other are
+//! paired (straightest first, comparable widths), and paired edges are walked into polylines;
+//! short pieces lying inside other strokes are dropped.
+//!
+//! Frame: the analysis raster, px, y down. Each chain is a polyline of pixel-centre points,
+//! lightly smoothed with its end points kept; every live edge ends up in exactly one chain.
+
+use kurbo::{Point, Vec2};
+
+use super::graph::{Graph, branch_width, ends_at};
+use super::options::GraphOptions;
+use crate::polyline::length;
+
+/// Pairs branch ends at every node and walks the pairs into chains (smoothed).
+pub(super) fn pair_and_chain(g: &Graph, dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+    let live: Vec<usize> = (0..g.edges.len()).filter(|&k| g.edges[k].alive).collect();
+    // End id: 2k (end a) or 2k+1 (end b) of edge k.
+    let mut partner = vec![usize::MAX; 2 * g.edges.len()];
+    for v in 0..g.nodes.len() {
+        if !g.nodes[v].alive {
+            continue;
+        }
+        let ends = ends_at(g, v);
+        if ends.len() < 2 {
+            continue;
+        }
+        let widths: Vec<f64> = if opts.pair_width_ratio > 0.0 && ends.len() >= 3 {
+            ends.iter().map(|&(end, _)| branch_width(g, &g.edges[end / 2], end % 2 == 0, dt, n)).collect()
+        } else {
+            Vec::new()
+        };
+        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+        for i in 0..ends.len() {
+            for j in i + 1..ends.len() {
+                if !widths.is_empty() && widths[i].min(widths[j]) < opts.pair_width_ratio * widths[i].max(widths[j]) {
+                    continue;
+                }
+                pairs.push((ends[i].1.dot(ends[j].1), ends[i].0, ends[j].0));
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let limit = if ends.len() == 2 { 1.0 } else { opts.straight_min_rad.cos() };
+        for (c, x, y) in pairs {
+            if c <= limit + 1e-12 && partner[x] == usize::MAX && partner[y] == usize::MAX && x / 2 != y / 2 {
+                partner[x] = y;
+                partner[y] = x;
+            }
+        }
+    }
+    let mut used = vec![false; g.edges.len()];
+    let mut strokes = Vec::new();
+    let walk = |start_end: usize, used: &mut Vec<bool>| {
+        let mut pts: Vec<Point> = Vec::new();
+        let mut end = start_end;
+        loop {
+            let k = end / 2;
+            if used[k] {
+                break;
+            }
+            used[k] = true;
+            let e = &g.edges[k];
+            let seg: Vec<Point> = if end % 2 == 0 { e.pts.clone() } else { e.pts.iter().rev().copied().collect() };
+            if pts.is_empty() {
+                pts.extend(seg);
+            } else {
+                pts.extend(seg.into_iter().skip(1));
+            }
+            let other = end ^ 1;
+            match partner[other] {
+                usize::MAX => break,
+                next => end = next,
+            }
+        }
+        pts
+    };
+    for &k in &live {
+        for end in [2 * k, 2 * k + 1] {
+            if !used[k] && partner[end] == usize::MAX {
+                strokes.push(walk(end, &mut used));
+            }
+        }
+    }
+    for &k in &live {
+        if !used[k] {
+            strokes.push(walk(2 * k, &mut used));
+        }
+    }
+    strokes.into_iter().map(|s| smooth(&s)).collect()
+}
+
+/// A light moving average (window 5) that keeps the end points.
+fn smooth(p: &[Point]) -> Vec<Point> {
+    if p.len() < 5 {
+        return p.to_vec();
+    }
+    let mut out = Vec::with_capacity(p.len());
+    out.push(p[0]);
+    for i in 1..p.len() - 1 {
+        let (lo, hi) = (i.saturating_sub(2), (i + 2).min(p.len() - 1));
+        let mut s = Vec2::ZERO;
+        for q in &p[lo..=hi] {
+            s += q.to_vec2();
+        }
+        out.push((s / (hi - lo + 1) as f64).to_point());
+    }
+    out.push(p[p.len() - 1]);
+    out
+}
+
+/// Drops short pieces that lie wholly inside the ink of other strokes (a crossing that thinning
+/// drew as two junctions leaves such a piece between them): they add no ink of their own, and
+/// counted as strokes they would be wrong.
+pub(super) fn drop_covered(strokes: Vec<Vec<Point>>, dt: &[f32], n: usize, k: f64) -> Vec<Vec<Point>> {
+    let width = |p: Point| crate::distance::sample(dt, n, n, p.x, p.y).max(1.0);
+    let near = |p: Point, s: &[Point]| {
+        s.windows(2)
+            .map(|w| kurbo::ParamCurveNearest::nearest(&kurbo::Line::new(w[0], w[1]), p, 1e-6).distance_sq.sqrt())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut keep = vec![true; strokes.len()];
+    for i in 0..strokes.len() {
+        let s = &strokes[i];
+        let w = s.iter().map(|&p| width(p)).fold(0.0, f64::max);
+        if length(s) > k * w {
+            continue;
+        }
+        let covered = s.iter().all(|&p| {
+            let wp = width(p);
+            (0..strokes.len()).any(|j| j != i && keep[j] && strokes[j].len() > 1 && near(p, &strokes[j]) < wp)
+        });
+        if covered {
+            keep[i] = false;
+        }
+    }
+    strokes.into_iter().zip(keep).filter_map(|(s, k)| k.then_some(s)).collect()
+}

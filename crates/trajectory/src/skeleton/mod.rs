@@ -1,0 +1,322 @@
+//! From a skeleton to strokes: a graph of end points and junctions ([`graph`]), spur pruning
+//! and junction merging, straight-through pairing at crossings ([`chains`]), corner and hook
+//! rules ([`corners`]), and stroke order ([`order`]).
+//!
+//! Frame: the analysis raster (`n × n` px of the em box, pixel centres at `i + 0.5`, y down);
+//! widths are distance-transform values (px). [`crate::medians`] scales the result into the em
+//! frame. Invariant: the output is a pure function of the skeleton, the distance transform and
+//! the [`GraphOptions`] (no randomness, no environment).
+
+mod chains;
+mod corners;
+mod graph;
+mod options;
+mod order;
+
+use kurbo::Point;
+
+pub use options::GraphOptions;
+
+use crate::polyline::length;
+use chains::{drop_covered, pair_and_chain};
+use corners::split_at_corners;
+use graph::{attach_loose_ends, build_graph, degree, merge_junctions, prune_spurs};
+use order::order_strokes;
+
+/// Extracts strokes from a one-pixel skeleton. `dt` is the distance transform of the glyph mask
+/// (same `n × n` raster). Returns polylines in pixel coordinates, oriented and ordered by the
+/// usual writing rules.
+pub(crate) fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+    let mut g = build_graph(skel, dt, n);
+    attach_loose_ends(&mut g, opts.loose_end_em * n as f64 / 1024.0);
+    prune_spurs(&mut g, opts);
+    merge_junctions(&mut g, opts);
+    prune_spurs(&mut g, opts);
+    // Where three or more branches meet (chains that end there end against other strokes).
+    let junctions: Vec<Point> =
+        (0..g.nodes.len()).filter(|&v| g.nodes[v].alive && degree(&g, v) >= 3).map(|v| g.nodes[v].pos).collect();
+    let strokes: Vec<Vec<Point>> =
+        pair_and_chain(&g, dt, n, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts, &junctions)).collect();
+    let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > 1.5).collect();
+    let strokes = drop_covered(strokes, dt, n, opts.covered_max_widths);
+    order_strokes(strokes)
+}
+
+/// A glyph's skeleton on the analysis raster: the thinned mask and the distance transform of the
+/// glyph mask (`n × n`, pixel centres at `i + 0.5`), as [`crate::centre_lines`] computes them
+/// for [`crate::Method::Skeleton`].
+#[derive(Clone, Debug)]
+pub struct Skeleton {
+    /// One-pixel-wide skeleton, row-major.
+    pub skel: Vec<bool>,
+    /// Distance to the background, px.
+    pub dt: Vec<f32>,
+    /// Side, px.
+    pub n: usize,
+}
+
+impl Skeleton {
+    /// Rasterises `g` at `analysis_px`², thins it (Zhang–Suen, staircase removal) and takes its
+    /// distance transform; `None` when the glyph has no ink there.
+    pub fn of(g: &crate::Glyph, analysis_px: u32) -> Option<Skeleton> {
+        let n = analysis_px as usize;
+        let mask = crate::raster::mask_of(&crate::raster::render_glyph(g, analysis_px));
+        if !mask.iter().any(|&b| b) {
+            return None;
+        }
+        let dt = crate::distance::distance_to_background(&mask, n, n);
+        let mut skel = mask;
+        crate::thinning::zhang_suen(&mut skel, n, n);
+        crate::thinning::remove_staircases(&mut skel, n, n);
+        Some(Skeleton { skel, dt, n })
+    }
+
+    /// The strokes found with `opts` ([`skeleton_strokes`]), in pixels.
+    pub fn strokes(&self, opts: &GraphOptions) -> Vec<Vec<Point>> {
+        skeleton_strokes(&self.skel, &self.dt, self.n, opts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::graph::{Edge, Graph, Node};
+    use super::order::is_horizontal;
+    use super::*;
+    use crate::distance::distance_to_background;
+    use crate::thinning::zhang_suen;
+
+    fn strokes_of(mask: Vec<bool>, n: usize) -> Vec<Vec<Point>> {
+        strokes_with(mask, n, &GraphOptions::default())
+    }
+
+    fn strokes_with(mask: Vec<bool>, n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+        let dt = distance_to_background(&mask, n, n);
+        let mut skel = mask;
+        zhang_suen(&mut skel, n, n);
+        crate::thinning::remove_staircases(&mut skel, n, n);
+        skeleton_strokes(&skel, &dt, n, opts)
+    }
+
+    fn bar(m: &mut [bool], n: usize, x0: usize, x1: usize, y0: usize, y1: usize) {
+        for y in y0..y1 {
+            for x in x0..x1 {
+                m[y * n + x] = true;
+            }
+        }
+    }
+
+    #[test]
+    fn a_cross_splits_into_horizontal_then_vertical() {
+        let n = 96;
+        let mut m = vec![false; n * n];
+        bar(&mut m, n, 10, 86, 44, 52); // horizontal
+        bar(&mut m, n, 44, 52, 8, 88); // vertical
+        let s = strokes_of(m, n);
+        assert_eq!(s.len(), 2, "{s:?}");
+        // Horizontal first (it crosses the vertical), drawn left to right.
+        let (h, v) = (&s[0], &s[1]);
+        assert!(h[0].x < 20.0 && h[h.len() - 1].x > 76.0 && (h[0].y - 48.0).abs() < 3.0);
+        assert!(v[0].y < 18.0 && v[v.len() - 1].y > 78.0 && (v[0].x - 48.0).abs() < 3.0);
+    }
+
+    #[test]
+    fn a_t_junction_keeps_the_bar_whole() {
+        let n = 96;
+        let mut m = vec![false; n * n];
+        bar(&mut m, n, 10, 86, 14, 22); // top bar
+        bar(&mut m, n, 44, 52, 14, 88); // stem hanging from it
+        let s = strokes_of(m, n);
+        assert_eq!(s.len(), 2, "{s:?}");
+        assert!(is_horizontal(&s[0]) && !is_horizontal(&s[1]));
+        let stem = &s[1];
+        assert!(stem[stem.len() - 1].y > 80.0 && stem[0].y < 26.0);
+    }
+
+    /// A thick segment from `a` to `b` (pixel units), half-width `r`.
+    fn line(m: &mut [bool], n: usize, a: (f64, f64), b: (f64, f64), r: f64) {
+        let (a, b) = (Point::new(a.0, a.1), Point::new(b.0, b.1));
+        for y in 0..n {
+            for x in 0..n {
+                let q = Point::new(x as f64 + 0.5, y as f64 + 0.5);
+                let t = ((q - a).dot(b - a) / (b - a).hypot2()).clamp(0.0, 1.0);
+                if q.distance(a + (b - a) * t) <= r {
+                    m[y * n + x] = true;
+                }
+            }
+        }
+    }
+
+    /// A segment's two ends, pixel units.
+    type Segment = ((f64, f64), (f64, f64));
+
+    fn shape(n: usize, segments: &[Segment]) -> Vec<Vec<Point>> {
+        let mut m = vec![false; n * n];
+        for &(a, b) in segments {
+            line(&mut m, n, a, b, 4.0);
+        }
+        strokes_of(m, n)
+    }
+
+    #[test]
+    fn a_box_is_three_strokes_like_kou() {
+        // 口: left side, top + right side (横折), bottom.
+        let s = shape(
+            100,
+            &[
+                ((20.0, 20.0), (20.0, 80.0)),
+                ((20.0, 20.0), (80.0, 20.0)),
+                ((80.0, 20.0), (80.0, 80.0)),
+                ((20.0, 80.0), (80.0, 80.0)),
+            ],
+        );
+        assert_eq!(s.len(), 3, "{s:?}");
+        // One of them turns: starts at the upper left going right, ends at the lower right.
+        let hengzhe = s.iter().find(|p| {
+            let (a, b) = (p[0], p[p.len() - 1]);
+            a.x < 35.0 && a.y < 30.0 && b.x > 70.0 && b.y > 65.0
+        });
+        assert!(hengzhe.is_some(), "{s:?}");
+    }
+
+    #[test]
+    fn a_corner_where_two_strokes_start_is_split() {
+        // 厂's corner: a bar going right and a bar going down both start at the upper left.
+        let s = shape(100, &[((20.0, 20.0), (85.0, 20.0)), ((20.0, 20.0), (20.0, 85.0))]);
+        assert_eq!(s.len(), 2, "{s:?}");
+    }
+
+    #[test]
+    fn a_turn_written_in_one_go_stays_whole() {
+        // 横折: right, then down.
+        assert_eq!(shape(100, &[((15.0, 20.0), (80.0, 20.0)), ((80.0, 20.0), (80.0, 85.0))]).len(), 1);
+        // 竖提: down, then rising to the right.
+        assert_eq!(shape(100, &[((20.0, 10.0), (20.0, 85.0)), ((20.0, 85.0), (88.0, 30.0))]).len(), 1);
+        // A vertical with a short hook to the left at its foot (竖钩).
+        assert_eq!(shape(100, &[((50.0, 10.0), (50.0, 85.0)), ((50.0, 85.0), (34.0, 78.0))]).len(), 1);
+    }
+
+    #[test]
+    fn an_end_beside_a_junction_is_joined_to_it() {
+        let node = |x: f64, y: f64| Node { pos: Point::new(x, y), width: 5.0, alive: true };
+        let edge = |a: usize, b: usize, g: &[Node]| Edge { a, b, pts: vec![g[a].pos, g[b].pos], alive: true };
+        // A junction at (50, 50) with three branches, a loose end 2 px from it with its own
+        // branch, and a far end point that must stay free.
+        let nodes = vec![
+            node(50.0, 50.0),
+            node(10.0, 50.0),
+            node(90.0, 50.0),
+            node(50.0, 10.0),
+            node(51.0, 52.0),
+            node(80.0, 90.0),
+            node(57.0, 50.0),
+        ];
+        let edges = vec![edge(0, 1, &nodes), edge(0, 2, &nodes), edge(0, 3, &nodes), edge(4, 5, &nodes)];
+        let mut g = Graph { nodes, edges };
+        attach_loose_ends(&mut g, 4.5);
+        assert!(!g.nodes[4].alive);
+        assert_eq!(degree(&g, 0), 4);
+        assert_eq!((g.edges[3].a, g.edges[3].b), (0, 5));
+        assert_eq!(g.edges[3].pts[0], Point::new(50.0, 50.0));
+        // Ends already joined to the junction, or too far from it, are left alone.
+        assert!(g.nodes[1].alive && g.nodes[5].alive && g.nodes[6].alive);
+    }
+
+    #[test]
+    fn an_l_corner_is_one_stroke() {
+        let n = 80;
+        let mut m = vec![false; n * n];
+        bar(&mut m, n, 10, 18, 10, 70);
+        bar(&mut m, n, 10, 70, 62, 70);
+        let s = strokes_of(m, n);
+        assert_eq!(s.len(), 1, "{s:?}");
+    }
+
+    #[test]
+    fn a_stub_off_a_hook_corner_is_pruned() {
+        // 竖提: down, then up to the right; the thinned blunt corner leaves a stub pointing down.
+        let n = 128;
+        let mut m = vec![false; n * n];
+        line(&mut m, n, (40.0, 10.0), (40.0, 90.0), 6.0);
+        line(&mut m, n, (40.0, 90.0), (80.0, 52.0), 6.0);
+        line(&mut m, n, (40.0, 90.0), (40.0, 106.0), 6.0);
+        let with = strokes_of(m.clone(), n);
+        assert_eq!(with.len(), 1, "{with:?}");
+        // Pruned only by the corner rule: as an ordinary spur the stub would stay.
+        let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..GraphOptions::default() };
+        assert!(strokes_with(m, n, &plain).len() > 1);
+    }
+
+    #[test]
+    fn the_bottom_of_an_open_box_is_its_own_stroke() {
+        // 甘 without its inner bar: a top bar crossed by two uprights, and a bottom between them.
+        // The left upright and the bottom form an open chain (the upright starts above the bar).
+        let segs = [
+            ((10.0, 30.0), (90.0, 30.0)),
+            ((30.0, 10.0), (30.0, 82.0)),
+            ((70.0, 10.0), (70.0, 82.0)),
+            ((30.0, 82.0), (70.0, 82.0)),
+        ];
+        let s = shape(100, &segs);
+        assert_eq!(s.len(), 4, "{s:?}");
+        let mut m = vec![false; 100 * 100];
+        for &(a, b) in &segs {
+            line(&mut m, 100, a, b, 4.0);
+        }
+        let old = GraphOptions { open_box_min_ratio: 0.0, ..GraphOptions::default() };
+        let o = strokes_with(m, 100, &old);
+        assert_eq!(o.len(), 3, "without the rule the left side and the bottom are one: {o:?}");
+        // 山: the 竖折's vertical leg is short against its bottom, so it stays one stroke.
+        let shan = shape(
+            128,
+            &[
+                ((64.0, 10.0), (64.0, 100.0)),
+                ((20.0, 64.0), (20.0, 100.0)),
+                ((20.0, 100.0), (108.0, 100.0)),
+                ((108.0, 40.0), (108.0, 100.0)),
+            ],
+        );
+        assert_eq!(shan.len(), 3, "{shan:?}");
+    }
+
+    #[test]
+    fn a_box_bottom_that_rises_a_little_is_not_a_ti() {
+        // 口 with its bottom rising 17° to the right, as kaishu writes it: still three strokes.
+        let segs = [
+            ((20.0, 20.0), (20.0, 80.0)),
+            ((20.0, 20.0), (80.0, 20.0)),
+            ((80.0, 20.0), (80.0, 66.0)),
+            ((20.0, 84.0), (80.0, 66.0)),
+        ];
+        assert_eq!(shape(100, &segs).len(), 3);
+        // A real 竖提 (rising steeply out of a vertical) stays one stroke.
+        assert_eq!(shape(100, &[((20.0, 10.0), (20.0, 80.0)), ((20.0, 80.0), (70.0, 50.0))]).len(), 1);
+    }
+
+    #[test]
+    fn options_are_set_by_name() {
+        let mut o = GraphOptions::default();
+        o.set("corner_deg", 45.0).unwrap();
+        assert!((o.corner_rad - 45f64.to_radians()).abs() < 1e-12);
+        o.set("split_box_corners", 0.0).unwrap();
+        assert!(!o.split_box_corners);
+        assert!(o.set("nope", 1.0).unwrap_err().contains("unknown skeleton option `nope`"));
+        assert!(o.set("hook_ratio", f64::NAN).is_err());
+    }
+
+    #[test]
+    fn pieces_inside_other_strokes_are_dropped() {
+        let n = 100;
+        let dt = vec![4.0f32; n * n];
+        let pl = |pts: &[(f64, f64)]| pts.iter().map(|&(x, y)| Point::new(x, y)).collect::<Vec<_>>();
+        let strokes = vec![
+            pl(&[(10.0, 50.0), (90.0, 50.0)]), // horizontal
+            pl(&[(50.0, 10.0), (50.0, 90.0)]), // vertical
+            pl(&[(47.0, 51.0), (55.0, 52.0)]), // a piece inside the crossing
+            pl(&[(20.0, 20.0), (26.0, 24.0)]), // a dot on its own
+            pl(&[(70.0, 50.0), (72.0, 58.0)]), // short, but leaves the horizontal's ink
+        ];
+        let kept = drop_covered(strokes.clone(), &dt, n, GraphOptions::default().covered_max_widths);
+        assert_eq!(kept.len(), 4);
+        assert!(!kept.contains(&strokes[2]));
+    }
+}
