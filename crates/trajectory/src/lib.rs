@@ -49,25 +49,28 @@ pub mod graph {
     pub use crate::skeleton::{GraphOptions, Skeleton};
 }
 mod image_glyph;
+mod metrics;
+mod paper;
+mod path;
 mod polyline;
 pub mod raster;
 pub mod scan;
 mod skeleton;
 pub mod template;
 pub mod thinning;
-pub mod track;
+mod track;
 
 use kurbo::Point;
 use thiserror::Error;
 
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
 pub use image_glyph::glyph_from_gray;
+pub use metrics::chamfer_pct;
+pub use paper::{CharBox, auto_char_mm};
+pub use path::{CORNER_RAD, CORNER_REACH_EM, StrokePath, find_corners};
 pub use skeleton::{GraphOptions, Skeleton};
 pub use template::{Registration, StrokeFit, TemplateOptions};
-pub use track::{
-    BuiltTrack, CharBox, DEFAULT_SPACING_MM, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, chamfer_pct,
-    find_corners,
-};
+pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track};
 
 /// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons: 256²
 /// scored CSIM 0.896 / 0.877 (medians / skeleton), 512² 0.898 / 0.885, 768² no better (see
@@ -306,12 +309,12 @@ fn run_out(from: Point, u: kurbo::Vec2, w: f64, dt: &[f32], n: usize, px_to_em: 
 
 /// Kaiti corners (折) and hook bends (钩) carry a knob where the brush pressed before turning;
 /// centre lines cut the corner inside it. At each sharp corner of a centre line (the turn test of
-/// [`track::CORNER_RAD`] over ±[`track::CORNER_REACH_EM`]) the line is continued out along the
+/// [`CORNER_RAD`] over ±[`CORNER_REACH_EM`]) the line is continued out along the
 /// corner's outer bisector until the distance to the outline falls to [`END_CAP_FRACTION`] of the
 /// half-width at the corner, and the next leg starts from there. On the embedded set this raised
 /// the medians method's mean CSIM from 0.899 to 0.912 and IoU from 0.800 to 0.823.
 fn knob_corners(mut p: Vec<Point>, mut w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> StrokePath {
-    let turns = track::corner_turns(&p);
+    let turns = path::corner_turns(&p);
     let mut corners = Vec::with_capacity(turns.len());
     // Points inserted by earlier knobs shift the later corners' indices.
     let mut shift = 0;

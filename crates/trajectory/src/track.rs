@@ -1,114 +1,19 @@
-//! Centre lines with widths → a 5D brush track on the paper.
+//! Centre lines with widths → a 5D brush track on the paper: per corner-free piece a reverse
+//! entry, a turn-over glide and forward writing ([`build_track`]).
+//!
+//! Frames and units: centre lines come in the em frame (em units), the track goes out on paper
+//! (mm, radians) through the [`CharBox`]. Invariants: the track holds only commanded motion
+//! (β is what [`brush_model::ForwardModel`] derives from it, never set freely); consecutive
+//! points while the brush presses are at most one spacing apart; every pressed depth is
+//! predictable by the profile (refused otherwise).
 
 use brush_model::{
     BrushProfile, Clamp, Extrapolation, ForwardModel, PointMm, Press, ProfileError, Stroke, Track, TrackPoint,
 };
-use kurbo::Point;
-use serde::{Deserialize, Serialize};
 
-use crate::glyph::EM;
-use crate::polyline::{arc_lengths, arc_lengths_by};
-
-/// Where a character sits on the paper: the em box maps onto the square
-/// `[x0, x0 + size] × [y0, y0 + size]` mm. Em point `(x', y')` (y down) is at
-/// `(x0 + x'/1024·size, y0 + y'/1024·size)`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CharBox {
-    /// Left edge, mm.
-    pub x0_mm: f64,
-    /// Top edge, mm.
-    pub y0_mm: f64,
-    /// Side, mm.
-    pub size_mm: f64,
-}
-
-impl CharBox {
-    /// Millimetres per em unit.
-    pub fn mm_per_em(&self) -> f64 {
-        self.size_mm / EM
-    }
-    /// An em-frame point on the paper.
-    pub fn to_paper(&self, p: Point) -> PointMm {
-        PointMm::new(self.x0_mm + p.x * self.mm_per_em(), self.y0_mm + p.y * self.mm_per_em())
-    }
-    /// A paper point in the em frame.
-    pub fn to_em(&self, p: PointMm) -> Point {
-        Point::new((p.x_mm - self.x0_mm) / self.mm_per_em(), (p.y_mm - self.y0_mm) / self.mm_per_em())
-    }
-}
-
-/// One stroke's centre line in the em frame with the glyph's half-width at each point (em).
-#[derive(Clone, Debug, PartialEq)]
-pub struct StrokePath {
-    /// Points in writing order, em frame.
-    pub points: Vec<Point>,
-    /// Half-width of the glyph at each point, em units.
-    pub half_widths: Vec<f64>,
-    /// Indices into `points` of sharp corners (折), ascending: [`build_track`] ends a piece there
-    /// and starts the next with a fresh entry press, as a calligrapher lifts slightly and presses
-    /// again.
-    pub corners: Vec<usize>,
-}
-
-impl StrokePath {
-    /// A path whose corners are found by [`find_corners`].
-    pub fn new(points: Vec<Point>, half_widths: Vec<f64>) -> Self {
-        let corners = find_corners(&points);
-        Self { points, half_widths, corners }
-    }
-}
-
-/// Turn (radians) above which a centre line has a corner.
-pub const CORNER_RAD: f64 = 0.7;
-/// The turn is measured between the directions over this arc length before and after a point,
-/// em units (about a stroke width, so the rounded bends of hand-drawn medians still count).
-pub const CORNER_REACH_EM: f64 = 50.0;
-
-/// The sharp corners of a centre line (em frame): for every point at least
-/// [`CORNER_REACH_EM`] from both ends, the turn between the chords to the points that far before
-/// and after it; of each run of points turning more than [`CORNER_RAD`], the sharpest. Returns
-/// ascending indices into `points`.
-pub fn find_corners(points: &[Point]) -> Vec<usize> {
-    corner_turns(points).into_iter().map(|(i, _)| i).collect()
-}
-
-/// [`find_corners`] with each corner's unit chord directions in and out.
-pub(crate) fn corner_turns(p: &[Point]) -> Vec<(usize, (kurbo::Vec2, kurbo::Vec2))> {
-    if p.len() < 3 {
-        return Vec::new();
-    }
-    let s = arc_lengths(p);
-    let total = s[s.len() - 1];
-    let reach = CORNER_REACH_EM;
-    let dirs = |i: usize| {
-        let a = p[(0..=i).rev().find(|&j| s[i] - s[j] >= reach).unwrap_or(0)];
-        let b = p[(i..p.len()).find(|&j| s[j] - s[i] >= reach).unwrap_or(p.len() - 1)];
-        let (u, v) = (p[i] - a, b - p[i]);
-        let (nu, nv) = (u.hypot(), v.hypot());
-        if nu < 1e-9 || nv < 1e-9 { None } else { Some((u / nu, v / nv)) }
-    };
-    let mut out = Vec::new();
-    let mut run: Option<(usize, f64, (kurbo::Vec2, kurbo::Vec2))> = None;
-    for (i, &si) in s.iter().enumerate() {
-        let d = if si >= reach && si <= total - reach { dirs(i) } else { None };
-        match d.map(|(u, v)| (u.dot(v).clamp(-1.0, 1.0).acos(), (u, v))) {
-            Some((a, uv)) if a > CORNER_RAD => {
-                if run.is_none_or(|(_, best, _)| a > best) {
-                    run = Some((i, a, uv));
-                }
-            }
-            _ => {
-                if let Some((c, _, uv)) = run.take() {
-                    out.push((c, uv));
-                }
-            }
-        }
-    }
-    if let Some((c, _, uv)) = run {
-        out.push((c, uv));
-    }
-    out
-}
+use crate::paper::CharBox;
+use crate::path::StrokePath;
+use crate::polyline::arc_lengths_by;
 
 /// How footprints are sized.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -416,49 +321,4 @@ impl<'a> Placer<'a> {
         }
         Ok(out)
     }
-}
-
-/// The default char box size for a set of centre lines: the em scale that maps the glyphs'
-/// typical half-widths (20th to 80th percentile over all points) onto the brush's belly
-/// half-width range at tilt `alpha_rad`, matching their geometric middles. Returns mm.
-pub fn auto_char_mm(paths: &[StrokePath], profile: &BrushProfile, alpha_rad: f64) -> f64 {
-    let mut w: Vec<f64> = paths.iter().flat_map(|p| p.half_widths.iter().copied()).filter(|v| *v > 0.0).collect();
-    w.sort_by(f64::total_cmp);
-    let beta = profile.ranges.beta_rad.min;
-    let lr = |h: f64| profile.model.lr_mm.eval(h, alpha_rad, beta);
-    let (lo, hi) = (lr(profile.ranges.h_mm.min), lr(profile.ranges.h_mm.max));
-    if w.is_empty() || lo <= 0.0 || hi <= 0.0 {
-        return 60.0;
-    }
-    let q = |f: f64| w[((w.len() - 1) as f64 * f).round() as usize];
-    let (w20, w80) = (q(0.2), q(0.8));
-    let k = ((lo * hi) / (w20 * w80)).sqrt();
-    k * EM
-}
-
-/// Symmetric chamfer distance between a track and reference centre lines, in percent of the em
-/// box: the mean over track points of the distance to the nearest reference point and the mean
-/// over reference points (resampled every 4 em units) of the distance to the nearest track
-/// point, averaged.
-pub fn chamfer_pct(track: &Track, char_box: &CharBox, medians: &[Vec<Point>]) -> f64 {
-    let a: Vec<Point> = track.points().map(|p| char_box.to_em(p.anchor())).collect();
-    let mut b = Vec::new();
-    for m in medians {
-        b.push(m[0]);
-        for w in m.windows(2) {
-            let d = w[0].distance(w[1]);
-            let steps = (d / 4.0).ceil().max(1.0) as usize;
-            for i in 1..=steps {
-                b.push(w[0].lerp(w[1], i as f64 / steps as f64));
-            }
-        }
-    }
-    if a.is_empty() || b.is_empty() {
-        return 100.0;
-    }
-    let mean_nn = |from: &[Point], to: &[Point]| {
-        from.iter().map(|p| to.iter().map(|q| p.distance(*q)).fold(f64::INFINITY, f64::min)).sum::<f64>()
-            / from.len() as f64
-    };
-    0.5 * (mean_nn(&a, &b) + mean_nn(&b, &a)) / EM * 100.0
 }

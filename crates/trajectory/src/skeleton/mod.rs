@@ -71,7 +71,7 @@ impl Skeleton {
         Some(Skeleton { skel, dt, n })
     }
 
-    /// The strokes found with `opts` ([`skeleton_strokes`]), in pixels.
+    /// The strokes found with `opts`, in pixels (analysis raster).
     pub fn strokes(&self, opts: &GraphOptions) -> Vec<Vec<Point>> {
         skeleton_strokes(&self.skel, &self.dt, self.n, opts)
     }

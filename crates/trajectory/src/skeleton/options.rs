@@ -2,9 +2,16 @@
 //!
 //! Every length here is relative to the local stroke half-width `w` (the distance transform at
 //! a junction or chain point, px), except [`GraphOptions::loose_end_em`] (em units); angles are
-//! radians (degrees only in [`GraphOptions::set`]'s keys, for sweeps). The defaults were tuned on
-//! the skeleton report's tuning half and checked on its held-out half (docs/trajectory.md,
-//! "Skeleton rules").
+//! radians (degrees only in [`GraphOptions::set`]'s keys, for sweeps).
+//!
+//! Where the defaults came from: `cargo xtask skeleton-counts` (% of characters whose skeleton
+//! stroke count equals the medians'), one parameter at a time, on the **tuning half** of
+//! `fixtures/hanzi/heldout-2000.txt` (lines 1–1,000; the rules were first tuned on the embedded
+//! set). With all the defaults below: tuning half 76.8 %, embedded 82.6 % (both tuned on),
+//! **report half (lines 1,001–2,000, never tuned on) 72.8 %**. The sweeps quoted per constant
+//! are from docs/trajectory.md, "Skeleton stroke counts on characters not used for tuning"
+//! (values → % right on the tuning half, with the base the row started from);
+//! `cargo xtask tidy` checks that the values there and here agree.
 
 /// Tuning of the skeleton graph, relative to the local stroke half-width `w` (the distance
 /// transform at a junction).
@@ -15,7 +22,7 @@ pub struct GraphOptions {
     pub spur_factor: f64,
     /// The same for a branch off a corner (the junction's two other branches turn rather than
     /// continue each other, and the branch points away from both by more than
-    /// [`CORNER_SPUR_AWAY_RAD`]): thinning leaves the pressed outer corner of 折, 钩 and 提 as
+    /// `corner_spur_away_rad`): thinning leaves the pressed outer corner of 折, 钩 and 提 as
     /// such a branch, longer than ordinary spurs.
     pub corner_spur_factor: f64,
     /// Junctions closer than `merge_factor · w` are one crossing.
@@ -31,20 +38,20 @@ pub struct GraphOptions {
     /// corner of 口 or 日, whose bottom is a stroke of its own. Open chains keep 竖折 (山, 出).
     pub split_box_corners: bool,
     /// An end point within this distance (em units) of a junction it is not joined to is joined
-    /// to it ([`LOOSE_END_EM`]).
+    /// to it (default: `LOOSE_END_EM` in docs/trajectory.md, "Tuned constants").
     pub loose_end_em: f64,
     /// A corner spur points away from both legs of its corner by more than this (radians,
-    /// [`CORNER_SPUR_AWAY_RAD`]).
+    /// `corner_spur_away_rad`).
     pub corner_spur_away_rad: f64,
     /// How far each way the turn at a chain point is measured, in local half-widths
-    /// ([`CORNER_REACH`]).
+    /// (default: `CORNER_REACH` in docs/trajectory.md, "Tuned constants").
     pub corner_reach: f64,
-    /// A chain's end leg no longer than this many half-widths can be a hook ([`HOOK_WIDTHS`]).
+    /// A chain's end leg no longer than this many half-widths can be a hook (default: `HOOK_WIDTHS` in docs/trajectory.md, "Tuned constants").
     pub hook_widths: f64,
-    /// ... when shorter than this fraction of the leg it turns from ([`HOOK_RATIO`]).
+    /// ... when shorter than this fraction of the leg it turns from (default: `HOOK_RATIO` in docs/trajectory.md, "Tuned constants").
     pub hook_ratio: f64,
     /// Pieces no longer than this many half-widths that lie inside other strokes are dropped
-    /// ([`COVERED_MAX_WIDTHS`]).
+    /// (default: `COVERED_MAX_WIDTHS` in docs/trajectory.md, "Tuned constants").
     pub covered_max_widths: f64,
     /// At a junction of three or more branches, two branches continue each other only if the
     /// thinner one's half-width (measured one to three junction half-widths out) is at least this
@@ -65,11 +72,11 @@ pub struct GraphOptions {
 impl Default for GraphOptions {
     fn default() -> Self {
         Self {
-            spur_factor: 2.0,
-            corner_spur_factor: 3.0,
-            merge_factor: 2.0,
-            straight_min_rad: 125f64.to_radians(),
-            corner_rad: 50f64.to_radians(),
+            spur_factor: SPUR_FACTOR,
+            corner_spur_factor: CORNER_SPUR_FACTOR,
+            merge_factor: MERGE_FACTOR,
+            straight_min_rad: STRAIGHT_MIN_DEG.to_radians(),
+            corner_rad: CORNER_DEG.to_radians(),
             split_box_corners: true,
             loose_end_em: LOOSE_END_EM,
             corner_spur_away_rad: CORNER_SPUR_AWAY_RAD,
@@ -77,9 +84,9 @@ impl Default for GraphOptions {
             hook_widths: HOOK_WIDTHS,
             hook_ratio: HOOK_RATIO,
             covered_max_widths: COVERED_MAX_WIDTHS,
-            pair_width_ratio: 0.5,
-            open_box_min_ratio: 0.5,
-            ti_min_rise: 0.4,
+            pair_width_ratio: PAIR_WIDTH_RATIO,
+            open_box_min_ratio: OPEN_BOX_MIN_RATIO,
+            ti_min_rise: TI_MIN_RISE,
         }
     }
 }
@@ -118,21 +125,66 @@ impl GraphOptions {
     }
 }
 
-/// A piece no longer than this many half-widths, all of whose points lie within one local
-/// half-width of another stroke's centre line, is dropped by `drop_covered`.
-const COVERED_MAX_WIDTHS: f64 = 3.0;
+/// Spur length limit, in junction half-widths ([`GraphOptions::spur_factor`]). Sweep from 73.8 %:
+/// 1.5 / 2.5 → 72.6 / 71.6; from 75.1 %: 1.75 → 74.8.
+const SPUR_FACTOR: f64 = 2.0;
 
-/// How near a junction (em units) an end point is taken to belong to it.
+/// Corner-spur length limit, in junction half-widths ([`GraphOptions::corner_spur_factor`]).
+/// Sweep from 73.8 %: 2.5 / 3.5 / 4 → 73.8 / 73.7 / 73.7.
+const CORNER_SPUR_FACTOR: f64 = 3.0;
+
+/// Junctions closer than this many half-widths merge ([`GraphOptions::merge_factor`]). Sweep
+/// from 73.8 % (1.5 before): 1.0 / 2.0 / 2.5 → 63.0 / **74.9** / 72.9; from 75.1 %: 1.75 / 2.25
+/// → 75.2 / 75.1; from 76.8 %: 1.5 → 74.1.
+const MERGE_FACTOR: f64 = 2.0;
+
+/// Two branches continue each other above this angle, degrees
+/// ([`GraphOptions::straight_min_rad`]). Sweep from 73.8 %: 115 / 135 / 145 → 73.9 / 73.9 / 73.1;
+/// from 76.6 %: 120 / 130 → 76.6 / 76.6.
+const STRAIGHT_MIN_DEG: f64 = 125.0;
+
+/// A chain has a corner where it turns by more than this, degrees ([`GraphOptions::corner_rad`]).
+/// Sweep from 73.8 %: 40 / 60 / 70 → 73.3 / 72.6 / 48.2; from 75.1 %: 45 → 74.7.
+const CORNER_DEG: f64 = 50.0;
+
+/// An end point this near a junction (em units) is joined to it ([`GraphOptions::loose_end_em`]).
+/// Sweep from 73.8 %: 5 / 14 / 20 → 62.1 / 74.1 / 73.9; from 75.1 %: 14 → 75.2.
 const LOOSE_END_EM: f64 = 9.0;
 
-/// A corner spur points away from both legs of its corner by more than this (radians).
+/// A corner spur points away from both legs by more than this, radians (120°;
+/// [`GraphOptions::corner_spur_away_rad`]). Sweep from 73.8 %: 110° / 130° → 73.1 / 73.1.
 const CORNER_SPUR_AWAY_RAD: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 
-/// A chain's end leg no longer than this many local half-widths can be a hook (钩) of the
-/// stroke it turns from rather than a stroke of its own...
-const HOOK_WIDTHS: f64 = 5.0;
-/// ... when it is shorter than this fraction of that stroke's leg, or rises away from the corner.
-const HOOK_RATIO: f64 = 0.5;
-/// How far each way the turn at a chain point is measured, in local half-widths (a skeleton
-/// corner is rounded over about one width).
+/// How far each way a chain point's turn is measured, in local half-widths (a skeleton corner is
+/// rounded over about one width; [`GraphOptions::corner_reach`]). Sweep from 73.8 %: 2 / 3 / 3.5
+/// → 73.7 / 71.1 / 66.4; from 75.1 %: 2.25 → 75.2.
 const CORNER_REACH: f64 = 2.5;
+
+/// A chain's end leg no longer than this many half-widths can be a hook (钩)
+/// ([`GraphOptions::hook_widths`]). Sweep from 73.8 %: 4 / 6 → 74.0 / 71.8; from 75.1 %: 4 → 75.2.
+const HOOK_WIDTHS: f64 = 5.0;
+
+/// ... when shorter than this fraction of the leg it turns from ([`GraphOptions::hook_ratio`]).
+/// Sweep from 73.8 %: 0.3 / 0.5 → 73.2 / 74.0; kept last, from 76.6 %: 0.5 → **76.8** (embedded
+/// 82.1 → 82.6 %).
+const HOOK_RATIO: f64 = 0.5;
+
+/// Short pieces inside other strokes are dropped up to this many half-widths
+/// ([`GraphOptions::covered_max_widths`]). Sweep from 73.8 %: 2 / 4 / 5 → 73.9 / 73.8 / 73.8;
+/// from 75.1 %: 2 → 75.1.
+const COVERED_MAX_WIDTHS: f64 = 3.0;
+
+/// Branches pair only if the thinner is at least this fraction of the thicker's width
+/// ([`GraphOptions::pair_width_ratio`]). Sweep from 73.8 %: 0.4 / 0.5 / 0.6 / 0.7 → 73.4 / 73.5 /
+/// 73.0 / 57.2; from 74.9 %: 0.5 / 0.6 → **75.1** / 74.3; from 75.1 %: 0.45 / 0.55 → 75.2 / 75.2;
+/// off (0) from 76.6 % → 76.4.
+const PAIR_WIDTH_RATIO: f64 = 0.5;
+
+/// Open-chain 竖折 split when the vertical leg is at least this many times the horizontal
+/// ([`GraphOptions::open_box_min_ratio`]). Sweep from 75.6 %: 0.01 / 0.3 / 0.5 / 1 / 1.5 / 2 / 3
+/// → 76.6 / 76.6 / **76.6** / 76.3 / 75.8 / 75.8 / 75.6.
+const OPEN_BOX_MIN_RATIO: f64 = 0.5;
+
+/// 提 rises by more than this per unit run ([`GraphOptions::ti_min_rise`]). Sweep from 75.1 %
+/// (0.2 before): 0.3 / 0.4 / 0.5 / 0.6 → 75.6 each; from 76.6 %: 0.2 → 76.1.
+const TI_MIN_RISE: f64 = 0.4;
