@@ -2,7 +2,7 @@
 
 /// For each pixel of a `w × h` mask, the Euclidean distance (px) from its centre to the centre
 /// of the nearest pixel outside the mask (0 outside). Pixels beyond the image count as outside.
-pub fn distance_to_background(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
+pub(crate) fn distance_to_background(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
     const INF: f64 = 1e20;
     // Pad by one pixel of background on every side so the image edge counts as outside.
     let (pw, ph) = (w + 2, h + 2);
@@ -83,7 +83,7 @@ fn dt1d(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 
 /// Bilinear sample of a `w × h` field at pixel coordinates `(x, y)` (pixel centres at `i + 0.5`),
 /// clamped at the edges.
-pub fn sample(field: &[f32], w: usize, h: usize, x: f64, y: f64) -> f64 {
+pub(crate) fn sample(field: &[f32], w: usize, h: usize, x: f64, y: f64) -> f64 {
     let fx = (x - 0.5).clamp(0.0, (w - 1) as f64);
     let fy = (y - 0.5).clamp(0.0, (h - 1) as f64);
     let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);

@@ -9,7 +9,7 @@ use image::GrayImage;
 use crate::glyph::{Glyph, GlyphError, GlyphSource, Shape};
 
 /// Loads, thresholds and cleans an image; returns the square side and the binary ink (1/0).
-pub fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
+pub(crate) fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     let name = path.display().to_string();
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
     let img =

@@ -200,7 +200,7 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
     let mut lines = Vec::with_capacity(moved.len());
     let mut fits = Vec::with_capacity(moved.len());
     for (i, m) in moved.iter().enumerate() {
-        let placed = super::densify(m, 8.0);
+        let placed = crate::medians::densify(m, crate::medians::MEDIAN_STEP_EM);
         let near = placed.iter().filter(|&&p| ink_near(p)).count() as f64 / placed.len() as f64;
         let pts: Vec<Point> = placed.iter().map(|&p| field.as_ref().map_or(p, |f| p + f.displacement(p))).collect();
         let on_ink = pts.iter().filter(|&&p| at(p) >= 1.0).count();
@@ -234,8 +234,8 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         // On the stroke's own ink, re-centre from where the fits put it (the snap on the whole
         // ink bends towards a crossing stroke's ridge and leaves kinks that read as corners).
         let (p, w) = match &own {
-            Some(sdt) => super::centre_on_ridge(&pts, sdt, n, px_to_em),
-            None => super::centre_on_ridge(&snapped, &dt, n, px_to_em),
+            Some(sdt) => crate::medians::centre_on_ridge(&pts, sdt, n, px_to_em),
+            None => crate::medians::centre_on_ridge(&snapped, &dt, n, px_to_em),
         };
         lines.push((p, Some((w, own))));
         fits.push(StrokeFit { ink_fraction, found_ink, doubled_with: None, snap_em });
@@ -250,8 +250,8 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         match widths {
             Some((w, own)) => {
                 let sdt = own.as_ref().unwrap_or(&dt);
-                let (p, w) = super::extend_ends(pts, w, sdt, n, px_to_em);
-                paths.push(super::knob_corners(p, w, sdt, n, px_to_em));
+                let (p, w) = crate::medians::extend_ends(pts, w, sdt, n, px_to_em);
+                paths.push(crate::medians::knob_corners(p, w, sdt, n, px_to_em));
             }
             None => {
                 let w = vec![typical; pts.len()];

@@ -18,7 +18,7 @@ fn ring(m: &[bool], w: usize, h: usize, x: isize, y: isize) -> [bool; 8] {
 
 /// Thins `mask` (`w × h`, true = ink) in place by Zhang–Suen's two-subiteration algorithm,
 /// until no pixel changes. Pixels on the image border are treated as having paper outside.
-pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
+pub(crate) fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
     let mut remove = Vec::new();
     loop {
         let mut changed = false;
@@ -68,7 +68,7 @@ pub fn zhang_suen(mask: &mut [bool], w: usize, h: usize) {
 /// staircases), so every line pixel has exactly two 8-neighbours: a pixel is removed when two of
 /// its 4-neighbours at right angles are set (a staircase corner), it has two or three
 /// neighbours, and those stay 8-connected without it.
-pub fn remove_staircases(mask: &mut [bool], w: usize, h: usize) {
+pub(crate) fn remove_staircases(mask: &mut [bool], w: usize, h: usize) {
     for y in 0..h as isize {
         for x in 0..w as isize {
             if !mask[y as usize * w + x as usize] {
