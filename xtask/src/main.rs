@@ -9,6 +9,7 @@ mod refine_gate;
 mod rng;
 mod skeleton_counts;
 mod styles;
+mod tidy;
 mod train_fixture;
 
 const HELP: &str = "\
@@ -26,6 +27,8 @@ Tasks:
   skeleton-counts [--hanzi-data DIR] [--set FILE] [...]
                        skeleton stroke counts against the medians on a character set
                        (`cargo xtask skeleton-counts --help`)
+  tidy                 check that the tuned constants in docs/trajectory.md (section Tuned constants)
+                       have the values the code gives them
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
                        (also target/bench-summary.md)
 ";
@@ -42,6 +45,7 @@ fn main() -> ExitCode {
         Some("bench") => bench::run(&args[1..]),
         Some("skeleton-counts") => skeleton_counts::run(&args[1..]),
         Some("styles") => styles::run(&args[1..]),
+        Some("tidy") => tidy::run(&args[1..]),
         Some("train-fixture") => train_fixture::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };
