@@ -415,6 +415,18 @@ pub fn refine_target(glyph: &Glyph, char_box: &CharBox, px: u32) -> Result<Targe
     )?)
 }
 
+/// The committed pen1 generator prepared for refinement (`--gradients generator`), loaded once.
+fn committed_gen_model() -> Result<std::sync::Arc<track_refine::generator::GenModel>> {
+    static CELL: std::sync::OnceLock<Result<std::sync::Arc<track_refine::generator::GenModel>, String>> =
+        std::sync::OnceLock::new();
+    CELL.get_or_init(|| {
+        let g = crate::generator::load_generator(None).map_err(|e| format!("{e:#}"))?;
+        track_refine::generator::GenModel::new(&g).map(std::sync::Arc::new).map_err(|e| e.to_string())
+    })
+    .clone()
+    .map_err(|e| anyhow::anyhow!("the committed generator: {e}"))
+}
+
 /// Refines a written character's track against its glyph and replaces the result's track,
 /// renders and figures by the refined ones, keeping the built track's figures as "before".
 /// A refined track that fails the robot check is not used (the report says why).
@@ -426,8 +438,13 @@ fn refine_result(
     ro: &RefineOptions,
 ) -> Result<()> {
     let target = refine_target(&p.glyph, &r.char_box, ro.analysis_px)?;
-    let refined = track_refine::refine(&r.track, profile, &target, ro)
-        .with_context(|| format!("{}: refining the track", p.glyph.ch))?;
+    let refined = match ro.gradients {
+        track_refine::Gradients::Analytic => track_refine::refine(&r.track, profile, &target, ro),
+        track_refine::Gradients::Generator => {
+            track_refine::refine_with_generator(&r.track, profile, &target, ro, committed_gen_model()?)
+        }
+    }
+    .with_context(|| format!("{}: refining the track", p.glyph.ch))?;
     let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
     let planned_after = similarity(&r.reference, &render)?;
     let planned_before = Similarity { csim: r.report.csim, ssim: r.report.ssim, iou: r.report.iou };

@@ -65,3 +65,19 @@ fn evaluate_refine_adds_means_before_and_after() {
     assert!(r["executed_after"]["csim"].as_f64().unwrap() > 0.7, "{v}");
     assert!(r["executed_before"]["csim"].as_f64().unwrap() > 0.7, "{v}");
 }
+
+#[test]
+fn refine_through_the_generator_is_judged_by_the_analytic_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ten");
+    ok(&maobi(&["write", "十", "--size", "96", "--refine", "--iters", "1", "--gradients", "generator", "-o", s(&out)]));
+    let r = json(&out.join("report.json"));
+    let rf = &r["refine"];
+    assert_eq!(rf["options"]["gradients"], "generator");
+    assert_eq!(rf["curve"].as_array().unwrap().len(), 2, "{rf}");
+    // The model that drew the scored images is the analytic one, not the generator.
+    assert_eq!(r["model"], "bsm");
+    assert!(rf["executed_after"]["csim"].as_f64().unwrap() > 0.7, "{rf}");
+    fails(&maobi(&["write", "十", "--gradients", "generator", "-o", s(&out)]), "--refine");
+    fails(&maobi(&["write", "十", "--refine", "--gradients", "soft", "-o", s(&out)]), "soft");
+}

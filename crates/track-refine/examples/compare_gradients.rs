@@ -19,7 +19,8 @@ use bezier_raster::{Coverage, ModelKind, render_stamps, sweep_stamps};
 use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
 use robot_io::{PaperFrame, RobotConfig, build_program};
 use stroke_metrics::GrayRef;
-use track_refine::{Gradients, RefineOptions, Target, refine};
+use track_refine::generator::GenModel;
+use track_refine::{Gradients, RefineOptions, Target, refine, refine_with_generator};
 use trajectory::{CharBox, Method, Sizing, TrackOptions, build_track, centre_lines, glyph, raster::render_glyph};
 
 const JUDGE_PX: u32 = 256;
@@ -56,6 +57,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let set = args.first().map_or("tuning", String::as_str).to_string();
     let n: usize = args.get(1).map_or(Ok(10), |s| s.parse())?;
     let embedded = glyph::embedded_chars();
+    // The committed pen1 generator (fixtures/generator/), as the `maobi` binary uses it.
+    let weights = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/generator/pen1.safetensors");
+    let gen_model = std::sync::Arc::new(GenModel::new(&neural_gen::Generator::load(&weights)?)?);
     let (chars, dir): (Vec<char>, Option<std::path::PathBuf>) = match set.as_str() {
         "tuning" => (embedded.iter().copied().take(n).collect(), None),
         "heldout" => {
@@ -101,7 +105,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for grad in [Gradients::Analytic, Gradients::Generator] {
             let opts = RefineOptions { gradients: grad, ..base };
             let t0 = Instant::now();
-            let out = refine(&built, &pen1, &target, &opts)?;
+            let out = match grad {
+                Gradients::Analytic => refine(&built, &pen1, &target, &opts)?,
+                Gradients::Generator => refine_with_generator(&built, &pen1, &target, &opts, gen_model.clone())?,
+            };
             let ms = t0.elapsed().as_secs_f64() * 1e3;
             let (c, i) = executed(&out.track, &pen1, &char_box, &reference).unwrap_or((f64::NAN, f64::NAN));
             row.extend([c, i, ms]);

@@ -17,8 +17,6 @@
 //! reaches 0 or 1, so no coverage saturates). The judge is never the generator: callers score
 //! the refined track with the analytic renderer and the executed simulation.
 
-use std::sync::{Arc, OnceLock};
-
 use brush_model::{BrushProfile, Extrapolation, PointMm, Press, Range};
 use neural_gen::{Generator, InputVjp, Tape};
 use rayon::prelude::*;
@@ -28,10 +26,6 @@ use crate::problem::{CHUNK, Fp};
 
 /// Footprints per generator batch (one forward and one backward pass each).
 pub const BATCH: usize = 128;
-
-/// The committed pen1 generator (`fixtures/generator/`).
-static WEIGHTS: &[u8] = include_bytes!("../../../fixtures/generator/pen1.safetensors");
-static CONFIG: &str = include_str!("../../../fixtures/generator/pen1.json");
 
 /// A generator prepared for refinement.
 pub struct GenModel {
@@ -125,26 +119,6 @@ impl GenModel {
                 (presses, which)
             }
         }
-    }
-
-    /// The committed pen1 generator, loaded once per process.
-    ///
-    /// # Errors
-    /// [`RefineError::Generator`] when the committed checkpoint does not load.
-    pub fn committed() -> Result<Arc<Self>, RefineError> {
-        static CELL: OnceLock<Result<Arc<GenModel>, String>> = OnceLock::new();
-        CELL.get_or_init(|| {
-            let g = Generator::from_bytes(
-                WEIGHTS,
-                CONFIG,
-                "fixtures/generator/pen1.safetensors",
-                "fixtures/generator/pen1.json",
-            )
-            .map_err(|e| e.to_string())?;
-            GenModel::new(&g).map(Arc::new).map_err(|e| e.to_string())
-        })
-        .clone()
-        .map_err(RefineError::Generator)
     }
 
     /// The name of the brush profile the generator was trained for.

@@ -183,9 +183,10 @@ pub enum Gradients {
     /// The analytic soft footprint ([`soft`]) with closed-form derivatives: the default.
     #[default]
     Analytic,
-    /// The B-BSMG generator's images (the committed pen1 checkpoint), gradients from the
-    /// network's VJP and the images' spatial gradients (`generator` module; needs the cargo
-    /// feature `generator`, else [`RefineError::BadOption`]).
+    /// The B-BSMG generator's images, gradients from the network's VJP and the images'
+    /// spatial gradients (`generator` module, cargo feature `generator`): through
+    /// `refine_with_generator`, which takes the generator; [`refine`] refuses it with
+    /// [`RefineError::BadOption`].
     Generator,
 }
 
@@ -279,8 +280,9 @@ pub fn refine(
     run(Problem::new(track, profile, target, opts)?, opts, t0)
 }
 
-/// As [`refine`] on the generator path with a given generator (the generator path of
-/// [`refine`] uses the committed pen1 checkpoint).
+/// As [`refine`] on the generator path, with `generator` giving the footprint images and their
+/// derivatives (e.g. `GenModel::new(&neural_gen::Generator::load(path)?)`; the `maobi` binary
+/// passes its committed pen1 checkpoint). The judge stays the caller's analytic render.
 ///
 /// # Errors
 /// As [`refine`]; [`RefineError::Generator`] when the generator was trained for another profile.

@@ -236,15 +236,17 @@ impl<'a> Problem<'a> {
         .and_then(|p| p.choose_generator())
     }
 
-    /// Takes the committed generator when the options ask for the generator path.
+    /// Refuses the generator path here: it needs a generator, given through
+    /// [`crate::refine_with_generator`] (the crate carries no weights of its own).
     fn choose_generator(self) -> Result<Self, RefineError> {
         match self.opts.gradients {
             crate::Gradients::Analytic => Ok(self),
             #[cfg(feature = "generator")]
-            crate::Gradients::Generator => {
-                let g = crate::generator::GenModel::committed()?;
-                self.with_generator(g)
-            }
+            crate::Gradients::Generator => Err(RefineError::BadOption {
+                name: "gradients",
+                value: "generator".into(),
+                expected: "`analytic` for `refine`; the generator path takes its generator through `refine_with_generator`",
+            }),
             #[cfg(not(feature = "generator"))]
             crate::Gradients::Generator => Err(RefineError::BadOption {
                 name: "gradients",

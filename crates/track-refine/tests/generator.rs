@@ -114,11 +114,20 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     assert_eq!(out.curve.len(), 2);
     assert!(out.curve[1].image < out.curve[0].image, "{:?}", out.curve);
     assert!(out.curve[1].total < out.curve[0].total, "{:?}", out.curve);
-    // The committed generator is the default for the option.
+    // Plain `refine` has no generator to use: the option is refused there, naming the way.
     let o = RefineOptions { gradients: Gradients::Generator, ..RefineOptions::default() };
-    assert!(Problem::new(&line_track(12.0, 0.0), &profile, &target, &o).is_ok());
+    let e = Problem::new(&line_track(12.0, 0.0), &profile, &target, &o).err().unwrap();
+    assert!(e.to_string().contains("refine_with_generator"), "{e}");
     // A generator trained for another profile is refused.
     let pen2 = BrushProfile::builtin("pen2").unwrap();
-    let e = Problem::new(&line_track(12.0, 0.0), &pen2, &target, &o).err().unwrap();
+    let e = refine_with_generator(
+        &line_track(12.0, 0.0),
+        &pen2,
+        &target,
+        &opts,
+        tiny(track_refine::generator::DEFAULT_MODE),
+    )
+    .err()
+    .unwrap();
     assert!(e.to_string().contains("pen1"), "{e}");
 }

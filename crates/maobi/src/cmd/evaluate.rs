@@ -63,6 +63,11 @@ pub struct Args {
     /// Gradient steps of --refine (default 20).
     #[arg(long, requires = "refine")]
     iters: Option<usize>,
+    /// Where --refine takes its gradients from: the analytic soft footprint (default: as good
+    /// within 0.005 CSIM and about 16× faster) or the B-BSMG generator's VJP (see
+    /// docs/trajectory.md, "Refinement"). Scores always come from the analytic renderer.
+    #[arg(long, requires = "refine", value_parser = ["analytic", "generator"])]
+    gradients: Option<String>,
 }
 
 /// Runs the command.
@@ -112,7 +117,7 @@ pub fn run(args: Args) -> Result<()> {
         GlyphInput::Hanzi(args.hanzi_data.clone())
     };
     let alpha_rad = args.alpha.to_radians();
-    let refine = crate::cmd::write::refine_options(args.refine, args.iters)?;
+    let refine = crate::cmd::write::refine_options(args.refine, args.iters, args.gradients.as_deref())?;
     let opts = WriteOptions {
         model: args.model,
         size: args.size,
