@@ -127,7 +127,7 @@ fn photo_set() -> Result<(Vec<u8>, Vec<NamedFile>)> {
     let mut k = 0u64;
     for h in [11.0, 14.0, 17.0, 20.0] {
         for a in [0.0, 5.0, 10.0] {
-            let b = if k.is_multiple_of(2) { 0.0 } else { 5.0 };
+            let b = if k % 2 == 0 { 0.0 } else { 5.0 };
             let press = Press::from_degrees(h, a, b);
             let fp = pen1.predict(&press, Extrapolation::Refuse)?;
             let turn = ((k as f64 * 0.37).sin() * 2.0).to_radians();

@@ -9,7 +9,7 @@ use crate::NeuralGenError;
 use crate::model::Generator;
 
 /// Held-out presses: drawn with a seed training never uses.
-pub const HELD_OUT_SEED: u64 = 0x4845_4c44_4f55_54;
+pub const HELD_OUT_SEED: u64 = 0x0048_454c_444f_5554;
 
 /// CSIM and SSIM summaries of the generator against the analytic footprints over `n` held-out
 /// presses (rendered in batches of 64).

@@ -213,7 +213,7 @@ impl Generator {
     ) -> Result<Self, NeuralGenError> {
         let name = config_name.to_string();
         let text = config_json;
-        let config: GeneratorConfig = serde_json::from_str(&text)
+        let config: GeneratorConfig = serde_json::from_str(text)
             .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
         if config.version != CONFIG_VERSION {
             return Err(NeuralGenError::Config {
