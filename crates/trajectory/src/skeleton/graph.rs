@@ -37,156 +37,224 @@ pub(super) struct Graph {
     pub(super) edges: Vec<Edge>,
 }
 
-/// The graph of a one-pixel skeleton `skel` (`n × n`), node widths from `dt`.
+/// The graph of a one-pixel skeleton `skel` (`n × n`), node widths from `dt`: nodes first
+/// (junction clusters and end pixels), then every line traced from them, then a seed node on
+/// each loop that has none.
 pub(super) fn build_graph(skel: &[bool], dt: &[f32], n: usize) -> Graph {
-    let on = |x: isize, y: isize| {
-        x >= 0 && y >= 0 && (x as usize) < n && (y as usize) < n && skel[y as usize * n + x as usize]
+    let mut b = Builder {
+        px: Pixels { skel, dt, n },
+        node_of: vec![NO_NODE; n * n],
+        nodes: Vec::new(),
+        visited: vec![false; n * n],
+        edges: Vec::new(),
     };
-    let centre = |i: usize| Point::new((i % n) as f64 + 0.5, (i / n) as f64 + 0.5);
-    // Branch count: 0→1 transitions around the 8-neighbourhood (robust to staircases).
-    let branches = |i: usize| {
+    b.find_nodes();
+    b.trace_all();
+    Graph { nodes: b.nodes, edges: b.edges }
+}
+
+/// `node_of` for a pixel that belongs to no node.
+const NO_NODE: usize = usize::MAX;
+
+/// The skeleton raster: which pixels are on, their centres and neighbourhoods.
+struct Pixels<'a> {
+    skel: &'a [bool],
+    dt: &'a [f32],
+    n: usize,
+}
+
+impl Pixels<'_> {
+    fn on(&self, x: isize, y: isize) -> bool {
+        let n = self.n;
+        x >= 0 && y >= 0 && (x as usize) < n && (y as usize) < n && self.skel[y as usize * n + x as usize]
+    }
+
+    fn centre(&self, i: usize) -> Point {
+        Point::new((i % self.n) as f64 + 0.5, (i / self.n) as f64 + 0.5)
+    }
+
+    /// The set 8-neighbours of pixel `i` in [`N8`] order, each with whether it is a 4-neighbour.
+    fn neighbours(&self, i: usize) -> Vec<(usize, bool)> {
+        let n = self.n;
         let (x, y) = ((i % n) as isize, (i / n) as isize);
-        let p: Vec<bool> = N8.iter().map(|&(dx, dy)| on(x + dx, y + dy)).collect();
+        N8.iter()
+            .filter(|&&(dx, dy)| self.on(x + dx, y + dy))
+            .map(|&(dx, dy)| ((y + dy) as usize * n + (x + dx) as usize, dx == 0 || dy == 0))
+            .collect()
+    }
+
+    /// Set neighbours and 0→1 transitions around the 8-neighbourhood (the branch count, robust
+    /// to staircases).
+    fn branches(&self, i: usize) -> (usize, usize) {
+        let n = self.n;
+        let (x, y) = ((i % n) as isize, (i / n) as isize);
+        let p: Vec<bool> = N8.iter().map(|&(dx, dy)| self.on(x + dx, y + dy)).collect();
         let count = p.iter().filter(|&&b| b).count();
         let trans = (0..8).filter(|&k| !p[k] && p[(k + 1) % 8]).count();
         (count, trans)
-    };
-    let mut node_of = vec![usize::MAX; n * n];
-    let mut nodes: Vec<Node> = Vec::new();
-    // Junction pixels (≥ 3 branches) clustered 8-connected; end pixels (1 neighbour) alone.
-    let is_junction = |i: usize| {
-        let (count, trans) = branches(i);
-        let _ = count;
-        trans >= 3
-    };
-    for i in 0..n * n {
-        if !skel[i] || node_of[i] != usize::MAX {
-            continue;
-        }
-        let (count, trans) = branches(i);
-        if is_junction(i) {
-            let id = nodes.len();
-            let mut stack = vec![i];
-            node_of[i] = id;
-            let (mut sum, mut k, mut wmax) = (Vec2::ZERO, 0.0, 0.0f64);
-            while let Some(j) = stack.pop() {
-                sum += centre(j).to_vec2();
-                k += 1.0;
-                wmax = wmax.max(dt[j] as f64);
-                let (x, y) = ((j % n) as isize, (j / n) as isize);
-                for &(dx, dy) in &N8 {
-                    if on(x + dx, y + dy) {
-                        let q = (y + dy) as usize * n + (x + dx) as usize;
-                        if node_of[q] == usize::MAX && is_junction(q) {
-                            node_of[q] = id;
-                            stack.push(q);
-                        }
-                    }
-                }
+    }
+
+    /// A junction pixel: three or more branches.
+    fn is_junction(&self, i: usize) -> bool {
+        self.branches(i).1 >= 3
+    }
+
+    fn node_at(&self, i: usize) -> Node {
+        Node { pos: self.centre(i), width: self.dt[i] as f64, alive: true }
+    }
+}
+
+/// The graph under construction: `node_of` maps each node pixel to its node, `visited` marks
+/// line pixels already traced.
+struct Builder<'a> {
+    px: Pixels<'a>,
+    node_of: Vec<usize>,
+    nodes: Vec<Node>,
+    visited: Vec<bool>,
+    edges: Vec<Edge>,
+}
+
+impl Builder<'_> {
+    /// Junction pixels (≥ 3 branches) clustered 8-connected; end pixels alone.
+    fn find_nodes(&mut self) {
+        let n = self.px.n;
+        for i in 0..n * n {
+            if !self.px.skel[i] || self.node_of[i] != NO_NODE {
+                continue;
             }
-            nodes.push(Node { pos: (sum / k).to_point(), width: wmax, alive: true });
-        } else if count <= 1 || (count == 2 && trans == 1) {
-            // An end: one neighbour, or two touching ones (a one-pixel hook at the tip).
-            node_of[i] = nodes.len();
-            nodes.push(Node { pos: centre(i), width: dt[i] as f64, alive: true });
+            let (count, trans) = self.px.branches(i);
+            if self.px.is_junction(i) {
+                let node = self.junction_cluster(i);
+                self.nodes.push(node);
+            } else if count <= 1 || (count == 2 && trans == 1) {
+                // An end: one neighbour, or two touching ones (a one-pixel hook at the tip).
+                self.node_of[i] = self.nodes.len();
+                self.nodes.push(self.px.node_at(i));
+            }
         }
     }
-    let mut visited = vec![false; n * n];
-    let mut edges = Vec::new();
-    let trace = |start_node: usize,
-                 from: usize,
-                 first: usize,
-                 visited: &mut Vec<bool>,
-                 node_of: &Vec<usize>,
-                 nodes: &Vec<Node>|
-     -> Result<Edge, (Vec<Point>, usize)> {
-        let mut pts = vec![nodes[start_node].pos, centre(first)];
-        let (mut prev, mut cur) = (from, first);
-        visited[cur] = true;
-        loop {
-            if node_of[cur] != usize::MAX {
-                *pts.last_mut().expect("non-empty") = nodes[node_of[cur]].pos;
-                return Ok(Edge { a: start_node, b: node_of[cur], pts, alive: true });
+
+    /// Marks the junction pixels 8-connected to `i` as the next node; the node sits at their
+    /// mean centre with their widest half-width.
+    fn junction_cluster(&mut self, i: usize) -> Node {
+        let id = self.nodes.len();
+        let mut stack = vec![i];
+        self.node_of[i] = id;
+        let (mut sum, mut k, mut wmax) = (Vec2::ZERO, 0.0, 0.0f64);
+        while let Some(j) = stack.pop() {
+            sum += self.px.centre(j).to_vec2();
+            k += 1.0;
+            wmax = wmax.max(self.px.dt[j] as f64);
+            for (q, _) in self.px.neighbours(j) {
+                if self.node_of[q] == NO_NODE && self.px.is_junction(q) {
+                    self.node_of[q] = id;
+                    stack.push(q);
+                }
             }
-            let (x, y) = ((cur % n) as isize, (cur / n) as isize);
+        }
+        Node { pos: (sum / k).to_point(), width: wmax, alive: true }
+    }
+
+    /// Traces every line leaving a node pixel; a loop with no node at all (an 口 traced as one
+    /// ring) gets a seed node and is traced from it.
+    fn trace_all(&mut self) {
+        let n = self.px.n;
+        let mut start_pixels: Vec<usize> = (0..n * n).filter(|&i| self.node_of[i] != NO_NODE).collect();
+        let mut k = 0;
+        loop {
+            while k < start_pixels.len() {
+                self.trace_from(start_pixels[k]);
+                k += 1;
+            }
+            let Some(seed) = (0..n * n).find(|&i| self.px.skel[i] && self.node_of[i] == NO_NODE && !self.visited[i])
+            else {
+                break;
+            };
+            self.node_of[seed] = self.nodes.len();
+            self.nodes.push(self.px.node_at(seed));
+            start_pixels.push(seed);
+        }
+    }
+
+    /// The edges leaving node pixel `i`: direct edges to adjacent pixels of other nodes, and a
+    /// traced line through each unvisited neighbour (ending in a new end node at a dead end).
+    fn trace_from(&mut self, i: usize) {
+        let id = self.node_of[i];
+        for (q, _) in self.px.neighbours(i) {
+            let other = self.node_of[q];
+            if other != NO_NODE || self.visited[q] {
+                // Adjacent node pixels of different nodes: a direct edge.
+                if other != NO_NODE && other != id && id < other {
+                    let (a, b) = (id, other);
+                    if !self.edges.iter().any(|e| (e.a == a && e.b == b) || (e.a == b && e.b == a)) {
+                        let pts = vec![self.nodes[a].pos, self.nodes[b].pos];
+                        self.edges.push(Edge { a, b, pts, alive: true });
+                    }
+                }
+                continue;
+            }
+            match self.trace(id, i, q) {
+                Ok(e) => self.edges.push(e),
+                Err((pts, cur)) => {
+                    let b = self.nodes.len();
+                    self.node_of[cur] = b;
+                    self.nodes.push(self.px.node_at(cur));
+                    self.edges.push(Edge { a: id, b, pts, alive: true });
+                }
+            }
+        }
+    }
+
+    /// Follows the line from node `start_node` (left at pixel `from`) through pixel `first`
+    /// to the next node; `Err` with the points so far and the last pixel at a dead end that was
+    /// not classified as an end (the caller makes it one).
+    fn trace(&mut self, start_node: usize, from: usize, first: usize) -> Result<Edge, (Vec<Point>, usize)> {
+        let mut pts = vec![self.nodes[start_node].pos, self.px.centre(first)];
+        let (mut prev, mut cur) = (from, first);
+        self.visited[cur] = true;
+        loop {
+            if self.node_of[cur] != NO_NODE {
+                *pts.last_mut().expect("non-empty") = self.nodes[self.node_of[cur]].pos;
+                return Ok(Edge { a: start_node, b: self.node_of[cur], pts, alive: true });
+            }
             let mut cands: Vec<(usize, bool)> = Vec::new();
-            for &(dx, dy) in &N8 {
-                if on(x + dx, y + dy) {
-                    let q = (y + dy) as usize * n + (x + dx) as usize;
-                    if q == prev || (node_of[q] == start_node && pts.len() < 4) {
-                        continue;
-                    }
-                    if node_of[q] != usize::MAX || !visited[q] {
-                        cands.push((q, dx == 0 || dy == 0));
-                    }
+            for (q, four) in self.px.neighbours(cur) {
+                if q == prev || (self.node_of[q] == start_node && pts.len() < 4) {
+                    continue;
+                }
+                if self.node_of[q] != NO_NODE || !self.visited[q] {
+                    cands.push((q, four));
                 }
             }
             // Prefer a node, then 4-neighbours (so staircase corners are not skipped).
-            cands.sort_by_key(|&(q, four)| (node_of[q] == usize::MAX, !four));
+            cands.sort_by_key(|&(q, four)| (self.node_of[q] == NO_NODE, !four));
             let Some(&(next, _)) = cands.first() else {
-                // A dead end that was not classified as an end: the caller makes it one.
                 return Err((pts, cur));
             };
-            // Absorb staircase pixels adjacent to both cur and next (never next to a node, whose
-            // other branches start there).
-            for &(q, _) in cands.iter().skip(1) {
-                if node_of[q] == usize::MAX && node_of[next] == usize::MAX {
-                    let (qx, qy) = ((q % n) as isize, (q / n) as isize);
-                    let (nx, ny) = ((next % n) as isize, (next / n) as isize);
-                    if (qx - nx).abs() <= 1 && (qy - ny).abs() <= 1 {
-                        visited[q] = true;
-                    }
-                }
-            }
-            pts.push(centre(next));
+            self.absorb_staircase(&cands[1..], next);
+            pts.push(self.px.centre(next));
             prev = cur;
             cur = next;
-            if node_of[cur] == usize::MAX {
-                visited[cur] = true;
+            if self.node_of[cur] == NO_NODE {
+                self.visited[cur] = true;
             }
         }
-    };
-    let mut start_pixels: Vec<usize> = (0..n * n).filter(|&i| node_of[i] != usize::MAX).collect();
-    let mut k = 0;
-    loop {
-        while k < start_pixels.len() {
-            let i = start_pixels[k];
-            k += 1;
-            let id = node_of[i];
-            let (x, y) = ((i % n) as isize, (i / n) as isize);
-            for &(dx, dy) in &N8 {
-                if !on(x + dx, y + dy) {
-                    continue;
-                }
-                let q = (y + dy) as usize * n + (x + dx) as usize;
-                if node_of[q] != usize::MAX || visited[q] {
-                    // Adjacent node pixels of different nodes: a direct edge.
-                    if node_of[q] != usize::MAX && node_of[q] != id && id < node_of[q] {
-                        let (a, b) = (id, node_of[q]);
-                        if !edges.iter().any(|e: &Edge| (e.a == a && e.b == b) || (e.a == b && e.b == a)) {
-                            edges.push(Edge { a, b, pts: vec![nodes[a].pos, nodes[b].pos], alive: true });
-                        }
-                    }
-                    continue;
-                }
-                match trace(id, i, q, &mut visited, &node_of, &nodes) {
-                    Ok(e) => edges.push(e),
-                    Err((pts, cur)) => {
-                        let b = nodes.len();
-                        node_of[cur] = b;
-                        nodes.push(Node { pos: centre(cur), width: dt[cur] as f64, alive: true });
-                        edges.push(Edge { a: id, b, pts, alive: true });
-                    }
-                }
-            }
-        }
-        // Loops with no node at all (an 口 traced as one ring): seed a node on them.
-        let Some(seed) = (0..n * n).find(|&i| skel[i] && node_of[i] == usize::MAX && !visited[i]) else { break };
-        node_of[seed] = nodes.len();
-        nodes.push(Node { pos: centre(seed), width: dt[seed] as f64, alive: true });
-        start_pixels.push(seed);
     }
-    Graph { nodes, edges }
+
+    /// Marks the other candidates adjacent to both the current pixel and `next` as visited
+    /// (staircase pixels), never next to a node, whose other branches start there.
+    fn absorb_staircase(&mut self, others: &[(usize, bool)], next: usize) {
+        let n = self.px.n as isize;
+        for &(q, _) in others {
+            if self.node_of[q] == NO_NODE && self.node_of[next] == NO_NODE {
+                let (qx, qy) = (q as isize % n, q as isize / n);
+                let (nx, ny) = (next as isize % n, next as isize / n);
+                if (qx - nx).abs() <= 1 && (qy - ny).abs() <= 1 {
+                    self.visited[q] = true;
+                }
+            }
+        }
+    }
 }
 
 /// Thinning sometimes leaves a branch a pixel or two short of the junction it leaves (an end
