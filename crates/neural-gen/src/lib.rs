@@ -35,6 +35,9 @@ pub mod compose;
 pub mod config;
 pub mod conv;
 pub mod eval;
+// Kept for the speed comparison with PyTorch (benches/ltp.rs, examples/ltp_speed.rs) only: not
+// part of the API a downstream crate should use.
+#[doc(hidden)]
 pub mod ltp;
 pub mod model;
 pub mod train;
@@ -51,12 +54,24 @@ pub use vjp::{InputVjp, Tape};
 #[derive(Debug, Error)]
 pub enum NeuralGenError {
     /// A file could not be read or written.
-    #[error("{path}: {message}")]
+    #[error("{}: {context}", path.display())]
     Io {
         /// The file.
-        path: String,
-        /// Why.
-        message: String,
+        path: std::path::PathBuf,
+        /// What was being done (`cannot read`, `cannot write`, …).
+        context: &'static str,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The weights could not be saved.
+    #[error("{}: cannot save the weights", path.display())]
+    Save {
+        /// The file.
+        path: std::path::PathBuf,
+        /// candle's error.
+        #[source]
+        source: candle_core::Error,
     },
     /// A config or checkpoint is malformed or does not match.
     #[error("{source_name}: {message}")]
@@ -70,6 +85,6 @@ pub enum NeuralGenError {
     #[error("{0}")]
     Shape(String),
     /// An error inside candle.
-    #[error("candle: {0}")]
-    Candle(String),
+    #[error("candle")]
+    Candle(#[from] candle_core::Error),
 }

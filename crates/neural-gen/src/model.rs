@@ -25,7 +25,7 @@ pub struct Generator {
 }
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
-    NeuralGenError::Candle(e.to_string())
+    NeuralGenError::Candle(e)
 }
 
 impl Generator {
@@ -147,7 +147,7 @@ impl Generator {
         let grads = l.backward().map_err(cerr)?;
         let gx: Vec<f32> = grads
             .get(x.as_tensor())
-            .ok_or_else(|| NeuralGenError::Candle("no gradient for the input".into()))?
+            .ok_or_else(|| NeuralGenError::Candle(candle_core::Error::Msg("no gradient for the input".into())))?
             .flatten_all()
             .and_then(|t| t.to_vec1())
             .map_err(cerr)?;
@@ -165,13 +165,16 @@ impl Generator {
     /// # Errors
     /// [`NeuralGenError::Io`].
     pub fn save(&self, path: &Path) -> Result<(), NeuralGenError> {
-        let io = |e: String| NeuralGenError::Io { path: path.display().to_string(), message: e };
+        let io = |p: &Path, context: &'static str| {
+            let path = p.to_path_buf();
+            move |source| NeuralGenError::Io { path, context, source }
+        };
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| io(e.to_string()))?;
+            std::fs::create_dir_all(dir).map_err(io(dir, "cannot create the folder"))?;
         }
         let tmp = path.with_extension("safetensors.tmp");
-        self.varmap.save(&tmp).map_err(|e| io(e.to_string()))?;
-        std::fs::rename(&tmp, path).map_err(|e| io(e.to_string()))?;
+        self.varmap.save(&tmp).map_err(|source| NeuralGenError::Save { path: tmp.clone(), source })?;
+        std::fs::rename(&tmp, path).map_err(io(path, "cannot rename the temporary file onto it"))?;
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
@@ -180,8 +183,8 @@ impl Generator {
         let cfg = config_path(path);
         let tmp = cfg.with_extension("json.tmp");
         std::fs::write(&tmp, serde_json::to_string_pretty(&self.config).expect("serialises"))
-            .map_err(|e| io(e.to_string()))?;
-        std::fs::rename(&tmp, &cfg).map_err(|e| io(e.to_string()))?;
+            .map_err(io(&tmp, "cannot write"))?;
+        std::fs::rename(&tmp, &cfg).map_err(io(&cfg, "cannot rename the temporary file onto it"))?;
         Ok(())
     }
 
@@ -193,10 +196,16 @@ impl Generator {
     pub fn load(path: &Path) -> Result<Self, NeuralGenError> {
         let cfg_path = config_path(path);
         let name = cfg_path.display().to_string();
-        let text = std::fs::read_to_string(&cfg_path)
-            .map_err(|e| NeuralGenError::Io { path: name.clone(), message: e.to_string() })?;
-        let bytes = std::fs::read(path)
-            .map_err(|e| NeuralGenError::Io { path: path.display().to_string(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(&cfg_path).map_err(|source| NeuralGenError::Io {
+            path: cfg_path.clone(),
+            context: "cannot read the generator's config",
+            source,
+        })?;
+        let bytes = std::fs::read(path).map_err(|source| NeuralGenError::Io {
+            path: path.to_path_buf(),
+            context: "cannot read the generator's weights",
+            source,
+        })?;
         Self::from_bytes(&bytes, &text, &path.display().to_string(), &name)
     }
 

@@ -16,7 +16,7 @@ use crate::NeuralGenError;
 use crate::model::Generator;
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
-    NeuralGenError::Candle(e.to_string())
+    NeuralGenError::Candle(e)
 }
 
 /// Training options.

@@ -92,7 +92,7 @@ fn tensor_vec(t: &Tensor) -> Result<Vec<f32>, NeuralGenError> {
     t.flatten_all()
         .and_then(|f| f.to_dtype(candle_core::DType::F32))
         .and_then(|f| f.to_vec1::<f32>())
-        .map_err(|e| NeuralGenError::Candle(e.to_string()))
+        .map_err(NeuralGenError::Candle)
 }
 
 /// `Σ a·b` with eight accumulators (vectorises).
@@ -409,7 +409,7 @@ impl Generator {
         presses: &[Press],
         upstream: &[f32],
     ) -> Result<(Vec<bezier_raster::Coverage>, Vec<[f64; 3]>), NeuralGenError> {
-        let cerr = |e: candle_core::Error| NeuralGenError::Candle(e.to_string());
+        let cerr = |e: candle_core::Error| NeuralGenError::Candle(e);
         let s = self.config.size as usize;
         let b = presses.len();
         if upstream.len() != b * s * s {
@@ -428,7 +428,9 @@ impl Generator {
         let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
         let grads = l.backward().map_err(cerr)?;
         let gx = tensor_vec(
-            grads.get(x.as_tensor()).ok_or_else(|| NeuralGenError::Candle("no gradient for the input".into()))?,
+            grads
+                .get(x.as_tensor())
+                .ok_or_else(|| NeuralGenError::Candle(candle_core::Error::Msg("no gradient for the input".into())))?,
         )?;
         let k = self.config.normalise_slopes();
         let img = tensor_vec(&y)?;
