@@ -4,8 +4,8 @@
 //! point down, so `x' = x`, `y' = 900 − y` (docs/contracts.md §2). The em box is `[0, 1024]²` in `(x', y')`.
 
 use std::collections::HashMap;
-use std::path::Path;
-use std::sync::OnceLock;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 
 use kurbo::{BezPath, Point};
 use serde::Deserialize;
@@ -136,13 +136,24 @@ pub enum GlyphError {
         /// Which source was searched.
         source_name: String,
     },
-    /// A file could not be read.
-    #[error("{path}: cannot read: {message}")]
+    /// A file or folder could not be read (or is not what was asked for: a folder where a
+    /// file was expected, a folder without fonts; the source says which).
+    #[error("{}: cannot read", path.display())]
     Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// Why (shared, so the error stays `Clone`).
+        #[source]
+        source: Arc<std::io::Error>,
+    },
+    /// An image file could not be opened or decoded.
+    #[error("{}: cannot read image", path.display())]
+    Image {
         /// The file.
-        path: String,
-        /// Why.
-        message: String,
+        path: PathBuf,
+        /// Why (missing, empty, too large, not an image).
+        #[source]
+        source: Arc<bezier_raster::ImageFileError>,
     },
     /// The data is malformed.
     #[error("{source_name}: {message}")]
@@ -153,13 +164,20 @@ pub enum GlyphError {
         message: String,
     },
     /// An image holds no usable glyph.
-    #[error("{path}: {message}")]
+    #[error("{}: {message}", path.display())]
     BadImage {
-        /// The file.
-        path: String,
+        /// The file (or the label an in-memory image was given).
+        path: PathBuf,
         /// What is wrong.
         message: String,
     },
+}
+
+impl GlyphError {
+    /// [`GlyphError::Io`] for `path`.
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        GlyphError::Io { path: path.to_path_buf(), source: Arc::new(source) }
+    }
 }
 
 /// Where a glyph came from.
@@ -352,7 +370,7 @@ pub fn embedded(ch: char) -> Result<Glyph, GlyphError> {
 /// [`GlyphError::Unknown`] if there is no file for the character; [`GlyphError::Malformed`].
 pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
     if !dir.is_dir() {
-        return Err(GlyphError::Io { path: dir.display().to_string(), message: "not a folder".into() });
+        return Err(GlyphError::io(dir, std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a folder")));
     }
     let path = dir.join(format!("{ch}.json"));
     let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: dir.display().to_string() };
@@ -365,7 +383,7 @@ pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
     }
     let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
         std::io::ErrorKind::NotFound => unknown(),
-        _ => GlyphError::Io { path: path.display().to_string(), message: e.to_string() },
+        _ => GlyphError::io(&path, e),
     })?;
     parse_hanzi_json(ch, &text, GlyphSource::HanziData(dir.display().to_string()), &path.display().to_string())
 }
@@ -381,7 +399,8 @@ pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
 /// a glyph beyond [`limits`]), [`GlyphError::Unknown`].
 pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     if path.is_dir() {
-        return Err(GlyphError::Io { path: path.display().to_string(), message: "a folder, not a font file".into() });
+        let e = std::io::Error::new(std::io::ErrorKind::InvalidInput, "a folder, not a font file");
+        return Err(GlyphError::io(path, e));
     }
     from_font_files(&[path.to_path_buf()], None, ch)
 }

@@ -12,8 +12,8 @@ use crate::glyph::{Glyph, GlyphError, GlyphSource, Shape};
 pub(crate) fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     let name = path.display().to_string();
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
-    let img =
-        bezier_raster::coverage::open_image(path).map_err(|message| GlyphError::Io { path: name.clone(), message })?;
+    let img = bezier_raster::coverage::decode_image(path)
+        .map_err(|source| GlyphError::Image { path: path.to_path_buf(), source: std::sync::Arc::new(source) })?;
     clean_gray(&name, img.to_luma8())
 }
 
@@ -99,7 +99,7 @@ fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
 
 /// Thresholds and cleans a grey image (see [`load_clean`]).
 fn clean_gray(name: &str, gray: GrayImage) -> Result<(u32, Vec<f32>), GlyphError> {
-    let name = name.to_string();
+    let name = std::path::PathBuf::from(name);
     let gray = if gray.width().max(gray.height()) > 1024 {
         // Longer side to 1024 px, aspect kept (as `DynamicImage::resize` does).
         let k = 1024.0 / gray.width().max(gray.height()) as f64;

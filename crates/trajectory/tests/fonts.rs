@@ -160,8 +160,11 @@ fn a_character_in_no_file_names_the_files() {
     let empty = std::env::temp_dir().join(format!("maobi-nofonts-{}", std::process::id()));
     std::fs::create_dir_all(&empty).unwrap();
     std::fs::write(empty.join("README.txt"), "no fonts here").unwrap();
-    let e = FontSet::open(std::slice::from_ref(&empty), None).unwrap_err().to_string();
-    assert!(e.contains("no font files") && e.contains(".woff2"), "{e}");
+    let e = FontSet::open(std::slice::from_ref(&empty), None).unwrap_err();
+    // The folder is the error, why is its source.
+    let why = std::error::Error::source(&e).map(|s| s.to_string()).unwrap_or_default();
+    assert!(e.to_string().contains("maobi-nofonts"), "{e}");
+    assert!(why.contains("no font files") && why.contains(".woff2"), "{e}: {why}");
     std::fs::remove_dir_all(&empty).unwrap();
     let e = glyph::from_font_files(&[fonts().join("nope.ttf")], None, '永').unwrap_err().to_string();
     assert!(e.contains("nope.ttf"), "{e}");

@@ -113,7 +113,7 @@ fn check_woff1(path: &Path, d: &[u8]) -> Result<(), GlyphError> {
 /// [`GlyphError::Io`] if the file cannot be read; [`GlyphError::Malformed`] naming the file for
 /// one larger than [`limits::MAX_FONT_BYTES`] and as [`sfnt_from_bytes`].
 pub fn read_sfnt(path: &Path) -> Result<Vec<u8>, GlyphError> {
-    let io = |e: std::io::Error| GlyphError::Io { path: path.display().to_string(), message: e.to_string() };
+    let io = |e: std::io::Error| GlyphError::io(path, e);
     let len = std::fs::metadata(path).map_err(io)?.len();
     if len > limits::MAX_FONT_BYTES {
         return Err(malformed(path, format!("{len} bytes; a font is at most {} bytes", limits::MAX_FONT_BYTES)));
@@ -174,7 +174,7 @@ pub fn font_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, GlyphError> {
     }
     let mut out = Vec::new();
     for p in paths {
-        let io = |e: std::io::Error| GlyphError::Io { path: p.display().to_string(), message: e.to_string() };
+        let io = |e: std::io::Error| GlyphError::io(p, e);
         if p.is_dir() {
             let mut found: Vec<PathBuf> = std::fs::read_dir(p)
                 .map_err(io)?
@@ -187,10 +187,8 @@ pub fn font_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, GlyphError> {
                 })
                 .collect();
             if found.is_empty() {
-                return Err(GlyphError::Io {
-                    path: p.display().to_string(),
-                    message: format!("no font files (.{}) in this folder", FONT_EXTENSIONS.join(", .")),
-                });
+                let why = format!("no font files (.{}) in this folder", FONT_EXTENSIONS.join(", ."));
+                return Err(GlyphError::io(p, std::io::Error::new(std::io::ErrorKind::NotFound, why)));
             }
             found.sort_by(|a, b| a.file_name().cmp(&b.file_name()));
             out.extend(found);
