@@ -11,8 +11,8 @@ use kurbo::{BezPath, Point};
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::image_glyph;
-
+mod bitmap;
+pub use bitmap::glyph_from_gray;
 pub mod font;
 pub use font::{FontSet, from_font_files};
 
@@ -412,7 +412,7 @@ pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
 /// [`GlyphError::Io`] for unreadable files, [`GlyphError::BadImage`] for an image with no ink
 /// or nothing but ink.
 pub fn from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
-    let (size, ink) = image_glyph::load_clean(path)?;
+    let (size, ink) = bitmap::load_clean(path)?;
     Ok(Glyph {
         ch,
         source: GlyphSource::Image(path.display().to_string()),

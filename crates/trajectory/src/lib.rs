@@ -50,7 +50,6 @@ pub mod glyph;
 pub mod graph {
     pub use crate::skeleton::{GraphOptions, Skeleton};
 }
-mod image_glyph;
 mod medians;
 mod metrics;
 mod paper;
@@ -65,8 +64,8 @@ mod track;
 
 use thiserror::Error;
 
+pub use glyph::glyph_from_gray;
 pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
-pub use image_glyph::glyph_from_gray;
 pub use metrics::chamfer_pct;
 pub use paper::{CharBox, auto_char_mm};
 pub use path::{CORNER_RAD, CORNER_REACH_EM, StrokePath, find_corners};

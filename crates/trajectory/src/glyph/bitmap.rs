@@ -6,7 +6,7 @@ use std::path::Path;
 use bezier_raster::binary::{components, fill_holes, otsu_threshold};
 use image::GrayImage;
 
-use crate::glyph::{Glyph, GlyphError, GlyphSource, Shape};
+use super::{Glyph, GlyphError, GlyphSource, Shape};
 
 /// Loads, thresholds and cleans an image; returns the square side and the binary ink (1/0).
 pub(crate) fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
