@@ -151,3 +151,20 @@ fn evaluate_reports_means_and_refuses_unknown_characters() {
     fails(&maobi(&["evaluate", "--chars", "十𪚥"]), "not in the embedded subset");
     fails(&maobi(&["evaluate", "--chars", "十", "--from", "bones"]), "unknown method");
 }
+
+#[test]
+fn without_a_terminal_long_loops_print_progress_lines() {
+    // stderr is a pipe here; the quiet period is set to 0 so two characters are "long".
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_maobi"))
+        .args(["evaluate", "--chars", "十人", "--size", "64"])
+        .env("MAOBI_PROGRESS_AFTER_S", "0")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("evaluate: 2/2 (100%)"), "{e}");
+    assert!(e.contains("ETA"), "{e}");
+    // With the default quiet period a short run prints nothing on stderr.
+    let o = maobi(&["evaluate", "--chars", "十", "--size", "64"]);
+    assert!(o.status.success() && o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+}
