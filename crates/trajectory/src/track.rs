@@ -138,7 +138,7 @@ pub fn build_track(
 ) -> Result<BuiltTrack, ProfileError> {
     let placer = Placer::new(profile, opts);
     let k = opts.char_box.mm_per_em();
-    let mut counts = (0usize, 0usize);
+    let mut counts = Clamped::default();
     let mut strokes = Vec::with_capacity(paths.len());
     // Directions as an upright brush would leave them (the tilt threshold out of reach).
     let model = ForwardModel::default();
@@ -177,7 +177,43 @@ pub fn build_track(
     for p in strokes.iter().flat_map(|s| s.points.iter()).filter(|p| p.h_mm >= placer.lowest) {
         profile.predict_oriented(&Press::new(p.h_mm, p.alpha_rad, p.beta_rad), placer.extrapolation())?;
     }
-    Ok(BuiltTrack { track: Track { strokes }, clamped_low: counts.0, clamped_high: counts.1 })
+    Ok(BuiltTrack { track: Track { strokes }, clamped_low: counts.low, clamped_high: counts.high })
+}
+
+/// How many pressed points had their h clamped up (`low`) or down (`high`) to the brush's range.
+#[derive(Default)]
+struct Clamped {
+    low: usize,
+    high: usize,
+}
+
+impl Clamped {
+    fn tally(&mut self, clamp: Clamp) {
+        match clamp {
+            Clamp::Min => self.low += 1,
+            Clamp::Max => self.high += 1,
+            Clamp::None => {}
+        }
+    }
+}
+
+/// A piece's end replaces the last regular station when closer to it than this share of a
+/// spacing (no two commanded points at one place). Hand-set.
+const END_STATION_MERGE: f64 = 0.05;
+
+/// The stations of a piece `total` mm long: every `step` mm from 0, and the end (which replaces
+/// a last regular station closer than [`END_STATION_MERGE`] of a step).
+fn stations(total: f64, step: f64) -> Vec<f64> {
+    let n = (total / step).floor() as usize;
+    let mut stations: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();
+    if total - n as f64 * step > END_STATION_MERGE * step || n == 0 {
+        if total > 1e-9 {
+            stations.push(total);
+        }
+    } else {
+        stations[n] = total;
+    }
+    stations
 }
 
 /// Places footprints along one corner-free piece of a stroke.
@@ -241,35 +277,15 @@ impl<'a> Placer<'a> {
 
     /// The commanded states of one corner-free piece (see [`build_track`]): entry backwards,
     /// turn, writing forwards. β is left at 0 for the forward model to fill in.
-    fn piece(
-        &self,
-        pts: &[PointMm],
-        widths: &[f64],
-        counts: &mut (usize, usize),
-    ) -> Result<Vec<TrackPoint>, ProfileError> {
-        let (alpha, step) = (self.opts.alpha_rad, self.opts.spacing_mm);
+    fn piece(&self, pts: &[PointMm], widths: &[f64], counts: &mut Clamped) -> Result<Vec<TrackPoint>, ProfileError> {
+        let alpha = self.opts.alpha_rad;
         let s = arc_lengths_by(pts, PointMm::distance);
         let total = s[s.len() - 1];
-        let n = (total / step).floor() as usize;
-        let mut stations: Vec<f64> = (0..=n).map(|i| i as f64 * step).collect();
-        // The end is a station; one closer than a twentieth of a spacing to the last regular
-        // station replaces it (no two commanded points at one place).
-        if total - n as f64 * step > 0.05 * step || n == 0 {
-            if total > 1e-9 {
-                stations.push(total);
-            }
-        } else {
-            stations[n] = total;
-        }
+        let stations = stations(total, self.opts.spacing_mm);
         let (first, end) = (pts[0], pts[pts.len() - 1]);
         let at = |t: f64, h: f64| {
             let p = point_at(&s, pts, t);
             TrackPoint { x_mm: p.x_mm, y_mm: p.y_mm, h_mm: h, alpha_rad: alpha, beta_rad: 0.0 }
-        };
-        let tally = |clamp: Clamp, counts: &mut (usize, usize)| match clamp {
-            Clamp::Min => counts.0 += 1,
-            Clamp::Max => counts.1 += 1,
-            Clamp::None => {}
         };
         // Trailing sizes (belly lh behind), and the first station where such a footprint fits
         // behind the brush.
@@ -294,7 +310,7 @@ impl<'a> Placer<'a> {
             let (h_in, clamp) = self.size_belly(|lh| interp(&s, widths, (t + lh).min(total)))?;
             let fit = self.h_for_length(p.distance(end));
             let h = if fit >= self.lowest {
-                tally(clamp, counts);
+                counts.tally(clamp);
                 h_in.min(fit)
             } else if j == 0 {
                 // The head must be inked even when the piece is shorter than any footprint.
@@ -315,7 +331,7 @@ impl<'a> Placer<'a> {
                 let t = stations[j];
                 let (h_tr, clamp) = trailing[j];
                 let fit = self.h_for_length(first.distance(point_at(&s, pts, t)));
-                tally(clamp, counts);
+                counts.tally(clamp);
                 out.push(at(t, h_tr.min(fit).max(self.lowest)));
             }
         }
