@@ -13,79 +13,98 @@ use crate::polyline::length;
 
 /// Pairs branch ends at every node and walks the pairs into chains (smoothed).
 pub(super) fn pair_and_chain(g: &Graph, dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
-    let live: Vec<usize> = (0..g.edges.len()).filter(|&k| g.edges[k].alive).collect();
     // End id: 2k (end a) or 2k+1 (end b) of edge k.
-    let mut partner = vec![usize::MAX; 2 * g.edges.len()];
+    let mut partner = vec![UNPAIRED; 2 * g.edges.len()];
     for v in 0..g.nodes.len() {
-        if !g.nodes[v].alive {
-            continue;
+        if g.nodes[v].alive {
+            pair_at(g, v, dt, n, opts, &mut partner);
         }
-        let ends = ends_at(g, v);
-        if ends.len() < 2 {
-            continue;
-        }
-        let widths: Vec<f64> = if opts.pair_width_ratio > 0.0 && ends.len() >= 3 {
-            ends.iter().map(|&(end, _)| branch_width(g, &g.edges[end / 2], end % 2 == 0, dt, n)).collect()
-        } else {
-            Vec::new()
-        };
-        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-        for i in 0..ends.len() {
-            for j in i + 1..ends.len() {
-                if !widths.is_empty() && widths[i].min(widths[j]) < opts.pair_width_ratio * widths[i].max(widths[j]) {
-                    continue;
-                }
+    }
+    walk_chains(g, &partner).into_iter().map(|s| smooth(&s)).collect()
+}
+
+/// `partner` of a branch end that continues no other.
+const UNPAIRED: usize = usize::MAX;
+
+/// At node `v`, pairs the branch ends that continue each other, straightest pair first: both
+/// ends of a two-branch node; at a crossing, pairs turning by less than `straight_min_rad`
+/// whose widths are comparable (`pair_width_ratio`).
+fn pair_at(g: &Graph, v: usize, dt: &[f32], n: usize, opts: &GraphOptions, partner: &mut [usize]) {
+    let ends = ends_at(g, v);
+    if ends.len() < 2 {
+        return;
+    }
+    let widths: Vec<f64> = if opts.pair_width_ratio > 0.0 && ends.len() >= 3 {
+        ends.iter().map(|&(end, _)| branch_width(g, &g.edges[end / 2], end % 2 == 0, dt, n)).collect()
+    } else {
+        Vec::new()
+    };
+    let comparable = |i: usize, j: usize| {
+        widths.is_empty() || widths[i].min(widths[j]) >= opts.pair_width_ratio * widths[i].max(widths[j])
+    };
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for i in 0..ends.len() {
+        for j in i + 1..ends.len() {
+            if comparable(i, j) {
                 pairs.push((ends[i].1.dot(ends[j].1), ends[i].0, ends[j].0));
             }
         }
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let limit = if ends.len() == 2 { 1.0 } else { opts.straight_min_rad.cos() };
-        for (c, x, y) in pairs {
-            if c <= limit + 1e-12 && partner[x] == usize::MAX && partner[y] == usize::MAX && x / 2 != y / 2 {
-                partner[x] = y;
-                partner[y] = x;
-            }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let limit = if ends.len() == 2 { 1.0 } else { opts.straight_min_rad.cos() };
+    for (c, x, y) in pairs {
+        if c <= limit + 1e-12 && partner[x] == UNPAIRED && partner[y] == UNPAIRED && x / 2 != y / 2 {
+            partner[x] = y;
+            partner[y] = x;
         }
     }
+}
+
+/// Walks the live edges into chains through their paired ends: first from every unpaired end,
+/// then around the loops left.
+fn walk_chains(g: &Graph, partner: &[usize]) -> Vec<Vec<Point>> {
+    let live: Vec<usize> = (0..g.edges.len()).filter(|&k| g.edges[k].alive).collect();
     let mut used = vec![false; g.edges.len()];
     let mut strokes = Vec::new();
-    let walk = |start_end: usize, used: &mut Vec<bool>| {
-        let mut pts: Vec<Point> = Vec::new();
-        let mut end = start_end;
-        loop {
-            let k = end / 2;
-            if used[k] {
-                break;
-            }
-            used[k] = true;
-            let e = &g.edges[k];
-            let seg: Vec<Point> = if end % 2 == 0 { e.pts.clone() } else { e.pts.iter().rev().copied().collect() };
-            if pts.is_empty() {
-                pts.extend(seg);
-            } else {
-                pts.extend(seg.into_iter().skip(1));
-            }
-            let other = end ^ 1;
-            match partner[other] {
-                usize::MAX => break,
-                next => end = next,
-            }
-        }
-        pts
-    };
     for &k in &live {
         for end in [2 * k, 2 * k + 1] {
-            if !used[k] && partner[end] == usize::MAX {
-                strokes.push(walk(end, &mut used));
+            if !used[k] && partner[end] == UNPAIRED {
+                strokes.push(walk(g, partner, end, &mut used));
             }
         }
     }
     for &k in &live {
         if !used[k] {
-            strokes.push(walk(2 * k, &mut used));
+            strokes.push(walk(g, partner, 2 * k, &mut used));
         }
     }
-    strokes.into_iter().map(|s| smooth(&s)).collect()
+    strokes
+}
+
+/// The chain entered at branch end `start_end`, edge after edge through paired ends, until an
+/// unpaired end or an edge already used.
+fn walk(g: &Graph, partner: &[usize], start_end: usize, used: &mut [bool]) -> Vec<Point> {
+    let mut pts: Vec<Point> = Vec::new();
+    let mut end = start_end;
+    loop {
+        let k = end / 2;
+        if used[k] {
+            break;
+        }
+        used[k] = true;
+        let e = &g.edges[k];
+        let seg: Vec<Point> = if end % 2 == 0 { e.pts.clone() } else { e.pts.iter().rev().copied().collect() };
+        if pts.is_empty() {
+            pts.extend(seg);
+        } else {
+            pts.extend(seg.into_iter().skip(1));
+        }
+        match partner[end ^ 1] {
+            UNPAIRED => break,
+            next => end = next,
+        }
+    }
+    pts
 }
 
 /// A light moving average (window 5) that keeps the end points.
