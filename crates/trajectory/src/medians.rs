@@ -73,6 +73,14 @@ pub(crate) fn densify(p: &[Point], step: f64) -> Vec<Point> {
     out
 }
 
+/// The ridge search reaches this far (px) beyond the distance to the outline at the median's
+/// point... Hand-set.
+const RIDGE_EXTRA_PX: f64 = 3.0;
+/// ... but never farther than this (px) either way.
+const RIDGE_MAX_PX: f64 = 40.0;
+/// The ridge search's step across the stroke (px).
+const RIDGE_STEP_PX: f64 = 0.5;
+
 /// Moves each point of a median across the stroke onto the ridge of the stroke's distance
 /// transform (hanzi-writer medians are hand-drawn and often off-centre), and returns the ridge
 /// height there as the half-width (em units). The shifts are smoothed along the stroke so the
@@ -91,11 +99,11 @@ pub(crate) fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) 
             continue;
         }
         let normal = Vec2::new(-d.y / len, d.x / len);
-        let reach = (at(p[i]) + 3.0).min(40.0) * px_to_em;
+        let reach = (at(p[i]) + RIDGE_EXTRA_PX).min(RIDGE_MAX_PX) * px_to_em;
         let (mut best, mut best_off) = (at(p[i]), 0.0);
-        let steps = (reach / (0.5 * px_to_em)).ceil() as i64;
+        let steps = (reach / (RIDGE_STEP_PX * px_to_em)).ceil() as i64;
         for k in -steps..=steps {
-            let off = k as f64 * 0.5 * px_to_em;
+            let off = k as f64 * RIDGE_STEP_PX * px_to_em;
             let v = at(p[i] + normal * off);
             if v > best + 1e-9 {
                 best = v;

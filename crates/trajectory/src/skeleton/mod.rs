@@ -23,6 +23,9 @@ use corners::split_at_corners;
 use graph::{attach_loose_ends, build_graph, degree, merge_junctions, prune_spurs};
 use order::order_strokes;
 
+/// Chains no longer than this (px) are thinning debris, not strokes. Hand-set.
+const MIN_STROKE_PX: f64 = 1.5;
+
 /// Extracts strokes from a one-pixel skeleton. `dt` is the distance transform of the glyph mask
 /// (same `n × n` raster). Returns polylines in pixel coordinates, oriented and ordered by the
 /// usual writing rules.
@@ -37,7 +40,7 @@ pub(crate) fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &Graph
         (0..g.nodes.len()).filter(|&v| g.nodes[v].alive && degree(&g, v) >= 3).map(|v| g.nodes[v].pos).collect();
     let strokes: Vec<Vec<Point>> =
         pair_and_chain(&g, dt, n, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts, &junctions)).collect();
-    let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > 1.5).collect();
+    let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > MIN_STROKE_PX).collect();
     let strokes = drop_covered(strokes, dt, n, opts.covered_max_widths);
     order_strokes(strokes)
 }

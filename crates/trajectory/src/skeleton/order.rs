@@ -10,6 +10,10 @@ use kurbo::{Point, Vec2};
 
 use crate::polyline::nearly_horizontal;
 
+/// Strokes starting in the same horizontal band (of this many across the glyph's extent) are
+/// ordered left to right; bands top to bottom. Hand-set.
+const ORDER_BANDS: f64 = 12.0;
+
 /// The direction a line of direction `v` (either sign; raster y down) is written in: rightward
 /// if it is nearly horizontal, otherwise downward (撇 and 捺 both go down; 提, the rising
 /// stroke, is short and rarely meets another at a corner).
@@ -41,7 +45,7 @@ pub(super) fn order_strokes(strokes: Vec<Vec<Point>>) -> Vec<Vec<Point>> {
         })
         .collect();
     let extent = s.iter().flatten().fold(1.0f64, |m, p| m.max(p.x).max(p.y));
-    let band = extent / 12.0;
+    let band = extent / ORDER_BANDS;
     s.sort_by(|a, b| {
         let ka = ((a[0].y / band).floor() as i64, a[0].x);
         let kb = ((b[0].y / band).floor() as i64, b[0].x);
