@@ -140,46 +140,11 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
     let medians =
         template.medians.as_ref().ok_or_else(|| TrajectoryError::NoMedians(template.source.kind().to_string()))?;
     // 1. Global affine fit.
-    let fit_n = opts.fit_px.max(32) as usize;
-    let t_cov = raster::render_glyph(template, fit_n as u32);
-    let g_cov = raster::render_glyph(target, fit_n as u32);
-    let t_ink = ink_points(t_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(template.ch))?;
-    let g_ink = ink_points(g_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(target.ch))?;
-    let start = moment_start(t_cov.data(), g_cov.data(), fit_n);
-    let mut q = start.as_coeffs();
-    let mut overlap_start = None;
-    let mut overlap_fit = 0.0;
-    for sigma_px in [4.0, 1.5] {
-        let tb = gaussian_blur(t_cov.data(), fit_n, sigma_px);
-        let gb = gaussian_blur(g_cov.data(), fit_n, sigma_px);
-        let score =
-            |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
-        overlap_start.get_or_insert_with(|| score(&q));
-        let steps = [0.05, 0.05, 0.05, 0.05, 12.0, 12.0];
-        let (best, val) = nelder_mead(|c| -score(c), &q, &steps, 160);
-        q = best.try_into().expect("six coefficients");
-        overlap_fit = -val;
-    }
-    let affine = Affine::new(q);
+    let global = global_fit(template, target, opts)?;
+    let (q, affine) = (global.coeffs, Affine::new(global.coeffs));
     // 2. Non-rigid fit of the moved medians onto the target skeleton.
     let moved: Vec<Vec<Point>> = medians.iter().map(|m| m.iter().map(|&p| affine * p).collect()).collect();
-    // Like with like: the template's skeleton (moved) against the target's, so a glyph registered
-    // onto itself stays put; the field then carries the medians.
-    let sk_n = opts.skeleton_px.max(32) as usize;
-    // Both thinned on one grid (cells of the same size), so the two samplings have one density.
-    let (t_skel, g_skel) = (skeleton_points(template, sk_n), skeleton_points(target, sk_n));
-    let px_em = EM / sk_n as f64;
-    let cell = (1..=16).find(|&c| grid_thin(&t_skel, c, px_em).len() <= 400).unwrap_or(16);
-    let ctrl: Vec<Point> = grid_thin(&t_skel, cell, px_em).into_iter().map(|p| affine * p).collect();
-    let skel = grid_thin(&g_skel, cell, px_em);
-    let field = if opts.cpd_iters > 0 && !skel.is_empty() && ctrl.len() >= 3 {
-        Some(Cpd::fit(&ctrl, &skel, opts))
-    } else {
-        None
-    };
-    let nonrigid_mean_em = field
-        .as_ref()
-        .map_or(0.0, |f| ctrl.iter().map(|&p| f.displacement(p).hypot()).sum::<f64>() / ctrl.len() as f64);
+    let (field, nonrigid_mean_em) = nonrigid_fit(template, target, affine, opts);
     // 3. Snap onto the target's distance ridge.
     let n = opts.analysis_px.max(32) as usize;
     let px_to_em = EM / n as f64;
@@ -265,11 +230,69 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
         paths,
         strokes: fits,
         affine: q,
-        overlap_start: overlap_start.unwrap_or(0.0),
-        overlap_fit,
+        overlap_start: global.overlap_start,
+        overlap_fit: global.overlap_fit,
         nonrigid_mean_em,
         uncovered_ink,
     })
+}
+
+/// The global affine fit of [`register`] (stage 1): its coefficients and the blurred-ink
+/// overlap before and after.
+struct GlobalFit {
+    coeffs: [f64; 6],
+    overlap_start: f64,
+    overlap_fit: f64,
+}
+
+/// Stage 1 of [`register`]: the affine map of the template's ink onto the target's, from the
+/// moments start, Nelder–Mead on the overlap of the blurred inks at two blur widths.
+fn global_fit(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Result<GlobalFit, TrajectoryError> {
+    let fit_n = opts.fit_px.max(32) as usize;
+    let t_cov = raster::render_glyph(template, fit_n as u32);
+    let g_cov = raster::render_glyph(target, fit_n as u32);
+    let t_ink = ink_points(t_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(template.ch))?;
+    let g_ink = ink_points(g_cov.data(), fit_n, 2500).ok_or(TrajectoryError::Empty(target.ch))?;
+    let start = moment_start(t_cov.data(), g_cov.data(), fit_n);
+    let mut q = start.as_coeffs();
+    let mut overlap_start = None;
+    let mut overlap_fit = 0.0;
+    for sigma_px in [4.0, 1.5] {
+        let tb = gaussian_blur(t_cov.data(), fit_n, sigma_px);
+        let gb = gaussian_blur(g_cov.data(), fit_n, sigma_px);
+        let score =
+            |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
+        overlap_start.get_or_insert_with(|| score(&q));
+        let steps = [0.05, 0.05, 0.05, 0.05, 12.0, 12.0];
+        let (best, val) = nelder_mead(|c| -score(c), &q, &steps, 160);
+        q = best.try_into().expect("six coefficients");
+        overlap_fit = -val;
+    }
+    Ok(GlobalFit { coeffs: q, overlap_start: overlap_start.unwrap_or(0.0), overlap_fit })
+}
+
+/// Stage 2 of [`register`]: the non-rigid field (CPD) taking the template's skeleton, moved by
+/// `affine`, onto the target's, and its mean displacement (em); `None` when it is switched off
+/// or there is too little skeleton.
+fn nonrigid_fit(template: &Glyph, target: &Glyph, affine: Affine, opts: &TemplateOptions) -> (Option<Cpd>, f64) {
+    // Like with like: the template's skeleton (moved) against the target's, so a glyph registered
+    // onto itself stays put; the field then carries the medians.
+    let sk_n = opts.skeleton_px.max(32) as usize;
+    // Both thinned on one grid (cells of the same size), so the two samplings have one density.
+    let (t_skel, g_skel) = (skeleton_points(template, sk_n), skeleton_points(target, sk_n));
+    let px_em = EM / sk_n as f64;
+    let cell = (1..=16).find(|&c| grid_thin(&t_skel, c, px_em).len() <= 400).unwrap_or(16);
+    let ctrl: Vec<Point> = grid_thin(&t_skel, cell, px_em).into_iter().map(|p| affine * p).collect();
+    let skel = grid_thin(&g_skel, cell, px_em);
+    let field = if opts.cpd_iters > 0 && !skel.is_empty() && ctrl.len() >= 3 {
+        Some(Cpd::fit(&ctrl, &skel, opts))
+    } else {
+        None
+    };
+    let nonrigid_mean_em = field
+        .as_ref()
+        .map_or(0.0, |f| ctrl.iter().map(|&p| f.displacement(p).hypot()).sum::<f64>() / ctrl.len() as f64);
+    (field, nonrigid_mean_em)
 }
 
 /// The share of ink pixels of `mask` (`n × n`) outside discs of radius 1.5·half-width + 2 px
