@@ -5,8 +5,7 @@
 //! (the last argument sets [`GraphOptions`] as `cargo xtask skeleton-counts --opts` does).
 use image::{Rgb, RgbImage};
 use kurbo::Point;
-use trajectory::graph::{GraphOptions, Skeleton};
-use trajectory::{glyph, raster};
+use trajectory::{GraphOptions, Skeleton, glyph, raster};
 
 const PX: u32 = 512;
 const CELL: u32 = 256;

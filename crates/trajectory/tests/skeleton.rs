@@ -1,7 +1,6 @@
 //! The skeleton that `cargo xtask skeleton-counts` measures is the one `centre_lines` uses.
 
-use trajectory::graph::{GraphOptions, Skeleton};
-use trajectory::{DEFAULT_ANALYSIS_PX, Method, centre_lines, glyph};
+use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Method, Skeleton, centre_lines, glyph};
 
 #[test]
 fn skeleton_counts_are_the_centre_lines_counts() {
