@@ -266,63 +266,10 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
     if j.strokes.len() > limits::MAX_STROKES {
         return Err(bad(format!("{} strokes; at most {}", j.strokes.len(), limits::MAX_STROKES)));
     }
-    let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
-    let mut outlines = Vec::with_capacity(j.strokes.len());
-    for (i, s) in j.strokes.iter().enumerate() {
-        if s.len() > limits::MAX_SVG_BYTES {
-            return Err(bad(format!(
-                "stroke {}: SVG path of {} bytes; at most {}",
-                i + 1,
-                s.len(),
-                limits::MAX_SVG_BYTES
-            )));
-        }
-        if let Some(tok) = svg_number_too_large(s) {
-            let tok: String = tok.chars().take(40).collect();
-            return Err(bad(format!(
-                "stroke {}: SVG path number {tok} is beyond ±{} (the em box is 0..=1024)",
-                i + 1,
-                limits::MAX_SVG_NUMBER
-            )));
-        }
-        let mut p = BezPath::from_svg(s).map_err(|e| bad(format!("stroke {}: bad SVG path: {e}", i + 1)))?;
-        if p.elements().len() > limits::MAX_PATH_ELEMENTS {
-            return Err(bad(format!(
-                "stroke {}: {} path elements; at most {}",
-                i + 1,
-                p.elements().len(),
-                limits::MAX_PATH_ELEMENTS
-            )));
-        }
-        if let Some(q) = path_outside(&p) {
-            return Err(bad(format!(
-                "stroke {}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
-                i + 1,
-                num(q.x),
-                num(q.y)
-            )));
-        }
-        p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
-        outlines.push(p);
-    }
-    let mut medians = Vec::with_capacity(j.medians.len());
-    for (i, m) in j.medians.iter().enumerate() {
-        if m.is_empty() || m.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(bad(format!("median {} is empty or not finite", i + 1)));
-        }
-        if m.len() > limits::MAX_MEDIAN_POINTS {
-            return Err(bad(format!("median {}: {} points; at most {}", i + 1, m.len(), limits::MAX_MEDIAN_POINTS)));
-        }
-        if let Some([x, y]) = m.iter().find(|&&[x, y]| !in_window(Point::new(x, y))) {
-            return Err(bad(format!(
-                "median {}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
-                i + 1,
-                num(*x),
-                num(*y)
-            )));
-        }
-        medians.push(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect());
-    }
+    let outlines = j.strokes.iter().enumerate().map(|(i, s)| stroke_outline(i + 1, s).map_err(bad));
+    let outlines: Vec<BezPath> = outlines.collect::<Result<_, _>>()?;
+    let medians = j.medians.iter().enumerate().map(|(i, m)| median(i + 1, m).map_err(bad));
+    let medians: Vec<Vec<Point>> = medians.collect::<Result<_, _>>()?;
     Ok(Glyph {
         ch,
         source,
@@ -330,6 +277,55 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
         stroke_outlines: Some(outlines),
         medians: Some(medians),
     })
+}
+
+/// Stroke `k` (1-based) of a hanzi-writer file: its SVG outline, bounded before parsing and
+/// checked after, flipped into the em frame (y down). `Err` is the message.
+fn stroke_outline(k: usize, s: &str) -> Result<BezPath, String> {
+    let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
+    if s.len() > limits::MAX_SVG_BYTES {
+        return Err(format!("stroke {k}: SVG path of {} bytes; at most {}", s.len(), limits::MAX_SVG_BYTES));
+    }
+    if let Some(tok) = svg_number_too_large(s) {
+        let tok: String = tok.chars().take(40).collect();
+        return Err(format!(
+            "stroke {k}: SVG path number {tok} is beyond ±{} (the em box is 0..=1024)",
+            limits::MAX_SVG_NUMBER
+        ));
+    }
+    let mut p = BezPath::from_svg(s).map_err(|e| format!("stroke {k}: bad SVG path: {e}"))?;
+    if p.elements().len() > limits::MAX_PATH_ELEMENTS {
+        return Err(format!("stroke {k}: {} path elements; at most {}", p.elements().len(), limits::MAX_PATH_ELEMENTS));
+    }
+    if let Some(q) = path_outside(&p) {
+        return Err(format!(
+            "stroke {k}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
+            num(q.x),
+            num(q.y)
+        ));
+    }
+    p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
+    Ok(p)
+}
+
+/// Median `k` (1-based) of a hanzi-writer file, checked and flipped into the em frame. `Err` is
+/// the message.
+fn median(k: usize, m: &[[f64; 2]]) -> Result<Vec<Point>, String> {
+    let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
+    if m.is_empty() || m.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("median {k} is empty or not finite"));
+    }
+    if m.len() > limits::MAX_MEDIAN_POINTS {
+        return Err(format!("median {k}: {} points; at most {}", m.len(), limits::MAX_MEDIAN_POINTS));
+    }
+    if let Some([x, y]) = m.iter().find(|&&[x, y]| !in_window(Point::new(x, y))) {
+        return Err(format!(
+            "median {k}: point ({}, {}) outside the accepted coordinates {lo}..={hi} (the em box is 0..=1024)",
+            num(*x),
+            num(*y)
+        ));
+    }
+    Ok(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect())
 }
 
 fn embedded_index() -> &'static HashMap<char, &'static str> {
