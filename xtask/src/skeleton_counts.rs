@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
-use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, glyph, graph::Skeleton};
+use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, glyph};
 
 const HELP: &str = "\
 cargo xtask skeleton-counts [--hanzi-data DIR] [--set FILE|embedded] [--lines A-B]

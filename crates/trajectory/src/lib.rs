@@ -45,12 +45,6 @@ struct ReadmeDoctests;
 
 mod distance;
 pub mod glyph;
-/// The skeleton method's public items under their older path (`trajectory::graph::Skeleton`,
-/// still used by xtask's `skeleton_counts.rs`); new code names them at the crate root, and this
-/// alias goes once nothing uses it.
-pub mod graph {
-    pub use crate::skeleton::{GraphOptions, Skeleton};
-}
 mod medians;
 mod metrics;
 mod paper;
