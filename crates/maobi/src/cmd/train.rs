@@ -44,38 +44,12 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    check_range("--steps", args.steps, 1, 10_000_000, "steps")?;
-    check_range("--batch", args.batch, 1, 256, "images")?;
-    if !(args.lr.is_finite() && args.lr > 0.0 && args.lr <= 1.0) {
-        bail!("--lr {}: expected a learning rate above 0 and at most 1", args.lr);
-    }
-    check_range("--val-every", args.val_every, 1, 10_000_000, "steps")?;
-    check_range("--eval-n", args.eval_n, 1, 100_000, "presses")?;
-    if args.output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
-        bail!("-o {}: expected a .safetensors file name", args.output.display());
-    }
+    check_args(&args)?;
     // The checkpoints are written to these and renamed (neural_gen::Generator::save).
     crate::common::remove_on_interrupt(&args.output.with_extension("safetensors.tmp"));
     crate::common::remove_on_interrupt(&neural_gen::model::config_path(&args.output).with_extension("json.tmp"));
     let profile = load_brush(&args.brush.brush)?;
-    let mut g = match &args.resume {
-        Some(p) => {
-            let g = Generator::load(p).with_context(|| format!("--resume {}", p.display()))?;
-            if g.config.profile != profile && args.brush.brush != "pen1" {
-                bail!(
-                    "--resume {}: the checkpoint was trained for brush `{}`, not `{}`",
-                    p.display(),
-                    g.config.profile.name,
-                    profile.name
-                );
-            }
-            g
-        }
-        None => {
-            let arch = if args.arch == "tiny" { Arch::tiny_32() } else { Arch::default_128() };
-            Generator::new(GeneratorConfig::new(profile, arch), args.seed)?
-        }
-    };
+    let mut g = start_generator(&args, profile)?;
     let a = &g.config.arch;
     eprintln!(
         "generator: {} parameters, {:.2} M multiply-adds per image, {}² output",
@@ -104,44 +78,9 @@ pub fn run(args: Args) -> Result<()> {
     })?;
     progress.finish();
     let (csim, ssim) = neural_gen::eval::evaluate(&g, args.eval_n)?;
-    g.config.recipe = Some(Recipe {
-        steps: report.steps_run,
-        batch: args.batch,
-        lr: args.lr,
-        seed: args.seed,
-        loss: "mse".into(),
-        schedule: "linear warm-up over 5% of the steps, cosine decay to 5%".into(),
-        wall_seconds: report.wall_seconds,
-        threads: rayon::current_num_threads(),
-    });
-    g.config.metrics = Some(Metrics {
-        n: args.eval_n,
-        ssim_mean: ssim.mean,
-        ssim_worst: ssim.worst,
-        csim_mean: csim.mean,
-        val_mse: report.best_val_mse,
-    });
+    record(&mut g, &args, &report, &csim, &ssim);
     g.save(&args.output)?;
-    let mut csv = String::from("step,train_mse,val_mse,lr\n");
-    for p in &report.history {
-        csv.push_str(&format!(
-            "{},{},{},{}\n",
-            p.step,
-            p.train_mse,
-            p.val_mse.map_or(String::new(), |v| v.to_string()),
-            p.lr
-        ));
-    }
-    let dir = args
-        .output
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("."));
-    write_atomic(&dir.join("loss.csv"), csv.as_bytes())?;
-    let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
-    let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
-    write_atomic(&dir.join("loss.png"), &maobi::plot::loss_png(&[("train", train), ("validation", val)])?)?;
+    let dir = write_loss_files(&args.output, &report)?;
     crate::outln!(
         "{} steps in {:.1} s ({:.3} s/step, data {:.1}%){}; best validation MSE {:.6} at step {}; held-out (n = {}): SSIM mean {:.4} worst {:.4}, CSIM mean {:.4}",
         report.steps_run,
@@ -164,4 +103,89 @@ pub fn run(args: Args) -> Result<()> {
         dir.join("loss.png").display()
     )?;
     Ok(())
+}
+
+/// Refuses flags out of range before any work.
+fn check_args(args: &Args) -> Result<()> {
+    check_range("--steps", args.steps, 1, 10_000_000, "steps")?;
+    check_range("--batch", args.batch, 1, 256, "images")?;
+    if !(args.lr.is_finite() && args.lr > 0.0 && args.lr <= 1.0) {
+        bail!("--lr {}: expected a learning rate above 0 and at most 1", args.lr);
+    }
+    check_range("--val-every", args.val_every, 1, 10_000_000, "steps")?;
+    check_range("--eval-n", args.eval_n, 1, 100_000, "presses")?;
+    if args.output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
+        bail!("-o {}: expected a .safetensors file name", args.output.display());
+    }
+    Ok(())
+}
+
+/// The generator to train: the `--resume` checkpoint (trained for this brush) or a new one.
+fn start_generator(args: &Args, profile: brush_model::BrushProfile) -> Result<Generator> {
+    Ok(match &args.resume {
+        Some(p) => {
+            let g = Generator::load(p).with_context(|| format!("--resume {}", p.display()))?;
+            if g.config.profile != profile && args.brush.brush != "pen1" {
+                bail!(
+                    "--resume {}: the checkpoint was trained for brush `{}`, not `{}`",
+                    p.display(),
+                    g.config.profile.name,
+                    profile.name
+                );
+            }
+            g
+        }
+        None => {
+            let arch = if args.arch == "tiny" { Arch::tiny_32() } else { Arch::default_128() };
+            Generator::new(GeneratorConfig::new(profile, arch), args.seed)?
+        }
+    })
+}
+
+/// Writes the recipe and the held-out metrics into the generator's config.
+fn record(
+    g: &mut Generator,
+    args: &Args,
+    report: &neural_gen::TrainReport,
+    csim: &stroke_metrics::Summary,
+    ssim: &stroke_metrics::Summary,
+) {
+    g.config.recipe = Some(Recipe {
+        steps: report.steps_run,
+        batch: args.batch,
+        lr: args.lr,
+        seed: args.seed,
+        loss: "mse".into(),
+        schedule: "linear warm-up over 5% of the steps, cosine decay to 5%".into(),
+        wall_seconds: report.wall_seconds,
+        threads: rayon::current_num_threads(),
+    });
+    g.config.metrics = Some(Metrics {
+        n: args.eval_n,
+        ssim_mean: ssim.mean,
+        ssim_worst: ssim.worst,
+        csim_mean: csim.mean,
+        val_mse: report.best_val_mse,
+    });
+}
+
+/// `loss.csv` and `loss.png` beside the weights; returns their folder.
+fn write_loss_files(output: &std::path::Path, report: &neural_gen::TrainReport) -> Result<PathBuf> {
+    let mut csv = String::from("step,train_mse,val_mse,lr\n");
+    for p in &report.history {
+        csv.push_str(&format!(
+            "{},{},{},{}\n",
+            p.step,
+            p.train_mse,
+            p.val_mse.map_or(String::new(), |v| v.to_string()),
+            p.lr
+        ));
+    }
+    let dir =
+        output.parent().filter(|d| !d.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."));
+    write_atomic(&dir.join("loss.csv"), csv.as_bytes())?;
+    let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
+    let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
+    write_atomic(&dir.join("loss.png"), &maobi::plot::loss_png(&[("train", train), ("validation", val)])?)?;
+    Ok(dir)
 }
