@@ -132,22 +132,7 @@ pub(crate) fn direct_forward(pd: Padded, b: usize, o: usize, xp: &[f32], w: &[f3
                 arch.dispatch(|| {
                     let full = len - len % TILE;
                     for t in (0..full).step_by(TILE) {
-                        let mut a = [[0f32; TILE]; OB];
-                        for c in 0..pd.c {
-                            let plane = &xi[c * hpwp..(c + 1) * hpwp];
-                            for ky in 0..k {
-                                for kx in 0..k {
-                                    let off = ky * wp + kx + t;
-                                    let src: &[f32; TILE] = plane[off..off + TILE].try_into().expect("tile");
-                                    let ws = &wv[((c * k + ky) * k + kx) * OB..][..OB];
-                                    for j in 0..OB {
-                                        for i in 0..TILE {
-                                            a[j][i] += ws[j] * src[i];
-                                        }
-                                    }
-                                }
-                            }
-                        }
+                        let a = tile_sums(pd, xi, wv, t);
                         for (j, aj) in a.iter().enumerate() {
                             acc[j * stride + t..j * stride + t + TILE].copy_from_slice(aj);
                         }
@@ -178,6 +163,31 @@ pub(crate) fn direct_forward(pd: Padded, b: usize, o: usize, xp: &[f32], w: &[f3
         );
     });
     y
+}
+
+/// One register tile of [`direct_forward`]: the sums over every input channel and kernel tap
+/// for the [`TILE`] output positions from `t` and the [`OB`] channels of one block (`wv`: the
+/// block's weights, tap-major).
+#[inline(always)]
+fn tile_sums(pd: Padded, xi: &[f32], wv: &[f32], t: usize) -> [[f32; TILE]; OB] {
+    let (wp, k, hpwp) = (pd.wp, pd.k, pd.hp * pd.wp);
+    let mut a = [[0f32; TILE]; OB];
+    for c in 0..pd.c {
+        let plane = &xi[c * hpwp..(c + 1) * hpwp];
+        for ky in 0..k {
+            for kx in 0..k {
+                let off = ky * wp + kx + t;
+                let src: &[f32; TILE] = plane[off..off + TILE].try_into().expect("tile");
+                let ws = &wv[((c * k + ky) * k + kx) * OB..][..OB];
+                for j in 0..OB {
+                    for i in 0..TILE {
+                        a[j][i] += ws[j] * src[i];
+                    }
+                }
+            }
+        }
+    }
+    a
 }
 
 /// The weight gradient `dw[o, c, ky, kx] = Σ_b Σ_p dy[b, o, p] · x[b, c, p + (ky, kx)]` on
