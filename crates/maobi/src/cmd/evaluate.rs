@@ -80,42 +80,7 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--limit 0: expected at least 1 character");
     }
     let profile = load_brush(&args.brush.brush)?;
-    let image_files = match &args.images {
-        Some(dir) => image_files(dir)?,
-        None => Vec::new(),
-    };
-    let mut chars: Vec<char> = match &args.chars {
-        Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
-        None if args.images.is_some() => image_files.iter().map(|(c, _)| *c).collect(),
-        None => glyph::embedded_chars(),
-    };
-    if args.images.is_some() {
-        let missing: Vec<char> = chars.iter().filter(|c| !image_files.iter().any(|(f, _)| f == *c)).copied().collect();
-        if !missing.is_empty() {
-            bail!(
-                "--images {}: no image for {} (expected files named <char>.png, .jpg or .jpeg)",
-                args.images.as_ref().map(|d| d.display().to_string()).unwrap_or_default(),
-                missing.iter().collect::<String>()
-            );
-        }
-    }
-    if let Some(n) = args.limit {
-        chars.truncate(n);
-    }
-    if chars.is_empty() {
-        bail!("no characters to evaluate");
-    }
-    let style = !args.font.is_empty() || args.images.is_some();
-    if args.hanzi_data.is_some() && args.chars.is_none() && !style {
-        bail!("--hanzi-data needs --chars: name the characters to read from it");
-    }
-    let input = if !args.font.is_empty() {
-        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
-    } else if args.images.is_some() {
-        GlyphInput::Images(image_files, args.hanzi_data.clone())
-    } else {
-        GlyphInput::Hanzi(args.hanzi_data.clone())
-    };
+    let (chars, input) = chars_and_input(&args)?;
     let alpha_rad = args.alpha.to_radians();
     let refine = crate::cmd::write::refine_options(args.refine, args.iters, args.gradients.as_deref())?;
     let opts = WriteOptions {
@@ -287,4 +252,46 @@ fn image_files(dir: &std::path::Path) -> Result<Vec<(char, std::path::PathBuf)>>
         bail!("--images {}: no <char>.png, .jpg or .jpeg files", dir.display());
     }
     Ok(out)
+}
+
+/// The characters to evaluate and where their glyphs come from (`--font`, `--images`, a
+/// hanzi-writer-data folder or the embedded set), checked against each other.
+fn chars_and_input(args: &Args) -> Result<(Vec<char>, GlyphInput)> {
+    let image_files = match &args.images {
+        Some(dir) => image_files(dir)?,
+        None => Vec::new(),
+    };
+    let mut chars: Vec<char> = match &args.chars {
+        Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
+        None if args.images.is_some() => image_files.iter().map(|(c, _)| *c).collect(),
+        None => glyph::embedded_chars(),
+    };
+    if args.images.is_some() {
+        let missing: Vec<char> = chars.iter().filter(|c| !image_files.iter().any(|(f, _)| f == *c)).copied().collect();
+        if !missing.is_empty() {
+            bail!(
+                "--images {}: no image for {} (expected files named <char>.png, .jpg or .jpeg)",
+                args.images.as_ref().map(|d| d.display().to_string()).unwrap_or_default(),
+                missing.iter().collect::<String>()
+            );
+        }
+    }
+    if let Some(n) = args.limit {
+        chars.truncate(n);
+    }
+    if chars.is_empty() {
+        bail!("no characters to evaluate");
+    }
+    let style = !args.font.is_empty() || args.images.is_some();
+    if args.hanzi_data.is_some() && args.chars.is_none() && !style {
+        bail!("--hanzi-data needs --chars: name the characters to read from it");
+    }
+    let input = if !args.font.is_empty() {
+        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
+    } else if args.images.is_some() {
+        GlyphInput::Images(image_files, args.hanzi_data.clone())
+    } else {
+        GlyphInput::Hanzi(args.hanzi_data.clone())
+    };
+    Ok((chars, input))
 }
