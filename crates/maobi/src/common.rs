@@ -240,6 +240,36 @@ pub fn load_image(path: &Path) -> Result<bezier_raster::Coverage> {
 
 pub use maobi::pipeline::gray;
 
+/// The table `models` and `eval-generator` print: per model, CSIM and SSIM best, worst and mean,
+/// in %.
+pub fn print_model_table<'a>(
+    rows: impl IntoIterator<Item = (&'a str, stroke_metrics::Summary, stroke_metrics::Summary)>,
+) -> Result<()> {
+    crate::outln!(
+        "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
+        "model",
+        "CSIM best",
+        "worst",
+        "mean",
+        "SSIM best",
+        "worst",
+        "mean"
+    )?;
+    for (name, c, s) in rows {
+        crate::outln!(
+            "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
+            name,
+            100.0 * c.best,
+            100.0 * c.worst,
+            100.0 * c.mean,
+            100.0 * s.best,
+            100.0 * s.worst,
+            100.0 * s.mean
+        )?;
+    }
+    Ok(())
+}
+
 /// Seconds a loop runs before [`Progress`] prints its first line without a terminal (the
 /// environment variable `MAOBI_PROGRESS_AFTER_S` overrides it): short runs stay quiet, so an
 /// error stays the one line on stderr.

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{check_range, gray, print_json};
+use crate::common::{check_range, gray, print_json, print_model_table};
 
 /// Arguments of `maobi eval-generator`.
 #[derive(clap::Args, Debug)]
@@ -78,29 +78,10 @@ pub fn run(args: Args) -> Result<()> {
             args.n,
             g.config.profile.name
         )?;
-        crate::outln!(
-            "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
-            "model",
-            "CSIM best",
-            "worst",
-            "mean",
-            "SSIM best",
-            "worst",
-            "mean"
-        )?;
-        for name in ["b-bsmg", "circle", "ellipse", "line", "qbc"] {
+        print_model_table(["b-bsmg", "circle", "ellipse", "line", "qbc"].map(|name| {
             let (c, s) = table[name];
-            crate::outln!(
-                "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
-                name,
-                100.0 * c.best,
-                100.0 * c.worst,
-                100.0 * c.mean,
-                100.0 * s.best,
-                100.0 * s.worst,
-                100.0 * s.mean
-            )?;
-        }
+            (name, c, s)
+        }))?;
     }
     Ok(())
 }

@@ -11,7 +11,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{BrushArg, check_range, gray, load_brush, load_image, print_json, progress, read_stroke_labels};
+use crate::common::{
+    BrushArg, check_range, gray, load_brush, load_image, print_json, print_model_table, progress, read_stroke_labels,
+};
 
 /// Arguments of `maobi models`.
 #[derive(clap::Args, Debug)]
@@ -146,29 +148,10 @@ pub fn run(args: Args) -> Result<()> {
             report.brush,
             report.reference
         )?;
-        crate::outln!(
-            "{:<8} {:>9} {:>9} {:>9}   {:>9} {:>9} {:>9}",
-            "model",
-            "CSIM best",
-            "worst",
-            "mean",
-            "SSIM best",
-            "worst",
-            "mean"
-        )?;
-        for m in &models {
+        print_model_table(models.iter().map(|m| {
             let s = report.models[m.name()];
-            crate::outln!(
-                "{:<8} {:>9.2} {:>9.2} {:>9.2}   {:>9.2} {:>9.2} {:>9.2}",
-                m.name(),
-                100.0 * s.csim.best,
-                100.0 * s.csim.worst,
-                100.0 * s.csim.mean,
-                100.0 * s.ssim.best,
-                100.0 * s.ssim.worst,
-                100.0 * s.ssim.mean
-            )?;
-        }
+            (m.name(), s.csim, s.ssim)
+        }))?;
     }
     Ok(())
 }
