@@ -58,3 +58,47 @@ pub fn render_glyph(g: &Glyph, size: u32) -> Coverage {
 pub fn mask_of(c: &Coverage) -> Vec<bool> {
     c.data().iter().map(|&v| v >= 0.5).collect()
 }
+
+/// What [`gaussian_blur`] reads outside the raster.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Edge {
+    /// Nothing (zero): a raster that is all ink fades towards its border.
+    Zero,
+    /// The nearest border pixel.
+    Clamp,
+}
+
+/// Separable Gaussian blur (σ in px, kernel ±3σ, normalised to sum 1) of an `n × n` raster;
+/// `edge` says what lies outside it. σ ≤ 0 returns the raster unchanged.
+pub(crate) fn gaussian_blur(src: &[f32], n: usize, sigma: f64, edge: Edge) -> Vec<f32> {
+    if sigma <= 0.0 {
+        return src.to_vec();
+    }
+    let r = (3.0 * sigma).ceil() as i64;
+    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
+    let norm: f64 = k.iter().sum();
+    let at = |i: i64| -> Option<usize> {
+        match edge {
+            Edge::Zero => (0..n as i64).contains(&i).then_some(i as usize),
+            Edge::Clamp => Some(i.clamp(0, n as i64 - 1) as usize),
+        }
+    };
+    // One pass along rows (`horizontal`) or columns.
+    let pass = |from: &[f32], horizontal: bool| -> Vec<f32> {
+        let mut to = vec![0.0f32; n * n];
+        for y in 0..n {
+            for x in 0..n {
+                let mut acc = 0.0;
+                for (j, w) in k.iter().enumerate() {
+                    let (along, other) = if horizontal { (x, y) } else { (y, x) };
+                    if let Some(i) = at(along as i64 + j as i64 - r) {
+                        acc += w * from[if horizontal { other * n + i } else { i * n + other }] as f64;
+                    }
+                }
+                to[y * n + x] = (acc / norm) as f32;
+            }
+        }
+        to
+    };
+    pass(&pass(src, true), false)
+}

@@ -145,34 +145,6 @@ fn value_noise(n: usize, cell: usize, r: &mut SplitMix) -> Vec<f32> {
     out
 }
 
-/// Separable Gaussian blur (σ px, ±3σ, edges clamped) of an `n × n` image.
-fn blur(src: &[f32], n: usize, sigma: f64) -> Vec<f32> {
-    if sigma <= 0.0 {
-        return src.to_vec();
-    }
-    let r = (3.0 * sigma).ceil() as i64;
-    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
-    let norm: f64 = k.iter().sum();
-    let clamp = |v: i64| v.clamp(0, n as i64 - 1) as usize;
-    let mut tmp = vec![0.0f32; n * n];
-    for y in 0..n {
-        for x in 0..n {
-            let acc: f64 =
-                k.iter().enumerate().map(|(j, w)| w * src[y * n + clamp(x as i64 + j as i64 - r)] as f64).sum();
-            tmp[y * n + x] = (acc / norm) as f32;
-        }
-    }
-    let mut out = vec![0.0f32; n * n];
-    for y in 0..n {
-        for x in 0..n {
-            let acc: f64 =
-                k.iter().enumerate().map(|(j, w)| w * tmp[clamp(y as i64 + j as i64 - r) * n + x] as f64).sum();
-            out[y * n + x] = (acc / norm) as f32;
-        }
-    }
-    out
-}
-
 /// A synthetic scan of `g` as a JPEG file's bytes (8-bit grey): the em box centred on the page,
 /// the page rotated, lit unevenly, with paper texture and optics blur, encoded at the given
 /// quality. Ink is dark on light paper, as `--image` expects.
@@ -200,7 +172,7 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
             ink[y * n + x] = distance::sample(cov.data(), m, m, u, v) as f32;
         }
     }
-    let ink = blur(&ink, n, o.blur_px);
+    let ink = raster::gaussian_blur(&ink, n, o.blur_px, raster::Edge::Clamp);
     let mut r = SplitMix(o.seed);
     let fibres = value_noise(n, (n / 24).max(2), &mut r);
     let fine = value_noise(n, 3, &mut r);

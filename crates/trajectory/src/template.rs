@@ -261,8 +261,8 @@ fn global_fit(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Resul
     let mut overlap_start = None;
     let mut overlap_fit = 0.0;
     for sigma_px in [4.0, 1.5] {
-        let tb = gaussian_blur(t_cov.data(), fit_n, sigma_px);
-        let gb = gaussian_blur(g_cov.data(), fit_n, sigma_px);
+        let tb = raster::gaussian_blur(t_cov.data(), fit_n, sigma_px, raster::Edge::Zero);
+        let gb = raster::gaussian_blur(g_cov.data(), fit_n, sigma_px, raster::Edge::Zero);
         let score =
             |c: &[f64]| overlap(Affine::new([c[0], c[1], c[2], c[3], c[4], c[5]]), &t_ink, &g_ink, &tb, &gb, fit_n);
         overlap_start.get_or_insert_with(|| score(&q));
@@ -440,41 +440,6 @@ fn overlap(a: Affine, t_ink: &[Point], g_ink: &[Point], tb: &[f32], gb: &[f32], 
         distance::sample(tb, n, n, q.x * s, q.y * s)
     });
     0.5 * (fwd.sum::<f64>() / t_ink.len() as f64 + back.sum::<f64>() / g_ink.len() as f64)
-}
-
-/// Separable Gaussian blur (σ in px, kernel ±3σ, zero outside) of an `n × n` raster, normalised
-/// so a raster that is all ink stays 1 inside.
-fn gaussian_blur(src: &[f32], n: usize, sigma: f64) -> Vec<f32> {
-    let r = (3.0 * sigma).ceil() as i64;
-    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
-    let norm: f64 = k.iter().sum();
-    let mut tmp = vec![0.0f32; n * n];
-    for y in 0..n {
-        for x in 0..n {
-            let mut acc = 0.0;
-            for (j, w) in k.iter().enumerate() {
-                let xx = x as i64 + j as i64 - r;
-                if (0..n as i64).contains(&xx) {
-                    acc += w * src[y * n + xx as usize] as f64;
-                }
-            }
-            tmp[y * n + x] = (acc / norm) as f32;
-        }
-    }
-    let mut out = vec![0.0f32; n * n];
-    for y in 0..n {
-        for x in 0..n {
-            let mut acc = 0.0;
-            for (j, w) in k.iter().enumerate() {
-                let yy = y as i64 + j as i64 - r;
-                if (0..n as i64).contains(&yy) {
-                    acc += w * tmp[yy as usize * n + x] as f64;
-                }
-            }
-            out[y * n + x] = (acc / norm) as f32;
-        }
-    }
-    out
 }
 
 /// Nelder–Mead minimisation of `f` from `x0` with initial steps `steps`, `iters` iterations.
