@@ -225,6 +225,28 @@ impl GenModel {
         }
     }
 
+    /// One pixel's share of a footprint's spatial derivatives: adds ∂L/∂(x, y, θ) and Σ ∂L/∂a
+    /// (the canvas anchor) into `g[..5]` and returns the pixel's weight `w = q / (1 − c)`
+    /// (∂L/∂c of this footprint's image there). `at` is what [`GenModel::visit`] gives: the
+    /// image offset, the bilinear fractions and the footprint-frame offset (mm).
+    #[inline]
+    fn add_spatial(&self, g: &mut [f64], src: &[f32], pl: &Place, qk: f64, at: (usize, f64, f64, f64, f64)) -> f64 {
+        let (o, tx, ty, lx, ly) = at;
+        let (s, kc) = (self.size, self.px_per_mm);
+        let c = bilerp(src, o, s, tx, ty);
+        let w = qk / (1.0 - c.min(1.0 - 1e-7));
+        let (v00, v10, v01, v11) = (src[o] as f64, src[o + 1] as f64, src[o + s] as f64, src[o + s + 1] as f64);
+        let cgx = (1.0 - ty) * (v10 - v00) + ty * (v11 - v01);
+        let cgy = (1.0 - tx) * (v01 - v00) + tx * (v11 - v10);
+        let (gx, gy) = (w * cgx * kc, w * cgy * kc);
+        g[0] += -gx * pl.cs + gy * pl.sn;
+        g[1] += -gx * pl.sn - gy * pl.cs;
+        g[2] += gx * ly - gy * lx;
+        g[3] += gx;
+        g[4] += gy;
+        w
+    }
+
     /// The image term (see [`ImageTerm`]).
     pub(crate) fn image_term(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> ImageTerm {
         let places = self.places(fps, want_grad);
@@ -273,7 +295,6 @@ impl GenModel {
             let need = [true, fps.iter().any(|f| f.alpha > 0.0), places.iter().any(|p| p.follows > 0.0)];
             let jac: Vec<Vec<f32>> = tapes.iter().map(|t| self.net.jacobian_of(t, need)).collect();
             let ss = s * s;
-            let kc = self.px_per_mm;
             per_fp = fps
                 .par_iter()
                 .enumerate()
@@ -288,18 +309,7 @@ impl GenModel {
                         if qk == 0.0 {
                             return;
                         }
-                        let c = bilerp(src, o, s, tx, ty);
-                        let w = qk / (1.0 - c.min(1.0 - 1e-7));
-                        let (v00, v10, v01, v11) =
-                            (src[o] as f64, src[o + 1] as f64, src[o + s] as f64, src[o + s + 1] as f64);
-                        let cgx = (1.0 - ty) * (v10 - v00) + ty * (v11 - v01);
-                        let cgy = (1.0 - tx) * (v01 - v00) + tx * (v11 - v10);
-                        let (gx, gy) = (w * cgx * kc, w * cgy * kc);
-                        g[0] += -gx * pl.cs + gy * pl.sn;
-                        g[1] += -gx * pl.sn - gy * pl.cs;
-                        g[2] += gx * ly - gy * lx;
-                        g[3] += gx;
-                        g[4] += gy;
+                        let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
                         for i in 0..3 {
                             g[5 + i] += w * bilerp(&j[i * ss..(i + 1) * ss], o, s, tx, ty);
                         }
@@ -315,7 +325,6 @@ impl GenModel {
                 })
                 .collect();
         } else if want_grad {
-            let kc = self.px_per_mm;
             per_fp.reserve(fps.len());
             for (bi, tape) in tapes.iter().enumerate() {
                 let lo = bi * BATCH;
@@ -334,18 +343,7 @@ impl GenModel {
                             if qk == 0.0 {
                                 return;
                             }
-                            let c = bilerp(src, o, s, tx, ty);
-                            let w = qk / (1.0 - c.min(1.0 - 1e-7));
-                            let (v00, v10, v01, v11) =
-                                (src[o] as f64, src[o + 1] as f64, src[o + s] as f64, src[o + s + 1] as f64);
-                            let cgx = (1.0 - ty) * (v10 - v00) + ty * (v11 - v01);
-                            let cgy = (1.0 - tx) * (v01 - v00) + tx * (v11 - v10);
-                            let (gx, gy) = (w * cgx * kc, w * cgy * kc);
-                            g[0] += -gx * pl.cs + gy * pl.sn;
-                            g[1] += -gx * pl.sn - gy * pl.cs;
-                            g[2] += gx * ly - gy * lx;
-                            g[3] += gx;
-                            g[4] += gy;
+                            let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
                             let wf = w as f32;
                             let (txf, tyf) = (tx as f32, ty as f32);
                             upk[o] += wf * (1.0 - txf) * (1.0 - tyf);
