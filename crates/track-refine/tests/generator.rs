@@ -4,14 +4,13 @@
 
 use std::sync::Arc;
 
-use brush_model::{BrushProfile, PointMm, Stroke, Track, TrackPoint};
+mod common;
+
+use brush_model::BrushProfile;
+use common::{bar_target, line_track, pen1};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 use track_refine::generator::{GenModel, Mode};
-use track_refine::{Gradients, Problem, RefineOptions, Target, refine_with_generator};
-
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
+use track_refine::{Gradients, Problem, RefineOptions, refine_with_generator};
 
 /// A tiny 32² generator after a few training steps (so that its images look like footprints).
 fn tiny(mode: Mode) -> Arc<GenModel> {
@@ -19,38 +18,6 @@ fn tiny(mode: Mode) -> Arc<GenModel> {
     let opts = TrainOptions { steps: 30, batch: 16, lr: 3e-3, val_every: 1_000_000, ..Default::default() };
     neural_gen::train(&mut g, &opts, |_| {}).unwrap();
     Arc::new(GenModel::new(&g).unwrap().with_mode(mode))
-}
-
-/// A bent stroke along +x at y ≈ 30 mm, x 10 → 50 mm, 1 mm spacing, depth rising from `h`.
-fn line_track(h: f64, alpha: f64) -> Track {
-    let mut points = vec![TrackPoint { x_mm: 10.0, y_mm: 30.0, h_mm: 0.01, alpha_rad: alpha, beta_rad: 0.0 }];
-    let n = 40;
-    for i in 0..=n {
-        let x = 10.0 + 40.0 * i as f64 / n as f64;
-        let y = 30.0 + 2.0 * ((x - 10.0) / 40.0 * std::f64::consts::PI).sin();
-        points.push(TrackPoint {
-            x_mm: x,
-            y_mm: y,
-            h_mm: h + 2.0 * i as f64 / n as f64,
-            alpha_rad: alpha,
-            beta_rad: 0.0,
-        });
-    }
-    Track { strokes: vec![Stroke { points }] }
-}
-
-fn bar_target(px: u32) -> Target {
-    let mm = 64.0 / px as f64;
-    let mut ink = vec![0f32; (px * px) as usize];
-    for j in 0..px {
-        for i in 0..px {
-            let (x, y) = ((i as f64 + 0.5) * mm, (j as f64 + 0.5) * mm);
-            if (8.0..48.0).contains(&x) && (26.0..36.0).contains(&y) {
-                ink[(j * px + i) as usize] = 1.0;
-            }
-        }
-    }
-    Target::new(px, px, ink, PointMm::new(0.0, 0.0), mm).unwrap()
 }
 
 #[test]
@@ -62,7 +29,7 @@ fn generator_gradients_match_finite_differences() {
         [(Mode::Vjp, 0.0), (Mode::Vjp, 5f64.to_radians()), (Mode::Shared { quantum: [0.0; 3] }, 5f64.to_radians())]
     {
         let net = tiny(mode);
-        let track = line_track(12.0, alpha);
+        let track = line_track(12.0, alpha, 40);
         let p = Problem::new(&track, &profile, &target, &RefineOptions::default())
             .unwrap()
             .with_generator(net.clone())
@@ -104,7 +71,7 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     let target = bar_target(64);
     let opts = RefineOptions { iterations: 1, ..RefineOptions::default() };
     let out = refine_with_generator(
-        &line_track(11.5, 0.0),
+        &line_track(11.5, 0.0, 40),
         &profile,
         &target,
         &opts,
@@ -116,12 +83,12 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     assert!(out.curve[1].total < out.curve[0].total, "{:?}", out.curve);
     // Plain `refine` has no generator to use: the option is refused there, naming the way.
     let o = RefineOptions { gradients: Gradients::Generator, ..RefineOptions::default() };
-    let e = Problem::new(&line_track(12.0, 0.0), &profile, &target, &o).err().unwrap();
+    let e = Problem::new(&line_track(12.0, 0.0, 40), &profile, &target, &o).err().unwrap();
     assert!(e.to_string().contains("refine_with_generator"), "{e}");
     // A generator trained for another profile is refused.
     let pen2 = BrushProfile::builtin("pen2").unwrap();
     let e = refine_with_generator(
-        &line_track(12.0, 0.0),
+        &line_track(12.0, 0.0, 40),
         &pen2,
         &target,
         &opts,

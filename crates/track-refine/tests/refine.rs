@@ -1,54 +1,18 @@
 //! Refinement on synthetic targets: gradients against finite differences, one step lowers the
 //! loss, a refined track stays in the ranges and passes the robot check.
 
-use brush_model::{BrushProfile, PointMm, Stroke, Track, TrackPoint};
+mod common;
+
+use brush_model::{PointMm, Track};
+use common::{bar_target, line_track, pen1};
 use track_refine::{Problem, RefineOptions, Target, refine};
-
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-/// A straight stroke along +x at y = 30 mm from x = 10 to 50 mm, pressed at `h` (0.15 mm
-/// spacing), with a glide state at its start like the track builder's turn-over.
-fn line_track(h: f64, alpha: f64) -> Track {
-    let mut points = vec![TrackPoint { x_mm: 10.0, y_mm: 30.0, h_mm: 0.01, alpha_rad: alpha, beta_rad: 0.0 }];
-    let n = 267;
-    for i in 0..=n {
-        let x = 10.0 + 40.0 * i as f64 / n as f64;
-        // A gentle bend so that directions vary.
-        let y = 30.0 + 2.0 * ((x - 10.0) / 40.0 * std::f64::consts::PI).sin();
-        points.push(TrackPoint {
-            x_mm: x,
-            y_mm: y,
-            h_mm: h + 2.0 * (i as f64 / n as f64),
-            alpha_rad: alpha,
-            beta_rad: 0.0,
-        });
-    }
-    Track { strokes: vec![Stroke { points }] }
-}
-
-/// A horizontal bar from x = 8 to 48 mm, y = 26 to 36 mm on a 64² raster of a 64 mm box.
-fn bar_target(px: u32) -> Target {
-    let mm = 64.0 / px as f64;
-    let mut ink = vec![0f32; (px * px) as usize];
-    for j in 0..px {
-        for i in 0..px {
-            let (x, y) = ((i as f64 + 0.5) * mm, (j as f64 + 0.5) * mm);
-            if (8.0..48.0).contains(&x) && (26.0..36.0).contains(&y) {
-                ink[(j * px + i) as usize] = 1.0;
-            }
-        }
-    }
-    Target::new(px, px, ink, PointMm::new(0.0, 0.0), mm).unwrap()
-}
 
 #[test]
 fn gradients_match_finite_differences() {
     let profile = pen1();
     let target = bar_target(64);
     for alpha in [0.0, 5f64.to_radians()] {
-        let track = line_track(12.0, alpha);
+        let track = line_track(12.0, alpha, 267);
         for coupling in [false, true] {
             let opts = RefineOptions {
                 smooth_weight: 5.0,
@@ -98,7 +62,7 @@ fn one_step_lowers_the_loss_on_a_synthetic_target() {
     let profile = pen1();
     let target = bar_target(64);
     // Pressed lighter than the bar's half-width wants: the step must press deeper or move.
-    let track = line_track(11.5, 0.0);
+    let track = line_track(11.5, 0.0, 267);
     let opts = RefineOptions { iterations: 1, ..RefineOptions::default() };
     let out = refine(&track, &profile, &target, &opts).unwrap();
     assert_eq!(out.curve.len(), 2);
@@ -110,7 +74,7 @@ fn one_step_lowers_the_loss_on_a_synthetic_target() {
 fn refinement_lowers_the_loss_over_steps() {
     let profile = pen1();
     let target = bar_target(64);
-    let out = refine(&line_track(11.5, 0.0), &profile, &target, &RefineOptions::default()).unwrap();
+    let out = refine(&line_track(11.5, 0.0, 267), &profile, &target, &RefineOptions::default()).unwrap();
     let (first, last) = (out.curve[0], out.curve[out.curve.len() - 1]);
     assert!(last.image < 0.9 * first.image, "{first:?} → {last:?}");
 }
@@ -120,8 +84,8 @@ fn refinement_is_deterministic() {
     let profile = pen1();
     let target = bar_target(64);
     let opts = RefineOptions { iterations: 5, ..RefineOptions::default() };
-    let a = refine(&line_track(12.0, 0.0), &profile, &target, &opts).unwrap();
-    let b = refine(&line_track(12.0, 0.0), &profile, &target, &opts).unwrap();
+    let a = refine(&line_track(12.0, 0.0, 267), &profile, &target, &opts).unwrap();
+    let b = refine(&line_track(12.0, 0.0, 267), &profile, &target, &opts).unwrap();
     assert_eq!(a.track, b.track);
     assert_eq!(a.curve, b.curve);
 }
@@ -133,14 +97,15 @@ fn bad_inputs_are_errors_naming_what_was_expected() {
     let empty = Track::default();
     let e = refine(&empty, &profile, &target, &RefineOptions::default()).unwrap_err();
     assert!(e.to_string().contains("no points"), "{e}");
-    let e = refine(&line_track(12.0, 0.0), &profile, &target, &RefineOptions { edge_px: 0.0, ..Default::default() })
-        .unwrap_err();
+    let e =
+        refine(&line_track(12.0, 0.0, 267), &profile, &target, &RefineOptions { edge_px: 0.0, ..Default::default() })
+            .unwrap_err();
     assert!(e.to_string().contains("edge_px") && e.to_string().contains("expected"), "{e}");
     let e = Target::new(4, 4, vec![0.0; 15], PointMm::new(0.0, 0.0), 1.0).unwrap_err();
     assert!(e.to_string().contains("expected width × height"), "{e}");
     let e = Target::new(2, 2, vec![0.0, 2.0, 0.0, 0.0], PointMm::new(0.0, 0.0), 1.0).unwrap_err();
     assert!(e.to_string().contains("[0, 1]"), "{e}");
     let blank = Target::new(8, 8, vec![0.0; 64], PointMm::new(0.0, 0.0), 8.0).unwrap();
-    let e = refine(&line_track(12.0, 0.0), &profile, &blank, &RefineOptions::default()).unwrap_err();
+    let e = refine(&line_track(12.0, 0.0, 267), &profile, &blank, &RefineOptions::default()).unwrap_err();
     assert!(e.to_string().contains("no ink"), "{e}");
 }
