@@ -3,42 +3,16 @@
 
 use std::path::PathBuf;
 
-use bezier_raster::{ModelKind, render_track};
-use brush_model::{BrushProfile, Extrapolation, PointMm};
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
 use trajectory::template::{TemplateOptions, register};
-use trajectory::{
-    CharBox, DEFAULT_SPACING_MM, Glyph, Shape, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, glyph,
-    glyph_from_gray, raster,
-};
+use trajectory::{Shape, glyph, glyph_from_gray, raster};
 
-const PX: u32 = 256;
+mod common;
+
+use common::{PX, csim};
 
 fn ukai() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf")
-}
-
-fn csim(paths: &[StrokePath], g: &Glyph) -> f64 {
-    let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let size_mm = auto_char_mm(paths, &pen1, 0.0);
-    let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
-    let o = TrackOptions { char_box: b, spacing_mm: DEFAULT_SPACING_MM, alpha_rad: 0.0, sizing: Sizing::Brush };
-    let built = build_track(paths, &pen1, &o).unwrap();
-    let img = render_track(
-        &built.track,
-        &pen1,
-        ModelKind::Bsm.model(),
-        Extrapolation::Refuse,
-        PointMm::new(0.0, 0.0),
-        PX as f64 / size_mm,
-        PX,
-        PX,
-    )
-    .unwrap();
-    let reference = raster::render_glyph(g, PX);
-    let n = PX as usize;
-    let (r, i) = (stroke_metrics::GrayRef::new(reference.data(), n, n), stroke_metrics::GrayRef::new(img.data(), n, n));
-    stroke_metrics::csim(r.unwrap(), i.unwrap()).unwrap()
 }
 
 #[test]
