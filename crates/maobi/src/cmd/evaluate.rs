@@ -56,18 +56,8 @@ pub struct Args {
     /// Print every character's report and the means as JSON.
     #[arg(long)]
     json: bool,
-    /// Refine every track by gradient descent against its glyph (as `maobi write --refine`);
-    /// the summary gains the means before and after.
-    #[arg(long)]
-    refine: bool,
-    /// Gradient steps of --refine (default 20).
-    #[arg(long, requires = "refine")]
-    iters: Option<usize>,
-    /// Where --refine takes its gradients from: the analytic soft footprint (default: as good
-    /// within 0.005 CSIM and about 16× faster) or the B-BSMG generator's VJP (see
-    /// docs/trajectory.md, "Refinement"). Scores always come from the analytic renderer.
-    #[arg(long, requires = "refine", value_parser = ["analytic", "generator"])]
-    gradients: Option<String>,
+    #[command(flatten)]
+    refine: crate::cmd::write::RefineArgs,
 }
 
 /// Runs the command.
@@ -82,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
     let profile = load_brush(&args.brush.brush)?;
     let (chars, input) = chars_and_input(&args)?;
     let alpha_rad = args.alpha.to_radians();
-    let refine = crate::cmd::write::refine_options(args.refine, args.iters, args.gradients.as_deref())?;
+    let refine = args.refine.options()?;
     let opts = WriteOptions {
         model: args.model,
         size: args.size,

@@ -86,9 +86,16 @@ pub struct Args {
     json: bool,
     #[command(flatten)]
     renderer: RendererArgs,
+    #[command(flatten)]
+    refine: RefineArgs,
+}
+
+/// `--refine [--iters N] [--gradients analytic|generator]` of `write` and `evaluate`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct RefineArgs {
     /// Refine each track by gradient descent against its glyph before executing it (see
-    /// docs/trajectory.md, "Refinement"); report.json gains the before/after figures and the
-    /// loss curve goes to refine.png.
+    /// docs/trajectory.md, "Refinement"): `write`'s report.json gains the before/after figures
+    /// and refine.png the loss curve; `evaluate`'s summary gains the means before and after.
     #[arg(long)]
     refine: bool,
     /// Gradient steps of --refine (default 20).
@@ -101,26 +108,24 @@ pub struct Args {
     gradients: Option<String>,
 }
 
-/// The refinement options of `--refine [--iters N]` (`None` without `--refine`).
-pub(crate) fn refine_options(
-    refine: bool,
-    iters: Option<usize>,
-    gradients: Option<&str>,
-) -> Result<Option<track_refine::RefineOptions>> {
-    if !refine {
-        return Ok(None);
-    }
-    let mut o = track_refine::RefineOptions::default();
-    if let Some(n) = iters {
-        if !(1..=10_000).contains(&n) {
-            bail!("--iters {n}: expected 1..=10000 gradient steps");
+impl RefineArgs {
+    /// The refinement options (`None` without `--refine`).
+    pub(crate) fn options(&self) -> Result<Option<track_refine::RefineOptions>> {
+        if !self.refine {
+            return Ok(None);
         }
-        o.iterations = n;
+        let mut o = track_refine::RefineOptions::default();
+        if let Some(n) = self.iters {
+            if !(1..=10_000).contains(&n) {
+                bail!("--iters {n}: expected 1..=10000 gradient steps");
+            }
+            o.iterations = n;
+        }
+        if self.gradients.as_deref() == Some("generator") {
+            o.gradients = track_refine::Gradients::Generator;
+        }
+        Ok(Some(o))
     }
-    if gradients == Some("generator") {
-        o.gradients = track_refine::Gradients::Generator;
-    }
-    Ok(Some(o))
 }
 
 /// Where `write` and `evaluate` take glyphs from, opened once.
@@ -233,7 +238,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let char_mm = lay.char_mm;
     let boxes = lay.boxes.clone();
-    let refine = refine_options(args.refine, args.iters, args.gradients.as_deref())?;
+    let refine = args.refine.options()?;
     let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, refine, ..WriteOptions::default() };
     let pb = progress(chars.len() as u64, "write");
     let results: Vec<CharResult> = prepared
