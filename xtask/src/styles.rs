@@ -141,7 +141,7 @@ fn score(
         }
         _ => (trajectory::centre_lines(&target, method, trajectory::DEFAULT_ANALYSIS_PX)?, vec![], vec![], true, None),
     };
-    let p = Prepared { glyph: target, method, paths, registration: None };
+    let p = Prepared { glyph: target, method, paths, template: None };
     let mm = trajectory::auto_char_mm(&p.paths, pen, 0.0);
     let r = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?.report;
     let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));

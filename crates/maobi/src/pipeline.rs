@@ -94,7 +94,7 @@ pub struct Prepared {
     pub paths: Vec<StrokePath>,
     /// What registration found when the centre lines came from a stroke template registered
     /// onto a font or image glyph ([`prepare_with_template`]); `None` otherwise.
-    pub registration: Option<Registration>,
+    pub template: Option<TemplateReport>,
 }
 
 /// Finds the centre lines of a glyph with `method` (`None`: the source's medians when it has
@@ -131,10 +131,11 @@ pub fn prepare_with_template(glyph: Glyph, method: Option<Method>, template: Opt
             );
         };
         let reg = centre_lines_from_template(t, &glyph, ANALYSIS_PX).with_context(|| format!("{ch:?}"))?;
-        return Ok(Prepared { glyph, method, paths: reg.paths.clone(), registration: Some(reg) });
+        let template = Some(TemplateReport::of(&reg));
+        return Ok(Prepared { glyph, method, paths: reg.paths, template });
     }
     let paths = centre_lines(&glyph, method, ANALYSIS_PX).with_context(|| format!("{ch:?}"))?;
-    Ok(Prepared { glyph, method, paths, registration: None })
+    Ok(Prepared { glyph, method, paths, template: None })
 }
 
 /// What template registration found for one character, as `report.json` shows it.
@@ -367,7 +368,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         ssim: sim.ssim,
         iou: sim.iou,
         chamfer_pct: chamfer,
-        strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.registration.as_ref().map(|r| r.strokes.len())),
+        strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.template.as_ref().map(|t| t.strokes)),
         strokes_found: built.track.strokes.len(),
         points: built.track.point_count(),
         millis,
@@ -378,7 +379,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         executed,
         agreement,
         refine: None,
-        template: p.registration.as_ref().map(TemplateReport::of),
+        template: p.template.clone(),
     };
     let mut result =
         CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };

@@ -187,7 +187,7 @@ pub(crate) fn prepare_loaded(
     let p = prepare_with_template(g, method, template.as_ref())?;
     // A registration where most strokes find no ink means the glyph is not this character (or
     // not legible): writing the template where it landed would be a guess, not the glyph.
-    let missing = p.registration.as_ref().map_or((0, 0), |r| (r.missing().len(), r.strokes.len()));
+    let missing = p.template.as_ref().map_or((0, 0), |t| (t.missing.len(), t.strokes));
     let mostly_missing = missing.0 * 2 > missing.1;
     if p.paths.is_empty() || mostly_missing {
         let from = match &p.glyph.source {
@@ -207,10 +207,9 @@ pub(crate) fn prepare_loaded(
             p.glyph.ch
         );
     }
-    if let (Some(r), false) = (&p.registration, quiet) {
-        let missing = r.missing();
-        if !missing.is_empty() {
-            let list: Vec<String> = missing.iter().map(|i| (i + 1).to_string()).collect();
+    if let (Some(t), false) = (&p.template, quiet) {
+        if !t.missing.is_empty() {
+            let list: Vec<String> = t.missing.iter().map(|i| i.to_string()).collect();
             eprintln!(
                 "{}: template stroke(s) {} found no ink under them (kept where the template put them; see report.json)",
                 p.glyph.ch,
