@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{Prepared, WriteOptions, write_char};
+use maobi::pipeline::{WriteOptions, prepare_with_template, write_char};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -131,17 +131,13 @@ fn score(
     opts: &WriteOptions,
 ) -> Result<Row> {
     let expected = template.medians.as_ref().map_or(0, Vec::len);
-    let (paths, missing, doubled, fits_ok, uncovered_ink) = match method {
-        Method::Template => {
-            let r = trajectory::centre_lines_from_template(template, &target, trajectory::DEFAULT_ANALYSIS_PX)?;
-            let doubled =
-                r.strokes.iter().enumerate().filter(|(_, s)| s.doubled_with.is_some()).map(|(i, _)| i).collect();
-            let ok = r.strokes_ok();
-            (r.paths.clone(), r.missing(), doubled, ok, Some(r.uncovered_ink))
-        }
-        _ => (trajectory::centre_lines(&target, method, trajectory::DEFAULT_ANALYSIS_PX)?, vec![], vec![], true, None),
-    };
-    let p = Prepared { glyph: target, method, paths, template: None };
+    let p = prepare_with_template(target, Some(method), Some(template))?;
+    // The template report counts strokes from 1; the rows from 0.
+    let t = p.template.as_ref();
+    let missing: Vec<usize> = t.map_or(Vec::new(), |t| t.missing.iter().map(|i| i - 1).collect());
+    let doubled: Vec<usize> = t.map_or(Vec::new(), |t| t.doubled.iter().map(|d| d[0] - 1).collect());
+    let fits_ok = t.is_none_or(|t| t.strokes_ok);
+    let uncovered_ink = t.map(|t| t.uncovered_ink);
     let mm = trajectory::auto_char_mm(&p.paths, pen, 0.0);
     let r = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?.report;
     let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));
