@@ -37,6 +37,7 @@ pub mod conv;
 pub mod eval;
 // Kept for the speed comparison with PyTorch (benches/ltp.rs, examples/ltp_speed.rs) only: not
 // part of the API a downstream crate should use.
+mod kernels;
 #[doc(hidden)]
 pub mod ltp;
 pub mod model;

@@ -21,25 +21,33 @@ use candle_core::Tensor;
 use rayon::prelude::*;
 
 use crate::NeuralGenError;
-use crate::conv::{Padded, direct_forward, flip_transpose, pad_planes};
+use crate::conv::flip_transpose;
+use crate::kernels::{Conv3, Dense, Isa, padded_len};
 use crate::model::Generator;
 
-/// One fully connected layer: `y = W·x + b`, `W` `[out, in]` row-major.
+/// One fully connected layer `y = W·x + b`.
 struct Fc {
-    w: Vec<f32>,
+    /// `· Wᵀ`: the forward products (`x` `[batch, in]`).
+    fwd: Dense,
+    /// `· W`: the backward product (`g` `[batch, out]`).
+    bwd: Dense,
     b: Vec<f32>,
-    inp: usize,
     out: usize,
 }
 
 /// One 3×3 convolution stage (padding 1), followed by a ×2 pixel shuffle.
 struct Stage {
-    w: Vec<f32>,
-    /// The flipped, transposed kernel for the input gradient.
-    wf: Vec<f32>,
+    fwd: Conv3,
+    /// The flipped, transposed kernel: the correlation that gives the input gradient.
+    bwd: Conv3,
     b: Vec<f32>,
     cin: usize,
     cout: usize,
+    /// Side of the stage's input (and of its convolution's output), px.
+    n: usize,
+    /// Offset of the ReLU mask of the stage's input in an image's masks on a [`Tape`] (the
+    /// first stage's input, the seed map, has none).
+    moff: usize,
 }
 
 /// The generator's network on plain buffers, for batched images and input VJPs (see the
@@ -47,7 +55,10 @@ struct Stage {
 pub struct InputVjp {
     fcs: Vec<Fc>,
     stages: Vec<Stage>,
-    seed_side: usize,
+    /// Values per image of the stages' padded inputs (forward scratch).
+    per_image: usize,
+    /// Mask bytes per image on a [`Tape`].
+    masks_per_image: usize,
     size: usize,
     slopes: [f64; 3],
     config: crate::GeneratorConfig,
@@ -57,8 +68,12 @@ pub struct InputVjp {
 /// and the images.
 pub struct Tape {
     batch: usize,
-    fc_masks: Vec<Vec<u8>>,
-    stage_masks: Vec<Vec<u8>>,
+    /// Outputs (after the ReLU) of the fully connected layers but the last, `[batch, width]`
+    /// (their signs are the masks).
+    hidden: Vec<Vec<f32>>,
+    /// Per image, the ReLU masks (1 where positive) of the inputs of every stage but the first,
+    /// `[c, y, x]` after the pixel shuffle, stage after stage.
+    masks: Vec<u8>,
     images: Vec<f32>,
 }
 
@@ -95,39 +110,30 @@ fn tensor_vec(t: &Tensor) -> Result<Vec<f32>, NeuralGenError> {
         .map_err(NeuralGenError::Candle)
 }
 
-/// `Σ a·b` with eight accumulators (vectorises).
-#[inline]
-fn dot(a: &[f32], b: &[f32]) -> f32 {
-    let mut acc = [0f32; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let tail: f32 = ca.remainder().iter().zip(cb.remainder()).map(|(x, y)| x * y).sum();
-    for (x, y) in ca.zip(cb) {
-        for i in 0..8 {
-            acc[i] += x[i] * y[i];
-        }
-    }
-    acc.iter().sum::<f32>() + tail
+/// `v` where the mask byte is 1, 0 where it is 0 (branch-free, so that the loops vectorise).
+#[inline(always)]
+fn masked(v: f32, m: u8) -> f32 {
+    f32::from_bits(v.to_bits() & u32::from(m).wrapping_neg())
 }
 
-/// Pixel shuffle by 2 of one image: `[4C, n, n]` → `[C, 2n, 2n]` (PyTorch's arrangement), or
-/// the inverse.
-fn shuffle(src: &[f32], dst: &mut [f32], c: usize, n: usize, inverse: bool) {
-    let (small, big) = (n * n, 4 * n * n);
+/// Splits an image's activations into the padded inputs of the stages.
+fn regions<'a>(stages: &[Stage], mut buf: &'a mut [f32]) -> Vec<&'a mut [f32]> {
+    let mut out = Vec::with_capacity(stages.len());
+    for st in stages {
+        let (a, rest) = std::mem::take(&mut buf).split_at_mut(padded_len(st.cin, st.n));
+        out.push(a);
+        buf = rest;
+    }
+    out
+}
+
+/// Copies `c` planes of `n × n` into the interior of zero-bordered padded planes.
+fn write_padded(dst: &mut [f32], src: &[f32], c: usize, n: usize) {
+    let wp = n + 2;
     for ch in 0..c {
-        for dy in 0..2 {
-            for dx in 0..2 {
-                let sp = (ch * 2 + dy) * 2 + dx;
-                for y in 0..n {
-                    for x in 0..n {
-                        let (si, li) = (sp * small + y * n + x, ch * big + (2 * y + dy) * 2 * n + 2 * x + dx);
-                        if inverse {
-                            dst[si] = src[li];
-                        } else {
-                            dst[li] = src[si];
-                        }
-                    }
-                }
-            }
+        for y in 0..n {
+            let d = ch * wp * wp + (y + 1) * wp + 1;
+            dst[d..d + n].copy_from_slice(&src[(ch * n + y) * n..(ch * n + y + 1) * n]);
         }
     }
 }
@@ -140,6 +146,7 @@ impl InputVjp {
     /// [`NeuralGenError::Candle`].
     pub fn new(g: &Generator) -> Result<Self, NeuralGenError> {
         let a = &g.config.arch;
+        let isa = Isa::detect();
         let data = g.varmap.data().lock().expect("varmap");
         let get = |name: String| -> Result<Vec<f32>, NeuralGenError> {
             let v = data.get(&name).ok_or_else(|| NeuralGenError::Config {
@@ -153,19 +160,47 @@ impl InputVjp {
         let widths: Vec<usize> =
             a.hidden.iter().copied().chain([a.seed_channels * a.seed_side * a.seed_side]).collect();
         for (i, &out) in widths.iter().enumerate() {
-            fcs.push(Fc { w: get(format!("fc{i}.weight"))?, b: get(format!("fc{i}.bias"))?, inp, out });
+            let w = get(format!("fc{i}.weight"))?;
+            let mut wt = vec![0f32; w.len()];
+            for o in 0..out {
+                for k in 0..inp {
+                    wt[k * out + o] = w[o * inp + k];
+                }
+            }
+            fcs.push(Fc {
+                fwd: Dense::new(&wt, inp, out, isa),
+                bwd: Dense::new(&w, out, inp, isa),
+                b: get(format!("fc{i}.bias"))?,
+                out,
+            });
             inp = out;
         }
         let mut stages = Vec::new();
+        let (mut n, mut per_image, mut moff) = (a.seed_side, 0, 0);
         for (i, &(cin, cout)) in a.stages.iter().enumerate() {
             let w = get(format!("conv{i}.weight"))?;
             let wf = flip_transpose(&w, cout, cin, 3);
-            stages.push(Stage { w, wf, b: get(format!("conv{i}.bias"))?, cin, cout });
+            stages.push(Stage {
+                fwd: Conv3::new(&w, cout, cin, isa),
+                bwd: Conv3::new(&wf, cin, cout, isa),
+                b: get(format!("conv{i}.bias"))?,
+                cin,
+                cout,
+                n,
+                moff,
+            });
+            per_image += padded_len(cin, n);
+            if i > 0 {
+                moff += cin * n * n;
+            }
+            n *= 2;
         }
         Ok(Self {
             fcs,
             stages,
-            seed_side: a.seed_side,
+            per_image,
+            // At least one byte, so that the per-image chunks of a tape are never empty.
+            masks_per_image: moff.max(1),
             size: g.config.size as usize,
             slopes: g.config.normalise_slopes(),
             config: g.config.clone(),
@@ -177,50 +212,79 @@ impl InputVjp {
         self.size
     }
 
+    /// Values of the seed map (the last fully connected layer's output) per image.
+    fn seed_len(&self) -> usize {
+        let s = &self.stages[0];
+        s.cin * s.n * s.n
+    }
+
     /// The forward pass for a batch of presses (β as the generator takes it: inside its
-    /// calibrated range), keeping what [`InputVjp::vjp`] needs.
+    /// calibrated range), keeping what [`InputVjp::vjp`] needs. The fully connected layers
+    /// run on the whole batch, the convolutions image by image in parallel.
     pub fn forward(&self, presses: &[Press]) -> Tape {
         let b = presses.len();
-        let mut x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
-        let mut fc_masks = Vec::new();
-        let last_fc = self.fcs.len() - 1;
+        let x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
+        let mut hidden: Vec<Vec<f32>> = Vec::new();
+        let mut seed = Vec::new();
         for (li, fc) in self.fcs.iter().enumerate() {
-            let mut y = vec![0f32; b * fc.out];
-            y.par_chunks_mut(fc.out).zip(x.par_chunks(fc.inp)).for_each(|(yo, xi)| {
-                for (o, v) in yo.iter_mut().enumerate() {
-                    *v = dot(&fc.w[o * fc.inp..(o + 1) * fc.inp], xi) + fc.b[o];
-                }
-            });
-            if li < last_fc {
-                fc_masks.push(y.iter().map(|&v| u8::from(v > 0.0)).collect());
+            let input = if li == 0 { &x } else { &hidden[li - 1] };
+            let mut y = fc.fwd.apply(input, Some(&fc.b));
+            if li + 1 < self.fcs.len() {
                 y.iter_mut().for_each(|v| *v = v.max(0.0));
+                hidden.push(y);
+            } else {
+                seed = y;
             }
-            x = y;
         }
-        let mut n = self.seed_side;
-        let mut stage_masks = Vec::new();
+        let ss = self.size * self.size;
+        let mut masks = vec![0u8; b * self.masks_per_image];
+        let mut images = vec![0f32; b * ss];
+        let mp = self.masks_per_image;
+        images.par_chunks_mut(ss).zip(masks.par_chunks_mut(mp)).zip(seed.par_chunks(self.seed_len())).for_each_init(
+            || (vec![0f32; self.per_image], Vec::new()),
+            |(buf, acc), ((img, m), sd)| self.forward_image(sd, img, m, buf, acc),
+        );
+        Tape { batch: b, hidden, masks, images }
+    }
+
+    /// The convolution stages of one image, from its seed map: the image into `img`, the ReLU
+    /// masks into `masks`; `buf` holds the stages' padded inputs (zero borders kept), `acc`
+    /// scratch.
+    fn forward_image(&self, seed: &[f32], img: &mut [f32], masks: &mut [u8], buf: &mut [f32], acc: &mut Vec<f32>) {
+        let mut reg = regions(&self.stages, buf);
+        write_padded(reg[0], seed, self.stages[0].cin, self.stages[0].n);
         let last = self.stages.len() - 1;
         for (si, st) in self.stages.iter().enumerate() {
-            let pd = Padded { c: st.cin, hp: n + 2, wp: n + 2, k: 3 };
-            let xp = pad_planes(&x, b * st.cin, (n, n), 1);
-            let mut y = direct_forward(pd, b, st.cout, &xp, &st.w);
-            y.par_chunks_mut(n * n).enumerate().for_each(|(bo, plane)| {
-                let bv = st.b[bo % st.cout];
-                plane.iter_mut().for_each(|v| *v += bv);
-            });
+            let (cur, next) = reg.split_at_mut(si + 1);
+            let (x, n, s) = (&*cur[si], st.n, 2 * st.n);
             if si < last {
-                stage_masks.push(y.iter().map(|&v| u8::from(v > 0.0)).collect());
-                y.iter_mut().for_each(|v| *v = v.max(0.0));
+                // Bias, ReLU and the pixel shuffle into the next stage's padded input.
+                let (dst, wq) = (&mut *next[0], s + 2);
+                let nx = &self.stages[si + 1];
+                let m = &mut masks[nx.moff..nx.moff + nx.cin * s * s];
+                st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
+                    let (ch, r, b0, b1) = (o / 4, 2 * y + (o / 2) % 2, st.b[o], st.b[o + 1]);
+                    let d = &mut dst[ch * wq * wq + (r + 1) * wq + 1..ch * wq * wq + (r + 1) * wq + 1 + s];
+                    for (dd, (&v0, &v1)) in d.chunks_exact_mut(2).zip(r0.iter().zip(r1)) {
+                        dd[0] = (v0 + b0).max(0.0);
+                        dd[1] = (v1 + b1).max(0.0);
+                    }
+                    for (mm, &v) in m[(ch * s + r) * s..(ch * s + r + 1) * s].iter_mut().zip(d.iter()) {
+                        *mm = u8::from(v > 0.0);
+                    }
+                });
+            } else {
+                // Bias, the pixel shuffle and the sigmoid into the image.
+                st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
+                    let (ch, r, b0, b1) = (o / 4, 2 * y + (o / 2) % 2, st.b[o], st.b[o + 1]);
+                    let d = &mut img[(ch * s + r) * s..(ch * s + r + 1) * s];
+                    for (dd, (&v0, &v1)) in d.chunks_exact_mut(2).zip(r0.iter().zip(r1)) {
+                        dd[0] = 1.0 / (1.0 + (-(v0 + b0)).exp());
+                        dd[1] = 1.0 / (1.0 + (-(v1 + b1)).exp());
+                    }
+                });
             }
-            let mut s = vec![0f32; y.len()];
-            let per = st.cout * n * n;
-            s.par_chunks_mut(per).zip(y.par_chunks(per)).for_each(|(d, src)| shuffle(src, d, st.cout / 4, n, false));
-            x = s;
-            n *= 2;
         }
-        x.iter_mut().for_each(|v| *v = 1.0 / (1.0 + (-*v).exp()));
-        debug_assert_eq!(n, self.size);
-        Tape { batch: b, fc_masks, stage_masks, images: x }
     }
 
     /// The Jacobian of each image with respect to its press by forward-mode differentiation
@@ -250,51 +314,79 @@ impl InputVjp {
             let k = sel[r % ns];
             x[r * 3 + k] = self.slopes[k] as f32;
         }
-        let last_fc = self.fcs.len() - 1;
         for (li, fc) in self.fcs.iter().enumerate() {
-            let mut y = vec![0f32; t * fc.out];
-            y.par_chunks_mut(fc.out).zip(x.par_chunks(fc.inp)).enumerate().for_each(|(r, (yo, xi))| {
-                let mask = (li < last_fc).then(|| &tape.fc_masks[li][(r / ns) * fc.out..(r / ns + 1) * fc.out]);
-                for (o, v) in yo.iter_mut().enumerate() {
-                    if mask.is_none_or(|m| m[o] != 0) {
-                        *v = dot(&fc.w[o * fc.inp..(o + 1) * fc.inp], xi);
-                    }
-                }
-            });
-            x = y;
-        }
-        let mut n = self.seed_side;
-        let last = self.stages.len() - 1;
-        for (si, st) in self.stages.iter().enumerate() {
-            let pd = Padded { c: st.cin, hp: n + 2, wp: n + 2, k: 3 };
-            let xp = pad_planes(&x, t * st.cin, (n, n), 1);
-            let mut y = direct_forward(pd, t, st.cout, &xp, &st.w);
-            let per = st.cout * n * n;
-            if si < last {
-                y.par_chunks_mut(per).enumerate().for_each(|(r, img)| {
-                    let m = &tape.stage_masks[si][(r / ns) * per..(r / ns + 1) * per];
-                    img.iter_mut().zip(m).for_each(|(v, &k)| {
-                        if k == 0 {
+            let mut y = fc.fwd.apply(&x, None);
+            if li + 1 < self.fcs.len() {
+                let h = &tape.hidden[li];
+                y.par_chunks_mut(fc.out).enumerate().for_each(|(r, row)| {
+                    let m = &h[(r / ns) * fc.out..(r / ns + 1) * fc.out];
+                    row.iter_mut().zip(m).for_each(|(v, &a)| {
+                        if a <= 0.0 {
                             *v = 0.0;
                         }
                     });
                 });
             }
-            let mut sh = vec![0f32; y.len()];
-            sh.par_chunks_mut(per).zip(y.par_chunks(per)).for_each(|(d, src)| shuffle(src, d, st.cout / 4, n, false));
-            x = sh;
-            n *= 2;
+            x = y;
         }
+        let (sl, mp) = (self.seed_len(), self.masks_per_image);
         let mut out = vec![0f32; b * 3 * ss];
-        x.par_chunks_mut(ss).enumerate().for_each(|(r, j)| {
-            let img = tape.image(r / ns);
-            j.iter_mut().zip(img).for_each(|(v, y)| *v *= y * (1.0 - y));
-        });
-        for (r, j) in x.chunks_exact(ss).enumerate() {
-            let (i, k) = (r / ns, sel[r % ns]);
-            out[(i * 3 + k) * ss..(i * 3 + k + 1) * ss].copy_from_slice(j);
-        }
+        out.par_chunks_mut(3 * ss).enumerate().for_each_init(
+            || (vec![0f32; self.per_image], Vec::new()),
+            |(buf, acc), (i, cols)| {
+                for (q, &k) in sel.iter().enumerate() {
+                    let r = i * ns + q;
+                    let masks = &tape.masks[i * mp..(i + 1) * mp];
+                    let col = &mut cols[k * ss..(k + 1) * ss];
+                    self.tangent_image(&x[r * sl..(r + 1) * sl], masks, tape.image(i), col, buf, acc);
+                }
+            },
+        );
         out
+    }
+
+    /// One tangent of one image through the stages: `seed` the tangent of the seed map,
+    /// `masks` and `img` the image's ReLU masks and image from the forward pass, the tangent
+    /// of the image into `col`; `buf` scratch for the stages' padded inputs (zero borders kept).
+    fn tangent_image(
+        &self,
+        seed: &[f32],
+        masks: &[u8],
+        img: &[f32],
+        col: &mut [f32],
+        buf: &mut [f32],
+        acc: &mut Vec<f32>,
+    ) {
+        let mut reg = regions(&self.stages, buf);
+        write_padded(reg[0], seed, self.stages[0].cin, self.stages[0].n);
+        let last = self.stages.len() - 1;
+        for (si, st) in self.stages.iter().enumerate() {
+            let (cur, next) = reg.split_at_mut(si + 1);
+            let (x, n, s) = (&*cur[si], st.n, 2 * st.n);
+            if si < last {
+                let (dst, wq) = (&mut *next[0], s + 2);
+                let m = &masks[self.stages[si + 1].moff..];
+                st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
+                    let (ch, r) = (o / 4, 2 * y + (o / 2) % 2);
+                    let d = &mut dst[ch * wq * wq + (r + 1) * wq + 1..ch * wq * wq + (r + 1) * wq + 1 + s];
+                    let mr = &m[(ch * s + r) * s..(ch * s + r + 1) * s];
+                    for ((dd, mm), (&v0, &v1)) in d.chunks_exact_mut(2).zip(mr.chunks_exact(2)).zip(r0.iter().zip(r1)) {
+                        dd[0] = masked(v0, mm[0]);
+                        dd[1] = masked(v1, mm[1]);
+                    }
+                });
+            } else {
+                st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
+                    let (ch, r) = (o / 4, 2 * y + (o / 2) % 2);
+                    let row = (ch * s + r) * s..(ch * s + r + 1) * s;
+                    let (d, im) = (&mut col[row.clone()], &img[row]);
+                    for ((dd, yy), (&v0, &v1)) in d.chunks_exact_mut(2).zip(im.chunks_exact(2)).zip(r0.iter().zip(r1)) {
+                        dd[0] = v0 * (yy[0] * (1.0 - yy[0]));
+                        dd[1] = v1 * (yy[1] * (1.0 - yy[1]));
+                    }
+                });
+            }
+        }
     }
 
     /// The gradient of `Σ upstream · image` with respect to each press `(h [per mm], α [per
@@ -304,11 +396,12 @@ impl InputVjp {
     /// [`NeuralGenError::Shape`] when `upstream` does not hold `size²` values per image.
     pub fn vjp(&self, tape: &Tape, upstream: &[f32]) -> Result<Vec<[f64; 3]>, NeuralGenError> {
         let b = tape.batch;
-        if upstream.len() != b * self.size * self.size {
+        let ss = self.size * self.size;
+        if upstream.len() != b * ss {
             return Err(NeuralGenError::Shape(format!(
                 "upstream gradient has {} values, expected {} ({} images of {}²)",
                 upstream.len(),
-                b * self.size * self.size,
+                b * ss,
                 b,
                 self.size
             )));
@@ -316,49 +409,96 @@ impl InputVjp {
         if b == 0 {
             return Ok(Vec::new());
         }
-        // Through the sigmoid.
-        let mut g: Vec<f32> = upstream.iter().zip(&tape.images).map(|(u, y)| u * y * (1.0 - y)).collect();
-        let mut n = self.size / 2;
-        for (si, st) in self.stages.iter().enumerate().rev() {
-            // Un-shuffle to the convolution's output, [B, cout, n, n].
-            let per = st.cout * n * n;
-            let mut gy = vec![0f32; g.len()];
-            gy.par_chunks_mut(per).zip(g.par_chunks(per)).for_each(|(d, src)| shuffle(src, d, st.cout / 4, n, true));
-            if si + 1 < self.stages.len() {
-                gy.iter_mut().zip(&tape.stage_masks[si]).for_each(|(v, &m)| {
-                    if m == 0 {
-                        *v = 0.0;
-                    }
-                });
-            }
-            let pd = Padded { c: st.cout, hp: n + 2, wp: n + 2, k: 3 };
-            let gp = pad_planes(&gy, b * st.cout, (n, n), 1);
-            g = direct_forward(pd, b, st.cin, &gp, &st.wf);
-            n /= 2;
-        }
-        // The seed map is the last FC's output; back through the FC layers.
+        // The convolution stages image by image, to the seed map.
+        let (sl, mp) = (self.seed_len(), self.masks_per_image);
+        let mut g = vec![0f32; b * sl];
+        let bufs = || -> Vec<Vec<f32>> { self.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect() };
+        g.par_chunks_mut(sl)
+            .zip(upstream.par_chunks(ss))
+            .zip(tape.images.par_chunks(ss))
+            .zip(tape.masks.par_chunks(mp))
+            .for_each_init(
+                || (bufs(), Vec::new()),
+                |(bufs, acc), (((gs, up), img), m)| self.backward_image(gs, up, img, m, bufs, acc),
+            );
+        // Back through the fully connected layers, on the whole batch.
         for (li, fc) in self.fcs.iter().enumerate().rev() {
-            if li < self.fcs.len() - 1 {
-                g.iter_mut().zip(&tape.fc_masks[li]).for_each(|(v, &m)| {
-                    if m == 0 {
+            let mut gi = fc.bwd.apply(&g, None);
+            if li > 0 {
+                gi.iter_mut().zip(&tape.hidden[li - 1]).for_each(|(v, &a)| {
+                    if a <= 0.0 {
                         *v = 0.0;
                     }
                 });
             }
-            let mut dx = vec![0f32; b * fc.inp];
-            dx.par_chunks_mut(fc.inp).zip(g.par_chunks(fc.out)).for_each(|(d, go)| {
-                for (o, &gv) in go.iter().enumerate() {
-                    if gv != 0.0 {
-                        for (dv, wv) in d.iter_mut().zip(&fc.w[o * fc.inp..(o + 1) * fc.inp]) {
-                            *dv += gv * wv;
-                        }
-                    }
-                }
-            });
-            g = dx;
+            g = gi;
         }
         let k = self.slopes;
         Ok(g.chunks_exact(3).map(|v| [v[0] as f64 * k[0], v[1] as f64 * k[1], v[2] as f64 * k[2]]).collect())
+    }
+
+    /// The backward pass of one image through the stages: `up` the upstream gradient of the
+    /// image `img`, `masks` its ReLU masks from the tape; the gradient of the seed map into
+    /// `gs`. `bufs[si]` holds the padded gradient at stage `si`'s convolution output (zero
+    /// borders kept), `acc` scratch.
+    fn backward_image(
+        &self,
+        gs: &mut [f32],
+        up: &[f32],
+        img: &[f32],
+        masks: &[u8],
+        bufs: &mut [Vec<f32>],
+        acc: &mut Vec<f32>,
+    ) {
+        let last = self.stages.len() - 1;
+        // Through the sigmoid, un-shuffled onto the last convolution's padded output: row yy
+        // of image channel ch interleaves rows yy / 2 of channels 4ch + 2(yy % 2) + {0, 1}.
+        let st = &self.stages[last];
+        let (n, s, wp) = (st.n, 2 * st.n, st.n + 2);
+        let q2 = wp * wp;
+        let gl = &mut bufs[last];
+        for ch in 0..st.cout / 4 {
+            for yy in 0..s {
+                let base = (4 * ch + 2 * (yy % 2)) * q2 + (yy / 2 + 1) * wp + 1;
+                let (lo, hi) = gl.split_at_mut(base + q2);
+                let (d0, d1) = (&mut lo[base..base + n], &mut hi[..n]);
+                let row = (ch * s + yy) * s..(ch * s + yy + 1) * s;
+                let (u, y) = (&up[row.clone()], &img[row]);
+                for ((e0, e1), (uu, yv)) in
+                    d0.iter_mut().zip(d1.iter_mut()).zip(u.chunks_exact(2).zip(y.chunks_exact(2)))
+                {
+                    *e0 = uu[0] * yv[0] * (1.0 - yv[0]);
+                    *e1 = uu[1] * yv[1] * (1.0 - yv[1]);
+                }
+            }
+        }
+        for (si, st) in self.stages.iter().enumerate().rev() {
+            let n = st.n;
+            let (lo, hi) = bufs.split_at_mut(si);
+            let gy = &hi[0];
+            if si > 0 {
+                // The gradient at this stage's input is the previous stage's output after the
+                // ReLU and the shuffle: mask it and un-shuffle it (row y of channel c
+                // de-interleaves into rows y / 2 of channels 4c + 2(y % 2) + {0, 1}).
+                let (dst, m) = (&mut lo[si - 1], &masks[st.moff..st.moff + st.cin * n * n]);
+                let (h, wq) = (n / 2, n / 2 + 2);
+                let q2 = wq * wq;
+                st.bwd.run(gy, n, acc, |c, y, row| {
+                    let base = (4 * c + 2 * (y % 2)) * q2 + (y / 2 + 1) * wq + 1;
+                    let (lo, hi) = dst.split_at_mut(base + q2);
+                    let (d0, d1) = (&mut lo[base..base + h], &mut hi[..h]);
+                    let mr = &m[(c * n + y) * n..(c * n + y + 1) * n];
+                    for ((e0, e1), (v, mm)) in
+                        d0.iter_mut().zip(d1.iter_mut()).zip(row.chunks_exact(2).zip(mr.chunks_exact(2)))
+                    {
+                        *e0 = masked(v[0], mm[0]);
+                        *e1 = masked(v[1], mm[1]);
+                    }
+                });
+            } else {
+                st.bwd.run(gy, n, acc, |c, y, row| gs[(c * n + y) * n..(c * n + y + 1) * n].copy_from_slice(row));
+            }
+        }
     }
 }
 

@@ -1,0 +1,481 @@
+//! Register-blocked kernels for [`crate::InputVjp`]: a 3×3 correlation (padding 1) on
+//! padded planes and a small row-major matrix product, written once over [`pulp::Simd`] and
+//! run on the widest vectors the CPU has ([`pulp::Arch::dispatch`]: AVX-512, AVX2 + FMA, NEON
+//! or scalar).
+//!
+//! Every output is summed in the same order with fused multiply–adds (over input channel,
+//! then kernel row, then kernel column; or over the inner dimension), from zero, whatever the
+//! vector width, and never depends on the outputs computed beside it: the results are the same
+//! bits on every instruction set, batch size, thread count and tiling. These kernels are
+//! separate from [`crate::conv`]'s, whose summation (training, the committed fixtures) is left
+//! as it is.
+//!
+//! The correlation works on the "padded stride" layout of [`crate::conv`]: an image of `n × n`
+//! pixels and `C` channels is held as `C` zero-bordered planes of `(n + 2)²` values followed by
+//! [`SLACK`] values, so that output position `p = y·(n + 2) + x` of kernel tap `(ky, kx)` reads
+//! position `p + ky·(n + 2) + kx`: a tile of consecutive positions is a few contiguous vector
+//! loads. A tile of positions × a block of output channels is accumulated in registers over
+//! every input channel and tap, and the results are handed row by row to the caller's `emit`
+//! (bias, activation, pixel shuffle, masks), which writes them where the next layer reads them.
+
+use pulp::{Simd, WithSimd};
+use rayon::prelude::*;
+
+/// Values after the last padded plane of a correlation's input: the tiles of the last row
+/// read up to this far past the planes (into outputs that are discarded).
+pub(crate) const SLACK: usize = 64;
+
+/// Length of the padded-plane buffer of `c` channels of `n × n` pixels (with [`SLACK`]).
+pub(crate) fn padded_len(c: usize, n: usize) -> usize {
+    c * (n + 2) * (n + 2) + SLACK
+}
+
+/// f32 lanes of the vectors [`pulp::Arch::dispatch`] runs on.
+struct Lanes;
+
+impl WithSimd for Lanes {
+    type Output = usize;
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _simd: S) -> usize {
+        S::F32_LANES
+    }
+}
+
+/// The kernels' instruction set: pulp's dispatcher and its vector width.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Isa {
+    arch: pulp::Arch,
+    lanes: usize,
+}
+
+impl Isa {
+    /// The best the CPU supports.
+    pub(crate) fn detect() -> Self {
+        let arch = pulp::Arch::new();
+        Isa { arch, lanes: arch.dispatch(Lanes) }
+    }
+
+    /// Output channels per register block and vectors per tile for a correlation with `o`
+    /// outputs: `ob × nv` accumulators (16 of the 32 AVX-512 registers, 8 of 16 otherwise).
+    fn blocking(self, o: usize) -> (usize, usize) {
+        match self.lanes {
+            16 if o % 8 == 0 => (8, 2),
+            16 => (4, 4),
+            _ => (4, 2),
+        }
+    }
+}
+
+/// A 3×3 correlation with padding 1 (`y[o] = Σ_c w[o, c] ⋆ x[c]`, no bias), its weights
+/// rearranged for the register blocks of one [`Isa`].
+#[derive(Debug, Clone)]
+pub(crate) struct Conv3 {
+    cin: usize,
+    cout: usize,
+    ob: usize,
+    isa: Isa,
+    /// `[block][c][tap][j]`, zero for channels past `cout`.
+    w: Vec<f32>,
+}
+
+/// Sizes of one correlation call: input channels, padded width, accumulator span per output
+/// channel, tiles and output channels per block.
+#[derive(Debug, Clone, Copy)]
+struct Geometry {
+    cin: usize,
+    wp: usize,
+    span: usize,
+    tiles: usize,
+    ob: usize,
+}
+
+impl Conv3 {
+    /// From weights `[cout, cin, 3, 3]`, row-major.
+    pub(crate) fn new(w: &[f32], cout: usize, cin: usize, isa: Isa) -> Self {
+        assert_eq!(w.len(), cout * cin * 9, "3×3 weights");
+        let ob = isa.blocking(cout).0;
+        let blocks = cout.div_ceil(ob);
+        let mut wb = vec![0f32; blocks * cin * 9 * ob];
+        for o in 0..cout {
+            for c in 0..cin {
+                for tap in 0..9 {
+                    wb[(((o / ob) * cin + c) * 9 + tap) * ob + o % ob] = w[(o * cin + c) * 9 + tap];
+                }
+            }
+        }
+        Conv3 { cin, cout, ob, isa, w: wb }
+    }
+
+    /// Correlates the padded planes `x` (`cin` planes of `(n + 2)²`, then [`SLACK`]) and calls
+    /// `emit(o, y, row)` with the `n` outputs of every output channel `o` and row `y`, channel
+    /// block after block, rows in order. `acc` is scratch.
+    ///
+    /// # Panics
+    /// When `x` is shorter than [`padded_len`]`(cin, n)`.
+    pub(crate) fn run(&self, x: &[f32], n: usize, acc: &mut Vec<f32>, mut emit: impl FnMut(usize, usize, &[f32])) {
+        let (wp, ob, cout) = (n + 2, self.ob, self.cout);
+        self.run_blocks(x, n, acc, |o0, a, span| {
+            for j in 0..ob.min(cout - o0) {
+                for y in 0..n {
+                    emit(o0 + j, y, &a[j * span + y * wp..j * span + y * wp + n]);
+                }
+            }
+        });
+    }
+
+    /// As [`Conv3::run`], two channels at a time: `emit(o, y, row_o, row_o+1)` for every even
+    /// `o` (what a ×2 pixel shuffle interleaves into one row).
+    ///
+    /// # Panics
+    /// As [`Conv3::run`], and when the number of output channels is odd.
+    pub(crate) fn run_pairs(
+        &self,
+        x: &[f32],
+        n: usize,
+        acc: &mut Vec<f32>,
+        mut emit: impl FnMut(usize, usize, &[f32], &[f32]),
+    ) {
+        assert!(self.cout % 2 == 0, "pairs of {} channels", self.cout);
+        let (wp, ob, cout) = (n + 2, self.ob, self.cout);
+        self.run_blocks(x, n, acc, |o0, a, span| {
+            for j in (0..ob.min(cout - o0)).step_by(2) {
+                for y in 0..n {
+                    let (r0, r1) = (j * span + y * wp, (j + 1) * span + y * wp);
+                    emit(o0 + j, y, &a[r0..r0 + n], &a[r1..r1 + n]);
+                }
+            }
+        });
+    }
+
+    /// Every block of output channels: `f(first channel, accumulators, span)` with the block's
+    /// outputs on rows of `n + 2` (`span` values per channel).
+    fn run_blocks(&self, x: &[f32], n: usize, acc: &mut Vec<f32>, mut f: impl FnMut(usize, &[f32], usize)) {
+        let wp = n + 2;
+        assert!(
+            x.len() >= padded_len(self.cin, n),
+            "correlation input: {} values for {} planes of {wp}²",
+            x.len(),
+            self.cin
+        );
+        let t = self.isa.blocking(self.cout).1 * self.isa.lanes;
+        assert!(t <= SLACK);
+        let tiles = (n * wp - 2).div_ceil(t);
+        let span = tiles * t;
+        acc.resize(self.ob * span, 0.0);
+        let wblk = self.cin * 9 * self.ob;
+        let g = Geometry { cin: self.cin, wp, span, tiles, ob: self.ob };
+        for blk in 0..self.cout.div_ceil(self.ob) {
+            let w = &self.w[blk * wblk..(blk + 1) * wblk];
+            self.isa.arch.dispatch(ConvBlock { x, w, acc: &mut acc[..], g });
+            f(blk * self.ob, acc, span);
+        }
+    }
+}
+
+/// One block of output channels of a correlation, every tile (see [`conv_block`]).
+struct ConvBlock<'a> {
+    x: &'a [f32],
+    w: &'a [f32],
+    acc: &'a mut [f32],
+    g: Geometry,
+}
+
+impl WithSimd for ConvBlock<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        match (S::F32_LANES, self.g.ob) {
+            (16, 8) => conv_block::<S, 8, 2>(simd, self),
+            (16, _) => conv_block::<S, 4, 4>(simd, self),
+            _ => conv_block::<S, 4, 2>(simd, self),
+        }
+    }
+}
+
+/// An unaligned vector load of `S::F32_LANES` values.
+#[inline(always)]
+fn load<S: Simd>(s: &[f32]) -> S::f32s {
+    pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(s))
+}
+
+/// `OB` output channels × `NV` vectors of positions per tile, accumulated in `OB·NV`
+/// registers over every input channel and tap; the block's weights `w` are `[c][tap][j]`.
+#[inline(always)]
+fn conv_block<S: Simd, const OB: usize, const NV: usize>(simd: S, op: ConvBlock<'_>) {
+    let (l, g) = (S::F32_LANES, op.g);
+    let plane = g.wp * g.wp;
+    for tile in 0..g.tiles {
+        let t0 = tile * NV * l;
+        let mut a = [[simd.splat_f32s(0.0); NV]; OB];
+        for c in 0..g.cin {
+            let wc = &op.w[c * 9 * OB..(c + 1) * 9 * OB];
+            let xc = &op.x[c * plane + t0..c * plane + t0 + 2 * g.wp + 2 + NV * l];
+            for ky in 0..3 {
+                for kx in 0..3 {
+                    let off = ky * g.wp + kx;
+                    let xs: [S::f32s; NV] = std::array::from_fn(|v| load::<S>(&xc[off + v * l..off + (v + 1) * l]));
+                    let wt = &wc[(ky * 3 + kx) * OB..(ky * 3 + kx + 1) * OB];
+                    for (aj, &wj) in a.iter_mut().zip(wt) {
+                        let wj = simd.splat_f32s(wj);
+                        for (av, &xv) in aj.iter_mut().zip(&xs) {
+                            *av = simd.mul_add_f32s(wj, xv, *av);
+                        }
+                    }
+                }
+            }
+        }
+        for (j, aj) in a.iter().enumerate() {
+            let dst = &mut op.acc[j * g.span + t0..j * g.span + t0 + NV * l];
+            pulp::bytemuck::cast_slice_mut::<f32, S::f32s>(dst).copy_from_slice(aj);
+        }
+    }
+}
+
+/// A fully connected product `y = x · B (+ bias)` over a batch of rows, `B` (`[k, n]`) packed
+/// once into panels of a few vectors of columns (`[panel][k][p]`, zero past `n`), so that a
+/// tile streams its panel contiguously.
+#[derive(Debug, Clone)]
+pub(crate) struct Dense {
+    k: usize,
+    n: usize,
+    /// Panel width: columns per register tile.
+    p: usize,
+    isa: Isa,
+    panels: Vec<f32>,
+}
+
+impl Dense {
+    /// From `B` `[k, n]`, row-major.
+    pub(crate) fn new(b: &[f32], k: usize, n: usize, isa: Isa) -> Self {
+        assert_eq!(b.len(), k * n, "matrix: {} values for {k} × {n}", b.len());
+        let p = Self::vectors(isa.lanes) * isa.lanes;
+        let np = n.div_ceil(p);
+        let mut panels = vec![0f32; np * k * p];
+        for kk in 0..k {
+            for j in 0..n {
+                panels[((j / p) * k + kk) * p + j % p] = b[kk * n + j];
+            }
+        }
+        Dense { k, n, p, isa, panels }
+    }
+
+    /// Vectors of columns per tile (with 4 rows: 16 accumulators of 32 AVX-512 registers, 8
+    /// of 16 otherwise).
+    fn vectors(lanes: usize) -> usize {
+        if lanes == 16 { 4 } else { 2 }
+    }
+
+    /// `y = x · B (+ bias)` for `x` `[m, k]` row-major: `[m, n]`; each sum in order of the
+    /// inner index from zero, the bias added last. Parallel over fixed blocks of rows.
+    pub(crate) fn apply(&self, x: &[f32], bias: Option<&[f32]>) -> Vec<f32> {
+        const ROWS: usize = 16;
+        let (k, n) = (self.k, self.n);
+        let m = x.len().checked_div(k).unwrap_or(0);
+        let mut y = vec![0f32; m * n];
+        if n == 0 || m == 0 {
+            return y;
+        }
+        y.par_chunks_mut(ROWS * n).zip(x.par_chunks(ROWS * k)).for_each(|(yb, xb)| {
+            self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..] });
+            if let Some(bias) = bias {
+                for row in yb.chunks_exact_mut(n) {
+                    row.iter_mut().zip(bias).for_each(|(v, b)| *v += b);
+                }
+            }
+        });
+        y
+    }
+}
+
+/// Rows `x` through a [`Dense`] into `y`.
+struct DenseOp<'a> {
+    d: &'a Dense,
+    x: &'a [f32],
+    y: &'a mut [f32],
+}
+
+impl WithSimd for DenseOp<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        if S::F32_LANES == 16 { dense_rows::<S, 4>(simd, self) } else { dense_rows::<S, 2>(simd, self) }
+    }
+}
+
+/// Panel after panel (each then stays in cache), blocks of 4 rows then single rows.
+#[inline(always)]
+fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
+    let (k, n, p) = (op.d.k, op.d.n, op.d.p);
+    debug_assert_eq!(p, NV * S::F32_LANES);
+    let m = op.y.len() / n;
+    for (pi, panel) in op.d.panels.chunks_exact(k * p).enumerate() {
+        let (j0, cols) = (pi * p, p.min(n - pi * p));
+        let mut r = 0;
+        while r + 4 <= m {
+            dense_tile::<S, 4, NV>(
+                simd,
+                &op.x[r * k..(r + 4) * k],
+                k,
+                panel,
+                &mut op.y[r * n..(r + 4) * n],
+                n,
+                j0,
+                cols,
+            );
+            r += 4;
+        }
+        while r < m {
+            dense_tile::<S, 1, NV>(
+                simd,
+                &op.x[r * k..(r + 1) * k],
+                k,
+                panel,
+                &mut op.y[r * n..(r + 1) * n],
+                n,
+                j0,
+                cols,
+            );
+            r += 1;
+        }
+    }
+}
+
+/// `MR` rows × one panel (`NV` vectors), in `MR·NV` registers; `cols` of the panel's
+/// columns (from `j0`) are stored.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn dense_tile<S: Simd, const MR: usize, const NV: usize>(
+    simd: S,
+    x: &[f32],
+    k: usize,
+    panel: &[f32],
+    y: &mut [f32],
+    n: usize,
+    j0: usize,
+    cols: usize,
+) {
+    let l = S::F32_LANES;
+    let mut a = [[simd.splat_f32s(0.0); NV]; MR];
+    let xr: [&[f32]; MR] = std::array::from_fn(|r| &x[r * k..(r + 1) * k]);
+    for (kk, brow) in panel.chunks_exact(NV * l).enumerate() {
+        let bv: [S::f32s; NV] = std::array::from_fn(|v| load::<S>(&brow[v * l..(v + 1) * l]));
+        for (ar, xr) in a.iter_mut().zip(&xr) {
+            let xv = simd.splat_f32s(xr[kk]);
+            for (av, &bvv) in ar.iter_mut().zip(&bv) {
+                *av = simd.mul_add_f32s(xv, bvv, *av);
+            }
+        }
+    }
+    for (r, ar) in a.iter().enumerate() {
+        let flat: &[f32] = pulp::bytemuck::cast_slice(&ar[..]);
+        y[r * n + j0..r * n + j0 + cols].copy_from_slice(&flat[..cols]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn values(n: usize, seed: u64) -> Vec<f32> {
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        (0..n)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+            })
+            .collect()
+    }
+
+    /// The detected instruction set and the scalar one (one lane).
+    fn isas() -> Vec<Isa> {
+        vec![Isa::detect(), Isa { arch: pulp::Arch::Scalar, lanes: 1 }]
+    }
+
+    /// Every kernel against a naive f64 correlation, and every instruction set against the
+    /// portable one bit for bit, on odd channel counts and sides.
+    #[test]
+    fn conv3_matches_naive_correlation() {
+        for &(cin, cout, n) in &[(3, 8, 5), (2, 5, 1), (4, 12, 9), (8, 16, 8), (5, 4, 17), (16, 32, 4)] {
+            let w = values(cout * cin * 9, (cin * 100 + cout) as u64);
+            let img = values(cin * n * n, n as u64 + 7);
+            let wp = n + 2;
+            let mut x = vec![0f32; padded_len(cin, n)];
+            for c in 0..cin {
+                for y in 0..n {
+                    for xx in 0..n {
+                        x[c * wp * wp + (y + 1) * wp + xx + 1] = img[(c * n + y) * n + xx];
+                    }
+                }
+            }
+            let mut want = vec![0f64; cout * n * n];
+            for o in 0..cout {
+                for y in 0..n as isize {
+                    for xx in 0..n as isize {
+                        let mut s = 0f64;
+                        for c in 0..cin {
+                            for ky in 0..3isize {
+                                for kx in 0..3isize {
+                                    let (sy, sx) = (y + ky - 1, xx + kx - 1);
+                                    if sy >= 0 && sx >= 0 && sy < n as isize && sx < n as isize {
+                                        s += w[((o * cin + c) * 3 + ky as usize) * 3 + kx as usize] as f64
+                                            * img[(c * n + sy as usize) * n + sx as usize] as f64;
+                                    }
+                                }
+                            }
+                        }
+                        want[(o * n + y as usize) * n + xx as usize] = s;
+                    }
+                }
+            }
+            let mut first: Option<Vec<f32>> = None;
+            for isa in isas() {
+                let conv = Conv3::new(&w, cout, cin, isa);
+                let mut got = vec![f32::NAN; cout * n * n];
+                let mut seen = 0;
+                conv.run(&x, n, &mut Vec::new(), |o, y, row| {
+                    got[(o * n + y) * n..(o * n + y + 1) * n].copy_from_slice(row);
+                    seen += 1;
+                });
+                assert_eq!(seen, cout * n, "{isa:?}: one call per channel and row");
+                for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+                    assert!(
+                        (*g as f64 - w).abs() < 1e-5 * (1.0 + w.abs()),
+                        "{isa:?} {cin}→{cout}@{n} [{i}]: {g} vs {w}"
+                    );
+                }
+                match &first {
+                    None => first = Some(got),
+                    Some(f) => assert_eq!(f, &got, "{isa:?}: not the same bits as the other instruction set"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn matmul_matches_naive_product() {
+        for &(m, k, n) in &[(1, 3, 5), (5, 7, 16), (9, 12, 70), (4, 33, 128), (6, 128, 3), (2, 4, 0)] {
+            let x = values(m * k, 3 + m as u64);
+            let b = values(k * n, 5 + n as u64);
+            let bias = values(n, 9);
+            let mut first: Option<Vec<f32>> = None;
+            for isa in isas() {
+                let y = Dense::new(&b, k, n, isa).apply(&x, Some(&bias));
+                assert_eq!(y.len(), m * n);
+                for r in 0..m {
+                    for j in 0..n {
+                        let s: f64 =
+                            bias[j] as f64 + (0..k).map(|i| x[r * k + i] as f64 * b[i * n + j] as f64).sum::<f64>();
+                        let g = y[r * n + j] as f64;
+                        assert!((g - s).abs() < 1e-5 * (1.0 + s.abs()), "{isa:?} {m}×{k}×{n} [{r},{j}]: {g} vs {s}");
+                    }
+                }
+                match &first {
+                    None => first = Some(y),
+                    Some(f) => assert_eq!(f, &y, "{isa:?}: not the same bits as the other instruction set"),
+                }
+            }
+        }
+    }
+}
