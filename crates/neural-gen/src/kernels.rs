@@ -55,6 +55,12 @@ impl Isa {
         Isa { arch, lanes: arch.dispatch(Lanes) }
     }
 
+    /// Runs `op` on the detected vectors (what it inlines is compiled for them).
+    #[inline(always)]
+    pub(crate) fn dispatch<Op: WithSimd>(self, op: Op) -> Op::Output {
+        self.arch.dispatch(op)
+    }
+
     /// Output channels per register block and vectors per tile for a correlation with `o`
     /// outputs: `ob × nv` accumulators (16 of the 32 AVX-512 registers, 8 of 16 otherwise).
     fn blocking(self, o: usize) -> (usize, usize) {
@@ -112,15 +118,19 @@ impl Conv3 {
     ///
     /// # Panics
     /// When `x` is shorter than [`padded_len`]`(cin, n)`.
+    #[inline(always)]
     pub(crate) fn run(&self, x: &[f32], n: usize, acc: &mut Vec<f32>, mut emit: impl FnMut(usize, usize, &[f32])) {
-        let (wp, ob, cout) = (n + 2, self.ob, self.cout);
-        self.run_blocks(x, n, acc, |o0, a, span| {
-            for j in 0..ob.min(cout - o0) {
+        let g = self.geometry(x, n, acc);
+        for blk in 0..self.cout.div_ceil(self.ob) {
+            self.block(x, blk, g, acc);
+            let o0 = blk * self.ob;
+            for j in 0..self.ob.min(self.cout - o0) {
                 for y in 0..n {
-                    emit(o0 + j, y, &a[j * span + y * wp..j * span + y * wp + n]);
+                    let r = j * g.span + y * g.wp;
+                    emit(o0 + j, y, &acc[r..r + n]);
                 }
             }
-        });
+        }
     }
 
     /// As [`Conv3::run`], two channels at a time: `emit(o, y, row_o, row_o+1)` for every even
@@ -128,6 +138,7 @@ impl Conv3 {
     ///
     /// # Panics
     /// As [`Conv3::run`], and when the number of output channels is odd.
+    #[inline(always)]
     pub(crate) fn run_pairs(
         &self,
         x: &[f32],
@@ -136,20 +147,22 @@ impl Conv3 {
         mut emit: impl FnMut(usize, usize, &[f32], &[f32]),
     ) {
         assert!(self.cout % 2 == 0, "pairs of {} channels", self.cout);
-        let (wp, ob, cout) = (n + 2, self.ob, self.cout);
-        self.run_blocks(x, n, acc, |o0, a, span| {
-            for j in (0..ob.min(cout - o0)).step_by(2) {
+        let g = self.geometry(x, n, acc);
+        for blk in 0..self.cout.div_ceil(self.ob) {
+            self.block(x, blk, g, acc);
+            let o0 = blk * self.ob;
+            for j in (0..self.ob.min(self.cout - o0)).step_by(2) {
                 for y in 0..n {
-                    let (r0, r1) = (j * span + y * wp, (j + 1) * span + y * wp);
-                    emit(o0 + j, y, &a[r0..r0 + n], &a[r1..r1 + n]);
+                    let (r0, r1) = (j * g.span + y * g.wp, (j + 1) * g.span + y * g.wp);
+                    emit(o0 + j, y, &acc[r0..r0 + n], &acc[r1..r1 + n]);
                 }
             }
-        });
+        }
     }
 
-    /// Every block of output channels: `f(first channel, accumulators, span)` with the block's
-    /// outputs on rows of `n + 2` (`span` values per channel).
-    fn run_blocks(&self, x: &[f32], n: usize, acc: &mut Vec<f32>, mut f: impl FnMut(usize, &[f32], usize)) {
+    /// Checks the input and sizes the accumulators for an `n × n` image.
+    #[inline(always)]
+    fn geometry(&self, x: &[f32], n: usize, acc: &mut Vec<f32>) -> Geometry {
         let wp = n + 2;
         assert!(
             x.len() >= padded_len(self.cin, n),
@@ -162,13 +175,16 @@ impl Conv3 {
         let tiles = (n * wp - 2).div_ceil(t);
         let span = tiles * t;
         acc.resize(self.ob * span, 0.0);
+        Geometry { cin: self.cin, wp, span, tiles, ob: self.ob }
+    }
+
+    /// Block `blk` of output channels into `acc`, on rows of `n + 2` (`span` values per
+    /// channel).
+    #[inline(always)]
+    fn block(&self, x: &[f32], blk: usize, g: Geometry, acc: &mut [f32]) {
         let wblk = self.cin * 9 * self.ob;
-        let g = Geometry { cin: self.cin, wp, span, tiles, ob: self.ob };
-        for blk in 0..self.cout.div_ceil(self.ob) {
-            let w = &self.w[blk * wblk..(blk + 1) * wblk];
-            self.isa.arch.dispatch(ConvBlock { x, w, acc: &mut acc[..], g });
-            f(blk * self.ob, acc, span);
-        }
+        let w = &self.w[blk * wblk..(blk + 1) * wblk];
+        self.isa.arch.dispatch(ConvBlock { x, w, acc, g });
     }
 }
 

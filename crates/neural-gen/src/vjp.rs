@@ -18,6 +18,7 @@
 
 use brush_model::Press;
 use candle_core::Tensor;
+use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 
 use crate::NeuralGenError;
@@ -62,6 +63,7 @@ pub struct InputVjp {
     size: usize,
     slopes: [f64; 3],
     config: crate::GeneratorConfig,
+    isa: Isa,
 }
 
 /// What a forward pass keeps for its backward pass: the ReLU masks of every layer but the last
@@ -204,6 +206,7 @@ impl InputVjp {
             size: g.config.size as usize,
             slopes: g.config.normalise_slopes(),
             config: g.config.clone(),
+            isa,
         })
     }
 
@@ -242,7 +245,9 @@ impl InputVjp {
         let mp = self.masks_per_image;
         images.par_chunks_mut(ss).zip(masks.par_chunks_mut(mp)).zip(seed.par_chunks(self.seed_len())).for_each_init(
             || (vec![0f32; self.per_image], Vec::new()),
-            |(buf, acc), ((img, m), sd)| self.forward_image(sd, img, m, buf, acc),
+            |(buf, acc), ((img, m), sd)| {
+                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks: m, buf, acc })
+            },
         );
         Tape { batch: b, hidden, masks, images }
     }
@@ -250,6 +255,7 @@ impl InputVjp {
     /// The convolution stages of one image, from its seed map: the image into `img`, the ReLU
     /// masks into `masks`; `buf` holds the stages' padded inputs (zero borders kept), `acc`
     /// scratch.
+    #[inline(always)]
     fn forward_image(&self, seed: &[f32], img: &mut [f32], masks: &mut [u8], buf: &mut [f32], acc: &mut Vec<f32>) {
         let mut reg = regions(&self.stages, buf);
         write_padded(reg[0], seed, self.stages[0].cin, self.stages[0].n);
@@ -338,7 +344,9 @@ impl InputVjp {
                     let r = i * ns + q;
                     let masks = &tape.masks[i * mp..(i + 1) * mp];
                     let col = &mut cols[k * ss..(k + 1) * ss];
-                    self.tangent_image(&x[r * sl..(r + 1) * sl], masks, tape.image(i), col, buf, acc);
+                    let seed = &x[r * sl..(r + 1) * sl];
+                    let img = tape.image(i);
+                    self.isa.dispatch(TangentImage { net: self, seed, masks, img, col, buf, acc });
                 }
             },
         );
@@ -348,6 +356,7 @@ impl InputVjp {
     /// One tangent of one image through the stages: `seed` the tangent of the seed map,
     /// `masks` and `img` the image's ReLU masks and image from the forward pass, the tangent
     /// of the image into `col`; `buf` scratch for the stages' padded inputs (zero borders kept).
+    #[inline(always)]
     fn tangent_image(
         &self,
         seed: &[f32],
@@ -419,7 +428,9 @@ impl InputVjp {
             .zip(tape.masks.par_chunks(mp))
             .for_each_init(
                 || (bufs(), Vec::new()),
-                |(bufs, acc), (((gs, up), img), m)| self.backward_image(gs, up, img, m, bufs, acc),
+                |(bufs, acc), (((gs, up), img), masks)| {
+                    self.isa.dispatch(BackwardImage { net: self, gs, up, img, masks, bufs, acc })
+                },
             );
         // Back through the fully connected layers, on the whole batch.
         for (li, fc) in self.fcs.iter().enumerate().rev() {
@@ -441,6 +452,7 @@ impl InputVjp {
     /// image `img`, `masks` its ReLU masks from the tape; the gradient of the seed map into
     /// `gs`. `bufs[si]` holds the padded gradient at stage `si`'s convolution output (zero
     /// borders kept), `acc` scratch.
+    #[inline(always)]
     fn backward_image(
         &self,
         gs: &mut [f32],
@@ -499,6 +511,63 @@ impl InputVjp {
                 st.bwd.run(gy, n, acc, |c, y, row| gs[(c * n + y) * n..(c * n + y + 1) * n].copy_from_slice(row));
             }
         }
+    }
+}
+
+/// [`InputVjp::forward_image`] on the detected vectors (a struct, not a closure, so that the
+/// method is inlined where the target features are enabled).
+struct ForwardImage<'a> {
+    net: &'a InputVjp,
+    seed: &'a [f32],
+    img: &'a mut [f32],
+    masks: &'a mut [u8],
+    buf: &'a mut [f32],
+    acc: &'a mut Vec<f32>,
+}
+
+impl WithSimd for ForwardImage<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _simd: S) {
+        self.net.forward_image(self.seed, self.img, self.masks, self.buf, self.acc);
+    }
+}
+
+/// [`InputVjp::tangent_image`] on the detected vectors.
+struct TangentImage<'a> {
+    net: &'a InputVjp,
+    seed: &'a [f32],
+    masks: &'a [u8],
+    img: &'a [f32],
+    col: &'a mut [f32],
+    buf: &'a mut [f32],
+    acc: &'a mut Vec<f32>,
+}
+
+impl WithSimd for TangentImage<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _simd: S) {
+        self.net.tangent_image(self.seed, self.masks, self.img, self.col, self.buf, self.acc);
+    }
+}
+
+/// [`InputVjp::backward_image`] on the detected vectors.
+struct BackwardImage<'a> {
+    net: &'a InputVjp,
+    gs: &'a mut [f32],
+    up: &'a [f32],
+    img: &'a [f32],
+    masks: &'a [u8],
+    bufs: &'a mut [Vec<f32>],
+    acc: &'a mut Vec<f32>,
+}
+
+impl WithSimd for BackwardImage<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _simd: S) {
+        self.net.backward_image(self.gs, self.up, self.img, self.masks, self.bufs, self.acc);
     }
 }
 
