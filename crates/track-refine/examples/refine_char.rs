@@ -5,7 +5,8 @@
 //! cargo run --release -p track-refine --example refine_char -- 永 [OPTIONS_JSON]
 //! ```
 //!
-//! `OPTIONS_JSON` overrides fields of `RefineOptions`, e.g. `'{"iterations": 20}'`. The
+//! `OPTIONS_JSON` overrides fields of `RefineOptions`, e.g. `'{"iterations": 20}'`;
+//! `REFINE_JUDGE_PX` sets the side of the judging render (default 256). The
 //! headline figure of the project is the *executed* render (`maobi write 永 --refine`); the
 //! plan's render agrees with it to CSIM 0.9999 and is what this example shows.
 
@@ -73,7 +74,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t0 = Instant::now();
         let out = refine(&built.track, &pen1, &target, &opts)?;
         let dt = t0.elapsed().as_secs_f64() * 1e3;
-        let reference = render_glyph(&g, 256);
+        let judge_px = std::env::var("REFINE_JUDGE_PX").ok().and_then(|v| v.parse().ok()).unwrap_or(256);
+        let reference = render_glyph(&g, judge_px);
         let (c0, i0) = scores(&built.track, &pen1, &char_box, &reference);
         let (c1, i1) = scores(&out.track, &pen1, &char_box, &reference);
         let (l0, l1) = (out.curve[0], out.curve[out.curve.len() - 1]);

@@ -58,7 +58,7 @@ pub enum Mode {
 }
 
 /// The default mode: [`Mode::Shared`] at 0.05 mm in h and 0.05° in α and β (pen1's lengths
-/// move by under 0.05 mm per step, a tenth of a pixel of the default 128² analysis raster).
+/// move by under 0.05 mm per step, well under a pixel of the default 256² analysis raster).
 pub const DEFAULT_MODE: Mode =
     Mode::Shared { quantum: [0.05, 0.05 * std::f64::consts::PI / 180.0, 0.05 * std::f64::consts::PI / 180.0] };
 

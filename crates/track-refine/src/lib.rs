@@ -194,10 +194,10 @@ impl Default for RefineOptions {
     fn default() -> Self {
         Self {
             iterations: 20,
-            analysis_px: 128,
+            analysis_px: 256,
             edge_px: 0.75,
-            step_mm: 2.0,
-            step_h_mm: 0.5,
+            step_mm: 3.0,
+            step_h_mm: 0.25,
             step_alpha_rad: 0.5f64.to_radians(),
             smooth_weight: 1.0,
             spacing_weight: 1.0,

@@ -104,6 +104,19 @@ pub(crate) struct Fp {
     pub(crate) j1: i64,
 }
 
+/// A pixel in a footprint's soft edge, kept from the union pass for the gradient pass.
+#[derive(Clone, Copy, Debug)]
+struct EdgePx {
+    /// Pixel index, row-major.
+    k: u32,
+    /// `1 − c`.
+    one_minus_c: f64,
+    /// `∂c/∂d`, per mm.
+    dc: f64,
+    /// `∂d/∂(x, y, h, α, β)` of the footprint at this pixel.
+    a: [f64; 5],
+}
+
 /// Directions of the pressed points (rad), in the order of the problem's pressed points, plus
 /// the full re-derived track the directions came from.
 #[derive(Clone, Debug)]
@@ -565,43 +578,36 @@ impl<'a> Problem<'a> {
     }
 
     /// Visits every pixel of a footprint's box with its local coordinates `(u, v)` when inside
-    /// the footprint's band.
+    /// the footprint's band ([`visit`]).
     #[inline]
-    fn visit(&self, f: &Fp, mut each: impl FnMut(usize, f64, f64)) {
-        let t = self.target;
-        let e = self.edge_mm;
-        let (ul, uh, vh) = (-e, f.shape.length() + e, f.shape.lr + e);
-        let w = t.width as usize;
-        for j in f.j0..=f.j1 {
-            let py = t.origin_mm.y_mm + (j as f64 + 0.5) * t.mm_per_px - f.y;
-            for i in f.i0..=f.i1 {
-                let px = t.origin_mm.x_mm + (i as f64 + 0.5) * t.mm_per_px - f.x;
-                let u = px * f.cb + py * f.sb;
-                if u < ul || u > uh {
-                    continue;
-                }
-                let v = -px * f.sb + py * f.cb;
-                if v.abs() > vh {
-                    continue;
-                }
-                each(j as usize * w + i as usize, u, v);
-            }
-        }
+    fn visit(&self, f: &Fp, each: impl FnMut(usize, f64, f64)) {
+        visit(self.target, self.edge_mm, f, each);
     }
 
     /// The soft union's per-pixel state: `Σ ln(1 − c)` over unsaturated coverages and the
     /// number of saturated ones (`c = 1`).
     fn union(&self, fps: &[Fp]) -> (Vec<f64>, Vec<u32>) {
+        let (s, sat, _) = self.union_edges(fps, false);
+        (s, sat)
+    }
+
+    /// As [`Self::union`], and when `want_edges`, per footprint the pixels of its soft edge
+    /// (`0 < c < 1`) with what the gradient pass needs ([`EdgePx`]), in visiting order, so
+    /// that pass neither scans the footprint's box again nor solves for `t*` again.
+    fn union_edges(&self, fps: &[Fp], want_edges: bool) -> (Vec<f64>, Vec<u32>, Vec<Vec<EdgePx>>) {
         let n = (self.target.width * self.target.height) as usize;
         let e = self.edge_mm;
-        let parts: Vec<(Vec<f64>, Vec<u32>)> = fps
+        type Part = (Vec<f64>, Vec<u32>, Vec<Vec<EdgePx>>);
+        let parts: Vec<Part> = fps
             .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut s = vec![0.0f64; n];
                 let mut sat = vec![0u32; n];
+                let mut edges = Vec::with_capacity(if want_edges { chunk.len() } else { 0 });
                 for f in chunk {
                     let wb = f.shape.width_bounds(WIDTH_BINS);
                     let l = f.shape.length();
+                    let mut list = Vec::new();
                     self.visit(f, |k, u, v| {
                         if u > 0.0 && u < l {
                             match wb.classify(u, v.abs(), e) {
@@ -613,6 +619,32 @@ impl<'a> Problem<'a> {
                                 None => {}
                             }
                         }
+                        if want_edges {
+                            let m = f.shape.measure_grad_with(u, v, &wb);
+                            let (c, dc) = edge(m.d, e);
+                            if c >= 1.0 {
+                                sat[k] += 1;
+                            } else if c > 0.0 {
+                                s[k] += (1.0 - c).ln();
+                                if dc != 0.0 {
+                                    let [gu, gv, glt, glh, glr] = m.grad;
+                                    list.push(EdgePx {
+                                        k: k as u32,
+                                        one_minus_c: 1.0 - c,
+                                        dc,
+                                        a: [
+                                            -f.cb * gu + f.sb * gv,
+                                            -f.sb * gu - f.cb * gv,
+                                            glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
+                                            glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
+                                            // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
+                                            gu * v - gv * u,
+                                        ],
+                                    });
+                                }
+                            }
+                            return;
+                        }
                         let (c, _) = edge(f.shape.measure(u, v), e);
                         if c >= 1.0 {
                             sat[k] += 1;
@@ -620,19 +652,24 @@ impl<'a> Problem<'a> {
                             s[k] += (1.0 - c).ln();
                         }
                     });
+                    if want_edges {
+                        edges.push(list);
+                    }
                 }
-                (s, sat)
+                (s, sat, edges)
             })
             .collect();
         let mut s = vec![0.0f64; n];
         let mut sat = vec![0u32; n];
-        for (ps, pt) in parts {
+        let mut edges = Vec::with_capacity(if want_edges { fps.len() } else { 0 });
+        for (ps, pt, pe) in parts {
             for k in 0..n {
                 s[k] += ps[k];
                 sat[k] += pt[k];
             }
+            edges.extend(pe);
         }
-        (s, sat)
+        (s, sat, edges)
     }
 
     /// The soft union image `U` at an iterate (for inspection and tests).
@@ -690,7 +727,7 @@ impl<'a> Problem<'a> {
             let t = g.image_term(&self.raster(), fps, want_grad);
             return (t.image, t.per_fp);
         }
-        let (s, sat) = self.union(fps);
+        let (s, sat, edges) = self.union_edges(fps, want_grad);
         // Image term and ∂L/∂U.
         let mut image = 0.0;
         let mut q = vec![0.0f64; s.len()];
@@ -705,34 +742,21 @@ impl<'a> Problem<'a> {
         image /= self.ink_sum;
         let mut per_fp = Vec::new();
         if want_grad {
-            let e = self.edge_mm;
-            per_fp = fps
+            per_fp = edges
                 .par_iter()
-                .map(|f| {
+                .map(|list| {
                     let mut g = [0.0f64; 5];
-                    let wb = f.shape.width_bounds(WIDTH_BINS);
-                    let l = f.shape.length();
-                    self.visit(f, |k, u, v| {
-                        let qk = q[k];
-                        // Fully inside or outside the soft edge: ∂c/∂d = 0.
-                        if qk == 0.0 || (u > 0.0 && u < l && wb.classify(u, v.abs(), e).is_some()) {
-                            return;
-                        }
-                        let m = f.shape.measure_grad(u, v);
-                        let (c, dc) = edge(m.d, e);
-                        if dc == 0.0 || c >= 1.0 {
-                            return;
+                    for px in list {
+                        let qk = q[px.k as usize];
+                        if qk == 0.0 {
+                            continue;
                         }
                         // ∂U/∂c_i = Π_{j≠i}(1 − c_j) = Π/(1 − c_i), so ∂L/∂d = q/(1 − c)·∂c/∂d.
-                        let w = qk / (1.0 - c) * dc;
-                        let [gu, gv, glt, glh, glr] = m.grad;
-                        g[0] += w * (-f.cb * gu + f.sb * gv);
-                        g[1] += w * (-f.sb * gu - f.cb * gv);
-                        g[2] += w * (glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2]);
-                        g[3] += w * (glt * f.da[0] + glh * f.da[1] + glr * f.da[2]);
-                        // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
-                        g[4] += w * (gu * v - gv * u);
-                    });
+                        let w = qk / px.one_minus_c * px.dc;
+                        for (gi, ai) in g.iter_mut().zip(&px.a) {
+                            *gi += w * ai;
+                        }
+                    }
                     g
                 })
                 .collect();
@@ -858,6 +882,57 @@ impl<'a> Problem<'a> {
     }
 }
 
+/// Visits every pixel of footprint `f`'s box on `t` whose centre lies in the footprint's band
+/// (`−e ≤ u ≤ L + e`, `|v| ≤ lr + e`, `e` the edge half-width in mm), row by row, with its
+/// index and local coordinates `(u, v)`. Each row scans only the columns where the band can
+/// be, not the whole box.
+#[inline]
+fn visit(t: &Target, e: f64, f: &Fp, mut each: impl FnMut(usize, f64, f64)) {
+    let (ul, uh, vh) = (-e, f.shape.length() + e, f.shape.lr + e);
+    let w = t.width as usize;
+    // On each row, the columns where the band can be: `ul ≤ u ≤ uh` and `|v| ≤ vh` bound
+    // `px·cb` and `px·sb`; each bound gives an interval of `px` (widened by a hair, the
+    // per-pixel tests below decide).
+    let interval = |a: f64, lo: f64, hi: f64| -> Option<(f64, f64)> {
+        if a > 1e-12 {
+            Some((lo / a, hi / a))
+        } else if a < -1e-12 {
+            Some((hi / a, lo / a))
+        } else if lo <= 0.0 && 0.0 <= hi {
+            Some((f64::NEG_INFINITY, f64::INFINITY))
+        } else {
+            None
+        }
+    };
+    for j in f.j0..=f.j1 {
+        let py = t.origin_mm.y_mm + (j as f64 + 0.5) * t.mm_per_px - f.y;
+        let (Some(a), Some(b)) =
+            (interval(f.cb, ul - py * f.sb, uh - py * f.sb), interval(f.sb, py * f.cb - vh, py * f.cb + vh))
+        else {
+            continue;
+        };
+        let (lo, hi) = (a.0.max(b.0) - 1e-9, a.1.min(b.1) + 1e-9);
+        if lo > hi {
+            continue;
+        }
+        let col = |px: f64| (px + f.x - t.origin_mm.x_mm) / t.mm_per_px - 0.5;
+        let c0 = col(lo).ceil().max(f.i0 as f64) as i64;
+        let c1 = col(hi).floor().min(f.i1 as f64) as i64;
+        for i in c0..=c1 {
+            let px = t.origin_mm.x_mm + (i as f64 + 0.5) * t.mm_per_px - f.x;
+            let u = px * f.cb + py * f.sb;
+            if u < ul || u > uh {
+                continue;
+            }
+            let v = -px * f.sb + py * f.cb;
+            if v.abs() > vh {
+                continue;
+            }
+            each(j as usize * w + i as usize, u, v);
+        }
+    }
+}
+
 /// The angle between the tool axes of two states, rad (as the forward model samples turns).
 fn axis_angle(a: &TrackPoint, b: &TrackPoint) -> f64 {
     let ax = |p: &TrackPoint| {
@@ -868,4 +943,57 @@ fn axis_angle(a: &TrackPoint, b: &TrackPoint) -> f64 {
     let dot = (u[0] * v[0] + u[1] * v[1] + u[2] * v[2]).clamp(-1.0, 1.0);
     let cr = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
     (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt().atan2(dot)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `visit` scans only part of each row; it must reach exactly the pixels a scan of the
+    /// whole box reaches, at every angle, including the axis-aligned ones.
+    #[test]
+    fn visiting_rows_by_interval_reaches_every_pixel_of_the_band() {
+        let t = Target::new(64, 48, vec![0.0; 64 * 48], brush_model::PointMm::new(1.0, 2.0), 0.7).unwrap();
+        let e = 0.5;
+        let shape = Shape { lt: 13.5, lh: 5.25, lr: 3.0 };
+        for k in 0..72 {
+            let beta = k as f64 * std::f64::consts::TAU / 72.0 + if k % 9 == 0 { 0.0 } else { 0.013 };
+            let (sb, cb) = beta.sin_cos();
+            for (x, y, box_) in
+                [(20.0, 18.0, (0, 63, 0, 47)), (3.0, 30.0, (0, 20, 10, 40)), (44.5, 4.1, (40, 63, 0, 12))]
+            {
+                let f = Fp {
+                    x,
+                    y,
+                    h: 0.0,
+                    alpha: 0.0,
+                    beta,
+                    cb,
+                    sb,
+                    shape,
+                    dh: [0.0; 3],
+                    da: [0.0; 3],
+                    i0: box_.0,
+                    i1: box_.1,
+                    j0: box_.2,
+                    j1: box_.3,
+                };
+                let mut got = Vec::new();
+                visit(&t, e, &f, |k, u, v| got.push((k, u, v)));
+                let mut want = Vec::new();
+                let (ul, uh, vh) = (-e, shape.length() + e, shape.lr + e);
+                for j in f.j0..=f.j1 {
+                    let py = t.origin_mm.y_mm + (j as f64 + 0.5) * t.mm_per_px - f.y;
+                    for i in f.i0..=f.i1 {
+                        let px = t.origin_mm.x_mm + (i as f64 + 0.5) * t.mm_per_px - f.x;
+                        let (u, v) = (px * cb + py * sb, -px * sb + py * cb);
+                        if (ul..=uh).contains(&u) && v.abs() <= vh {
+                            want.push((j as usize * 64 + i as usize, u, v));
+                        }
+                    }
+                }
+                assert_eq!(got, want, "β {beta} at ({x}, {y})");
+            }
+        }
+    }
 }
