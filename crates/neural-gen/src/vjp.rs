@@ -125,13 +125,16 @@ fn exp_f32(x: f32) -> f32 {
     // Adding and subtracting 1.5·2²³ rounds to the nearest integer (|x·log₂e| < 2²²).
     const ROUND: f32 = 12_582_912.0;
     let x = x.clamp(-87.0, 88.0);
-    let k = (x * LOG2E + ROUND) - ROUND;
+    let y = x * LOG2E + ROUND;
+    let k = y - ROUND;
     let r = (x - k * LN2_HI) - k * LN2_LO;
     let p = 1.0
         + r * (1.0
             + r * (1.0 / 2.0
                 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0 + r * (1.0 / 5040.0)))))));
-    p * f32::from_bits(((k as i32 + 127) as u32) << 23)
+    // The bits of `y` are those of 1.5·2²³ plus k: 2ᵏ's exponent field is k + 127 (no
+    // float-to-integer conversion, which does not vectorise).
+    p * f32::from_bits(y.to_bits().wrapping_sub(0x4B40_0000 - 127) << 23)
 }
 
 /// The logistic function `1 / (1 + e⁻ˣ)` (through [`exp_f32`]).
