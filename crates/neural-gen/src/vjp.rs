@@ -6,15 +6,20 @@
 //! gradient with respect to the network's *input* only, so the weight gradients candle's
 //! autograd computes on every backward pass (a third of the work) are not needed, and neither is
 //! the graph. [`InputVjp`] copies the generator's weights out of candle once and runs the same
-//! network on plain buffers with the direct convolution kernels of [`crate::conv`]:
-//! [`InputVjp::forward`] keeps what the backward pass needs (the ReLU masks and the images, a
+//! network on plain buffers with its own kernels (`kernels`: packed matrix products for the
+//! fully connected layers, on the whole batch; register-tiled 3×3 correlations for the
+//! convolution stages, image by image in parallel, with bias, ReLU, pixel shuffle and sigmoid
+//! fused into the pass that writes the next layer's padded input): [`InputVjp::forward`] keeps
+//! what the backward pass needs (the ReLU masks, one byte per activation, and the images, a
 //! [`Tape`]), [`InputVjp::vjp`] runs the backward pass to the input. One forward and one
 //! backward per batch, and the forward's images can be used (to compute the upstream gradient)
 //! before the backward runs.
 //!
-//! Every image is computed independently of the others in its batch, in a fixed order, so the
-//! results do not depend on the batch size or the thread count. Tested against candle's
-//! autograd ([`crate::Generator::image_and_vjp`]) and against finite differences.
+//! Every image is computed independently of the others in its batch, every sum in a fixed
+//! order of fused multiply–adds, so the results do not depend on the batch size, the thread
+//! count or the vector width. The training path ([`crate::conv::Conv2d`]) keeps its own kernels.
+//! Tested against candle's autograd ([`crate::Generator::image_and_vjp`]) and against finite
+//! differences.
 
 use brush_model::Press;
 use candle_core::Tensor;
