@@ -46,6 +46,7 @@ const ROWS: &[(&str, &str)] = &[
     ("ltp_inference/batch_64_candle", "LearningToPaint-size net, inference batch 64, stock candle"),
     ("generator_vjp/batch_64_direct", "generator forward + VJP to the presses, batch 64, maobi kernels (InputVjp)"),
     ("generator_vjp/batch_64_forward_direct", "generator forward alone, batch 64, maobi kernels"),
+    ("generator_vjp/batch_64_jacobian_direct", "generator Jacobian to the presses (forward mode), batch 64"),
     ("generator_vjp/batch_64_candle_autograd", "generator forward + VJP to the presses, batch 64, candle autograd"),
     ("refine/永 default", "refining 永 at the defaults (analytic gradients, 20 steps)"),
     ("refine/字 default", "refining 字 at the defaults (analytic gradients, 20 steps)"),

@@ -1,7 +1,9 @@
 //! Batched forward + VJP with respect to the presses through the committed generator's
 //! architecture (`fixtures/generator/pen1.json`), batch 64: the direct, input-gradient-only path
-//! ([`neural_gen::InputVjp`]) and candle's autograd. The PyTorch reference on the same network
-//! and batch is `benches/gen_vjp_torch.py` (`cargo bench -p neural-gen --bench gen_vjp`).
+//! ([`neural_gen::InputVjp`]) and candle's autograd; also the forward pass alone and the
+//! forward-mode Jacobian (three tangents per image) of a recorded forward pass. The PyTorch
+//! reference on the same network and batch is `benches/gen_vjp_torch.py`
+//! (`cargo bench -p neural-gen --bench gen_vjp`).
 
 use brush_model::Press;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -36,6 +38,8 @@ fn bench(c: &mut Criterion) {
         })
     });
     grp.bench_function("batch_64_forward_direct", |b| b.iter(|| net.forward(black_box(&presses))));
+    let tape = net.forward(&presses);
+    grp.bench_function("batch_64_jacobian_direct", |b| b.iter(|| net.jacobian(black_box(&tape))));
     grp.bench_function("batch_64_candle_autograd", |b| {
         b.iter(|| g.images_and_vjps_candle(black_box(&presses), black_box(&up)).unwrap())
     });
