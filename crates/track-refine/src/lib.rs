@@ -136,7 +136,8 @@ impl Target {
 }
 
 /// Settings of [`refine`]. Units are in the field names; the defaults are what `maobi write
-/// --refine` uses (chosen on 永字八法十 from the tuning set, docs/trajectory.md, "Refinement").
+/// --refine` uses (chosen on 永字八法十, then the analysis raster and the steps on 12 characters,
+/// all from the tuning set; docs/trajectory.md, "Refinement").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RefineOptions {
