@@ -57,8 +57,11 @@ fn on_its_own_outline_the_template_gives_the_medians_result() {
                 assert!(dj > d, "{c} stroke {}: nearer to stroke {} ({dj:.1}) than to its own ({d:.1})", i + 1, j + 1);
             }
         }
+        // Not worse than the medians method's track. It may score higher: its end run-out goes on
+        // into a blunt cap (丁's hook: 0.938 against 0.913), where the medians method stops at
+        // END_CAP_FRACTION of the width.
         let (cm, ct) = (csim(&medians, &g), csim(&reg.paths, &g));
-        assert!((cm - ct).abs() < 0.015, "{c}: CSIM medians {cm:.3}, template {ct:.3}");
+        assert!(ct > cm - 0.015, "{c}: CSIM medians {cm:.3}, template {ct:.3}");
     }
 }
 
