@@ -8,6 +8,7 @@ mod gates;
 mod refine_gate;
 mod rng;
 mod skeleton_counts;
+mod skeleton_train;
 mod styles;
 mod tidy;
 mod train_fixture;
@@ -27,6 +28,9 @@ Tasks:
   skeleton-counts [--hanzi-data DIR] [--set FILE] [...]
                        skeleton stroke counts against the medians on a character set
                        (`cargo xtask skeleton-counts --help`)
+  skeleton-train --hanzi-data DIR
+                       train the skeleton's junction and corner models
+                       (crates/trajectory/data/skeleton-models.json; `cargo xtask skeleton-train --help`)
   tidy                 check that the tuned constants in docs/trajectory.md (section Tuned constants)
                        have the values the code gives them
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
@@ -44,6 +48,7 @@ fn main() -> ExitCode {
         Some("gates") => gates::run(&args[1..]),
         Some("bench") => bench::run(&args[1..]),
         Some("skeleton-counts") => skeleton_counts::run(&args[1..]),
+        Some("skeleton-train") => skeleton_train::run(&args[1..]),
         Some("styles") => styles::run(&args[1..]),
         Some("tidy") => tidy::run(&args[1..]),
         Some("train-fixture") => train_fixture::run(&args[1..]),

@@ -12,7 +12,7 @@ use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, glyph};
 
 const HELP: &str = "\
 cargo xtask skeleton-counts [--hanzi-data DIR] [--set FILE|embedded] [--lines A-B]
-                            [--opts K=V,K=V]... [--px N] [--json OUT] [--wrong]
+                            [--opts K=V,K=V]... [--px N] [--json OUT] [--wrong] [--oracle]
 
 Counts the strokes the skeleton method finds (Method::Skeleton at the analysis raster) against
 the medians' count, per character, and prints the share that is right.
@@ -25,11 +25,15 @@ the medians' count, per character, and prints the share that is right.
   --opts K=V,...    a variant of the skeleton rules (GraphOptions::set keys: spur_factor,
                     corner_spur_factor, merge_factor, straight_min_deg, corner_deg,
                     split_box_corners, loose_end_em, corner_spur_away_deg, corner_reach,
-                    hook_widths, hook_ratio, covered_max_widths); repeat for a sweep; the
-                    defaults are always measured first
+                    hook_widths, hook_ratio, covered_max_widths, learned_pairing,
+                    learned_corners, ...);
+                    repeat for a sweep; the defaults are always measured first
   --px N            analysis raster side (default the pipeline's, 512)
   --json OUT        where to write the figures (default target/skeleton-counts.json)
   --wrong           also list the characters each variant gets wrong (found/expected)
+  --oracle          also measure the defaults with junctions paired and corners split as the
+                    glyph's own medians say (how far better decisions could go; it needs the
+                    answer)
 ";
 
 #[derive(Serialize)]
@@ -89,6 +93,7 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut px = DEFAULT_ANALYSIS_PX;
     let mut json = PathBuf::from("target/skeleton-counts.json");
     let mut list_wrong = false;
+    let mut oracle = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("{a} needs a value"));
@@ -112,10 +117,14 @@ pub fn run(args: &[String]) -> Result<()> {
             "--px" => px = val()?.parse().context("--px")?,
             "--json" => json = PathBuf::from(val()?),
             "--wrong" => list_wrong = true,
+            "--oracle" => oracle = true,
             other => bail!("unknown argument `{other}`\n\n{HELP}"),
         }
     }
     let opts: Vec<GraphOptions> = variants.iter().map(|v| parse_opts(v)).collect::<Result<_>>()?;
+    if oracle {
+        variants.push("pairing and corners by the medians (oracle)".into());
+    }
     let mut chars = read_set(&set)?;
     if let Some((x, y)) = lines {
         if y > chars.len() {
@@ -140,9 +149,16 @@ pub fn run(args: &[String]) -> Result<()> {
         .map(|&c| -> Result<(char, usize, Vec<usize>)> {
             let g = load(c).with_context(|| format!("{c}"))?;
             let expected = g.medians.as_ref().map(Vec::len).with_context(|| format!("{c}: no medians"))?;
+            let medians = g.medians.as_deref().unwrap_or_default();
             let found = match Skeleton::of(&g, px) {
-                Some(s) => opts.iter().map(|o| s.strokes(o).len()).collect(),
-                None => vec![0; opts.len()],
+                Some(s) => {
+                    let mut f: Vec<usize> = opts.iter().map(|o| s.strokes(o).len()).collect();
+                    if oracle {
+                        f.push(s.strokes_paired_by_medians(&opts[0], medians).len());
+                    }
+                    f
+                }
+                None => vec![0; variants.len()],
             };
             pb.inc(1);
             Ok((c, expected, found))

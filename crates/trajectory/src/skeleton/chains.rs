@@ -8,16 +8,36 @@
 use kurbo::{Point, Vec2};
 
 use super::graph::{Graph, branch_width, ends_at};
+use super::learned::{DecisionModel, GlyphFrame, NUM_FEATURES, branches, pair_features, pair_greedily};
 use super::options::GraphOptions;
 use crate::polyline::length;
 
+/// How branch ends at junctions of three or more branches are paired.
+#[derive(Clone, Copy)]
+pub(super) enum Pairing<'a> {
+    /// The hand rules alone ([`rule_pairs`]).
+    Rules,
+    /// The learned model, with the rules' verdict as one of its features.
+    Model(&'a DecisionModel, &'a GlyphFrame),
+    /// Training labels (per end id, the median stroke it lies along): ends along the same stroke
+    /// pair, straightest first; ends without a label fall back to the rules. For measuring how
+    /// far better pairing alone could go.
+    Labels(&'a [Option<usize>]),
+}
+
 /// Pairs branch ends at every node and walks the pairs into chains (smoothed).
-pub(super) fn pair_and_chain(g: &Graph, dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+pub(super) fn pair_and_chain(
+    g: &Graph,
+    dt: &[f32],
+    n: usize,
+    opts: &GraphOptions,
+    pairing: Pairing<'_>,
+) -> Vec<Vec<Point>> {
     // End id: 2k (end a) or 2k+1 (end b) of edge k.
     let mut partner = vec![UNPAIRED; 2 * g.edges.len()];
     for v in 0..g.nodes.len() {
         if g.nodes[v].alive {
-            pair_at(g, v, dt, n, opts, &mut partner);
+            pair_at(g, v, dt, n, opts, pairing, &mut partner);
         }
     }
     walk_chains(g, &partner).into_iter().map(|s| smooth(&s)).collect()
@@ -26,14 +46,61 @@ pub(super) fn pair_and_chain(g: &Graph, dt: &[f32], n: usize, opts: &GraphOption
 /// `partner` of a branch end that continues no other.
 const UNPAIRED: usize = usize::MAX;
 
-/// At node `v`, pairs the branch ends that continue each other, straightest pair first: both
-/// ends of a two-branch node; at a crossing, pairs turning by less than `straight_min_rad`
-/// whose widths are comparable (`pair_width_ratio`).
-fn pair_at(g: &Graph, v: usize, dt: &[f32], n: usize, opts: &GraphOptions, partner: &mut [usize]) {
+/// At node `v`, pairs the branch ends that continue each other: both ends of a two-branch node;
+/// at a junction, as `pairing` says.
+fn pair_at(
+    g: &Graph,
+    v: usize,
+    dt: &[f32],
+    n: usize,
+    opts: &GraphOptions,
+    pairing: Pairing<'_>,
+    partner: &mut [usize],
+) {
     let ends = ends_at(g, v);
     if ends.len() < 2 {
         return;
     }
+    let rules = rule_pairs(g, &ends, dt, n, opts);
+    let scored: Vec<(f64, usize, usize)> = match pairing {
+        Pairing::Model(model, frame) if ends.len() >= 3 => {
+            let b = branches(g, v, &ends, dt, n);
+            let mut out = Vec::new();
+            for i in 0..b.len() {
+                for j in i + 1..b.len() {
+                    let rule = rules.contains(&(b[i].end, b[j].end));
+                    let x = pair_features(g, v, &b, (i, j), rule, frame);
+                    out.push((model.probability(&x), b[i].end, b[j].end));
+                }
+            }
+            pair_greedily(out, opts.pair_threshold, partner, UNPAIRED);
+            return;
+        }
+        Pairing::Labels(labels) if ends.len() >= 3 => {
+            let mut out = Vec::new();
+            for i in 0..ends.len() {
+                for j in i + 1..ends.len() {
+                    let (x, y) = (ends[i].0, ends[j].0);
+                    let straight = -ends[i].1.dot(ends[j].1);
+                    let score = match (labels[x], labels[y]) {
+                        (Some(a), Some(b)) => f64::from(u8::from(a == b)) * (3.0 + straight),
+                        _ => f64::from(u8::from(rules.contains(&(x, y)))) * (1.5 + straight / 4.0),
+                    };
+                    out.push((score, x, y));
+                }
+            }
+            pair_greedily(out, 1.0, partner, UNPAIRED);
+            return;
+        }
+        _ => rules.iter().map(|&(x, y)| (1.0, x, y)).collect(),
+    };
+    pair_greedily(scored, 1.0, partner, UNPAIRED);
+}
+
+/// The hand rules' pairs at a node with branch `ends` (as [`ends_at`] gives them, each pair in
+/// that order), straightest first: both ends of a two-branch node; at a crossing, pairs turning
+/// by less than `straight_min_rad` whose widths are comparable (`pair_width_ratio`).
+fn rule_pairs(g: &Graph, ends: &[(usize, Vec2)], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<(usize, usize)> {
     let widths: Vec<f64> = if opts.pair_width_ratio > 0.0 && ends.len() >= 3 {
         ends.iter().map(|&(end, _)| branch_width(g, &g.edges[end / 2], end % 2 == 0, dt, n)).collect()
     } else {
@@ -52,12 +119,49 @@ fn pair_at(g: &Graph, v: usize, dt: &[f32], n: usize, opts: &GraphOptions, partn
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let limit = if ends.len() == 2 { 1.0 } else { opts.straight_min_rad.cos() };
+    let mut used: Vec<usize> = Vec::new();
+    let mut out = Vec::new();
     for (c, x, y) in pairs {
-        if c <= limit + 1e-12 && partner[x] == UNPAIRED && partner[y] == UNPAIRED && x / 2 != y / 2 {
-            partner[x] = y;
-            partner[y] = x;
+        if c <= limit + 1e-12 && !used.contains(&x) && !used.contains(&y) && x / 2 != y / 2 {
+            used.extend([x, y]);
+            out.push((x, y));
         }
     }
+    out
+}
+
+/// Training samples at every junction of three or more branches: each pair's features and,
+/// when both of its ends have a median stroke in `labels` ([`super::learned::end_strokes`]),
+/// whether they lie along the same one.
+pub(super) fn pair_samples(
+    g: &Graph,
+    dt: &[f32],
+    n: usize,
+    opts: &GraphOptions,
+    frame: &GlyphFrame,
+    labels: &[Option<usize>],
+) -> Vec<([f64; NUM_FEATURES], Option<bool>)> {
+    let mut out = Vec::new();
+    for v in (0..g.nodes.len()).filter(|&v| g.nodes[v].alive) {
+        let ends = ends_at(g, v);
+        if ends.len() < 3 {
+            continue;
+        }
+        let rules = rule_pairs(g, &ends, dt, n, opts);
+        let b = branches(g, v, &ends, dt, n);
+        for i in 0..b.len() {
+            for j in i + 1..b.len() {
+                let rule = rules.contains(&(b[i].end, b[j].end));
+                let x = pair_features(g, v, &b, (i, j), rule, frame);
+                let label = match (labels[b[i].end], labels[b[j].end]) {
+                    (Some(a), Some(c)) => Some(a == c),
+                    _ => None,
+                };
+                out.push((x, label));
+            }
+        }
+    }
+    out
 }
 
 /// Walks the live edges into chains through their paired ends: first from every unpaired end,

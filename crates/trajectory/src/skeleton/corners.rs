@@ -7,6 +7,7 @@
 
 use kurbo::{Point, Vec2};
 
+use super::learned::{DecisionModel, GlyphFrame, NUM_CORNER_FEATURES, stroke_along};
 use super::options::GraphOptions;
 use super::order::writing_direction;
 use crate::polyline::{arc_lengths, nearly_horizontal};
@@ -22,12 +23,16 @@ use crate::polyline::{arc_lengths, nearly_horizontal};
 /// chain, vertical-into-rightward corners split too when `split_box_corners` is set. Legs
 /// shorter than two half-widths never split, nor do hooks at a chain's ends ([`HOOK_WIDTHS`],
 /// [`HOOK_RATIO`]). A closed chain (a box drawn as one loop) is cut at its splitting corners.
+///
+/// With `mode` [`CornerSplit::Model`], the learned model decides at each corner instead, the
+/// rules' verdicts among its features.
 pub(super) fn split_at_corners(
     p: &[Point],
     dt: &[f32],
     n: usize,
     opts: &GraphOptions,
     junctions: &[Point],
+    mode: CornerSplit<'_>,
 ) -> Vec<Vec<Point>> {
     if p.len() < 5 {
         return vec![p.to_vec()];
@@ -35,11 +40,71 @@ pub(super) fn split_at_corners(
     let chain = Chain::new(p, dt, n, opts);
     let corners = chain.corners(opts);
     let verdicts: Vec<Verdict> = corners.iter().map(|&i| chain.verdict(i, &corners, opts)).collect();
-    let splits = chain.splits(&corners, &verdicts, junctions);
+    let rule_splits = chain.splits(&corners, &verdicts, junctions);
+    let splits: Vec<usize> = match mode {
+        CornerSplit::Rules => rule_splits,
+        CornerSplit::Model(model, frame) => (0..corners.len())
+            .filter(|&k| {
+                let ctx =
+                    CornerContext { corners: &corners, verdicts: &verdicts, rule_splits: &rule_splits, junctions };
+                model.probability(&chain.corner_features(k, &ctx, opts, frame)) >= opts.corner_threshold
+            })
+            .map(|k| corners[k])
+            .collect(),
+        CornerSplit::Labels(medians) => corners
+            .iter()
+            .copied()
+            .filter(|&c| chain.label(c, medians).unwrap_or_else(|| rule_splits.contains(&c)))
+            .collect(),
+    };
     if splits.is_empty() {
         return vec![p.to_vec()];
     }
     chain.cut(&splits)
+}
+
+/// How a chain's corners are split.
+#[derive(Clone, Copy)]
+pub(super) enum CornerSplit<'a> {
+    /// The hand rules alone.
+    Rules,
+    /// The learned model, with the rules' verdicts among its features.
+    Model(&'a DecisionModel, &'a GlyphFrame),
+    /// The glyph's own medians (px): split where the two legs lie along different strokes,
+    /// elsewhere by the rules. For measuring how far better corners alone could go.
+    Labels(&'a [Vec<Point>]),
+}
+
+/// Training samples at every corner of chain `p`: its features and, when the medians (px) say
+/// which stroke each leg lies along, whether they differ (two strokes meet there).
+pub(super) fn corner_samples(
+    p: &[Point],
+    dt: &[f32],
+    n: usize,
+    opts: &GraphOptions,
+    junctions: &[Point],
+    frame: &GlyphFrame,
+    medians: &[Vec<Point>],
+) -> Vec<([f64; NUM_CORNER_FEATURES], Option<bool>)> {
+    if p.len() < 5 {
+        return Vec::new();
+    }
+    let chain = Chain::new(p, dt, n, opts);
+    let corners = chain.corners(opts);
+    let verdicts: Vec<Verdict> = corners.iter().map(|&i| chain.verdict(i, &corners, opts)).collect();
+    let rule_splits = chain.splits(&corners, &verdicts, junctions);
+    let ctx = CornerContext { corners: &corners, verdicts: &verdicts, rule_splits: &rule_splits, junctions };
+    (0..corners.len())
+        .map(|k| (chain.corner_features(k, &ctx, opts, frame), chain.label(corners[k], medians)))
+        .collect()
+}
+
+/// A chain's corners with the rules' verdicts, for the features.
+struct CornerContext<'a> {
+    corners: &'a [usize],
+    verdicts: &'a [Verdict],
+    rule_splits: &'a [usize],
+    junctions: &'a [Point],
 }
 
 /// A chain closes on itself (a box drawn as one loop) when its ends are closer than this (px).
@@ -251,6 +316,106 @@ impl<'a> Chain<'a> {
             })
             .map(|(&c, _)| c)
             .collect()
+    }
+
+    /// Whether the legs at corner `i` lie along different median strokes (`medians`, px), or
+    /// `None` when either is unknown: the training label.
+    fn label(&self, i: usize, medians: &[Vec<Point>]) -> Option<bool> {
+        let w = self.width(self.p[i]);
+        let side = |sign: f64| {
+            let pts: Vec<Point> = (0..)
+                .map(|k| w + k as f64)
+                .take_while(|&t| t <= 4.0 * w)
+                .map(|t| self.s[i] + sign * t)
+                .filter(|&u| self.closed || (0.0..=self.s[self.last()]).contains(&u))
+                .map(|u| self.at(u))
+                .collect();
+            stroke_along(&pts, medians, w)
+        };
+        Some(side(-1.0)? != side(1.0)?)
+    }
+
+    /// Mean half-width (px) along one leg of corner `i`, one to three half-widths out (`sign`
+    /// −1: before it).
+    fn leg_width(&self, i: usize, sign: f64) -> f64 {
+        let w = self.width(self.p[i]);
+        let ws: Vec<f64> = (0..)
+            .map(|k| w + k as f64)
+            .take_while(|&t| t <= 3.0 * w)
+            .map(|t| self.s[i] + sign * t)
+            .filter(|&u| self.closed || (0.0..=self.s[self.last()]).contains(&u))
+            .map(|u| {
+                let q = self.at(u);
+                crate::distance::sample(self.dt, self.n, self.n, q.x, q.y)
+            })
+            .collect();
+        if ws.is_empty() { w } else { ws.iter().sum::<f64>() / ws.len() as f64 }
+    }
+
+    /// The features of corner `k` (index into `ctx.corners`), in
+    /// [`super::learned::CORNER_FEATURE_NAMES`] order.
+    fn corner_features(
+        &self,
+        k: usize,
+        ctx: &CornerContext<'_>,
+        opts: &GraphOptions,
+        frame: &GlyphFrame,
+    ) -> [f64; NUM_CORNER_FEATURES] {
+        let (s, last, p) = (&self.s, self.last(), self.p);
+        let i = ctx.corners[k];
+        let w = self.width(p[i]);
+        let (d_in, d_out) = self.legs(i);
+        let (prev, next) = self.leg_ends(i, ctx.corners);
+        let len_in = s[i] - prev.unwrap_or(if self.closed { s[i] - self.total } else { 0.0 });
+        let len_out = next.unwrap_or(if self.closed { s[i] + self.total } else { s[last] }) - s[i];
+        let hook = !self.closed && self.is_hook(i, ctx.corners, (len_in, len_out), opts);
+        let ti = is_ti((d_in, d_out), opts);
+        let at_junction = |q: Point| ctx.junctions.iter().any(|j| j.distance(q) < AT_JUNCTION_PX);
+        let (mut start_j, mut end_j) = (at_junction(p[0]), at_junction(p[last]));
+        let (mut first, mut last_c) = (k == 0, k + 1 == ctx.corners.len());
+        let (mut w_in, mut w_out) = (self.leg_width(i, -1.0), self.leg_width(i, 1.0));
+        // View the chain from its end nearer the upper left.
+        let reversed = !self.closed && p[last].x + p[last].y < p[0].x + p[0].y;
+        let (mut a, mut b, mut la, mut lb) = (d_in, d_out, len_in, len_out);
+        if reversed {
+            (a, b, la, lb) = (-d_out, -d_in, len_out, len_in);
+            std::mem::swap(&mut start_j, &mut end_j);
+            std::mem::swap(&mut first, &mut last_c);
+            std::mem::swap(&mut w_in, &mut w_out);
+        }
+        let unit = |v: Vec2| if v.hypot() > 1e-9 { v / v.hypot() } else { Vec2::ZERO };
+        let (a, b) = (unit(a), unit(b));
+        let flag = |x: bool| f64::from(u8::from(x));
+        let forward = |v: Vec2| writing_direction(v).dot(v) > 0.0;
+        let (rx, ry) = frame.relative(p[i]);
+        [
+            self.turn(i),
+            flag(ctx.rule_splits.contains(&i)),
+            flag(matches!(ctx.verdicts[k], Verdict::Split)),
+            flag(matches!(ctx.verdicts[k], Verdict::OpenBox(_))),
+            flag(ti),
+            flag(hook),
+            flag(forward(a)),
+            flag(forward(b)),
+            a.x,
+            a.y,
+            b.x,
+            b.y,
+            (1.0 + la.max(0.0) / w).ln(),
+            (1.0 + lb.max(0.0) / w).ln(),
+            (1.0 + self.total / w).ln(),
+            flag(self.closed),
+            ctx.corners.len() as f64,
+            flag(first),
+            flag(last_c),
+            flag(start_j),
+            flag(end_j),
+            w_in / w,
+            w_out / w,
+            w / frame.mean_width,
+            rx,
+            ry,
+        ]
     }
 
     /// The pieces between the cuts (a loop is rotated to start at its first cut).

@@ -1,26 +1,35 @@
 //! From a skeleton to strokes: a graph of end points and junctions ([`graph`]), spur pruning
-//! and junction merging, straight-through pairing at crossings ([`chains`]), corner and hook
-//! rules ([`corners`]), and stroke order ([`order`]).
+//! and junction merging, pairing of the branches that continue each other at crossings
+//! ([`chains`]), corner and hook rules ([`corners`]), and stroke order ([`order`]). Which pairs
+//! continue through a junction and which corners split are decided by two small learned models
+//! ([`learned`], compiled in from `data/skeleton-models.json`) that take the hand rules'
+//! verdicts among their features; `GraphOptions::learned_pairing` / `learned_corners` off gives
+//! the rules alone.
 //!
 //! Frame: the analysis raster (`n × n` px of the em box, pixel centres at `i + 0.5`, y down);
 //! widths are distance-transform values (px). [`crate::medians`] scales the result into the em
-//! frame. Invariant: the output is a pure function of the skeleton, the distance transform and
-//! the [`GraphOptions`] (no randomness, no environment).
+//! frame. Invariant: the output is a pure function of the skeleton, the distance transform,
+//! the [`GraphOptions`] and the compiled-in models (no randomness, no environment).
 
 mod chains;
 mod corners;
 mod graph;
+mod learned;
 mod options;
 mod order;
 
 use kurbo::Point;
 
+pub use learned::{
+    CORNER_FEATURE_NAMES, DecisionModel, FEATURE_NAMES, NUM_CORNER_FEATURES, NUM_FEATURES, SkeletonModels,
+};
 pub use options::GraphOptions;
 
 use crate::polyline::length;
-use chains::{drop_covered, pair_and_chain};
-use corners::split_at_corners;
-use graph::{attach_loose_ends, build_graph, degree, merge_junctions, prune_spurs};
+use chains::{Pairing, drop_covered, pair_and_chain};
+use corners::{CornerSplit, corner_samples, split_at_corners};
+use graph::{Graph, attach_loose_ends, build_graph, degree, merge_junctions, prune_spurs};
+use learned::{GlyphFrame, end_strokes};
 use order::order_strokes;
 
 /// Chains no longer than this (px) are thinning debris, not strokes. Hand-set.
@@ -28,21 +37,71 @@ const MIN_STROKE_PX: f64 = 1.5;
 
 /// Extracts strokes from a one-pixel skeleton. `dt` is the distance transform of the glyph mask
 /// (same `n × n` raster). Returns polylines in pixel coordinates, oriented and ordered by the
-/// usual writing rules.
+/// usual writing rules. Junctions pair their branches and corners split with the learned
+/// models ([`SkeletonModels::embedded`]) unless `opts.learned_pairing` / `opts.learned_corners`
+/// is off.
 pub(crate) fn skeleton_strokes(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
+    let g = cleaned_graph(skel, dt, n, opts);
+    let frame = GlyphFrame::of(skel, dt, n);
+    let models = SkeletonModels::embedded();
+    let pairing = if opts.learned_pairing { Pairing::Model(&models.pairs, &frame) } else { Pairing::Rules };
+    let corners = if opts.learned_corners { CornerSplit::Model(&models.corners, &frame) } else { CornerSplit::Rules };
+    strokes_of_graph(&g, dt, n, opts, pairing, corners)
+}
+
+/// The skeleton's graph with loose ends joined, spurs pruned and nearby junctions merged.
+fn cleaned_graph(skel: &[bool], dt: &[f32], n: usize, opts: &GraphOptions) -> Graph {
     let mut g = build_graph(skel, dt, n);
     attach_loose_ends(&mut g, opts.loose_end_em * n as f64 / 1024.0);
     prune_spurs(&mut g, opts);
     merge_junctions(&mut g, opts);
     prune_spurs(&mut g, opts);
-    // Where three or more branches meet (chains that end there end against other strokes).
-    let junctions: Vec<Point> =
-        (0..g.nodes.len()).filter(|&v| g.nodes[v].alive && degree(&g, v) >= 3).map(|v| g.nodes[v].pos).collect();
-    let strokes: Vec<Vec<Point>> =
-        pair_and_chain(&g, dt, n, opts).iter().flat_map(|s| split_at_corners(s, dt, n, opts, &junctions)).collect();
+    g
+}
+
+/// Pairs, chains, splits at corners, drops debris and orders.
+fn strokes_of_graph(
+    g: &Graph,
+    dt: &[f32],
+    n: usize,
+    opts: &GraphOptions,
+    pairing: Pairing<'_>,
+    corners: CornerSplit<'_>,
+) -> Vec<Vec<Point>> {
+    let junctions = junctions(g);
+    let strokes: Vec<Vec<Point>> = pair_and_chain(g, dt, n, opts, pairing)
+        .iter()
+        .flat_map(|s| split_at_corners(s, dt, n, opts, &junctions, corners))
+        .collect();
     let strokes: Vec<Vec<Point>> = strokes.into_iter().filter(|s| length(s) > MIN_STROKE_PX).collect();
     let strokes = drop_covered(strokes, dt, n, opts.covered_max_widths);
     order_strokes(strokes)
+}
+
+/// Where three or more branches meet (chains that end there end against other strokes).
+fn junctions(g: &Graph) -> Vec<Point> {
+    (0..g.nodes.len()).filter(|&v| g.nodes[v].alive && degree(g, v) >= 3).map(|v| g.nodes[v].pos).collect()
+}
+
+/// One corner of a chain, for training the corner model: its features
+/// ([`CORNER_FEATURE_NAMES`]) and, when the glyph's medians say, whether two strokes meet there.
+#[derive(Clone, Debug)]
+pub struct CornerSample {
+    /// The features, in [`CORNER_FEATURE_NAMES`] order.
+    pub features: [f64; NUM_CORNER_FEATURES],
+    /// `Some(true)`: split (two strokes); `Some(false)`: one stroke turns; `None`: unknown.
+    pub label: Option<bool>,
+}
+
+/// One candidate pair of branch ends at a junction, for training the pairing model: its
+/// features ([`FEATURE_NAMES`]) and, when the glyph's medians say, whether the two ends lie
+/// along the same stroke.
+#[derive(Clone, Debug)]
+pub struct PairSample {
+    /// The features, in [`FEATURE_NAMES`] order.
+    pub features: [f64; NUM_FEATURES],
+    /// `Some(true)`: one stroke runs through; `Some(false)`: two strokes; `None`: unknown.
+    pub label: Option<bool>,
 }
 
 /// A glyph's skeleton on the analysis raster: the thinned mask and the distance transform of the
@@ -78,18 +137,78 @@ impl Skeleton {
     pub fn strokes(&self, opts: &GraphOptions) -> Vec<Vec<Point>> {
         skeleton_strokes(&self.skel, &self.dt, self.n, opts)
     }
+
+    /// Medians (em frame) on the analysis raster, px.
+    fn medians_px(&self, medians_em: &[Vec<Point>]) -> Vec<Vec<Point>> {
+        let k = self.n as f64 / crate::glyph::EM;
+        medians_em.iter().map(|m| m.iter().map(|p| Point::new(p.x * k, p.y * k)).collect()).collect()
+    }
+
+    /// Training samples for the pairing model: every candidate pair of branch ends at every
+    /// junction, labelled from the glyph's own medians (`medians_em`, em frame) where they say
+    /// which stroke each end lies along.
+    pub fn pair_samples(&self, opts: &GraphOptions, medians_em: &[Vec<Point>]) -> Vec<PairSample> {
+        let g = cleaned_graph(&self.skel, &self.dt, self.n, opts);
+        let labels = end_strokes(&g, &self.medians_px(medians_em));
+        let frame = GlyphFrame::of(&self.skel, &self.dt, self.n);
+        chains::pair_samples(&g, &self.dt, self.n, opts, &frame, &labels)
+            .into_iter()
+            .map(|(features, label)| PairSample { features, label })
+            .collect()
+    }
+
+    /// Training samples for the corner model: every corner of every chain (chains as `pairs`
+    /// pairs junctions, or the hand rules with `None`), labelled from the glyph's own medians
+    /// (`medians_em`, em frame) where they say which stroke each leg lies along.
+    pub fn corner_samples(
+        &self,
+        opts: &GraphOptions,
+        pairs: Option<&DecisionModel>,
+        medians_em: &[Vec<Point>],
+    ) -> Vec<CornerSample> {
+        let (dt, n) = (&self.dt, self.n);
+        let g = cleaned_graph(&self.skel, dt, n, opts);
+        let frame = GlyphFrame::of(&self.skel, dt, n);
+        let medians = self.medians_px(medians_em);
+        let pairing = pairs.map_or(Pairing::Rules, |m| Pairing::Model(m, &frame));
+        let junctions = junctions(&g);
+        pair_and_chain(&g, dt, n, opts, pairing)
+            .iter()
+            .flat_map(|c| corner_samples(c, dt, n, opts, &junctions, &frame, &medians))
+            .map(|(features, label)| CornerSample { features, label })
+            .collect()
+    }
+
+    /// The strokes found when junctions pair their branches and corners split as the glyph's
+    /// own medians say (`medians_em`, em frame; where they say nothing, by the hand rules), each
+    /// only where `opts` turns its learned decision on: how far better decisions could go. For
+    /// measurements only (it needs the answer).
+    pub fn strokes_paired_by_medians(&self, opts: &GraphOptions, medians_em: &[Vec<Point>]) -> Vec<Vec<Point>> {
+        let g = cleaned_graph(&self.skel, &self.dt, self.n, opts);
+        let labels = end_strokes(&g, &self.medians_px(medians_em));
+        let medians = self.medians_px(medians_em);
+        let corners = if opts.learned_corners { CornerSplit::Labels(&medians) } else { CornerSplit::Rules };
+        let pairing = if opts.learned_pairing { Pairing::Labels(&labels) } else { Pairing::Rules };
+        strokes_of_graph(&g, &self.dt, self.n, opts, pairing, corners)
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::graph::{Edge, Graph, Node};
+    use super::graph::{Edge, Node};
     use super::order::is_horizontal;
     use super::*;
     use crate::distance::distance_to_background;
     use crate::thinning::zhang_suen;
 
+    /// The hand rules alone: the tests below pin them down (the learned decisions, on by
+    /// default, are tested on their own and on real glyphs in tests/skeleton_counts.rs).
+    fn rules() -> GraphOptions {
+        GraphOptions { learned_pairing: false, learned_corners: false, ..GraphOptions::default() }
+    }
+
     fn strokes_of(mask: Vec<bool>, n: usize) -> Vec<Vec<Point>> {
-        strokes_with(mask, n, &GraphOptions::default())
+        strokes_with(mask, n, &rules())
     }
 
     fn strokes_with(mask: Vec<bool>, n: usize, opts: &GraphOptions) -> Vec<Vec<Point>> {
@@ -245,7 +364,7 @@ mod tests {
         let with = strokes_of(m.clone(), n);
         assert_eq!(with.len(), 1, "{with:?}");
         // Pruned only by the corner rule: as an ordinary spur the stub would stay.
-        let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..GraphOptions::default() };
+        let plain = GraphOptions { corner_spur_factor: GraphOptions::default().spur_factor, ..rules() };
         assert!(strokes_with(m, n, &plain).len() > 1);
     }
 
@@ -265,7 +384,7 @@ mod tests {
         for &(a, b) in &segs {
             line(&mut m, 100, a, b, 4.0);
         }
-        let old = GraphOptions { open_box_min_ratio: 0.0, ..GraphOptions::default() };
+        let old = GraphOptions { open_box_min_ratio: 0.0, ..rules() };
         let o = strokes_with(m, 100, &old);
         assert_eq!(o.len(), 3, "without the rule the left side and the bottom are one: {o:?}");
         // 山: the 竖折's vertical leg is short against its bottom, so it stays one stroke.
@@ -304,6 +423,79 @@ mod tests {
         assert!(!o.split_box_corners);
         assert!(o.set("nope", 1.0).unwrap_err().contains("unknown skeleton option `nope`"));
         assert!(o.set("hook_ratio", f64::NAN).is_err());
+    }
+
+    #[test]
+    fn the_embedded_models_load() {
+        let m = SkeletonModels::embedded();
+        assert_eq!(m.pairs.features, FEATURE_NAMES);
+        assert_eq!(m.corners.features, CORNER_FEATURE_NAMES);
+        let p = m.pairs.probability(&m.pairs.mean);
+        assert!(p > 0.0 && p < 1.0);
+        assert!(SkeletonModels::from_json("{}").is_err());
+    }
+
+    /// The skeleton of a `+` (horizontal 10–86 at y 44–52, vertical 44–52 at y 8–88, 96²), its
+    /// cleaned graph and its one junction.
+    fn cross() -> (Vec<bool>, Vec<f32>, usize, Graph, usize) {
+        let n = 96;
+        let mut m = vec![false; n * n];
+        bar(&mut m, n, 10, 86, 44, 52);
+        bar(&mut m, n, 44, 52, 8, 88);
+        let dt = distance_to_background(&m, n, n);
+        let mut skel = m;
+        zhang_suen(&mut skel, n, n);
+        crate::thinning::remove_staircases(&mut skel, n, n);
+        let g = cleaned_graph(&skel, &dt, n, &GraphOptions::default());
+        let v = (0..g.nodes.len()).find(|&v| g.nodes[v].alive && degree(&g, v) == 4).expect("one 4-way junction");
+        (skel, dt, n, g, v)
+    }
+
+    #[test]
+    fn a_crossing_pairs_straight_through() {
+        let (skel, dt, n, g, v) = cross();
+        let frame = GlyphFrame::of(&skel, &dt, n);
+        let ends = graph::ends_at(&g, v);
+        let b = learned::branches(&g, v, &ends, &dt, n);
+        let model = &SkeletonModels::embedded().pairs;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                let straight = b[i].dir.dot(b[j].dir) < -0.9;
+                let x = learned::pair_features(&g, v, &b, (i, j), straight, &frame);
+                // Features: the cosine, the degree, the junction's place in the middle.
+                assert!((x[0] - b[i].dir.dot(b[j].dir)).abs() < 1e-12);
+                assert_eq!((x[10], x[11]), (0.0, 0.0), "four branches");
+                assert!((x[20] - 0.5).abs() < 0.1 && (x[21] - 0.5).abs() < 0.1, "{x:?}");
+                let p = model.probability(&x);
+                assert_eq!(p >= model.threshold, straight, "pair {i}-{j}: cos {} p {p}", x[0]);
+            }
+        }
+    }
+
+    #[test]
+    fn training_labels_come_from_the_medians() {
+        let (skel, dt, n, g, v) = cross();
+        let medians = vec![
+            vec![Point::new(12.0, 48.0), Point::new(84.0, 48.0)],
+            vec![Point::new(48.0, 10.0), Point::new(48.0, 86.0)],
+        ];
+        let labels = end_strokes(&g, &medians);
+        let ends = graph::ends_at(&g, v);
+        for &(e, d) in &ends {
+            let want = if d.x.abs() > d.y.abs() { 0 } else { 1 };
+            assert_eq!(labels[e], Some(want), "end leaving {d:?}");
+        }
+        // The same through the public API (medians in the em frame, 1024 units for 96 px).
+        let sk = Skeleton { skel, dt, n };
+        let em: Vec<Vec<Point>> = medians
+            .iter()
+            .map(|m| m.iter().map(|p| Point::new(p.x * 1024.0 / 96.0, p.y * 1024.0 / 96.0)).collect())
+            .collect();
+        let samples = sk.pair_samples(&GraphOptions::default(), &em);
+        assert_eq!(samples.len(), 6);
+        assert_eq!(samples.iter().filter(|s| s.label == Some(true)).count(), 2);
+        assert!(samples.iter().all(|s| s.label == Some(s.features[0] < -0.9)));
+        assert_eq!(sk.strokes_paired_by_medians(&GraphOptions::default(), &em).len(), 2);
     }
 
     #[test]

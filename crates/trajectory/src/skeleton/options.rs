@@ -11,7 +11,10 @@
 //! **report half (lines 1,001–2,000, never tuned on) 72.8 %**. The sweeps quoted per constant
 //! are from docs/trajectory.md, "Skeleton stroke counts on characters not used for tuning"
 //! (values → % right on the tuning half, with the base the row started from);
-//! `cargo xtask tidy` checks that the values there and here agree.
+//! `cargo xtask tidy` checks that the values there and here agree. The learned decisions
+//! (`learned_pairing`, `learned_corners`, on by default; their thresholds swept on the tuning
+//! half) come on top of these rules: see docs/trajectory.md, "Learned junction pairing and
+//! corner splitting".
 
 /// Tuning of the skeleton graph, relative to the local stroke half-width `w` (the distance
 /// transform at a junction).
@@ -67,6 +70,19 @@ pub struct GraphOptions {
     /// more than this much per unit run; a box's bottom (口, 日) rises a little too and is a
     /// stroke of its own.
     pub ti_min_rise: f64,
+    /// Pair branch ends at junctions of three or more branches with the learned model
+    /// ([`crate::skeleton::DecisionModel::embedded`], the hand rules' verdict one of its features)
+    /// instead of the hand rules alone (`straight_min_rad`, `pair_width_ratio`).
+    pub learned_pairing: bool,
+    /// Decide at each corner of a chain whether it splits with the learned model
+    /// ([`crate::skeleton::SkeletonModels::embedded`], the hand rules' verdicts among its
+    /// features) instead of the hand rules alone.
+    pub learned_corners: bool,
+    /// With `learned_pairing`, a pair continues through its junction when the model's
+    /// probability reaches this.
+    pub pair_threshold: f64,
+    /// With `learned_corners`, a corner splits when the model's probability reaches this.
+    pub corner_threshold: f64,
 }
 
 impl Default for GraphOptions {
@@ -87,6 +103,10 @@ impl Default for GraphOptions {
             pair_width_ratio: PAIR_WIDTH_RATIO,
             open_box_min_ratio: OPEN_BOX_MIN_RATIO,
             ti_min_rise: TI_MIN_RISE,
+            learned_pairing: true,
+            learned_corners: true,
+            pair_threshold: PAIR_THRESHOLD,
+            corner_threshold: CORNER_THRESHOLD,
         }
     }
 }
@@ -94,8 +114,8 @@ impl Default for GraphOptions {
 impl GraphOptions {
     /// Sets one option by name, for sweeps (`cargo xtask skeleton-counts --opts`): the field
     /// names above, with angles in degrees and named `*_deg` instead of `*_rad`
-    /// (`straight_min_deg`, `corner_deg`, `corner_spur_away_deg`); `split_box_corners` takes 0
-    /// or 1.
+    /// (`straight_min_deg`, `corner_deg`, `corner_spur_away_deg`); `split_box_corners`,
+    /// `learned_pairing` and `learned_corners` take 0 or 1.
     ///
     /// # Errors
     /// A message naming the key when it is unknown or the value is not finite.
@@ -119,6 +139,10 @@ impl GraphOptions {
             "pair_width_ratio" => self.pair_width_ratio = value,
             "open_box_min_ratio" => self.open_box_min_ratio = value,
             "ti_min_rise" => self.ti_min_rise = value,
+            "learned_pairing" => self.learned_pairing = value != 0.0,
+            "learned_corners" => self.learned_corners = value != 0.0,
+            "pair_threshold" => self.pair_threshold = value,
+            "corner_threshold" => self.corner_threshold = value,
             _ => return Err(format!("unknown skeleton option `{key}`")),
         }
         Ok(())
@@ -188,3 +212,14 @@ const OPEN_BOX_MIN_RATIO: f64 = 0.5;
 /// 提 rises by more than this per unit run ([`GraphOptions::ti_min_rise`]). Sweep from 75.1 %
 /// (0.2 before): 0.3 / 0.4 / 0.5 / 0.6 → 75.6 each; from 76.6 %: 0.2 → 76.1.
 const TI_MIN_RISE: f64 = 0.4;
+
+/// A pair of branch ends continues through its junction at this probability of the learned
+/// model ([`GraphOptions::pair_threshold`]). Sweep on the tuning half, corner threshold 0.5:
+/// 0.05 / 0.1 / 0.15 / 0.2 / 0.3 / 0.4 / 0.5 / 0.6 → 83.2 / 83.1 / 83.1 / **83.1** / 82.5 /
+/// 82.4 / 81.9 / 81.4 (the middle of the plateau kept).
+const PAIR_THRESHOLD: f64 = 0.2;
+
+/// A corner splits at this probability of the learned model ([`GraphOptions::corner_threshold`]).
+/// Sweep on the tuning half, pair threshold 0.5: 0.4 / 0.5 / 0.6 / 0.7 / 0.8 → 81.1 / **81.9** /
+/// 81.6 / 81.6 / 82.0; pair threshold 0.3: 0.5 / 0.6 / 0.8 → 82.5 / 82.2 / 82.5.
+const CORNER_THRESHOLD: f64 = 0.5;
