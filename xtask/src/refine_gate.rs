@@ -12,8 +12,8 @@ use trajectory::{CharBox, Method, glyph};
 use crate::gates::{Better, Figure, Figures};
 
 /// The characters the refinement gate writes: the first four gate characters (one stroke-rich,
-/// one short, two with crossings). At the default settings each refines in about 1.3 s on one
-/// core, so the gate takes a few seconds on two.
+/// one short, two with crossings). At the default settings (256² analysis raster) each refines
+/// in about 1.4 s of CPU on one core, so the gate takes a few seconds on two.
 pub const REFINE_GATE_CHARS: &str = "永字八十";
 
 /// Refinement figures on [`REFINE_GATE_CHARS`] (medians, B-BSM, 256², default refinement):
