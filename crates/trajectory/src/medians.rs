@@ -136,12 +136,18 @@ pub(crate) fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) 
 pub(crate) const END_CAP_FRACTION: f64 = 0.65;
 
 /// Continues both ends of a centre line outward (see [`END_CAP_FRACTION`]), one em unit at a time.
-pub(crate) fn extend_ends(
+pub(crate) fn extend_ends(p: Vec<Point>, w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
+    extend_ends_by(p, w, |end, u, w_end| run_out(end, u, w_end, dt, n, px_to_em))
+}
+
+/// Continues both ends of a centre line outward with `run_out(end, unit direction, end
+/// half-width)`, which returns the new points and half-widths (em) in order away from the end.
+/// Each end's direction is taken over its last (up to) three segments; an end with no length or
+/// no width is left as it is.
+pub(crate) fn extend_ends_by(
     mut p: Vec<Point>,
     mut w: Vec<f64>,
-    dt: &[f32],
-    n: usize,
-    px_to_em: f64,
+    run_out: impl Fn(Point, Vec2, f64) -> Vec<(Point, f64)>,
 ) -> (Vec<Point>, Vec<f64>) {
     if p.len() < 2 {
         return (p, w);
@@ -152,7 +158,7 @@ pub(crate) fn extend_ends(
         if len < 1e-9 || w_end <= 0.0 {
             return Vec::new();
         }
-        run_out(end, d / len, w_end, dt, n, px_to_em)
+        run_out(end, d / len, w_end)
     };
     let k = (p.len() - 1).min(3);
     let tail = march(p[p.len() - 1], p[p.len() - 1 - k], w[w.len() - 1]);

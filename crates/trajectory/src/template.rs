@@ -358,30 +358,8 @@ fn own_margin_px(line: &[Point], dt: &[f32], outline: &[bool], n: usize, px_to_e
 /// outline and the end's half-width: a blunt or swollen terminal keeps its width out to the cap,
 /// a taper narrows. (The medians method's [`crate::medians::extend_ends`] stops at 0.65 of the
 /// width with the distance as the width, tuned on hanzi-writer's shapes.)
-fn extend_ends_own(mut p: Vec<Point>, mut w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
-    if p.len() < 2 {
-        return (p, w);
-    }
-    let k = (p.len() - 1).min(3);
-    let march = |end: Point, before: Point, w_end: f64| -> Vec<(Point, f64)> {
-        let d = end - before;
-        let len = d.hypot();
-        if len < 1e-9 || w_end <= 0.0 {
-            return Vec::new();
-        }
-        run_out_own(end, d / len, w_end, dt, n, px_to_em)
-    };
-    let tail = march(p[p.len() - 1], p[p.len() - 1 - k], w[w.len() - 1]);
-    for (q, v) in tail {
-        p.push(q);
-        w.push(v);
-    }
-    let head = march(p[0], p[k], w[0]);
-    for (q, v) in head {
-        p.insert(0, q);
-        w.insert(0, v);
-    }
-    (p, w)
+fn extend_ends_own(p: Vec<Point>, w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> (Vec<Point>, Vec<f64>) {
+    crate::medians::extend_ends_by(p, w, |end, u, w_end| run_out_own(end, u, w_end, dt, n, px_to_em))
 }
 
 /// The run-out of [`extend_ends_own`] from `from` along the unit direction `u`: points and

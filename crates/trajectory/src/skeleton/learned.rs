@@ -27,7 +27,7 @@ use crate::polyline::length;
 /// The compiled-in models (see the module doc).
 static MODELS_JSON: &str = include_str!("../../data/skeleton-models.json");
 
-/// Names of the features of one candidate pair, in [`pair_features`]' order. "thin" and "thick"
+/// Names of the features of one candidate pair, in the order the pair features are computed. "thin" and "thick"
 /// are the pair's two branches ordered by their half-width (measured one to three junction
 /// half-widths out); "dir" is the unit direction a branch leaves the junction in.
 pub const FEATURE_NAMES: [&str; NUM_FEATURES] = [
@@ -58,7 +58,7 @@ pub const FEATURE_NAMES: [&str; NUM_FEATURES] = [
     "thick_turn",     // the same, thicker branch
 ];
 
-/// How many features [`pair_features`] returns.
+/// How many features a candidate pair has ([`FEATURE_NAMES`]).
 pub const NUM_FEATURES: usize = 25;
 
 /// The skeleton's two learned decisions, as compiled in: junction pairing and corner splitting.

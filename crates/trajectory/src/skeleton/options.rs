@@ -71,7 +71,7 @@ pub struct GraphOptions {
     /// stroke of its own.
     pub ti_min_rise: f64,
     /// Pair branch ends at junctions of three or more branches with the learned model
-    /// ([`crate::skeleton::DecisionModel::embedded`], the hand rules' verdict one of its features)
+    /// ([`crate::SkeletonModels::embedded`], the hand rules' verdict one of its features)
     /// instead of the hand rules alone (`straight_min_rad`, `pair_width_ratio`).
     pub learned_pairing: bool,
     /// Decide at each corner of a chain whether it splits with the learned model
