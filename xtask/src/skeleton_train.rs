@@ -90,7 +90,7 @@ pub fn run(args: &[String]) -> Result<()> {
         corners,
     };
     let json = serde_json::to_string_pretty(&models)?;
-    SkeletonModels::from_json(&json).map_err(|e| anyhow::anyhow!(e))?;
+    SkeletonModels::from_json(&json).context("the trained models do not read back")?;
     write_atomic(&out, json.as_bytes())?;
     eprintln!("wrote {} (rebuild the trajectory crate to use it)", out.display());
     Ok(())

@@ -66,7 +66,7 @@ pub use paper::{CharBox, auto_char_mm};
 pub use path::{CORNER_RAD, CORNER_REACH_EM, StrokePath, find_corners};
 pub use skeleton::{
     CORNER_FEATURE_NAMES, CornerSample, DecisionModel, FEATURE_NAMES, GraphOptions, NUM_CORNER_FEATURES, NUM_FEATURES,
-    PairSample, Skeleton, SkeletonModels,
+    PairSample, Skeleton, SkeletonModelError, SkeletonModels,
 };
 pub use template::{Registration, StrokeFit, TemplateOptions};
 pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track};

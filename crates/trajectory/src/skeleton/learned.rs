@@ -61,6 +61,32 @@ pub const FEATURE_NAMES: [&str; NUM_FEATURES] = [
 /// How many features a candidate pair has ([`FEATURE_NAMES`]).
 pub const NUM_FEATURES: usize = 25;
 
+/// Why a skeleton model file was refused ([`SkeletonModels::from_json`]).
+#[derive(Debug, thiserror::Error)]
+pub enum SkeletonModelError {
+    /// The text is not JSON of the model format.
+    #[error("skeleton models: not the model file format")]
+    Json(#[source] serde_json::Error),
+    /// A model reads other features than this build computes (a file from another version).
+    #[error("skeleton model `{model}`: features {found:?}, expected {expected:?}")]
+    Features {
+        /// Which model: `pairs` or `corners`.
+        model: &'static str,
+        /// The features the file names.
+        found: Vec<String>,
+        /// The features this build computes, in order.
+        expected: Vec<String>,
+    },
+    /// A model's layer sizes do not fit its features (or a scale is not positive).
+    #[error("skeleton model `{model}`: layer sizes do not fit its {features} features (or a scale is not positive)")]
+    Sizes {
+        /// Which model: `pairs` or `corners`.
+        model: &'static str,
+        /// How many features it reads.
+        features: usize,
+    },
+}
+
 /// The skeleton's two learned decisions, as compiled in: junction pairing and corner splitting.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SkeletonModels {
@@ -76,11 +102,13 @@ impl SkeletonModels {
     /// Parses and checks a model file's text (each model as [`DecisionModel::check`]).
     ///
     /// # Errors
-    /// A message naming what is wrong.
-    pub fn from_json(text: &str) -> Result<SkeletonModels, String> {
-        let m: SkeletonModels = serde_json::from_str(text).map_err(|e| format!("skeleton models: {e}"))?;
-        m.pairs.check(&FEATURE_NAMES).map_err(|e| format!("skeleton models, pairs: {e}"))?;
-        m.corners.check(&CORNER_FEATURE_NAMES).map_err(|e| format!("skeleton models, corners: {e}"))?;
+    /// [`SkeletonModelError::Json`] when the text is not the model format;
+    /// [`SkeletonModelError::Features`] or [`SkeletonModelError::Sizes`] when a model does not
+    /// fit the features this build computes.
+    pub fn from_json(text: &str) -> Result<SkeletonModels, SkeletonModelError> {
+        let m: SkeletonModels = serde_json::from_str(text).map_err(SkeletonModelError::Json)?;
+        m.pairs.check("pairs", &FEATURE_NAMES)?;
+        m.corners.check("corners", &CORNER_FEATURE_NAMES)?;
         Ok(m)
     }
 
@@ -120,13 +148,19 @@ pub struct DecisionModel {
 }
 
 impl DecisionModel {
-    /// Checks that the model reads the features `names` and that its layer sizes fit.
+    /// Checks that the model reads the features `names` and that its layer sizes fit; `which`
+    /// names the model in the error (`pairs`, `corners`).
     ///
     /// # Errors
-    /// A message naming what is wrong.
-    pub fn check(&self, names: &[&str]) -> Result<(), String> {
+    /// [`SkeletonModelError::Features`] when the model reads other features than `names`,
+    /// [`SkeletonModelError::Sizes`] when its layers do not fit them.
+    pub fn check(&self, which: &'static str, names: &[&str]) -> Result<(), SkeletonModelError> {
         if self.features != names {
-            return Err(format!("features {:?}, expected {:?}", self.features, names));
+            return Err(SkeletonModelError::Features {
+                model: which,
+                found: self.features.clone(),
+                expected: names.iter().map(|n| n.to_string()).collect(),
+            });
         }
         let f = names.len();
         let sizes_ok = self.mean.len() == f
@@ -136,7 +170,7 @@ impl DecisionModel {
             && self.hidden_bias.len() == self.hidden.len()
             && self.out.len() == if self.hidden.is_empty() { f } else { self.hidden.len() };
         if !sizes_ok {
-            return Err("layer sizes do not fit the features".into());
+            return Err(SkeletonModelError::Sizes { model: which, features: f });
         }
         Ok(())
     }

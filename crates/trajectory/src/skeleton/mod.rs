@@ -21,7 +21,8 @@ mod order;
 use kurbo::Point;
 
 pub use learned::{
-    CORNER_FEATURE_NAMES, DecisionModel, FEATURE_NAMES, NUM_CORNER_FEATURES, NUM_FEATURES, SkeletonModels,
+    CORNER_FEATURE_NAMES, DecisionModel, FEATURE_NAMES, NUM_CORNER_FEATURES, NUM_FEATURES, SkeletonModelError,
+    SkeletonModels,
 };
 pub use options::GraphOptions;
 
@@ -432,7 +433,17 @@ mod tests {
         assert_eq!(m.corners.features, CORNER_FEATURE_NAMES);
         let p = m.pairs.probability(&m.pairs.mean);
         assert!(p > 0.0 && p < 1.0);
-        assert!(SkeletonModels::from_json("{}").is_err());
+        assert!(matches!(SkeletonModels::from_json("{}"), Err(SkeletonModelError::Json(_))));
+        // A file from another version (a feature renamed) or with a layer cut short is refused,
+        // naming the model.
+        let mut other = m.clone();
+        other.corners.features[0] = "something else".into();
+        let e = SkeletonModels::from_json(&serde_json::to_string(&other).unwrap()).unwrap_err();
+        assert!(matches!(e, SkeletonModelError::Features { model: "corners", .. }), "{e}");
+        let mut short = m.clone();
+        short.pairs.hidden_bias.pop();
+        let e = SkeletonModels::from_json(&serde_json::to_string(&short).unwrap()).unwrap_err();
+        assert!(e.to_string().contains("skeleton model `pairs`: layer sizes"), "{e}");
     }
 
     /// The skeleton of a `+` (horizontal 10–86 at y 44–52, vertical 44–52 at y 8–88, 96²), its
