@@ -619,33 +619,29 @@ impl<'a> Problem<'a> {
                                 None => {}
                             }
                         }
-                        if want_edges {
+                        let c = if want_edges {
                             let m = f.shape.measure_grad_with(u, v, &wb);
                             let (c, dc) = edge(m.d, e);
-                            if c >= 1.0 {
-                                sat[k] += 1;
-                            } else if c > 0.0 {
-                                s[k] += (1.0 - c).ln();
-                                if dc != 0.0 {
-                                    let [gu, gv, glt, glh, glr] = m.grad;
-                                    list.push(EdgePx {
-                                        k: k as u32,
-                                        one_minus_c: 1.0 - c,
-                                        dc,
-                                        a: [
-                                            -f.cb * gu + f.sb * gv,
-                                            -f.sb * gu - f.cb * gv,
-                                            glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
-                                            glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
-                                            // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
-                                            gu * v - gv * u,
-                                        ],
-                                    });
-                                }
+                            if c > 0.0 && c < 1.0 && dc != 0.0 {
+                                let [gu, gv, glt, glh, glr] = m.grad;
+                                list.push(EdgePx {
+                                    k: k as u32,
+                                    one_minus_c: 1.0 - c,
+                                    dc,
+                                    a: [
+                                        -f.cb * gu + f.sb * gv,
+                                        -f.sb * gu - f.cb * gv,
+                                        glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
+                                        glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
+                                        // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
+                                        gu * v - gv * u,
+                                    ],
+                                });
                             }
-                            return;
-                        }
-                        let (c, _) = edge(f.shape.measure(u, v), e);
+                            c
+                        } else {
+                            edge(f.shape.measure(u, v), e).0
+                        };
                         if c >= 1.0 {
                             sat[k] += 1;
                         } else if c > 0.0 {
