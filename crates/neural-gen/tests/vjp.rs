@@ -21,6 +21,28 @@ fn upstream(n: usize, s: usize) -> Vec<f32> {
     (0..n * s * s).map(|i| ((i * 7919) % 101) as f32 / 101.0 - 0.3).collect()
 }
 
+/// The forward-mode Jacobian of `ps` contracted with `up` (images of side `s`) gives the VJPs
+/// `grads`, to 1e-3 relative; `what` names the case in a failure. Returns the Jacobian.
+fn assert_jacobian_matches_vjp(
+    net: &InputVjp,
+    ps: &[Press],
+    up: &[f32],
+    s: usize,
+    grads: &[[f64; 3]],
+    what: &str,
+) -> Vec<f32> {
+    let jac = net.jacobian(&net.forward(ps));
+    for i in 0..ps.len() {
+        for k in 0..3 {
+            let col = &jac[(i * 3 + k) * s * s..(i * 3 + k + 1) * s * s];
+            let p: f64 = col.iter().zip(&up[i * s * s..(i + 1) * s * s]).map(|(a, b)| *a as f64 * *b as f64).sum();
+            let tol = 1e-3 * grads[i][k].abs().max(1.0);
+            assert!((p - grads[i][k]).abs() < tol, "{what} press {i} ∂{k}: Jacobian {p} vs VJP {}", grads[i][k]);
+        }
+    }
+    jac
+}
+
 #[test]
 fn batched_vjps_equal_the_single_press_vjp() {
     let g = tiny(3);
@@ -51,15 +73,7 @@ fn batched_vjps_equal_the_single_press_vjp() {
     assert_eq!(part[0], grads[1]);
     assert_eq!(tape.image(1), imgs[2].data());
     // The forward-mode Jacobian gives the same products.
-    let jac = net.jacobian(&net.forward(&ps));
-    for i in 0..ps.len() {
-        for k in 0..3 {
-            let col = &jac[(i * 3 + k) * s * s..(i * 3 + k + 1) * s * s];
-            let p: f64 = col.iter().zip(&up[i * s * s..(i + 1) * s * s]).map(|(a, b)| *a as f64 * *b as f64).sum();
-            let tol = 1e-3 * grads[i][k].abs().max(1.0);
-            assert!((p - grads[i][k]).abs() < tol, "press {i} ∂{k}: Jacobian {p} vs VJP {}", grads[i][k]);
-        }
-    }
+    let jac = assert_jacobian_matches_vjp(&net, &ps, &up, s, &grads, "tiny");
     // Only the marked columns, the same numbers.
     let some = net.jacobian_of(&net.forward(&ps), [true, false, true]);
     for i in 0..ps.len() {
@@ -144,14 +158,6 @@ fn odd_architectures_match_candle_autograd() {
         }
         // The forward-mode Jacobian agrees with the VJP here too.
         let net = InputVjp::new(&g).unwrap();
-        let jac = net.jacobian(&net.forward(&ps));
-        for i in 0..ps.len() {
-            for k in 0..3 {
-                let col = &jac[(i * 3 + k) * s * s..(i * 3 + k + 1) * s * s];
-                let p: f64 = col.iter().zip(&up[i * s * s..(i + 1) * s * s]).map(|(a, b)| *a as f64 * *b as f64).sum();
-                let tol = 1e-3 * grads[i][k].abs().max(1.0);
-                assert!((p - grads[i][k]).abs() < tol, "arch {ai} press {i} ∂{k}: Jacobian {p} vs VJP {}", grads[i][k]);
-            }
-        }
+        assert_jacobian_matches_vjp(&net, &ps, &up, s, &grads, &format!("arch {ai}"));
     }
 }
