@@ -5,6 +5,7 @@ use std::process::ExitCode;
 mod bench;
 mod fixtures;
 mod gates;
+mod io;
 mod refine_gate;
 mod rng;
 mod skeleton_counts;

@@ -2,13 +2,14 @@
 //! hanzi-writer's medians, on a named character set, for the default skeleton rules and any
 //! variants of them (a sweep computes each glyph's skeleton once and runs every variant on it).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, glyph};
+
+use crate::io::{char_bar, write_atomic};
 
 const HELP: &str = "\
 cargo xtask skeleton-counts [--hanzi-data DIR] [--set FILE|embedded] [--lines A-B]
@@ -136,13 +137,7 @@ pub fn run(args: &[String]) -> Result<()> {
         Some(dir) => glyph::from_hanzi_dir(dir, c),
         None => glyph::embedded(c),
     };
-    let pb = ProgressBar::new(chars.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({per_sec}, {eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    pb.set_message("skeletons");
+    let pb = char_bar(chars.len(), "skeletons");
     // Per character: the medians' count and each variant's count.
     let counts: Vec<(char, usize, Vec<usize>)> = chars
         .par_iter()
@@ -209,15 +204,5 @@ pub fn run(args: &[String]) -> Result<()> {
     };
     write_atomic(&json, serde_json::to_string_pretty(&report)?.as_bytes())?;
     eprintln!("wrote {}", json.display());
-    Ok(())
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-    }
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, bytes).with_context(|| tmp.display().to_string())?;
-    std::fs::rename(&tmp, path).with_context(|| path.display().to_string())?;
     Ok(())
 }

@@ -7,13 +7,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use trajectory::{
     CORNER_FEATURE_NAMES, DEFAULT_ANALYSIS_PX, DecisionModel, FEATURE_NAMES, GraphOptions, Skeleton, SkeletonModels,
     glyph,
 };
 
+use crate::io::{char_bar, write_atomic};
 use crate::rng::SplitMix;
 
 const HELP: &str = "\
@@ -165,13 +165,7 @@ fn collect(
     what: &str,
     samples: impl Fn(&Skeleton, &[Vec<kurbo::Point>]) -> Vec<(Vec<f64>, bool)> + Sync,
 ) -> Result<Vec<Sample>> {
-    let pb = ProgressBar::new(chars.len() as u64);
-    pb.set_style(
-        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({per_sec}, {eta})")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    pb.set_message(what.to_string());
+    let pb = char_bar(chars.len(), what);
     let per_char: Vec<Vec<Sample>> = chars
         .par_iter()
         .enumerate()
@@ -278,14 +272,4 @@ fn fit(names: &[&str], xs: &[Vec<f64>], ys: &[bool], hidden: usize, epochs: usiz
         out_bias: p[o0 + n_out],
         threshold: 0.5,
     }
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-    }
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, bytes).with_context(|| tmp.display().to_string())?;
-    std::fs::rename(&tmp, path).with_context(|| path.display().to_string())?;
-    Ok(())
 }

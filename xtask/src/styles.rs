@@ -19,6 +19,8 @@ use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
 use trajectory::{CharBox, Glyph, GlyphError, Method, glyph};
 
+use crate::io::write_atomic;
+
 const HELP: &str = "\
 cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --chars-file FILE]
                    [--skip N] [--take N] [--methods skeleton,template] [--scan] [--execute]
@@ -306,9 +308,7 @@ pub fn run(args: &[String]) -> Result<()> {
             "fonts": fonts, "hanzi_data": hanzi, "skip": skip, "take": take, "size": size,
             "scored": if execute { "executed" } else { "planned" }, "summary": summaries, "chars": rows,
         });
-        let tmp = path.with_extension("json.tmp");
-        std::fs::write(&tmp, serde_json::to_string_pretty(&doc)?).with_context(|| tmp.display().to_string())?;
-        std::fs::rename(&tmp, &path).with_context(|| path.display().to_string())?;
+        write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     }
     Ok(())
 }
