@@ -64,15 +64,10 @@ fn pair_at(
     let rules = rule_pairs(g, &ends, dt, n, opts);
     let scored: Vec<(f64, usize, usize)> = match pairing {
         Pairing::Model(model, frame) if ends.len() >= 3 => {
-            let b = branches(g, v, &ends, dt, n);
-            let mut out = Vec::new();
-            for i in 0..b.len() {
-                for j in i + 1..b.len() {
-                    let rule = rules.contains(&(b[i].end, b[j].end));
-                    let x = pair_features(g, v, &b, (i, j), rule, frame);
-                    out.push((model.probability(&x), b[i].end, b[j].end));
-                }
-            }
+            let out = junction_pairs(g, v, &ends, &rules, dt, n, frame)
+                .into_iter()
+                .map(|(x, y, f)| (model.probability(&f), x, y))
+                .collect();
             pair_greedily(out, opts.pair_threshold, partner, UNPAIRED);
             return;
         }
@@ -148,17 +143,35 @@ pub(super) fn pair_samples(
             continue;
         }
         let rules = rule_pairs(g, &ends, dt, n, opts);
-        let b = branches(g, v, &ends, dt, n);
-        for i in 0..b.len() {
-            for j in i + 1..b.len() {
-                let rule = rules.contains(&(b[i].end, b[j].end));
-                let x = pair_features(g, v, &b, (i, j), rule, frame);
-                let label = match (labels[b[i].end], labels[b[j].end]) {
-                    (Some(a), Some(c)) => Some(a == c),
-                    _ => None,
-                };
-                out.push((x, label));
-            }
+        for (x, y, f) in junction_pairs(g, v, &ends, &rules, dt, n, frame) {
+            let label = match (labels[x], labels[y]) {
+                (Some(a), Some(c)) => Some(a == c),
+                _ => None,
+            };
+            out.push((f, label));
+        }
+    }
+    out
+}
+
+/// Every pair of branches at junction `v` (branch `ends` as [`ends_at`] gives them): its two
+/// end ids and its features, among them whether the hand rules pair it (`rules`, from
+/// [`rule_pairs`]).
+fn junction_pairs(
+    g: &Graph,
+    v: usize,
+    ends: &[(usize, Vec2)],
+    rules: &[(usize, usize)],
+    dt: &[f32],
+    n: usize,
+    frame: &GlyphFrame,
+) -> Vec<(usize, usize, [f64; NUM_FEATURES])> {
+    let b = branches(g, v, ends, dt, n);
+    let mut out = Vec::new();
+    for i in 0..b.len() {
+        for j in i + 1..b.len() {
+            let rule = rules.contains(&(b[i].end, b[j].end));
+            out.push((b[i].end, b[j].end, pair_features(g, v, &b, (i, j), rule, frame)));
         }
     }
     out

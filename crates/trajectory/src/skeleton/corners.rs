@@ -43,14 +43,13 @@ pub(super) fn split_at_corners(
     let rule_splits = chain.splits(&corners, &verdicts, junctions);
     let splits: Vec<usize> = match mode {
         CornerSplit::Rules => rule_splits,
-        CornerSplit::Model(model, frame) => (0..corners.len())
-            .filter(|&k| {
-                let ctx =
-                    CornerContext { corners: &corners, verdicts: &verdicts, rule_splits: &rule_splits, junctions };
-                model.probability(&chain.corner_features(k, &ctx, opts, frame)) >= opts.corner_threshold
-            })
-            .map(|k| corners[k])
-            .collect(),
+        CornerSplit::Model(model, frame) => {
+            let ctx = CornerContext { corners: &corners, verdicts: &verdicts, rule_splits: &rule_splits, junctions };
+            (0..corners.len())
+                .filter(|&k| model.probability(&chain.corner_features(k, &ctx, opts, frame)) >= opts.corner_threshold)
+                .map(|k| corners[k])
+                .collect()
+        }
         CornerSplit::Labels(medians) => corners
             .iter()
             .copied()
@@ -322,33 +321,29 @@ impl<'a> Chain<'a> {
     /// `None` when either is unknown: the training label.
     fn label(&self, i: usize, medians: &[Vec<Point>]) -> Option<bool> {
         let w = self.width(self.p[i]);
-        let side = |sign: f64| {
-            let pts: Vec<Point> = (0..)
-                .map(|k| w + k as f64)
-                .take_while(|&t| t <= 4.0 * w)
-                .map(|t| self.s[i] + sign * t)
-                .filter(|&u| self.closed || (0.0..=self.s[self.last()]).contains(&u))
-                .map(|u| self.at(u))
-                .collect();
-            stroke_along(&pts, medians, w)
-        };
+        let side = |sign: f64| stroke_along(&self.leg_points(i, sign, 4.0).collect::<Vec<_>>(), medians, w);
         Some(side(-1.0)? != side(1.0)?)
+    }
+
+    /// Points along one leg of corner `i` (`sign` −1: before it), one px apart from one
+    /// half-width out to `reach` half-widths, within the chain (or round a closed one).
+    fn leg_points(&self, i: usize, sign: f64, reach: f64) -> impl Iterator<Item = Point> + '_ {
+        let w = self.width(self.p[i]);
+        let (at, end) = (self.s[i], self.s[self.last()]);
+        (0..)
+            .map(move |k| w + k as f64)
+            .take_while(move |&t| t <= reach * w)
+            .map(move |t| at + sign * t)
+            .filter(move |&u| self.closed || (0.0..=end).contains(&u))
+            .map(move |u| self.at(u))
     }
 
     /// Mean half-width (px) along one leg of corner `i`, one to three half-widths out (`sign`
     /// −1: before it).
     fn leg_width(&self, i: usize, sign: f64) -> f64 {
         let w = self.width(self.p[i]);
-        let ws: Vec<f64> = (0..)
-            .map(|k| w + k as f64)
-            .take_while(|&t| t <= 3.0 * w)
-            .map(|t| self.s[i] + sign * t)
-            .filter(|&u| self.closed || (0.0..=self.s[self.last()]).contains(&u))
-            .map(|u| {
-                let q = self.at(u);
-                crate::distance::sample(self.dt, self.n, self.n, q.x, q.y)
-            })
-            .collect();
+        let ws: Vec<f64> =
+            self.leg_points(i, sign, 3.0).map(|q| crate::distance::sample(self.dt, self.n, self.n, q.x, q.y)).collect();
         if ws.is_empty() { w } else { ws.iter().sum::<f64>() / ws.len() as f64 }
     }
 

@@ -186,8 +186,8 @@ impl Skeleton {
     /// measurements only (it needs the answer).
     pub fn strokes_paired_by_medians(&self, opts: &GraphOptions, medians_em: &[Vec<Point>]) -> Vec<Vec<Point>> {
         let g = cleaned_graph(&self.skel, &self.dt, self.n, opts);
-        let labels = end_strokes(&g, &self.medians_px(medians_em));
         let medians = self.medians_px(medians_em);
+        let labels = end_strokes(&g, &medians);
         let corners = if opts.learned_corners { CornerSplit::Labels(&medians) } else { CornerSplit::Rules };
         let pairing = if opts.learned_pairing { Pairing::Labels(&labels) } else { Pairing::Rules };
         strokes_of_graph(&g, &self.dt, self.n, opts, pairing, corners)
