@@ -273,3 +273,38 @@ fn fit(names: &[&str], xs: &[Vec<f64>], ys: &[bool], hidden: usize, epochs: usiz
         threshold: 0.5,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(v: &[&str]) -> Vec<String> {
+        v.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// Bad input is refused with a message naming the argument, and nothing is written.
+    #[test]
+    fn bad_input_names_the_argument_and_writes_nothing() {
+        let tmp = std::env::temp_dir().join(format!("maobi-skeleton-train-{}", std::process::id()));
+        std::fs::create_dir_all(&tmp).unwrap();
+        let out = tmp.join("models.json");
+        let heldout = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/hanzi/heldout-2000.txt");
+        let (o, h) = (out.to_str().unwrap(), heldout.to_str().unwrap());
+        let err = |v: &[&str]| format!("{:#}", run(&args(v)).unwrap_err());
+
+        assert!(err(&["--out", o]).contains("--hanzi-data DIR is required"));
+        assert!(err(&["--hanzi-data"]).contains("--hanzi-data needs a value"));
+        assert!(err(&["--bogus"]).contains("unknown argument `--bogus`"));
+        assert!(err(&["--hidden", "many"]).contains("--hidden"));
+        let missing = tmp.join("no-such-dir");
+        let e = err(&["--hanzi-data", missing.to_str().unwrap(), "--heldout", h, "--out", o]);
+        assert!(e.contains("--hanzi-data") && e.contains("no-such-dir"), "{e}");
+        // A folder without <char>.json files: no training characters.
+        let e = err(&["--hanzi-data", tmp.to_str().unwrap(), "--heldout", h, "--out", o]);
+        assert!(e.contains("no training characters"), "{e}");
+        let e = err(&["--hanzi-data", tmp.to_str().unwrap(), "--heldout", "/no/such/heldout.txt", "--out", o]);
+        assert!(e.contains("--heldout /no/such/heldout.txt"), "{e}");
+        assert!(!out.exists() && !out.with_extension("json.tmp").exists());
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+}
