@@ -165,6 +165,9 @@ pub struct RefineOptions {
     /// The optimiser's floor under a gradient's scale, as a multiple of the root mean square of
     /// the first gradient over variables of the same kind (positions, depths, tilts).
     pub grad_floor: f64,
+    /// Reset the optimiser's floor ([`Self::grad_floor`]) from the present gradient every this
+    /// many steps (at a direction re-derivation; 0: only from the first gradient).
+    pub floor_every: usize,
     /// Width (σ) of the Gaussian that smooths each gradient along the track, mm
     /// ([`Problem::smooth_gradient`]); 0 turns it off.
     pub gradient_sigma_mm: f64,
@@ -172,6 +175,14 @@ pub struct RefineOptions {
     /// sample it aims at (the forward model's rule with that sample held), instead of holding
     /// the angle fixed.
     pub aim_coupling: bool,
+    /// With [`Self::aim_coupling`], also couple the footprints the drag rule aims at the
+    /// farthest sample since touch-down (before the brush has moved its reach: a stroke's
+    /// first footprints) to that sample, instead of holding their angle.
+    pub aim_far: bool,
+    /// With [`Self::aim_coupling`], let each aim slide along the path as the footprint's length
+    /// changes with its depth and tilt (the drag rule's reach is a share of that length), so
+    /// the gradient with respect to depth sees the turn of the footprint that follows.
+    pub aim_reach: bool,
     /// Where the image term and its gradient come from (the judge is never this: callers
     /// score with the analytic renderer and the executed simulation).
     pub gradients: Gradients,
@@ -205,8 +216,11 @@ impl Default for RefineOptions {
             barrier_weight: 1e-3,
             rederive_every: 5,
             grad_floor: 10.0,
+            floor_every: 0,
             gradient_sigma_mm: 8.0,
             aim_coupling: true,
+            aim_far: true,
+            aim_reach: false,
             gradients: Gradients::Analytic,
         }
     }
@@ -316,7 +330,7 @@ fn run(problem: Problem<'_>, opts: &RefineOptions, t0: Instant) -> Result<Refine
         }
         problem.smooth_gradient(&mut grad, opts.gradient_sigma_mm);
         curve.push(loss);
-        if it == 0 {
+        if it == 0 || (opts.floor_every > 0 && it % opts.floor_every == 0) {
             adam.set_floors(&grad, &problem.kinds(), opts.grad_floor);
         }
         adam.step(&mut theta, &grad, &steps);

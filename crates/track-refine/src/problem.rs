@@ -128,6 +128,11 @@ pub struct Directions {
     /// sample and its fraction along that segment. With [`RefineOptions::aim_coupling`] the
     /// direction follows the point and its aim inside a step; `None` keeps the angle.
     pub aim: Vec<Option<(usize, usize, f64)>>,
+    /// With [`RefineOptions::aim_reach`], how each aim slides along the path when the footprint's
+    /// length (so the drag rule's reach) changes: the aim moves by `(reach − r₀)·(kx, ky)` mm,
+    /// `[kx, ky, r₀]` (`k` the backward tangent over its cosine with the aim's direction, `r₀`
+    /// the reach when the directions were derived); zero where the aim does not depend on it.
+    pub slide: Vec<[f64; 3]>,
     /// The track at the iterate, every β as the forward model derives it.
     pub track: Track,
 }
@@ -458,12 +463,19 @@ impl<'a> Problem<'a> {
             })
             .collect();
         let beta_rad: Vec<f64> = self.pressed.iter().map(|&(s, i)| strokes[s].points[i].beta_rad).collect();
-        let aim = if self.opts.aim_coupling {
-            self.pressed.iter().zip(&beta_rad).map(|(&(s, i), &b)| self.find_aim(&strokes[s].points, s, i, b)).collect()
+        let (aim, slide) = if self.opts.aim_coupling {
+            self.pressed
+                .iter()
+                .zip(&beta_rad)
+                .map(|(&(s, i), &b)| match self.find_aim(&strokes[s].points, s, i, b) {
+                    Some((a, k)) => (Some(a), k),
+                    None => (None, [0.0; 3]),
+                })
+                .unzip()
         } else {
-            vec![None; beta_rad.len()]
+            (vec![None; beta_rad.len()], vec![[0.0; 3]; beta_rad.len()])
         };
-        Directions { beta_rad, aim, track: Track { strokes } }
+        Directions { beta_rad, aim, slide, track: Track { strokes } }
     }
 
     /// The path sample an upright brush's footprint at point `i` aims at under the forward
@@ -471,12 +483,15 @@ impl<'a> Problem<'a> {
     /// at least `trail_reach` footprint lengths away), found by sampling the path as the model
     /// does; `None` where another rule set the direction or the found sample disagrees with
     /// `beta` (then the angle is kept fixed).
-    fn find_aim(&self, pts: &[TrackPoint], s: usize, i: usize, beta: f64) -> Option<(usize, usize, f64)> {
+    fn find_aim(&self, pts: &[TrackPoint], s: usize, i: usize, beta: f64) -> Option<((usize, usize, f64), [f64; 3])> {
         let model = ForwardModel::default();
         let p = pts[i];
         let len = self.profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?.length_mm();
         let reach = model.trail_reach * len;
-        for k in (0..i).rev() {
+        // The farthest sample so far (the drag rule's fallback before the brush has moved
+        // `reach` since touch-down): distance, segment's groups, fraction.
+        let mut far: Option<(f64, [f64; 2], usize, usize, f64)> = None;
+        'walk: for k in (0..i).rev() {
             let (a, b) = (pts[k], pts[k + 1]);
             let d = (b.x_mm - a.x_mm).hypot(b.y_mm - a.y_mm);
             let turn = axis_angle(&a, &b);
@@ -490,19 +505,55 @@ impl<'a> Problem<'a> {
                 let f = m as f64 / n as f64;
                 let h = a.h_mm + f * (b.h_mm - a.h_mm);
                 if !(h > 0.0) {
-                    return None;
+                    break 'walk;
                 }
                 let (x, y) = (a.x_mm + f * (b.x_mm - a.x_mm), a.y_mm + f * (b.y_mm - a.y_mm));
-                if (x - p.x_mm).hypot(y - p.y_mm) >= reach {
+                let d = (x - p.x_mm).hypot(y - p.y_mm);
+                if self.opts.aim_far && far.is_none_or(|(fd, ..)| d > fd) {
+                    far = Some((d, [x, y], self.slots[s][k].group, self.slots[s][k + 1].group, f));
+                }
+                if d >= reach {
                     let dir = (y - p.y_mm).atan2(x - p.x_mm);
                     if brush_model::motion::wrap(dir - beta).abs() > 1e-9 {
                         return None;
                     }
-                    return Some((self.slots[s][k].group, self.slots[s][k + 1].group, f));
+                    let aim = (self.slots[s][k].group, self.slots[s][k + 1].group, f);
+                    // Backward tangent of the segment, over its cosine with the aim's direction
+                    // (the aim slides by dσ = d(reach)/cos along it); none where nearly square.
+                    let (bx, by) = (a.x_mm - b.x_mm, a.y_mm - b.y_mm);
+                    let (bl, r) = (bx.hypot(by), d.max(1e-12));
+                    let cos = ((x - p.x_mm) * bx + (y - p.y_mm) * by) / (r * bl.max(1e-12));
+                    if !self.opts.aim_reach || bl < 1e-9 || cos < 0.2 {
+                        return Some((aim, [0.0; 3]));
+                    }
+                    return Some((aim, [bx / bl / cos, by / bl / cos, self.reach(p.h_mm, p.alpha_rad)]));
                 }
             }
         }
-        None
+        // Touch-down reached within `reach`: the rule aims at the farthest sample once that is
+        // `min_motion_mm` away.
+        let (d, [x, y], ga, gb, f) = far?;
+        let dir = (y - p.y_mm).atan2(x - p.x_mm);
+        if d < model.min_motion_mm || brush_model::motion::wrap(dir - beta).abs() > 1e-9 {
+            return None;
+        }
+        Some(((ga, gb, f), [0.0; 3]))
+    }
+
+    /// The drag rule's reach of a press, mm: `trail_reach` × footprint length (at β = 0, as
+    /// the forward model takes it), from the profile's linear model.
+    fn reach(&self, h: f64, alpha: f64) -> f64 {
+        let m = &self.profile.model;
+        ForwardModel::default().trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
+    }
+
+    /// `∂reach/∂(h, α)` of [`Self::reach`].
+    fn reach_grad(&self, _h: f64, _alpha: f64) -> [f64; 2] {
+        let m = &self.profile.model;
+        let c = |t: &brush_model::Terms| [t.h_mm.unwrap_or(0.0), t.alpha_rad.unwrap_or(0.0)];
+        let (a, b) = (c(&m.lt_mm), c(&m.lh_mm));
+        let tr = ForwardModel::default().trail_reach;
+        [tr * (a[0] + b[0]), tr * (a[1] + b[1])]
     }
 
     /// The footprints at an iterate with the given directions.
@@ -523,8 +574,10 @@ impl<'a> Problem<'a> {
                 let alpha = self.group_alpha[slot.group].map_or(p.alpha_rad, |a| theta[ao + a]);
                 let beta = match dirs.aim[k] {
                     Some((ga, gb, f)) => {
-                        let ax = (1.0 - f) * theta[2 * ga] + f * theta[2 * gb];
-                        let ay = (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1];
+                        let [kx, ky, r0] = dirs.slide[k];
+                        let dr = if kx != 0.0 || ky != 0.0 { self.reach(h, alpha) - r0 } else { 0.0 };
+                        let ax = (1.0 - f) * theta[2 * ga] + f * theta[2 * gb] + dr * kx;
+                        let ay = (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1] + dr * ky;
                         (ay - y).atan2(ax - x)
                     }
                     None => dirs.beta_rad[k],
@@ -777,12 +830,24 @@ impl<'a> Problem<'a> {
                 if let Some((ga, gb, fr)) = dirs.aim[k] {
                     // β = atan2(aim − p): ∂β/∂aim = (−r_y, r_x)/|r|², ∂β/∂p = −∂β/∂aim.
                     let fp = &fps[k];
-                    let ax = (1.0 - fr) * theta[2 * ga] + fr * theta[2 * gb];
-                    let ay = (1.0 - fr) * theta[2 * ga + 1] + fr * theta[2 * gb + 1];
+                    let [kx, ky, r0] = dirs.slide[k];
+                    let slides = kx != 0.0 || ky != 0.0;
+                    let dr = if slides { self.reach(fp.h, fp.alpha) - r0 } else { 0.0 };
+                    let ax = (1.0 - fr) * theta[2 * ga] + fr * theta[2 * gb] + dr * kx;
+                    let ay = (1.0 - fr) * theta[2 * ga + 1] + fr * theta[2 * gb + 1] + dr * ky;
                     let (rx, ry) = (ax - fp.x, ay - fp.y);
                     let r2 = rx * rx + ry * ry;
                     if r2 > 0.0 {
                         let (bx, by) = (-ry / r2 * g[4], rx / r2 * g[4]);
+                        if slides {
+                            // The aim slides with the reach: ∂aim/∂(h, α) = k·∂reach/∂(h, α).
+                            let [rh, ra] = self.reach_grad(fp.h, fp.alpha);
+                            let ga_k = bx * kx + by * ky;
+                            grad[self.h_off() + k] += ga_k * rh;
+                            if let Some(a) = self.group_alpha[slot.group] {
+                                grad[self.a_off() + a] += ga_k * ra;
+                            }
+                        }
                         grad[2 * slot.group] -= bx;
                         grad[2 * slot.group + 1] -= by;
                         grad[2 * ga] += (1.0 - fr) * bx;

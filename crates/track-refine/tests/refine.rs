@@ -13,11 +13,17 @@ fn gradients_match_finite_differences() {
     let target = bar_target(64);
     for alpha in [0.0, 5f64.to_radians()] {
         let track = line_track(12.0, alpha, 267);
-        for coupling in [false, true] {
+        // No coupling; the aims found by the reach only; with the farthest-sample aims of the
+        // stroke's start; and with the aims sliding as the reach changes with the depth.
+        for (coupling, far, reach) in
+            [(false, false, false), (true, false, false), (true, true, false), (true, true, true)]
+        {
             let opts = RefineOptions {
                 smooth_weight: 5.0,
                 spacing_weight: 5.0,
                 aim_coupling: coupling,
+                aim_far: far,
+                aim_reach: reach,
                 ..RefineOptions::default()
             };
             let p = Problem::new(&track, &profile, &target, &opts).unwrap();
@@ -108,4 +114,43 @@ fn bad_inputs_are_errors_naming_what_was_expected() {
     let blank = Target::new(8, 8, vec![0.0; 64], PointMm::new(0.0, 0.0), 8.0).unwrap();
     let e = refine(&line_track(12.0, 0.0, 267), &profile, &blank, &RefineOptions::default()).unwrap_err();
     assert!(e.to_string().contains("no ink"), "{e}");
+}
+
+/// With `aim_far`, the footprints of a stroke's start (before the brush has moved the drag
+/// rule's reach since touch-down) aim at the farthest sample, as the forward model does, and
+/// each aim reproduces the direction the model derived; without it their angles are held.
+#[test]
+fn the_first_footprints_of_a_stroke_aim_at_the_farthest_sample() {
+    let profile = pen1();
+    let target = bar_target(64);
+    let track = line_track(12.0, 0.0, 267);
+    let count = |far: bool| {
+        let opts = RefineOptions { aim_far: far, ..RefineOptions::default() };
+        let p = Problem::new(&track, &profile, &target, &opts).unwrap();
+        let theta = p.initial();
+        let dirs = p.directions(&theta);
+        let hmin = profile.ranges.h_mm.min;
+        let pressed: Vec<_> =
+            dirs.track.strokes.iter().flat_map(|s| s.points.iter()).filter(|q| q.h_mm >= hmin).collect();
+        assert_eq!(pressed.len(), dirs.aim.len());
+        for (k, (q, aim)) in pressed.iter().zip(&dirs.aim).enumerate() {
+            if let Some((ga, gb, f)) = *aim {
+                let ax = (1.0 - f) * theta[2 * ga] + f * theta[2 * gb];
+                let ay = (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1];
+                let beta = (ay - q.y_mm).atan2(ax - q.x_mm);
+                assert!(
+                    (beta - dirs.beta_rad[k]).abs() < 1e-9,
+                    "footprint {k}: aim gives {beta}, model {}",
+                    dirs.beta_rad[k]
+                );
+            }
+        }
+        // Index of the first footprint with an aim.
+        (dirs.aim.iter().filter(|a| a.is_some()).count(), dirs.aim.iter().position(Option::is_some))
+    };
+    let (held, first_held) = count(false);
+    let (far, first_far) = count(true);
+    // The reach is half a 15–18 mm footprint: the first ~7 mm of the 40 mm stroke (about 45 points).
+    assert!(far >= held + 30, "{far} aims with aim_far, {held} without");
+    assert!(first_far.unwrap() < 3 && first_held.unwrap() > 30, "{first_far:?} {first_held:?}");
 }
