@@ -18,10 +18,13 @@
 //! re-derives them every few steps and after the last. Inside a step each dragged footprint
 //! keeps the path sample the drag rule aimed it at ([`Directions::aim`]) and its direction
 //! follows its own point and that sample, which is how the gradient is taken
-//! ([`RefineOptions::aim_coupling`]); where another rule set the direction, or with the coupling
+//! ([`RefineOptions::aim_coupling`]); a stroke's first footprints, before the brush has moved the
+//! rule's reach since touch-down, keep the farthest sample they aim at the same way
+//! ([`RefineOptions::aim_far`]); where another rule set the direction, or with the coupling
 //! off, the angle itself is held fixed. Holding every angle fixed was tried first: moving a root
 //! sideways at a fixed angle moves the whole footprint, while the model swings it about its tip,
-//! so each re-derivation undid what the steps had gained (docs/trajectory.md, "Refinement").
+//! so each re-derivation undid what the steps had gained (docs/trajectory.md, "Refinement");
+//! holding the first footprints' angles did the same on a smaller scale.
 //!
 //! **Loss** (all terms dimensionless or mm², summed):
 //! * image: `Σ_p (U_p − G_p)² / Σ_p G_p`, with `U_p = 1 − Π_i (1 − c_i(p))` the soft union of
