@@ -205,6 +205,7 @@ pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Res
             Some(sdt) => crate::medians::centre_on_ridge(&pts, sdt, n, px_to_em),
             None => crate::medians::centre_on_ridge(&snapped, &dt, n, px_to_em),
         };
+        let (p, w) = unfold(p, w);
         lines.push((p, Some((w, own))));
         fits.push(StrokeFit { ink_fraction, found_ink, doubled_with: None, snap_em });
     }
@@ -421,6 +422,33 @@ const MAX_WIDTH_SLOPE: f64 = 1.0;
 /// WenKai Bold, characters 1–20; without it a run-out into a neighbour made a press jump the
 /// robot check refuses).
 const RUN_OUT_REGROW_EM: f64 = 4.0;
+
+/// Removes the folds re-centring can leave in a line: a point where the line turns back on
+/// itself (the segments before and after it point more than 90° apart) and one of those two
+/// segments is shorter than [`FOLD_EM`]. Re-centring moves neighbouring points by different
+/// amounts along their normals; where those cross, the line doubled back by a few em units, and
+/// track building's trailing press, sized from the width a footprint length behind, jumped at
+/// the fold past the robot's depth-rate limit (Zhi Mang Xing's 得). Real turns (hooks, 折) are
+/// longer than that on both sides. Repeats until none is left; the ends stay.
+fn unfold(mut p: Vec<Point>, mut w: Vec<f64>) -> (Vec<Point>, Vec<f64>) {
+    let mut i = 1;
+    while i + 1 < p.len() {
+        let (a, b) = (p[i] - p[i - 1], p[i + 1] - p[i]);
+        if a.dot(b) < 0.0 && a.hypot().min(b.hypot()) < FOLD_EM {
+            p.remove(i);
+            w.remove(i);
+            i = i.saturating_sub(1).max(1);
+        } else {
+            i += 1;
+        }
+    }
+    (p, w)
+}
+
+/// The longest segment next to a turn back that [`unfold`] treats as a fold, em units: half the
+/// medians' resampling step (8 em; segments that short come from re-centring, not from the
+/// template's line). Hand-set.
+const FOLD_EM: f64 = 4.0;
 
 /// Lowers the half-widths `w` (em) along the line `p` until none changes by more than `slope`
 /// em per em of arc length (a forward and a backward pass).
@@ -725,6 +753,22 @@ mod tests {
         let f = |x: &[f64]| (x[0] - 3.0).powi(2) + 2.0 * (x[1] + 1.0).powi(2) + 1.0;
         let (x, v) = nelder_mead(f, &[0.0, 0.0], &[1.0, 1.0], 200);
         assert!((x[0] - 3.0).abs() < 1e-4 && (x[1] + 1.0).abs() < 1e-4 && (v - 1.0).abs() < 1e-8, "{x:?} {v}");
+    }
+
+    #[test]
+    fn a_short_fold_is_removed_and_a_hook_kept() {
+        // Down 60 em, back up 3 em, down again: the fold goes.
+        let mut p: Vec<Point> = (0..=6).map(|i| Point::new(100.0, 100.0 + 10.0 * i as f64)).collect();
+        p.insert(4, Point::new(100.5, 127.0));
+        let w = vec![10.0; p.len()];
+        let (q, v) = unfold(p, w);
+        assert_eq!(q.len(), v.len());
+        assert!(q.windows(2).all(|s| s[1].y > s[0].y), "{q:?}");
+        // A hook: down 60 em, then 30 em back up and left in steps of 10 em: kept.
+        let mut h: Vec<Point> = (0..=6).map(|i| Point::new(100.0, 100.0 + 10.0 * i as f64)).collect();
+        h.extend((1..=3).map(|i| Point::new(100.0 - 7.0 * i as f64, 160.0 - 7.0 * i as f64)));
+        let (k, _) = unfold(h.clone(), vec![10.0; h.len()]);
+        assert_eq!(k, h);
     }
 
     #[test]
