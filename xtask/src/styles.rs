@@ -3,7 +3,8 @@
 //!
 //! For every character that both the font and the stroke data (embedded or `--hanzi-data`)
 //! have: centre lines by the method, a track built and rendered as `maobi evaluate` does
-//! (`maobi::pipeline::write_char`, pen1 nominal, B-BSM, auto char box, 512²), scored against the
+//! (`maobi::pipeline::write_char`, pen1 nominal, B-BSM, 512²; the char box by default the best of a
+//! few sizes by the plan's CSIM, `--char-box auto` the automatic size alone), scored against the
 //! font glyph. "Strokes right" compares the stroke count with the template's; for the template
 //! method (whose count is the template's by construction) a character counts as right only when
 //! every stroke found ink under it and no two strokes landed on one.
@@ -13,7 +14,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare_with_template, write_char};
+use maobi::pipeline::{WriteOptions, prepare_with_template, searched_char_mm, write_char};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -24,7 +25,7 @@ use crate::io::write_atomic;
 const HELP: &str = "\
 cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --chars-file FILE]
                    [--skip N] [--take N] [--methods skeleton,template] [--scan] [--execute]
-                   [--size PX] [--json OUT]
+                   [--free-widths] [--char-box search|auto] [--size PX] [--json OUT]
 
   --font F       a TrueType/OpenType file (a .ttc: its first font) or a folder of them; given
                  several times, each character comes from the first file that has it
@@ -34,6 +35,10 @@ cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --
   --skip/--take  a slice of that list (e.g. tune on --take 100, report on --skip 100)
   --scan         also score each method on a synthetic scan of the font glyph (seeded per char)
   --execute      score the executed program like `maobi evaluate` (slower); default: the plan
+  --free-widths  also score the plan with widths unconstrained (the brush's range not applied)
+  --char-box R   each character's box: search (default: the best of a few sizes around the
+                 automatic one by the plan's CSIM, maobi::pipeline::searched_char_mm) or auto
+                 (trajectory::auto_char_mm alone, as `maobi evaluate` sizes it)
   --json OUT     write every character's row and the summary
 ";
 
@@ -53,6 +58,18 @@ struct Row {
     csim: f64,
     ssim: f64,
     iou: f64,
+    /// Share of the glyph's ink (coverage sum) the scored render leaves out.
+    missing_ink: f64,
+    /// Ink the scored render puts outside the glyph, as a share of the glyph's ink.
+    extra_ink: f64,
+    /// Share of the track's pressed points whose width the brush had to clamp up / down.
+    clamped_low_pct: f64,
+    /// See `clamped_low_pct`.
+    clamped_high_pct: f64,
+    /// CSIM of the plan with widths unconstrained (`--free-widths`).
+    free_csim: Option<f64>,
+    /// Char box side, mm.
+    char_mm: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -61,10 +78,15 @@ struct Summary {
     method: &'static str,
     scan: bool,
     chars: usize,
+    /// Characters that could not be written or scored (not in `chars` or the means).
+    failed: usize,
     strokes_right_pct: f64,
     mean_csim: f64,
     worst_csim: f64,
     mean_iou: f64,
+    mean_missing_ink: f64,
+    mean_extra_ink: f64,
+    mean_free_csim: Option<f64>,
 }
 
 /// The font files to search, in order.
@@ -122,7 +144,17 @@ fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
     }
 }
 
+/// How `styles` sizes each character's box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CharBoxRule {
+    /// `trajectory::auto_char_mm` (the glyph's typical widths onto the brush's width range).
+    Auto,
+    /// `maobi::pipeline::searched_char_mm` (the best of a few sizes by the plan's CSIM).
+    Search,
+}
+
 /// One method on one target glyph: centre lines, track, render, scores.
+#[allow(clippy::too_many_arguments)]
 fn score(
     font: &str,
     template: &Glyph,
@@ -131,6 +163,7 @@ fn score(
     scan: bool,
     pen: &BrushProfile,
     opts: &WriteOptions,
+    char_box: CharBoxRule,
 ) -> Result<Row> {
     let expected = template.medians.as_ref().map_or(0, Vec::len);
     let p = prepare_with_template(target, Some(method), Some(template))?;
@@ -140,9 +173,15 @@ fn score(
     let doubled: Vec<usize> = t.map_or(Vec::new(), |t| t.doubled.iter().map(|d| d[0] - 1).collect());
     let fits_ok = t.is_none_or(|t| t.strokes_ok);
     let uncovered_ink = t.map(|t| t.uncovered_ink);
-    let mm = trajectory::auto_char_mm(&p.paths, pen, 0.0);
-    let r = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?.report;
+    let mm = match char_box {
+        CharBoxRule::Auto => trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad),
+        CharBoxRule::Search => searched_char_mm(&p, pen, opts)?,
+    };
+    let res = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?;
+    let (missing_ink, extra_ink) = ink_balance(&res.reference, res.executed.as_ref().unwrap_or(&res.render));
+    let r = res.report;
     let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));
+    let pct = |k: usize| 100.0 * k as f64 / r.points.max(1) as f64;
     Ok(Row {
         font: font.to_string(),
         char: r.char,
@@ -157,7 +196,26 @@ fn score(
         csim: sim.0,
         ssim: sim.1,
         iou: sim.2,
+        missing_ink,
+        extra_ink,
+        clamped_low_pct: pct(r.clamped_low),
+        clamped_high_pct: pct(r.clamped_high),
+        free_csim: r.free_widths.map(|f| f.csim),
+        char_mm: r.char_mm,
     })
+}
+
+/// The ink `render` leaves out of `reference` and the ink it puts outside, each as a share of
+/// the reference's ink (coverage sums, same size images).
+fn ink_balance(reference: &bezier_raster::Coverage, render: &bezier_raster::Coverage) -> (f64, f64) {
+    let (mut g, mut miss, mut extra) = (0.0f64, 0.0f64, 0.0f64);
+    for (&a, &b) in reference.data().iter().zip(render.data()) {
+        let (a, b) = (a as f64, b as f64);
+        g += a;
+        miss += (a - b).max(0.0);
+        extra += (b - a).max(0.0);
+    }
+    if g <= 0.0 { (0.0, 0.0) } else { (miss / g, extra / g) }
 }
 
 /// A stable per-character seed for the synthetic scan.
@@ -170,7 +228,8 @@ pub fn run(args: &[String]) -> Result<()> {
     let mut fonts = Vec::new();
     let (mut hanzi, mut chars, mut skip, mut take, mut json) = (None, None, 0usize, usize::MAX, None);
     let mut methods = vec![Method::Skeleton, Method::Template];
-    let (mut do_scan, mut execute, mut size) = (false, false, 512u32);
+    let (mut do_scan, mut execute, mut size, mut free) = (false, false, 512u32, false);
+    let mut char_box = CharBoxRule::Search;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut val = || it.next().with_context(|| format!("{a} needs a value\n\n{HELP}"));
@@ -196,6 +255,14 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             "--scan" => do_scan = true,
             "--execute" => execute = true,
+            "--free-widths" => free = true,
+            "--char-box" => {
+                char_box = match val()?.as_str() {
+                    "auto" => CharBoxRule::Auto,
+                    "search" => CharBoxRule::Search,
+                    other => bail!("--char-box: expected auto or search, got `{other}`\n\n{HELP}"),
+                }
+            }
             "--size" => size = val()?.parse().context("--size")?,
             "--json" => json = Some(PathBuf::from(val()?)),
             "--help" | "-h" => {
@@ -221,7 +288,7 @@ pub fn run(args: &[String]) -> Result<()> {
     };
     let list: Vec<char> = list.into_iter().skip(skip).take(take).collect();
     let pen = BrushProfile::builtin("pen1")?;
-    let opts = WriteOptions { size, free_widths: false, execute, ..WriteOptions::default() };
+    let opts = WriteOptions { size, free_widths: free, execute, ..WriteOptions::default() };
     // The characters both sources have.
     let jobs: Vec<(char, Glyph, Glyph)> = list
         .iter()
@@ -241,7 +308,7 @@ pub fn run(args: &[String]) -> Result<()> {
     );
     let done = AtomicUsize::new(0);
     let total = jobs.len();
-    let rows: Vec<Row> = jobs
+    let results: Vec<std::result::Result<Row, (&'static str, bool)>> = jobs
         .par_iter()
         .map(|(c, t, g)| {
             let mut out = Vec::new();
@@ -253,9 +320,19 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             for (target, scan) in targets {
                 for &m in &methods {
-                    let row = score(&font_name, t, target.clone(), m, scan, &pen, &opts)
-                        .with_context(|| format!("{c} ({}, {})", m.name(), if scan { "scan" } else { "font" }))?;
-                    out.push(row);
+                    // A character that fails (e.g. its program fails the robot check) is reported and
+                    // counted, not allowed to stop the run.
+                    match score(&font_name, t, target.clone(), m, scan, &pen, &opts, char_box) {
+                        Ok(row) => out.push(Ok(row)),
+                        Err(e) => {
+                            eprintln!(
+                                "styles: {c} ({}, {}) failed: {e:#}",
+                                m.name(),
+                                if scan { "scan" } else { "font" }
+                            );
+                            out.push(Err((m.name(), scan)));
+                        }
+                    }
                 }
             }
             let k = done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -268,6 +345,8 @@ pub fn run(args: &[String]) -> Result<()> {
         .into_iter()
         .flatten()
         .collect();
+    let failures: Vec<(&'static str, bool)> = results.iter().filter_map(|r| r.as_ref().err().copied()).collect();
+    let rows: Vec<Row> = results.into_iter().filter_map(|r| r.ok()).collect();
     let mut summaries = Vec::new();
     for scan in if do_scan { vec![false, true] } else { vec![false] } {
         for &m in &methods {
@@ -281,31 +360,41 @@ pub fn run(args: &[String]) -> Result<()> {
                 method: m.name(),
                 scan,
                 chars: r.len(),
+                failed: failures.iter().filter(|f| **f == (m.name(), scan)).count(),
                 strokes_right_pct: 100.0 * r.iter().filter(|x| x.strokes_ok).count() as f64 / n,
                 mean_csim: r.iter().map(|x| x.csim).sum::<f64>() / n,
                 worst_csim: r.iter().map(|x| x.csim).fold(f64::INFINITY, f64::min),
                 mean_iou: r.iter().map(|x| x.iou).sum::<f64>() / n,
+                mean_missing_ink: r.iter().map(|x| x.missing_ink).sum::<f64>() / n,
+                mean_extra_ink: r.iter().map(|x| x.extra_ink).sum::<f64>() / n,
+                mean_free_csim: free.then(|| r.iter().filter_map(|x| x.free_csim).sum::<f64>() / n),
             });
         }
     }
-    println!("| font | target | method | chars | strokes right | mean CSIM | worst CSIM | mean IoU |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!(
+        "| font | target | method | chars | strokes right | mean CSIM | worst CSIM | mean IoU | ink missing | ink outside |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for s in &summaries {
         println!(
-            "| {} | {} | {} | {} | {:.1} % | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {} | {:.1} % | {:.3} | {:.3} | {:.3} | {:.1} % | {:.1} % |{}",
             s.font,
             if s.scan { "synthetic scan" } else { "font glyph" },
             s.method,
-            s.chars,
+            if s.failed > 0 { format!("{} (+{} failed)", s.chars, s.failed) } else { s.chars.to_string() },
             s.strokes_right_pct,
             s.mean_csim,
             s.worst_csim,
-            s.mean_iou
+            s.mean_iou,
+            100.0 * s.mean_missing_ink,
+            100.0 * s.mean_extra_ink,
+            s.mean_free_csim.map_or(String::new(), |f| format!(" free widths CSIM {f:.3}"))
         );
     }
     if let Some(path) = json {
         let doc = serde_json::json!({
             "fonts": fonts, "hanzi_data": hanzi, "skip": skip, "take": take, "size": size,
+            "char_box": format!("{char_box:?}").to_lowercase(),
             "scored": if execute { "executed" } else { "planned" }, "summary": summaries, "chars": rows,
         });
         write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
