@@ -177,7 +177,9 @@ pub struct RefineOptions {
     pub aim_coupling: bool,
     /// With [`Self::aim_coupling`], also couple the footprints the drag rule aims at the
     /// farthest sample since touch-down (before the brush has moved its reach: a stroke's
-    /// first footprints) to that sample, instead of holding their angle.
+    /// first footprints) to that sample, instead of holding their angle. On by default: held,
+    /// those angles swung at every re-derivation and gave back part of each step's gain
+    /// (UKai tuning characters: planned CSIM gain +0.031 held, +0.039 coupled; docs/trajectory.md).
     pub aim_far: bool,
     /// With [`Self::aim_coupling`], let each aim slide along the path as the footprint's length
     /// changes with its depth and tilt (the drag rule's reach is a share of that length), so
