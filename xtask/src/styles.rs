@@ -3,8 +3,9 @@
 //!
 //! For every character that both the font and the stroke data (embedded or `--hanzi-data`)
 //! have: centre lines by the method, a track built and rendered as `maobi evaluate` does
-//! (`maobi::pipeline::write_char`, pen1 nominal, B-BSM, 512²; the char box by default the best of a
-//! few sizes by the plan's CSIM, `--char-box auto` the automatic size alone), scored against the
+//! (`maobi::pipeline::write_char`, pen1 nominal, B-BSM, 512²; the char box and corner splits by
+//! default the best of a few by the plan's CSIM, `--char-box auto` the automatic size alone),
+//! scored against the
 //! font glyph. "Strokes right" compares the stroke count with the template's; for the template
 //! method (whose count is the template's by construction) a character counts as right only when
 //! every stroke found ink under it and no two strokes landed on one.
@@ -14,7 +15,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare_with_template, searched_char_mm, write_char};
+use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, without_corner_splits, write_char};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -37,8 +38,9 @@ cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --
   --execute      score the executed program like `maobi evaluate` (slower); default: the plan
   --free-widths  also score the plan with widths unconstrained (the brush's range not applied)
   --char-box R   each character's box: search (default: the best of a few sizes around the
-                 automatic one by the plan's CSIM, maobi::pipeline::searched_char_mm) or auto
-                 (trajectory::auto_char_mm alone, as `maobi evaluate` sizes it)
+                 automatic one, strokes split at their corners or written in one piece, by the
+                 plan's CSIM; maobi::pipeline::searched_placement) or auto
+                 (trajectory::auto_char_mm alone, corners split, as `maobi evaluate` does)
   --json OUT     write every character's row and the summary
 ";
 
@@ -149,7 +151,8 @@ fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
 enum CharBoxRule {
     /// `trajectory::auto_char_mm` (the glyph's typical widths onto the brush's width range).
     Auto,
-    /// `maobi::pipeline::searched_char_mm` (the best of a few sizes by the plan's CSIM).
+    /// `maobi::pipeline::searched_placement` (the best of a few sizes, strokes split at their
+    /// corners or not, by the plan's CSIM).
     Search,
 }
 
@@ -166,7 +169,7 @@ fn score(
     char_box: CharBoxRule,
 ) -> Result<Row> {
     let expected = template.medians.as_ref().map_or(0, Vec::len);
-    let p = prepare_with_template(target, Some(method), Some(template))?;
+    let mut p = prepare_with_template(target, Some(method), Some(template))?;
     // The template report counts strokes from 1; the rows from 0.
     let t = p.template.as_ref();
     let missing: Vec<usize> = t.map_or(Vec::new(), |t| t.missing.iter().map(|i| i - 1).collect());
@@ -175,7 +178,13 @@ fn score(
     let uncovered_ink = t.map(|t| t.uncovered_ink);
     let mm = match char_box {
         CharBoxRule::Auto => trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad),
-        CharBoxRule::Search => searched_char_mm(&p, pen, opts)?,
+        CharBoxRule::Search => {
+            let pl = searched_placement(&p, pen, opts)?;
+            if !pl.split_at_corners {
+                p.paths = without_corner_splits(&p.paths);
+            }
+            pl.size_mm
+        }
     };
     let res = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?;
     let (missing_ink, extra_ink) = ink_balance(&res.reference, res.executed.as_ref().unwrap_or(&res.render));

@@ -389,7 +389,7 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     Ok(result)
 }
 
-/// The char box sizes [`searched_char_mm`] tries, as multiples of the automatic size
+/// The char box sizes [`searched_placement`] tries, as multiples of the automatic size
 /// ([`trajectory::auto_char_mm`]), the automatic one first (it wins ties). Tuning fonts only
 /// (LXGW WenKai Bold, Zhi Mang Xing; embedded characters 1–40, executed CSIM per character at
 /// 0.8, 0.9, 1, 1.1, 1.2 and 1.35 times the automatic size): the best of all six scored 0.924
@@ -397,43 +397,71 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
 /// both fonts (docs/trajectory.md, "Template registration").
 pub const CHAR_BOX_SEARCH_SCALES: [f64; 6] = [1.0, 0.8, 0.9, 1.1, 1.2, 1.35];
 
-/// Side (px) of the plan renders [`searched_char_mm`] compares. Hand-set (half the scoring
+/// Side (px) of the plan renders [`searched_placement`] compares. Hand-set (half the scoring
 /// raster, for time).
 pub const CHAR_BOX_SEARCH_PX: u32 = 256;
 
-/// The char box side (mm) for one character chosen by trying: the plan (brush sizing, as
-/// [`write_char`] builds it with `opts`' tilt, spacing and stroke model) is built and rendered
-/// at each of [`CHAR_BOX_SEARCH_SCALES`] times the automatic size and the size whose render
-/// is most like the glyph (CSIM at [`CHAR_BOX_SEARCH_PX`]²) is returned. A brush's footprint
-/// is long for its width (pen1: 14 to 25 mm long for 4.4 to 8 mm wide), so a smaller box gives
-/// wider marks but leaves short strokes too short for a full press, and a larger one the
-/// reverse; which wins depends on the character's strokes, not on its widths alone. Of sizes
-/// that score alike the automatic one is kept; a size whose program fails `robot check` is
-/// passed over. Costs six plan builds and renders.
+/// What [`searched_placement`] chose for one character.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// Char box side, mm.
+    pub size_mm: f64,
+    /// Whether the strokes keep their pieces split at corners (false: each stroke written in
+    /// one piece, [`without_corner_splits`]).
+    pub split_at_corners: bool,
+}
+
+/// The same centre lines with no corners: [`trajectory::build_track`] then writes each stroke
+/// in one piece, without lifting at its 折 (the knob the line runs out to stays in the line).
+pub fn without_corner_splits(paths: &[StrokePath]) -> Vec<StrokePath> {
+    paths.iter().map(|p| StrokePath { corners: Vec::new(), ..p.clone() }).collect()
+}
+
+/// The char box side and corner rule for one character chosen by trying: the plan (brush
+/// sizing, as [`write_char`] builds it with `opts`' tilt, spacing and stroke model) is built
+/// and rendered at each of [`CHAR_BOX_SEARCH_SCALES`] times the automatic size, with the
+/// strokes split at their corners and written in one piece ([`without_corner_splits`]), and the
+/// choice whose render is most like the glyph (CSIM at [`CHAR_BOX_SEARCH_PX`]²) is returned.
+/// A brush's footprint is long for its width (pen1: 14 to 25 mm long for 4.4 to 8 mm wide),
+/// so a smaller box gives wider marks but leaves short strokes and pieces too short for a full
+/// press, and a larger one the reverse; a piece starts thin (its footprints' tails must stay
+/// behind its start), so a brush font's joined strokes come out fuller in one piece, where
+/// hanzi-writer-like kaishu needs its corners. Which wins depends on the character. Of choices
+/// that score alike the automatic size with split corners is kept; a choice whose program fails
+/// `robot check` is passed over. Costs twelve plan builds and renders.
 ///
 /// # Errors
 /// When the profile refuses a track or the images cannot be scored.
-pub fn searched_char_mm(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions) -> Result<f64> {
+pub fn searched_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions) -> Result<Placement> {
     let auto = trajectory::auto_char_mm(&p.paths, profile, opts.alpha_rad);
     let reference = render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX);
-    let mut tried: Vec<(f64, CharBox, Track)> = Vec::with_capacity(CHAR_BOX_SEARCH_SCALES.len());
-    for scale in CHAR_BOX_SEARCH_SCALES {
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: auto * scale };
-        let topts =
-            TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-        let built = build_track(&p.paths, profile, &topts)?;
-        let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
-        tried.push((stroke_metrics::csim(gray(&reference), gray(&img))?, char_box, built.track));
+    let unsplit = without_corner_splits(&p.paths);
+    let mut tried: Vec<(f64, Placement, CharBox, Track)> = Vec::with_capacity(2 * CHAR_BOX_SEARCH_SCALES.len());
+    for (split_at_corners, paths) in [(true, &p.paths), (false, &unsplit)] {
+        for scale in CHAR_BOX_SEARCH_SCALES {
+            let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: auto * scale };
+            let topts = TrackOptions {
+                char_box,
+                spacing_mm: opts.spacing_mm,
+                alpha_rad: opts.alpha_rad,
+                sizing: Sizing::Brush,
+            };
+            let built = build_track(paths, profile, &topts)?;
+            let img =
+                render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
+            let csim = stroke_metrics::csim(gray(&reference), gray(&img))?;
+            tried.push((csim, Placement { size_mm: char_box.size_mm, split_at_corners }, char_box, built.track));
+        }
     }
-    // Best first; a stable sort keeps the automatic size ahead on ties.
+    // Best first; a stable sort keeps the automatic size with split corners ahead on ties.
     tried.sort_by(|a, b| b.0.total_cmp(&a.0));
-    // The best size whose program passes `robot check` (the automatic size if none does: the
+    // The best choice whose program passes `robot check` (the automatic one if none does: the
     // caller's own check then reports why).
     let cfg = RobotConfig::default();
     Ok(tried
         .iter()
-        .find(|(_, b, t)| build_program(t, profile, &level_frame_for(b), &cfg).is_ok())
-        .map_or(auto, |(_, b, _)| b.size_mm))
+        .find(|(_, _, b, t)| build_program(t, profile, &level_frame_for(b), &cfg).is_ok())
+        .map_or(Placement { size_mm: auto, split_at_corners: true }, |x| x.1))
 }
 
 /// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
@@ -579,16 +607,32 @@ mod tests {
     }
 
     #[test]
-    fn the_searched_char_box_is_a_candidate_scoring_at_least_the_automatic_one() {
+    fn the_searched_placement_is_a_candidate_scoring_at_least_the_automatic_one() {
         let pen = BrushProfile::builtin("pen1").unwrap();
+        // 口 has corners (the split matters), 永 a hook.
         for c in ['永', '口'] {
             let p = prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap();
             let auto = trajectory::auto_char_mm(&p.paths, &pen, 0.0);
-            let mm = searched_char_mm(&p, &pen, &WriteOptions::default()).unwrap();
-            assert!(CHAR_BOX_SEARCH_SCALES.iter().any(|s| (auto * s - mm).abs() < 1e-9), "{c}: {mm} of {auto}");
-            let best = CHAR_BOX_SEARCH_SCALES.iter().map(|s| plan_csim(&p, &pen, auto * s)).fold(0.0, f64::max);
-            assert!((plan_csim(&p, &pen, mm) - best).abs() < 1e-12, "{c}: {mm} mm is not the best size");
-            assert!(plan_csim(&p, &pen, mm) >= plan_csim(&p, &pen, auto), "{c}");
+            let pl = searched_placement(&p, &pen, &WriteOptions::default()).unwrap();
+            assert!(
+                CHAR_BOX_SEARCH_SCALES.iter().any(|s| (auto * s - pl.size_mm).abs() < 1e-9),
+                "{c}: {pl:?} of {auto}"
+            );
+            let unsplit =
+                Prepared { paths: without_corner_splits(&p.paths), template: None, glyph: p.glyph.clone(), ..p };
+            let chosen = if pl.split_at_corners { &p } else { &unsplit };
+            let got = plan_csim(chosen, &pen, pl.size_mm);
+            let best = CHAR_BOX_SEARCH_SCALES
+                .iter()
+                .flat_map(|s| [plan_csim(&p, &pen, auto * s), plan_csim(&unsplit, &pen, auto * s)])
+                .fold(0.0, f64::max);
+            assert!((got - best).abs() < 1e-12, "{c}: {pl:?} is not the best choice");
+            assert!(got >= plan_csim(&p, &pen, auto), "{c}");
         }
+        assert!(
+            without_corner_splits(&prepare(trajectory::glyph::embedded('口').unwrap(), None).unwrap().paths)
+                .iter()
+                .all(|p| p.corners.is_empty())
+        );
     }
 }
