@@ -410,3 +410,18 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ink_balance_counts_missed_and_outside_ink_against_the_reference() {
+        let (mut g, mut r) = (bezier_raster::Coverage::new(4, 1), bezier_raster::Coverage::new(4, 1));
+        g.data_mut().copy_from_slice(&[1.0, 1.0, 0.5, 0.0]);
+        r.data_mut().copy_from_slice(&[1.0, 0.0, 1.0, 0.25]);
+        let (miss, extra) = ink_balance(&g, &r);
+        assert!((miss - 1.0 / 2.5).abs() < 1e-9 && (extra - 0.75 / 2.5).abs() < 1e-9, "{miss} {extra}");
+        assert_eq!(ink_balance(&r, &r), (0.0, 0.0));
+    }
+}
