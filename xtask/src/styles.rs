@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, without_corner_splits, write_char};
+use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, with_splits, write_char};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -38,8 +38,8 @@ cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --
   --execute      score the executed program like `maobi evaluate` (slower); default: the plan
   --free-widths  also score the plan with widths unconstrained (the brush's range not applied)
   --char-box R   each character's box: search (default: the best of a few sizes around the
-                 automatic one, strokes split at their corners or written in one piece, by the
-                 plan's CSIM; maobi::pipeline::searched_placement) or auto
+                 automatic one, each stroke split at its corners or written in one piece, by
+                 the plan's CSIM; maobi::pipeline::searched_placement) or auto
                  (trajectory::auto_char_mm alone, corners split, as `maobi evaluate` does)
   --json OUT     write every character's row and the summary
 ";
@@ -151,8 +151,8 @@ fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
 enum CharBoxRule {
     /// `trajectory::auto_char_mm` (the glyph's typical widths onto the brush's width range).
     Auto,
-    /// `maobi::pipeline::searched_placement` (the best of a few sizes, strokes split at their
-    /// corners or not, by the plan's CSIM).
+    /// `maobi::pipeline::searched_placement` (the best of a few sizes and of the strokes split
+    /// at their corners or not, by the plan's CSIM).
     Search,
 }
 
@@ -180,9 +180,7 @@ fn score(
         CharBoxRule::Auto => trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad),
         CharBoxRule::Search => {
             let pl = searched_placement(&p, pen, opts)?;
-            if !pl.split_at_corners {
-                p.paths = without_corner_splits(&p.paths);
-            }
+            p.paths = with_splits(&p.paths, &pl.split);
             pl.size_mm
         }
     };

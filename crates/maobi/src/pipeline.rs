@@ -402,66 +402,97 @@ pub const CHAR_BOX_SEARCH_SCALES: [f64; 6] = [1.0, 0.8, 0.9, 1.1, 1.2, 1.35];
 pub const CHAR_BOX_SEARCH_PX: u32 = 256;
 
 /// What [`searched_placement`] chose for one character.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Placement {
     /// Char box side, mm.
     pub size_mm: f64,
-    /// Whether the strokes keep their pieces split at corners (false: each stroke written in
-    /// one piece, [`without_corner_splits`]).
-    pub split_at_corners: bool,
+    /// Per stroke (in the paths' order): whether it keeps its pieces split at its corners
+    /// (false: written in one piece, see [`with_splits`]).
+    pub split: Vec<bool>,
 }
 
-/// The same centre lines with no corners: [`trajectory::build_track`] then writes each stroke
-/// in one piece, without lifting at its 折 (the knob the line runs out to stays in the line).
-pub fn without_corner_splits(paths: &[StrokePath]) -> Vec<StrokePath> {
-    paths.iter().map(|p| StrokePath { corners: Vec::new(), ..p.clone() }).collect()
+/// The centre lines with the corners of the strokes whose `split` is false removed:
+/// [`trajectory::build_track`] then writes such a stroke in one piece, without lifting at its
+/// 折 (the knob the line runs out to stays in the line). A stroke past the end of `split` keeps
+/// its corners.
+pub fn with_splits(paths: &[StrokePath], split: &[bool]) -> Vec<StrokePath> {
+    paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if split.get(i).copied().unwrap_or(true) {
+                p.clone()
+            } else {
+                StrokePath { corners: Vec::new(), ..p.clone() }
+            }
+        })
+        .collect()
 }
 
-/// The char box side and corner rule for one character chosen by trying: the plan (brush
-/// sizing, as [`write_char`] builds it with `opts`' tilt, spacing and stroke model) is built
-/// and rendered at each of [`CHAR_BOX_SEARCH_SCALES`] times the automatic size, with the
-/// strokes split at their corners and written in one piece ([`without_corner_splits`]), and the
-/// choice whose render is most like the glyph (CSIM at [`CHAR_BOX_SEARCH_PX`]²) is returned.
-/// A brush's footprint is long for its width (pen1: 14 to 25 mm long for 4.4 to 8 mm wide),
-/// so a smaller box gives wider marks but leaves short strokes and pieces too short for a full
-/// press, and a larger one the reverse; a piece starts thin (its footprints' tails must stay
-/// behind its start), so a brush font's joined strokes come out fuller in one piece, where
-/// hanzi-writer-like kaishu needs its corners. Which wins depends on the character. Of choices
-/// that score alike the automatic size with split corners is kept; a choice whose program fails
-/// `robot check` is passed over. Costs twelve plan builds and renders.
+/// The char box side and the corner splits for one character chosen by trying. First the plan
+/// (brush sizing, as [`write_char`] builds it with `opts`' tilt, spacing and stroke model) is
+/// built and rendered at each of [`CHAR_BOX_SEARCH_SCALES`] times the automatic size, with
+/// every stroke split at its corners and with every stroke in one piece, and the choice whose
+/// render is most like the glyph (CSIM at [`CHAR_BOX_SEARCH_PX`]²) is taken; then, at that
+/// size, each stroke with corners in turn is tried the other way and kept so when the CSIM
+/// rises (one greedy pass). A brush's footprint is long for its width (pen1: 14 to 25 mm long
+/// for 4.4 to 8 mm wide), so a smaller box gives wider marks but leaves short strokes and pieces
+/// too short for a full press, and a larger one the reverse; a piece starts thin (its
+/// footprints' tails must stay behind its start), so a brush font's joined strokes come out
+/// fuller in one piece, where a kaishu 折 needs its lift. Which wins depends on the character
+/// and the stroke. Ties keep the automatic size with split corners; the result's program
+/// passes `robot check` (otherwise the best whole-character choice that does, or the
+/// automatic one: the caller's own check then reports why). Costs twelve plan renders plus one
+/// per stroke with corners.
 ///
 /// # Errors
 /// When the profile refuses a track or the images cannot be scored.
 pub fn searched_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions) -> Result<Placement> {
     let auto = trajectory::auto_char_mm(&p.paths, profile, opts.alpha_rad);
     let reference = render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX);
-    let unsplit = without_corner_splits(&p.paths);
-    let mut tried: Vec<(f64, Placement, CharBox, Track)> = Vec::with_capacity(2 * CHAR_BOX_SEARCH_SCALES.len());
-    for (split_at_corners, paths) in [(true, &p.paths), (false, &unsplit)] {
+    let n = p.paths.len();
+    // The plan's CSIM and track for the paths split as `split` in a box of `size_mm`.
+    let plan = |size_mm: f64, split: &[bool]| -> Result<(f64, Track)> {
+        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
+        let topts =
+            TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
+        let built = build_track(&with_splits(&p.paths, split), profile, &topts)?;
+        let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
+        Ok((stroke_metrics::csim(gray(&reference), gray(&img))?, built.track))
+    };
+    let passes = |size_mm: f64, track: &Track| {
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
+        build_program(track, profile, &level_frame_for(&b), &RobotConfig::default()).is_ok()
+    };
+    let mut tried: Vec<(f64, Placement, Track)> = Vec::with_capacity(2 * CHAR_BOX_SEARCH_SCALES.len());
+    for whole in [true, false] {
         for scale in CHAR_BOX_SEARCH_SCALES {
-            let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: auto * scale };
-            let topts = TrackOptions {
-                char_box,
-                spacing_mm: opts.spacing_mm,
-                alpha_rad: opts.alpha_rad,
-                sizing: Sizing::Brush,
-            };
-            let built = build_track(paths, profile, &topts)?;
-            let img =
-                render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
-            let csim = stroke_metrics::csim(gray(&reference), gray(&img))?;
-            tried.push((csim, Placement { size_mm: char_box.size_mm, split_at_corners }, char_box, built.track));
+            let pl = Placement { size_mm: auto * scale, split: vec![whole; n] };
+            let (csim, track) = plan(pl.size_mm, &pl.split)?;
+            tried.push((csim, pl, track));
         }
     }
     // Best first; a stable sort keeps the automatic size with split corners ahead on ties.
     tried.sort_by(|a, b| b.0.total_cmp(&a.0));
-    // The best choice whose program passes `robot check` (the automatic one if none does: the
-    // caller's own check then reports why).
-    let cfg = RobotConfig::default();
-    Ok(tried
-        .iter()
-        .find(|(_, _, b, t)| build_program(t, profile, &level_frame_for(b), &cfg).is_ok())
-        .map_or(Placement { size_mm: auto, split_at_corners: true }, |x| x.1))
+    let Some((best_csim, start, _)) = tried.iter().find(|(_, pl, t)| passes(pl.size_mm, t)).cloned() else {
+        return Ok(Placement { size_mm: auto, split: vec![true; n] });
+    };
+    // Per stroke, one greedy pass.
+    let (mut pl, mut best) = (start.clone(), best_csim);
+    let mut track = None;
+    for i in (0..n).filter(|&i| !p.paths[i].corners.is_empty()) {
+        pl.split[i] = !pl.split[i];
+        let (csim, t) = plan(pl.size_mm, &pl.split)?;
+        if csim > best + 1e-12 {
+            (best, track) = (csim, Some(t));
+        } else {
+            pl.split[i] = !pl.split[i];
+        }
+    }
+    Ok(match track {
+        Some(t) if !passes(pl.size_mm, &t) => start,
+        _ => pl,
+    })
 }
 
 /// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
@@ -607,32 +638,44 @@ mod tests {
     }
 
     #[test]
-    fn the_searched_placement_is_a_candidate_scoring_at_least_the_automatic_one() {
+    fn the_searched_placement_scores_at_least_every_whole_character_candidate() {
         let pen = BrushProfile::builtin("pen1").unwrap();
         // 口 has corners (the split matters), 永 a hook.
         for c in ['永', '口'] {
             let p = prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap();
+            assert!(p.paths.iter().any(|q| !q.corners.is_empty()), "{c}");
             let auto = trajectory::auto_char_mm(&p.paths, &pen, 0.0);
             let pl = searched_placement(&p, &pen, &WriteOptions::default()).unwrap();
+            assert_eq!(pl.split.len(), p.paths.len());
             assert!(
                 CHAR_BOX_SEARCH_SCALES.iter().any(|s| (auto * s - pl.size_mm).abs() < 1e-9),
                 "{c}: {pl:?} of {auto}"
             );
-            let unsplit =
-                Prepared { paths: without_corner_splits(&p.paths), template: None, glyph: p.glyph.clone(), ..p };
-            let chosen = if pl.split_at_corners { &p } else { &unsplit };
-            let got = plan_csim(chosen, &pen, pl.size_mm);
-            let best = CHAR_BOX_SEARCH_SCALES
+            let as_split = |split: &[bool]| Prepared {
+                paths: with_splits(&p.paths, split),
+                template: None,
+                glyph: p.glyph.clone(),
+                ..p
+            };
+            let got = plan_csim(&as_split(&pl.split), &pen, pl.size_mm);
+            let n = p.paths.len();
+            let best_whole = CHAR_BOX_SEARCH_SCALES
                 .iter()
-                .flat_map(|s| [plan_csim(&p, &pen, auto * s), plan_csim(&unsplit, &pen, auto * s)])
+                .flat_map(|s| {
+                    [
+                        plan_csim(&as_split(&vec![true; n]), &pen, auto * s),
+                        plan_csim(&as_split(&vec![false; n]), &pen, auto * s),
+                    ]
+                })
                 .fold(0.0, f64::max);
-            assert!((got - best).abs() < 1e-12, "{c}: {pl:?} is not the best choice");
-            assert!(got >= plan_csim(&p, &pen, auto), "{c}");
+            assert!(got >= best_whole - 1e-12, "{c}: {pl:?} scores {got} < {best_whole}");
         }
-        assert!(
-            without_corner_splits(&prepare(trajectory::glyph::embedded('口').unwrap(), None).unwrap().paths)
-                .iter()
-                .all(|p| p.corners.is_empty())
-        );
+        // Strokes marked false lose their corners, the others keep them.
+        let p = prepare(trajectory::glyph::embedded('口').unwrap(), None).unwrap();
+        let split: Vec<bool> = (0..p.paths.len()).map(|i| i % 2 == 0).collect();
+        for ((a, b), s) in with_splits(&p.paths, &split).iter().zip(&p.paths).zip(&split) {
+            assert_eq!(a.corners.is_empty(), !s || b.corners.is_empty());
+            assert_eq!(a.points, b.points);
+        }
     }
 }
