@@ -85,6 +85,7 @@ pub fn gray(c: &Coverage) -> GrayRef<'_> {
 }
 
 /// A glyph with its centre lines, ready to be placed.
+#[derive(Clone)]
 pub struct Prepared {
     /// The glyph.
     pub glyph: Glyph,
@@ -449,6 +450,24 @@ pub fn with_splits(paths: &[StrokePath], split: &[bool]) -> Vec<StrokePath> {
 /// When the profile refuses a track or the images cannot be scored.
 pub fn searched_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions) -> Result<Placement> {
     let auto = trajectory::auto_char_mm(&p.paths, profile, opts.alpha_rad);
+    let sizes: Vec<f64> = CHAR_BOX_SEARCH_SCALES.iter().map(|s| auto * s).collect();
+    search_placement(p, profile, opts, &sizes)
+}
+
+/// The corner splits for one character at a given char box side (mm), chosen as in
+/// [`searched_placement`] with the size fixed (two plans, every stroke split or every stroke
+/// in one piece, then the greedy pass per stroke): what `maobi write` uses where several
+/// characters share one box size on a sheet.
+///
+/// # Errors
+/// When the profile refuses a track or the images cannot be scored.
+pub fn searched_splits(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions, size_mm: f64) -> Result<Placement> {
+    search_placement(p, profile, opts, &[size_mm])
+}
+
+/// The search of [`searched_placement`] over the char box sides `sizes_mm` (the first wins
+/// ties, and is returned with split corners when no candidate passes `robot check`).
+fn search_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions, sizes_mm: &[f64]) -> Result<Placement> {
     let reference = render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX);
     let n = p.paths.len();
     // The plan's CSIM and track for the paths split as `split` in a box of `size_mm`.
@@ -464,18 +483,18 @@ pub fn searched_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOpti
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
         build_program(track, profile, &level_frame_for(&b), &RobotConfig::default()).is_ok()
     };
-    let mut tried: Vec<(f64, Placement, Track)> = Vec::with_capacity(2 * CHAR_BOX_SEARCH_SCALES.len());
+    let mut tried: Vec<(f64, Placement, Track)> = Vec::with_capacity(2 * sizes_mm.len());
     for whole in [true, false] {
-        for scale in CHAR_BOX_SEARCH_SCALES {
-            let pl = Placement { size_mm: auto * scale, split: vec![whole; n] };
+        for &size_mm in sizes_mm {
+            let pl = Placement { size_mm, split: vec![whole; n] };
             let (csim, track) = plan(pl.size_mm, &pl.split)?;
             tried.push((csim, pl, track));
         }
     }
-    // Best first; a stable sort keeps the automatic size with split corners ahead on ties.
+    // Best first; a stable sort keeps the first size with split corners ahead on ties.
     tried.sort_by(|a, b| b.0.total_cmp(&a.0));
     let Some((best_csim, start, _)) = tried.iter().find(|(_, pl, t)| passes(pl.size_mm, t)).cloned() else {
-        return Ok(Placement { size_mm: auto, split: vec![true; n] });
+        return Ok(Placement { size_mm: sizes_mm[0], split: vec![true; n] });
     };
     // Per stroke, one greedy pass.
     let (mut pl, mut best) = (start.clone(), best_csim);
@@ -493,6 +512,13 @@ pub fn searched_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOpti
         Some(t) if !passes(pl.size_mm, &t) => start,
         _ => pl,
     })
+}
+
+impl Prepared {
+    /// The same centre lines with the corner splits of `placement` applied ([`with_splits`]).
+    pub fn placed(&self, placement: &Placement) -> Prepared {
+        Prepared { paths: with_splits(&self.paths, &placement.split), ..self.clone() }
+    }
 }
 
 /// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the

@@ -135,3 +135,40 @@ fn evaluate_a_font_and_a_folder_of_images() {
     std::fs::write(imgs.join("two.png"), b"x").unwrap();
     fails(&maobi(&["evaluate", "--images", s(&imgs)]), "named after its one character");
 }
+
+#[test]
+fn template_placement_is_searched_unless_asked_not_to() {
+    let msz = fixtures().join("fonts/msz");
+    let run = |placement: &str| {
+        let v = ok_json(&maobi(&[
+            "evaluate",
+            "--font",
+            s(&msz),
+            "--chars",
+            "永",
+            "--size",
+            "128",
+            "--placement",
+            placement,
+            "--json",
+        ]));
+        let c = &v["chars"][0];
+        (c["char_mm"].as_f64().unwrap(), c["csim"].as_f64().unwrap())
+    };
+    let (auto_mm, auto_csim) = run("auto");
+    let (mm, csim) = run("search");
+    // The searched box is one of the tried multiples of the automatic one.
+    let scale = mm / auto_mm;
+    assert!(
+        maobi::pipeline::CHAR_BOX_SEARCH_SCALES.iter().any(|s| (s - scale).abs() < 1e-9),
+        "searched {mm} mm is {scale}× the automatic {auto_mm} mm"
+    );
+    // Chosen by the plan at a coarser raster: never clearly worse than the automatic placement.
+    assert!(csim > auto_csim - 0.01, "search {csim} vs auto {auto_csim}");
+    // `write` on one character searches the size the same way.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("w");
+    ok(&maobi(&["write", "永", "--font", s(&msz), "--size", "128", "-o", s(&out)]));
+    assert!((json(&out.join("report.json"))["char_mm"].as_f64().unwrap() - mm).abs() < 1e-9);
+    fails(&maobi(&["evaluate", "--font", s(&msz), "--chars", "永", "--placement", "best"]), "search");
+}

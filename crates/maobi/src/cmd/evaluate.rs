@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
-use maobi::pipeline::{CharReport, WriteOptions, write_char};
+use maobi::pipeline::{CharReport, WriteOptions, searched_placement, searched_splits, write_char};
 use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
@@ -57,6 +57,8 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     #[command(flatten)]
+    placement: crate::cmd::write::PlacementArg,
+    #[command(flatten)]
     refine: crate::cmd::write::RefineArgs,
 }
 
@@ -93,8 +95,15 @@ pub fn run(args: Args) -> Result<()> {
                 }
                 r => r?,
             };
-            let p = prepare_loaded(loaded, args.method, true)?;
-            let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
+            let mut p = prepare_loaded(loaded, args.method, true)?;
+            let mut mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
+            if args.placement.search() && p.method == Method::Template {
+                let pl = match args.char_mm {
+                    Some(mm) => searched_splits(&p, &profile, &opts, mm)?,
+                    None => searched_placement(&p, &profile, &opts)?,
+                };
+                (p, mm) = (p.placed(&pl), pl.size_mm);
+            }
             let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
             pb.inc(1);
             Ok(Some(r.report))

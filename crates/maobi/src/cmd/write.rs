@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use bezier_raster::{ModelKind, coverage::overlay_png};
 use brush_model::{BrushProfile, Extrapolation, Track};
-use maobi::pipeline::{CharReport, CharResult, Prepared, WriteOptions, prepare_with_template, write_char};
+use maobi::pipeline::{
+    CharReport, CharResult, Prepared, WriteOptions, prepare_with_template, searched_placement, searched_splits,
+    write_char,
+};
 use maobi::sheet::{Flow, Grid, Layout, Sheet, SheetTrack, layout_on_sheet, parse_sheet};
 use rayon::prelude::*;
 use serde_json::json;
@@ -87,7 +90,29 @@ pub struct Args {
     #[command(flatten)]
     renderer: RendererArgs,
     #[command(flatten)]
+    placement: PlacementArg,
+    #[command(flatten)]
     refine: RefineArgs,
+}
+
+/// `--placement search|auto` of `write` and `evaluate`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct PlacementArg {
+    /// How template tracks (`--from template`, the default for --font and --image) are placed:
+    /// `search` builds the plan at a few char box sizes (0.8–1.35× the size from the widths),
+    /// with each stroke's corners split or written in one piece, and keeps the plan most like
+    /// the glyph (docs/trajectory.md, "Template registration"); where the size is fixed
+    /// (--char-mm, --sheet, several characters sharing one box) only the splits are searched.
+    /// `auto`: the size from the widths, every corner split. Other methods are not affected.
+    #[arg(long, default_value = "search", value_parser = ["search", "auto"])]
+    placement: String,
+}
+
+impl PlacementArg {
+    /// Whether template tracks are placed by search.
+    pub(crate) fn search(&self) -> bool {
+        self.placement == "search"
+    }
 }
 
 /// `--refine [--iters N] [--gradients analytic|generator]` of `write` and `evaluate`.
@@ -231,14 +256,34 @@ pub fn run(args: Args) -> Result<()> {
     let prepared = prepare_all(&args, &chars)?;
     let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
     let brush_mm = trajectory::auto_char_mm(&all, &profile, alpha_rad);
+    let refine = args.refine.options()?;
+    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, refine, ..WriteOptions::default() };
+    let search = |p: &Prepared| args.placement.search() && p.method == Method::Template;
+    // One template character on its own: its box size is searched too.
+    let single_searched = match (&prepared[..], &sheet_layout, args.char_mm) {
+        ([p], None, None) if search(p) => Some(searched_placement(p, &profile, &opts)?),
+        _ => None,
+    };
     let lay = match sheet_layout {
         Some(l) => l,
-        None => auto_layout(chars.len(), args.char_mm.unwrap_or(brush_mm), args.per_line.unwrap_or(4), args.rows),
+        None => auto_layout(
+            chars.len(),
+            args.char_mm.or(single_searched.as_ref().map(|pl| pl.size_mm)).unwrap_or(brush_mm),
+            args.per_line.unwrap_or(4),
+            args.rows,
+        ),
     };
     let char_mm = lay.char_mm;
     let boxes = lay.boxes.clone();
-    let refine = args.refine.options()?;
-    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, refine, ..WriteOptions::default() };
+    // Template characters sharing the box size: their corner splits are searched.
+    let prepared: Vec<Prepared> = prepared
+        .into_par_iter()
+        .map(|p| match &single_searched {
+            Some(pl) => Ok(p.placed(pl)),
+            None if search(&p) => Ok(p.placed(&searched_splits(&p, &profile, &opts, char_mm)?)),
+            None => Ok(p),
+        })
+        .collect::<Result<_>>()?;
     let pb = progress(chars.len() as u64, "write");
     let results: Vec<CharResult> = prepared
         .par_iter()
