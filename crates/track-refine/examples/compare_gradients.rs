@@ -13,15 +13,16 @@
 //! embedded, glyphs from a hanzi-writer-data folder. Optional 4th argument: the first character
 //! index to start from (to split a run). Medians, pen1, 256² judge raster, default options.
 
+mod common;
+
 use std::time::Instant;
 
 use bezier_raster::{Coverage, ModelKind, render_stamps, sweep_stamps};
 use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
 use robot_io::{PaperFrame, RobotConfig, build_program};
-use stroke_metrics::GrayRef;
 use track_refine::generator::GenModel;
-use track_refine::{Gradients, RefineOptions, Target, refine, refine_with_generator};
-use trajectory::{CharBox, Method, Sizing, TrackOptions, build_track, centre_lines, glyph, raster::render_glyph};
+use track_refine::{Gradients, RefineOptions, refine, refine_with_generator};
+use trajectory::{CharBox, Method, centre_lines, glyph, raster::render_glyph};
 
 const JUDGE_PX: u32 = 256;
 
@@ -46,9 +47,7 @@ fn executed(track: &Track, pen: &BrushProfile, b: &CharBox, reference: &Coverage
         JUDGE_PX,
         JUDGE_PX,
     );
-    fn g(c: &Coverage) -> GrayRef<'_> {
-        GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("sized")
-    }
+    let g = common::gray;
     Some((stroke_metrics::csim(g(reference), g(&img)).ok()?, stroke_metrics::iou(g(reference), g(&img)).ok()?))
 }
 
@@ -83,22 +82,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             None => glyph::embedded(ch)?,
         };
         let paths = centre_lines(&g, Method::Medians, trajectory::DEFAULT_ANALYSIS_PX)?;
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&paths, &pen1, 0.0) };
-        let topts = TrackOptions {
-            char_box,
-            spacing_mm: trajectory::DEFAULT_SPACING_MM,
-            alpha_rad: 0.0,
-            sizing: Sizing::Brush,
-        };
-        let built = build_track(&paths, &pen1, &topts)?.track;
-        let px = base.analysis_px;
-        let target = Target::new(
-            px,
-            px,
-            render_glyph(&g, px).data().to_vec(),
-            PointMm::new(char_box.x0_mm, char_box.y0_mm),
-            char_box.size_mm / px as f64,
-        )?;
+        let (built, char_box) = common::built_track(&paths, &pen1, (0.0, 0.0));
+        let target = common::target_for(&g, &char_box, base.analysis_px);
         let reference = render_glyph(&g, JUDGE_PX);
         let before = executed(&built, &pen1, &char_box, &reference).ok_or("the built track fails robot check")?;
         let mut row = vec![before.0, before.1];

@@ -12,31 +12,15 @@
 //! *executed* render (`maobi evaluate --font F --refine`); the plan's render agrees with it to
 //! a few 1e-4 and is what this example shows, which is quicker for tuning.
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
-use bezier_raster::{ModelKind, render_track};
-use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
-use stroke_metrics::GrayRef;
-use track_refine::{RefineOptions, Target, refine};
-use trajectory::{
-    CharBox, DEFAULT_ANALYSIS_PX, Sizing, TrackOptions, build_track, centre_lines_from_template, glyph,
-    raster::render_glyph,
-};
-
-fn render(track: &Track, profile: &BrushProfile, b: &CharBox, size: u32) -> bezier_raster::Coverage {
-    render_track(
-        track,
-        profile,
-        ModelKind::Bsm.model(),
-        Extrapolation::Refuse,
-        PointMm::new(b.x0_mm, b.y0_mm),
-        size as f64 / b.size_mm,
-        size,
-        size,
-    )
-    .expect("a built or refined track renders")
-}
+use brush_model::{BrushProfile, Track};
+use common::{built_track, options, render, scores, target_for};
+use track_refine::refine;
+use trajectory::{CharBox, DEFAULT_ANALYSIS_PX, centre_lines_from_template, glyph, raster::render_glyph};
 
 /// Shares of the glyph's ink the render misses and of the render's ink outside the glyph, and
 /// the shares of pressed points at the lightest and at the deepest press.
@@ -59,25 +43,6 @@ fn diagnose(track: &Track, profile: &BrushProfile, b: &CharBox, reference: &bezi
     [miss / ink, extra / drawn.max(1e-9), lo, hi]
 }
 
-fn scores(track: &Track, profile: &BrushProfile, b: &CharBox, reference: &bezier_raster::Coverage) -> (f64, f64) {
-    let size = reference.width();
-    let img = render_track(
-        track,
-        profile,
-        ModelKind::Bsm.model(),
-        Extrapolation::Refuse,
-        PointMm::new(b.x0_mm, b.y0_mm),
-        size as f64 / b.size_mm,
-        size,
-        size,
-    )
-    .expect("a built or refined track renders");
-    fn g(c: &bezier_raster::Coverage) -> GrayRef<'_> {
-        GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("w × h values")
-    }
-    (stroke_metrics::csim(g(reference), g(&img)).unwrap(), stroke_metrics::iou(g(reference), g(&img)).unwrap())
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(font), Some(text)) = (args.first(), args.get(1)) else {
@@ -88,14 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => (font.clone(), None),
     };
     let fonts = glyph::FontSet::open(&[PathBuf::from(path)], face)?;
-    let mut opts = RefineOptions::default();
-    if let Some(js) = args.get(2) {
-        let mut v = serde_json::to_value(opts)?;
-        for (k, x) in serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(js)? {
-            v[k] = x;
-        }
-        opts = serde_json::from_value(v)?;
-    }
+    let opts = options(args.get(2))?;
     let judge_px = std::env::var("REFINE_JUDGE_PX").ok().and_then(|v| v.parse().ok()).unwrap_or(512);
     let pen1 = BrushProfile::builtin("pen1")?;
     let (mut sum_before, mut sum_after, mut sum_iou0, mut sum_iou1, mut ms, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0);
@@ -105,29 +63,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         };
         let reg = centre_lines_from_template(&template, &g, DEFAULT_ANALYSIS_PX)?;
-        let paths = reg.paths;
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&paths, &pen1, 0.0) };
-        let topts = TrackOptions {
-            char_box,
-            spacing_mm: trajectory::DEFAULT_SPACING_MM,
-            alpha_rad: 0.0,
-            sizing: Sizing::Brush,
-        };
-        let built = build_track(&paths, &pen1, &topts)?;
-        let px = opts.analysis_px;
-        let glyph_img = render_glyph(&g, px);
-        let target = Target::new(
-            px,
-            px,
-            glyph_img.data().to_vec(),
-            PointMm::new(char_box.x0_mm, char_box.y0_mm),
-            char_box.size_mm / px as f64,
-        )?;
+        let (track, char_box) = built_track(&reg.paths, &pen1, (0.0, 0.0));
+        let target = target_for(&g, &char_box, opts.analysis_px);
         let t0 = Instant::now();
-        let out = refine(&built.track, &pen1, &target, &opts)?;
+        let out = refine(&track, &pen1, &target, &opts)?;
         let dt = t0.elapsed().as_secs_f64() * 1e3;
         let reference = render_glyph(&g, judge_px);
-        let (c0, i0) = scores(&built.track, &pen1, &char_box, &reference);
+        let (c0, i0) = scores(&track, &pen1, &char_box, &reference);
         let (c1, i1) = scores(&out.track, &pen1, &char_box, &reference);
         let (l0, l1) = (out.curve[0], out.curve[out.curve.len() - 1]);
         println!(
@@ -135,12 +77,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c1 - c0,
             l0.image,
             l1.image,
-            built.track.point_count(),
+            track.point_count(),
             out.footprints,
             out.variables,
         );
         if std::env::var_os("REFINE_DIAG").is_some() {
-            let [m0, e0, lo0, hi0] = diagnose(&built.track, &pen1, &char_box, &reference);
+            let [m0, e0, lo0, hi0] = diagnose(&track, &pen1, &char_box, &reference);
             let [m1, e1, lo1, hi1] = diagnose(&out.track, &pen1, &char_box, &reference);
             println!(
                 "  ink missed {m0:.3} → {m1:.3}, ink outside {e0:.3} → {e1:.3}; presses at the lightest {lo0:.3} → {lo1:.3}, deepest {hi0:.3} → {hi1:.3}"
@@ -148,7 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         if let Some(dir) = std::env::var_os("REFINE_PNG") {
             let dir = PathBuf::from(dir);
-            for (name, t) in [("before", &built.track), ("after", &out.track)] {
+            for (name, t) in [("before", &track), ("after", &out.track)] {
                 let img = render(t, &pen1, &char_box, judge_px);
                 std::fs::write(
                     dir.join(format!("{ch}_{name}.png")),
