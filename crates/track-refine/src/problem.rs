@@ -550,13 +550,33 @@ impl<'a> Problem<'a> {
         ForwardModel::default().trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
     }
 
-    /// `∂reach/∂(h, α)` of [`Self::reach`].
-    fn reach_grad(&self, _h: f64, _alpha: f64) -> [f64; 2] {
+    /// `∂reach/∂(h, α)` of [`Self::reach`] (constant: the profile's model is linear in h and α).
+    fn reach_grad(&self) -> [f64; 2] {
         let m = &self.profile.model;
         let c = |t: &brush_model::Terms| [t.h_mm.unwrap_or(0.0), t.alpha_rad.unwrap_or(0.0)];
         let (a, b) = (c(&m.lt_mm), c(&m.lh_mm));
         let tr = ForwardModel::default().trail_reach;
         [tr * (a[0] + b[0]), tr * (a[1] + b[1])]
+    }
+
+    /// The point (mm) a coupled footprint aims at in the iterate `theta`: its path sample
+    /// (`aim`: the segment's two groups and the fraction along it), slid along the path by the
+    /// change of the reach since the directions were derived (`slide`, see
+    /// [`Directions::slide`]; none where it is zero) for a press of depth `h` and tilt `alpha`.
+    fn aim_point(
+        &self,
+        theta: &[f64],
+        (ga, gb, f): (usize, usize, f64),
+        slide: [f64; 3],
+        h: f64,
+        alpha: f64,
+    ) -> (f64, f64) {
+        let [kx, ky, r0] = slide;
+        let dr = if kx != 0.0 || ky != 0.0 { self.reach(h, alpha) - r0 } else { 0.0 };
+        (
+            (1.0 - f) * theta[2 * ga] + f * theta[2 * gb] + dr * kx,
+            (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1] + dr * ky,
+        )
     }
 
     /// The footprints at an iterate with the given directions.
@@ -576,11 +596,8 @@ impl<'a> Problem<'a> {
                 let h = theta[ho + k];
                 let alpha = self.group_alpha[slot.group].map_or(p.alpha_rad, |a| theta[ao + a]);
                 let beta = match dirs.aim[k] {
-                    Some((ga, gb, f)) => {
-                        let [kx, ky, r0] = dirs.slide[k];
-                        let dr = if kx != 0.0 || ky != 0.0 { self.reach(h, alpha) - r0 } else { 0.0 };
-                        let ax = (1.0 - f) * theta[2 * ga] + f * theta[2 * gb] + dr * kx;
-                        let ay = (1.0 - f) * theta[2 * ga + 1] + f * theta[2 * gb + 1] + dr * ky;
+                    Some(aim) => {
+                        let (ax, ay) = self.aim_point(theta, aim, dirs.slide[k], h, alpha);
                         (ay - y).atan2(ax - x)
                     }
                     None => dirs.beta_rad[k],
@@ -833,18 +850,15 @@ impl<'a> Problem<'a> {
                 if let Some((ga, gb, fr)) = dirs.aim[k] {
                     // β = atan2(aim − p): ∂β/∂aim = (−r_y, r_x)/|r|², ∂β/∂p = −∂β/∂aim.
                     let fp = &fps[k];
-                    let [kx, ky, r0] = dirs.slide[k];
-                    let slides = kx != 0.0 || ky != 0.0;
-                    let dr = if slides { self.reach(fp.h, fp.alpha) - r0 } else { 0.0 };
-                    let ax = (1.0 - fr) * theta[2 * ga] + fr * theta[2 * gb] + dr * kx;
-                    let ay = (1.0 - fr) * theta[2 * ga + 1] + fr * theta[2 * gb + 1] + dr * ky;
+                    let [kx, ky, _] = dirs.slide[k];
+                    let (ax, ay) = self.aim_point(theta, (ga, gb, fr), dirs.slide[k], fp.h, fp.alpha);
                     let (rx, ry) = (ax - fp.x, ay - fp.y);
                     let r2 = rx * rx + ry * ry;
                     if r2 > 0.0 {
                         let (bx, by) = (-ry / r2 * g[4], rx / r2 * g[4]);
-                        if slides {
+                        if kx != 0.0 || ky != 0.0 {
                             // The aim slides with the reach: ∂aim/∂(h, α) = k·∂reach/∂(h, α).
-                            let [rh, ra] = self.reach_grad(fp.h, fp.alpha);
+                            let [rh, ra] = self.reach_grad();
                             let ga_k = bx * kx + by * ky;
                             grad[self.h_off() + k] += ga_k * rh;
                             if let Some(a) = self.group_alpha[slot.group] {
