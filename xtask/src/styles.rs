@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, with_splits, write_char};
+use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, write_char};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -169,19 +169,21 @@ fn score(
     char_box: CharBoxRule,
 ) -> Result<Row> {
     let expected = template.medians.as_ref().map_or(0, Vec::len);
-    let mut p = prepare_with_template(target, Some(method), Some(template))?;
+    let p = prepare_with_template(target, Some(method), Some(template))?;
     // The template report counts strokes from 1; the rows from 0.
     let t = p.template.as_ref();
     let missing: Vec<usize> = t.map_or(Vec::new(), |t| t.missing.iter().map(|i| i - 1).collect());
     let doubled: Vec<usize> = t.map_or(Vec::new(), |t| t.doubled.iter().map(|d| d[0] - 1).collect());
     let fits_ok = t.is_none_or(|t| t.strokes_ok);
     let uncovered_ink = t.map(|t| t.uncovered_ink);
-    let mm = match char_box {
-        CharBoxRule::Auto => trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad),
+    let (p, mm) = match char_box {
+        CharBoxRule::Auto => {
+            let mm = trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad);
+            (p, mm)
+        }
         CharBoxRule::Search => {
             let pl = searched_placement(&p, pen, opts)?;
-            p.paths = with_splits(&p.paths, &pl.split);
-            pl.size_mm
+            (p.placed(&pl), pl.size_mm)
         }
     };
     let res = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?;

@@ -470,15 +470,7 @@ pub fn searched_splits(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions
 fn search_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions, sizes_mm: &[f64]) -> Result<Placement> {
     let reference = render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX);
     let n = p.paths.len();
-    // The plan's CSIM and track for the paths split as `split` in a box of `size_mm`.
-    let plan = |size_mm: f64, split: &[bool]| -> Result<(f64, Track)> {
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
-        let topts =
-            TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-        let built = build_track(&with_splits(&p.paths, split), profile, &topts)?;
-        let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
-        Ok((stroke_metrics::csim(gray(&reference), gray(&img))?, built.track))
-    };
+    let plan = |size_mm: f64, split: &[bool]| plan_score(p, &reference, profile, opts, size_mm, split);
     let passes = |size_mm: f64, track: &Track| {
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
         build_program(track, profile, &level_frame_for(&b), &RobotConfig::default()).is_ok()
@@ -512,6 +504,25 @@ fn search_placement(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions, s
         Some(t) if !passes(pl.size_mm, &t) => start,
         _ => pl,
     })
+}
+
+/// The plan's CSIM against `reference` (the glyph at [`CHAR_BOX_SEARCH_PX`]²) and its track,
+/// for the centre lines split as `split` ([`with_splits`]) in a char box of side `size_mm` at
+/// the origin: what [`searched_placement`] compares.
+fn plan_score(
+    p: &Prepared,
+    reference: &Coverage,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    size_mm: f64,
+    split: &[bool],
+) -> Result<(f64, Track)> {
+    let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
+    let topts =
+        TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
+    let built = build_track(&with_splits(&p.paths, split), profile, &topts)?;
+    let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
+    Ok((stroke_metrics::csim(gray(reference), gray(&img))?, built.track))
 }
 
 impl Prepared {
@@ -651,18 +662,6 @@ pub fn side_by_side(images: &[&Coverage]) -> Coverage {
 mod tests {
     use super::*;
 
-    /// The plan's CSIM at the search raster for a char box side.
-    fn plan_csim(p: &Prepared, pen: &BrushProfile, size_mm: f64) -> f64 {
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
-        let opts = WriteOptions::default();
-        let topts =
-            TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-        let built = build_track(&p.paths, pen, &topts).unwrap();
-        let img =
-            render_char(&built.track, pen, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX).unwrap();
-        stroke_metrics::csim(gray(&render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX)), gray(&img)).unwrap()
-    }
-
     #[test]
     fn the_searched_placement_scores_at_least_every_whole_character_candidate() {
         let pen = BrushProfile::builtin("pen1").unwrap();
@@ -677,22 +676,15 @@ mod tests {
                 CHAR_BOX_SEARCH_SCALES.iter().any(|s| (auto * s - pl.size_mm).abs() < 1e-9),
                 "{c}: {pl:?} of {auto}"
             );
-            let as_split = |split: &[bool]| Prepared {
-                paths: with_splits(&p.paths, split),
-                template: None,
-                glyph: p.glyph.clone(),
-                ..p
-            };
-            let got = plan_csim(&as_split(&pl.split), &pen, pl.size_mm);
+            let reference = render_glyph(&p.glyph, CHAR_BOX_SEARCH_PX);
+            let opts = WriteOptions::default();
+            let score =
+                |size_mm: f64, split: &[bool]| plan_score(&p, &reference, &pen, &opts, size_mm, split).unwrap().0;
+            let got = score(pl.size_mm, &pl.split);
             let n = p.paths.len();
             let best_whole = CHAR_BOX_SEARCH_SCALES
                 .iter()
-                .flat_map(|s| {
-                    [
-                        plan_csim(&as_split(&vec![true; n]), &pen, auto * s),
-                        plan_csim(&as_split(&vec![false; n]), &pen, auto * s),
-                    ]
-                })
+                .flat_map(|s| [score(auto * s, &vec![true; n]), score(auto * s, &vec![false; n])])
                 .fold(0.0, f64::max);
             assert!(got >= best_whole - 1e-12, "{c}: {pl:?} scores {got} < {best_whole}");
         }

@@ -95,15 +95,17 @@ pub fn run(args: Args) -> Result<()> {
                 }
                 r => r?,
             };
-            let mut p = prepare_loaded(loaded, args.method, true)?;
-            let mut mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
-            if args.placement.search() && p.method == Method::Template {
+            let p = prepare_loaded(loaded, args.method, true)?;
+            let (p, mm) = if args.placement.search() && p.method == Method::Template {
                 let pl = match args.char_mm {
                     Some(mm) => searched_splits(&p, &profile, &opts, mm)?,
                     None => searched_placement(&p, &profile, &opts)?,
                 };
-                (p, mm) = (p.placed(&pl), pl.size_mm);
-            }
+                (p.placed(&pl), pl.size_mm)
+            } else {
+                let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
+                (p, mm)
+            };
             let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
             pb.inc(1);
             Ok(Some(r.report))
