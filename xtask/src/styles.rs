@@ -415,6 +415,25 @@ pub fn run(args: &[String]) -> Result<()> {
 mod tests {
     use super::*;
 
+    /// Bad arguments are refused with a message naming the argument, and no JSON is written.
+    #[test]
+    fn bad_input_names_the_argument_and_writes_nothing() {
+        let json = std::env::temp_dir().join(format!("maobi-styles-{}.json", std::process::id()));
+        let font = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/fonts/ukai-subset.ttf");
+        let (j, f) = (json.to_str().unwrap(), font.to_str().unwrap());
+        let err = |v: &[&str]| format!("{:#}", run(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap_err());
+        assert!(err(&["--json", j]).contains("--font is required"));
+        assert!(
+            err(&["--font", f, "--char-box", "best", "--json", j])
+                .contains("--char-box: expected auto or search, got `best`")
+        );
+        assert!(err(&["--font", f, "--size", "big", "--json", j]).starts_with("--size"));
+        assert!(err(&["--font", f, "--methods", "ink", "--json", j]).contains("ink"));
+        assert!(err(&["--font", f, "--bogus"]).contains("unknown argument `--bogus`"));
+        assert!(err(&["--font", f, "--json"]).contains("--json needs a value"));
+        assert!(!json.exists());
+    }
+
     #[test]
     fn ink_balance_counts_missed_and_outside_ink_against_the_reference() {
         let (mut g, mut r) = (bezier_raster::Coverage::new(4, 1), bezier_raster::Coverage::new(4, 1));
