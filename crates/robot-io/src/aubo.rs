@@ -64,7 +64,25 @@ pub struct AuboClient {
     client_no: u64,
     timeout: Duration,
     interface_version: Option<i64>,
+    /// Ids of calls that timed out (their answers may still come), oldest first.
+    stale: Vec<Value>,
+    /// Answers with ids that did not match, on this connection.
+    foreign: usize,
+    /// The last such id (shown) and the count then, while the call it came in waits.
+    last_foreign: Option<(String, usize)>,
 }
+
+/// Answers with an id this client never used (or whose call had not timed out) tolerated on one
+/// connection: the third is a [`RobotError::Protocol`] error naming the ids. A call that gets
+/// such an answer and then none with its own id fails with [`RobotError::Protocol`] naming both
+/// ids, not with a timeout.
+pub const MAX_ID_MISMATCHES: usize = 3;
+
+/// Ids of calls that timed out whose late answers are skipped without counting.
+const MAX_STALE_IDS: usize = 16;
+
+/// Longest robot name accepted from `getRobotNames` (it goes into every method name), bytes.
+pub const MAX_ROBOT_NAME_LEN: usize = 64;
 
 /// Result code the controller returns when its motion queue is full.
 pub const QUEUE_FULL: i64 = 2;
@@ -133,6 +151,9 @@ impl AuboClient {
                         client_no: CLIENTS.fetch_add(1, Ordering::Relaxed),
                         timeout,
                         interface_version: None,
+                        stale: Vec::new(),
+                        foreign: 0,
+                        last_foreign: None,
                     });
                 }
                 Err(e) => last = Some(e),
@@ -272,11 +293,54 @@ impl AuboClient {
             }
         }
         let deadline = Instant::now() + self.timeout;
+        self.last_foreign = None;
         loop {
-            let v = self.read_value(method, deadline)?;
-            if v.get("id") != Some(&id) {
-                continue; // a notification or a stale answer
+            let v = match self.read_value(method, deadline) {
+                Ok(v) => v,
+                Err(RobotError::Timeout(m)) => {
+                    if let Some((got, n)) = &self.last_foreign {
+                        // Answers came, with the wrong id: say so rather than "timeout".
+                        let e = RobotError::Protocol(format!(
+                            "{method}: the controller answered id {got}, expected {id} (none with the expected id within {:.1} s; {n} answer(s) on this connection with ids that did not match)",
+                            self.timeout.as_secs_f64()
+                        ));
+                        self.last_foreign = None;
+                        return Err(e);
+                    }
+                    // A late answer to this call is stale, not foreign.
+                    if self.stale.len() >= MAX_STALE_IDS {
+                        self.stale.remove(0);
+                    }
+                    self.stale.push(id);
+                    return Err(RobotError::Timeout(m));
+                }
+                Err(e) => return Err(e),
+            };
+            let is_answer = v.get("result").is_some() || v.get("error").is_some();
+            match v.get("id") {
+                Some(got) if got == &id => {}
+                // An error the controller could not attach to an id (a parse error): ours, since
+                // one call is in flight at a time.
+                Some(Value::Null) | None if v.get("error").is_some() => {}
+                Some(got) if is_answer && !got.is_null() => {
+                    if let Some(i) = self.stale.iter().position(|s| s == got) {
+                        self.stale.remove(i); // the late answer to a call that timed out
+                        continue;
+                    }
+                    self.foreign += 1;
+                    self.last_foreign = Some((show_value(got), self.foreign));
+                    if self.foreign >= MAX_ID_MISMATCHES {
+                        return Err(RobotError::Protocol(format!(
+                            "{method}: the controller answered id {}, expected {id} ({} answers on this connection with ids that did not match)",
+                            show_value(got),
+                            self.foreign
+                        )));
+                    }
+                    continue;
+                }
+                _ => continue, // a notification
             }
+            self.last_foreign = None;
             if let Some(err) = v.get("error") {
                 return Err(RobotError::Rpc {
                     method: method.to_string(),
@@ -418,7 +482,12 @@ impl AuboClient {
     pub fn robot_names(&mut self) -> Result<Vec<String>, RobotError> {
         let p = self.params(Value::Null, json!([]));
         let r = self.call("getRobotNames", p)?;
-        serde_json::from_value(r).map_err(|e| bad_json("getRobotNames", "expected a list of names", e))
+        let names: Vec<String> =
+            serde_json::from_value(r).map_err(|e| bad_json("getRobotNames", "expected a list of names", e))?;
+        for n in &names {
+            check_robot_name(n).map_err(|why| RobotError::Protocol(format!("getRobotNames: {why}")))?;
+        }
+        Ok(names)
     }
 
     /// `<robot>.RobotConfig.setTcpOffset`: the tool centre point in the flange frame
@@ -428,7 +497,7 @@ impl AuboClient {
     /// As [`AuboClient::call_status`].
     pub fn set_tcp_offset(&mut self, robot: &str, offset: [f64; 6]) -> Result<i64, RobotError> {
         let p = self.params(json!({"offset": offset}), json!([offset]));
-        self.call_status(&format!("{robot}.RobotConfig.setTcpOffset"), p)
+        self.call_status(&robot_method(robot, "RobotConfig.setTcpOffset")?, p)
     }
 
     /// `<robot>.MotionControl.setSpeedFraction`: the fraction (0, 1] of the commanded speeds.
@@ -437,7 +506,7 @@ impl AuboClient {
     /// As [`AuboClient::call_status`].
     pub fn set_speed_fraction(&mut self, robot: &str, fraction: f64) -> Result<i64, RobotError> {
         let p = self.params(json!({"fraction": fraction}), json!([fraction]));
-        self.call_status(&format!("{robot}.MotionControl.setSpeedFraction"), p)
+        self.call_status(&robot_method(robot, "MotionControl.setSpeedFraction")?, p)
     }
 
     /// `<robot>.MotionControl.getExecId`: the running motion's id, −1 when idle.
@@ -445,7 +514,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`].
     pub fn exec_id(&mut self, robot: &str) -> Result<i64, RobotError> {
-        let m = format!("{robot}.MotionControl.getExecId");
+        let m = robot_method(robot, "MotionControl.getExecId")?;
         let p = self.params(Value::Null, json!([]));
         let r = self.call(&m, p)?;
         r.as_i64().ok_or_else(|| RobotError::Protocol(format!("{m}: expected an integer")))
@@ -456,7 +525,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`]; [`RobotError::Protocol`] if the result is not a bool.
     pub fn is_steady(&mut self, robot: &str) -> Result<bool, RobotError> {
-        let m = format!("{robot}.RobotState.isSteady");
+        let m = robot_method(robot, "RobotState.isSteady")?;
         let p = self.params(Value::Null, json!([]));
         let r = self.call(&m, p)?;
         r.as_bool().ok_or_else(|| RobotError::Protocol(format!("{m}: expected a bool, got {r}")))
@@ -474,7 +543,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`].
     pub fn tcp_pose(&mut self, robot: &str) -> Result<Pose, RobotError> {
-        Ok(Pose(self.six(&format!("{robot}.RobotState.getTcpPose"))?))
+        Ok(Pose(self.six(&robot_method(robot, "RobotState.getTcpPose")?)?))
     }
 
     /// `<robot>.RobotState.getJointPositions`: the six joint angles, rad.
@@ -482,7 +551,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call`].
     pub fn joint_positions(&mut self, robot: &str) -> Result<[f64; 6], RobotError> {
-        self.six(&format!("{robot}.RobotState.getJointPositions"))
+        self.six(&robot_method(robot, "RobotState.getJointPositions")?)
     }
 
     /// The method and params of one motion command for this transport: `moveJoint` with
@@ -512,6 +581,7 @@ impl AuboClient {
     /// # Errors
     /// As [`AuboClient::call_status`]; [`RobotError::Timeout`] if the queue stays full.
     pub fn send_move(&mut self, robot: &str, m: &Move) -> Result<(), RobotError> {
+        robot_method(robot, "MotionControl")?;
         let (method, params) = self.move_request(robot, m);
         for attempt in 0..200 {
             match self.call_status(&method, params.clone())? {
@@ -522,19 +592,114 @@ impl AuboClient {
         Err(RobotError::Timeout(format!("{method}: the motion queue stayed full")))
     }
 
-    /// Waits until the controller is idle (`getExecId` = −1), polling.
+    /// Waits until the controller is idle (`getExecId` = −1), polling every 10 ms; returns how
+    /// long it waited.
     ///
     /// # Errors
-    /// As [`AuboClient::call`]; [`RobotError::Timeout`] after `limit`.
-    pub fn wait_idle(&mut self, robot: &str, limit: Duration) -> Result<(), RobotError> {
-        let end = Instant::now() + limit;
-        while self.exec_id(robot)? != -1 {
-            if Instant::now() > end {
-                return Err(RobotError::Timeout(format!("{robot}: motion did not finish")));
+    /// As [`AuboClient::call`]; [`RobotError::UnexpectedState`] when the controller still
+    /// reports motion after `limit`, saying how long it waited and the last id.
+    pub fn wait_idle(&mut self, robot: &str, limit: Duration) -> Result<Duration, RobotError> {
+        let t0 = Instant::now();
+        loop {
+            let id = self.exec_id(robot)?;
+            if id == -1 {
+                return Ok(t0.elapsed());
+            }
+            if t0.elapsed() > limit {
+                return Err(RobotError::UnexpectedState(format!(
+                    "{robot}: motion did not finish: waited {:.1} s (limit {:.1} s), getExecId still {id}",
+                    t0.elapsed().as_secs_f64(),
+                    limit.as_secs_f64()
+                )));
             }
             std::thread::sleep(Duration::from_millis(10));
         }
-        Ok(())
+    }
+
+    /// `<robot>.RobotAlgorithm.inverseKinematics(qnear, pose)`: the controller's joints for the
+    /// TCP `pose` (m, rad) nearest `qnear` (rad), in its own kinematics.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Protocol`] if the result is not a
+    /// `[joints, code]` pair ([`tuple_result`]); [`RobotError::Controller`] for a code other
+    /// than 0; [`RobotError::UnexpectedState`] for joints that are not six finite numbers.
+    pub fn inverse_kinematics(&mut self, robot: &str, qnear: &[f64; 6], pose: &Pose) -> Result<[f64; 6], RobotError> {
+        let m = robot_method(robot, "RobotAlgorithm.inverseKinematics")?;
+        let p = self.params(json!({"qnear": qnear, "pose": pose.0}), json!([qnear, pose.0]));
+        let r = self.call(&m, p)?;
+        tuple_result(&m, &r)
+    }
+
+    /// `<robot>.RobotAlgorithm.forwardKinematics(q)`: the TCP pose of joints `q` (rad) in the
+    /// controller's own kinematics.
+    ///
+    /// # Errors
+    /// As [`AuboClient::inverse_kinematics`].
+    pub fn forward_kinematics(&mut self, robot: &str, q: &[f64; 6]) -> Result<Pose, RobotError> {
+        let m = robot_method(robot, "RobotAlgorithm.forwardKinematics")?;
+        let p = self.params(json!({"q": q}), json!([q]));
+        let r = self.call(&m, p)?;
+        tuple_result(&m, &r).map(Pose)
+    }
+}
+
+/// The result of an SDK method returning a C++ `std::tuple<std::vector<double>, int>`
+/// (`inverseKinematics`, `forwardKinematics`), assumed to travel as the JSON array
+/// `[[v0, …, v5], code]`: the six values when the code is 0. (The one place that knows this
+/// encoding.)
+///
+/// # Errors
+/// [`RobotError::Protocol`] for another shape; [`RobotError::Controller`] for a code other than
+/// 0; [`RobotError::UnexpectedState`] for values that are not finite.
+pub fn tuple_result(method: &str, r: &Value) -> Result<[f64; 6], RobotError> {
+    let shape =
+        || RobotError::Protocol(format!("{method}: expected [[six numbers], integer code], got {}", show_value(r)));
+    let [values, code] = r.as_array().map(Vec::as_slice).ok_or_else(shape)? else {
+        return Err(shape());
+    };
+    let code = code.as_i64().ok_or_else(shape)?;
+    if code != 0 {
+        return Err(RobotError::Controller { method: method.to_string(), code });
+    }
+    let v: Vec<f64> =
+        values.as_array().ok_or_else(shape)?.iter().map(Value::as_f64).collect::<Option<_>>().ok_or_else(shape)?;
+    let v: [f64; 6] = v.try_into().map_err(|_| shape())?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(RobotError::UnexpectedState(format!("{method}: answered values that are not finite: {v:?}")));
+    }
+    Ok(v)
+}
+
+/// Whether `name` can go into a method name: 1 to [`MAX_ROBOT_NAME_LEN`] characters from
+/// `[A-Za-z0-9_]`. The error says why not, naming the name (shortened).
+///
+/// # Errors
+/// A one-line description of what is wrong.
+pub fn check_robot_name(name: &str) -> Result<(), String> {
+    let ok_chars = name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
+    if !name.is_empty() && name.len() <= MAX_ROBOT_NAME_LEN && ok_chars {
+        return Ok(());
+    }
+    let shown: String = name.chars().take(80).collect();
+    let more = if name.chars().count() > 80 { format!(" (… {} bytes)", name.len()) } else { String::new() };
+    Err(format!(
+        "robot name {shown:?}{more} is not a plain identifier of 1 to {MAX_ROBOT_NAME_LEN} characters from A–Z, a–z, 0–9 and _: refused (it would go into method names)"
+    ))
+}
+
+/// `<robot>.<rest>`, refusing a robot name [`check_robot_name`] refuses.
+fn robot_method(robot: &str, rest: &str) -> Result<String, RobotError> {
+    check_robot_name(robot).map_err(RobotError::Protocol)?;
+    Ok(format!("{robot}.{rest}"))
+}
+
+/// A JSON value for a message, shortened to 80 characters.
+fn show_value(v: &Value) -> String {
+    let s = v.to_string();
+    if s.chars().count() <= 80 {
+        s
+    } else {
+        format!("{}… ({} bytes)", s.chars().take(80).collect::<String>(), s.len())
     }
 }
 
@@ -555,14 +720,38 @@ fn bad_json(method: &str, what: &str, source: serde_json::Error) -> RobotError {
     RobotError::BadJson { context: format!("{method}: {what}"), source }
 }
 
-/// Sends a Lua script to the controller's script port, framed by `\r\n\r\n`.
+/// Sends a Lua script to the controller's script port, framed by `\r\n\r\n`. A script that
+/// contains `\r\n\r\n` (the port would run it as two scripts) or a NUL byte is refused
+/// before connecting.
 ///
 /// # Errors
-/// [`RobotError::Io`].
+/// [`RobotError::Unsafe`] for such a script, naming the line; [`RobotError::Io`].
 pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), RobotError> {
+    check_script(script)?;
     let c = AuboClient::connect(addr, timeout)?;
     let mut s = c.stream;
     s.write_all(script.as_bytes()).and_then(|_| s.write_all(b"\r\n\r\n")).map_err(|e| io_at(addr, e))
 }
 
-pub use crate::run::{RunOptions, RunReport, run_program};
+pub use crate::run::{
+    IK_CHECK_M, IK_CHECK_RAD, MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M, RunOptions,
+    RunReport, run_program,
+};
+
+/// Refuses a script the script port would not take as one script: one containing the
+/// terminator `\r\n\r\n` or a NUL byte.
+fn check_script(script: &str) -> Result<(), RobotError> {
+    let line_of = |at: usize| script[..at].matches('\n').count() + 1;
+    let (at, what) = if let Some(at) = script.find("\r\n\r\n") {
+        (at, "the script terminator \"\\r\\n\\r\\n\" (the script port would run what follows as a second script)")
+    } else if let Some(at) = script.find('\0') {
+        (at, "a NUL byte")
+    } else {
+        return Ok(());
+    };
+    Err(RobotError::Unsafe {
+        stroke: None,
+        point: None,
+        reason: format!("the script contains {what} at byte {at} (line {}); nothing was sent", line_of(at)),
+    })
+}

@@ -164,6 +164,14 @@ pub enum RobotError {
         /// The status.
         code: i64,
     },
+    /// The controller does not behave as the runner commanded: a reported pose or joint
+    /// position that is not finite, outside the workspace, or farther than the tolerance from
+    /// what was commanded; motion the runner did not queue (another client?); or motion that
+    /// does not finish in the time the queued moves need. Not a link fault: the run is not
+    /// resumed. The message names what was reported, what was expected and by how much they
+    /// differ.
+    #[error("the controller disagrees with what was commanded: {0}")]
+    UnexpectedState(String),
     /// The run was stopped on request (Ctrl-C).
     #[error("interrupted (Ctrl-C)")]
     Interrupted,

@@ -1,13 +1,44 @@
 //! The fault-tolerant program runner: a program sent stroke by stroke over an [`AuboClient`],
 //! reconnecting after a dropped link or a timeout within a retry budget, lifting the brush
 //! straight out of the paper before resuming or giving up.
+//!
+//! The runner trusts nothing the controller reports. Every TCP pose it reads is checked (finite,
+//! within reach, near this program, and within [`POSE_TOLERANCE_M`] of what was commanded)
+//! before it is acted on; motion it did not queue is an error; every wait for motion to finish
+//! is bounded by the time the queued moves need.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use nalgebra::{Point3, Vector3};
+
 use crate::RobotError;
 use crate::aubo::{AuboClient, Link, io_at};
+use crate::kinematics::JOINT_LIMIT_RAD;
+use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
+
+/// How far a reported TCP position may lie from the commanded one (or from the commanded path
+/// after a fault, widened by the moves' blend radius), m: 5 mm. Far above a controller's
+/// repeatability (±0.02–0.05 mm for the AUBO-i5) and the simulator's (exact), far below the
+/// 80 mm "believed" offsets it exists to catch.
+pub const POSE_TOLERANCE_M: f64 = 0.005;
+/// How far a reported tool orientation may turn from the commanded one, rad (about 2.9°).
+pub const ORIENTATION_TOLERANCE_RAD: f64 = 0.05;
+/// Farthest a reported TCP may lie from the robot base, m: beyond the AUBO-i5's reach
+/// (0.886 m) plus a brush.
+pub const MAX_REACH_M: f64 = 1.2;
+/// How far outside the box of the program's commanded positions a reported TCP may lie once
+/// the arm is at the start pose, m.
+pub const NEIGHBOURHOOD_M: f64 = 0.1;
+/// How far the controller's forward kinematics of its own inverse solution for the start pose
+/// may lie from that pose: position, m (0.5 mm).
+pub const IK_CHECK_M: f64 = 0.0005;
+/// As [`IK_CHECK_M`], orientation, rad.
+pub const IK_CHECK_RAD: f64 = 1e-3;
+/// A stroke whose lift move was sent counts as done after a fault when the TCP is this close
+/// to the lift's end, m.
+const DONE_M: f64 = 0.0005;
 
 /// How the runner behaves on faults.
 pub struct RunOptions<'a> {
@@ -25,6 +56,12 @@ pub struct RunOptions<'a> {
     pub backoff: Duration,
     /// Longest wait before reconnecting.
     pub max_backoff: Duration,
+    /// Shortest wait for queued motion to finish (the floor of the limit derived from the
+    /// moves' expected duration).
+    pub min_wait: Duration,
+    /// Longest wait for one stroke's motion (or the start move, or a lift) to finish, unless
+    /// its expected duration alone needs more (then 1.5 × that).
+    pub max_wait_per_stroke: Duration,
     /// Safe height above the paper to lift to after a fault or a stop, m.
     pub lift_m: f64,
     /// The transport and credentials.
@@ -37,8 +74,9 @@ pub struct RunOptions<'a> {
 
 impl<'a> RunOptions<'a> {
     /// The defaults `maobi robot send` uses: 2 s per call, 5 connection attempts per fault,
-    /// 3 faults per stroke, 10 per run, backoff 200 ms doubling to 5 s, lift 20 mm, the framed
-    /// transport with the default user and password ([`Link::default`]).
+    /// 3 faults per stroke, 10 per run, backoff 200 ms doubling to 5 s, waits for motion of
+    /// at least 10 s and at most 2 min per stroke, lift 20 mm, the framed transport with the
+    /// default user and password ([`Link::default`]).
     pub fn new(stop: &'a AtomicBool) -> Self {
         Self {
             timeout: Duration::from_secs(2),
@@ -47,6 +85,8 @@ impl<'a> RunOptions<'a> {
             max_retries_total: 10,
             backoff: Duration::from_millis(200),
             max_backoff: Duration::from_secs(5),
+            min_wait: Duration::from_secs(10),
+            max_wait_per_stroke: Duration::from_secs(120),
             lift_m: 0.02,
             link: Link::default(),
             stop,
@@ -91,24 +131,6 @@ fn open(addr: &str, program: &Program, opts: &RunOptions<'_>, robot_name: Option
     Ok(Session { client, robot })
 }
 
-/// Lifts the brush straight out of the paper (along its normal) to `lift_m` above it, unless
-/// it is there already. Returns what it did, in words.
-fn lift(s: &mut Session, program: &Program, lift_m: f64, idle_limit: Duration) -> Result<String, RobotError> {
-    let here = s.client.tcp_pose(&s.robot)?;
-    let depth_mm = program.depth_mm(here.position());
-    if depth_mm <= -lift_m * 1000.0 + 0.5 {
-        return Ok(format!("the brush is at the safe height ({:.1} mm above the paper)", -depth_mm));
-    }
-    let pose = program.lifted_out(&here, lift_m);
-    let m = Move::Line { pose, a: program.retreat_acc_m_s2, v: program.retreat_speed_m_s, blend_m: 0.0 };
-    s.client.send_move(&s.robot, &m)?;
-    s.client.wait_idle(&s.robot, idle_limit)?;
-    Ok(format!(
-        "brush lifted from {depth_mm:.1} mm below the paper to the safe height ({:.1} mm above it)",
-        lift_m * 1000.0
-    ))
-}
-
 /// Sleeps `d`, waking early when `stop` is set.
 fn sleep_unless(d: Duration, stop: &AtomicBool) {
     let end = Instant::now() + d;
@@ -121,39 +143,288 @@ fn sleep_unless(d: Duration, stop: &AtomicBool) {
     }
 }
 
-/// Sends a stroke's moves, stopping early (after the move in flight) when `stop` is set, then
-/// waits until the controller has executed what it was sent.
-fn run_stroke(s: &mut Session, st: &StrokeProgram, idle_limit: Duration, stop: &AtomicBool) -> Result<(), RobotError> {
-    for m in st.moves() {
-        if stop.load(Ordering::SeqCst) {
-            s.client.wait_idle(&s.robot, idle_limit)?;
-            return Err(RobotError::Interrupted);
-        }
-        s.client.send_move(&s.robot, m)?;
-    }
-    s.client.wait_idle(&s.robot, idle_limit)
-}
-
 fn is_fault(e: &RobotError) -> bool {
     matches!(e, RobotError::Io { .. } | RobotError::Timeout(_))
 }
 
+/// One move sent to the controller, as the checks need it.
+#[derive(Clone, Copy, Debug)]
+struct Sent {
+    /// Where it ends (`None`: a joint move whose TCP pose is not known).
+    target: Option<Pose>,
+    /// A joint move: its TCP path is not a line.
+    joint: bool,
+    /// Its largest joint travel, rad (joint moves; `None`: not known).
+    joint_travel_rad: Option<f64>,
+    /// Speed (m/s or rad/s) and acceleration.
+    v: f64,
+    a: f64,
+    /// Blend radius, m.
+    blend_m: f64,
+}
+
+impl Sent {
+    fn of(m: &Move) -> Sent {
+        match *m {
+            Move::Joint { a, v, .. } => Sent { target: None, joint: true, joint_travel_rad: None, v, a, blend_m: 0.0 },
+            Move::Line { pose, a, v, blend_m } => {
+                Sent { target: Some(pose), joint: false, joint_travel_rad: None, v, a, blend_m }
+            }
+        }
+    }
+}
+
+/// What was commanded since the arm was last seen idle where expected.
+#[derive(Clone, Debug, Default)]
+struct Commanded {
+    /// The pose the arm was seen at then (`None` before the run).
+    from: Option<Pose>,
+    /// The moves sent since, in order (a move whose answer was lost included).
+    sent: Vec<Sent>,
+}
+
+impl Commanded {
+    /// The last commanded pose: the last move's target, or where the arm was seen.
+    fn last_pose(&self) -> Option<Pose> {
+        match self.sent.last() {
+            Some(s) => s.target,
+            None => self.from,
+        }
+    }
+
+    /// Seconds the controller needs for the moves sent: per move, the path length (or a turn
+    /// in place at the speed per 0.1 m, as the simulator runs it) at the commanded speed times
+    /// the speed fraction, plus a ramp up and down at the commanded acceleration; a joint move
+    /// of unknown travel counts 2π rad.
+    fn duration_s(&self, speed_fraction: f64) -> f64 {
+        let mut at = self.from;
+        let mut total = 0.0;
+        for s in &self.sent {
+            let v = (s.v * speed_fraction).max(1e-9);
+            let path = if s.joint {
+                s.joint_travel_rad.unwrap_or(std::f64::consts::TAU)
+            } else {
+                match (at, s.target) {
+                    (Some(a), Some(b)) => {
+                        let turn = a.to_iso().rotation.angle_to(&b.to_iso().rotation);
+                        distance_m(&a, &b).max(0.1 * turn)
+                    }
+                    _ => MAX_REACH_M * 2.0,
+                }
+            };
+            total += path / v + 2.0 * v / s.a.max(1e-9);
+            at = s.target;
+        }
+        total
+    }
+}
+
+/// Where a reported pose must be.
+enum Expect<'c> {
+    /// Before the run: anywhere within reach.
+    Reach,
+    /// Idle after the commanded moves: at their end.
+    At(Pose),
+    /// After a fault: anywhere along what was commanded since the arm was last seen.
+    Along(&'c Commanded),
+}
+
+fn distance_m(a: &Pose, b: &Pose) -> f64 {
+    let (p, q) = (a.position(), b.position());
+    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+}
+
+fn turn_rad(a: &Pose, b: &Pose) -> f64 {
+    a.to_iso().rotation.angle_to(&b.to_iso().rotation)
+}
+
+/// A number for a message: 4 decimals, or scientific when huge.
+fn num(x: f64) -> String {
+    if x.is_finite() && x.abs() < 1e6 { format!("{x:.4}") } else { format!("{x:e}") }
+}
+
+/// A pose (or joints) for a message.
+fn show(v: &[f64]) -> String {
+    format!("[{}]", v.iter().map(|&x| num(x)).collect::<Vec<_>>().join(", "))
+}
+
+/// The box of every position the program commands (m), for the neighbourhood check.
+fn program_box(program: &Program) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let moves = std::iter::once(&program.start).chain(program.strokes.iter().flat_map(StrokeProgram::moves));
+    for m in moves {
+        if let Move::Line { pose, .. } = m {
+            for k in 0..3 {
+                lo[k] = lo[k].min(pose.0[k]);
+                hi[k] = hi[k].max(pose.0[k]);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+/// Distance from `p` to the segment `a`–`b` and the parameter of the nearest point.
+fn to_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> (f64, f64) {
+    let ab: Vector3<f64> = b - a;
+    let len2 = ab.norm_squared();
+    let t = if len2 > 0.0 { ((p - a).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    ((p - (a + ab * t)).norm(), t)
+}
+
+/// Checks a reported TCP pose: finite, within [`MAX_REACH_M`] of the base, within
+/// [`NEIGHBOURHOOD_M`] of the program's box (`near`, once the program has started), and where
+/// `expect` says. The error names the pose reported, the pose expected and the distance.
+fn check_pose(
+    here: &Pose,
+    expect: &Expect<'_>,
+    near: Option<&([f64; 3], [f64; 3])>,
+    when: &str,
+) -> Result<(), RobotError> {
+    let bad =
+        |why: String| Err(RobotError::UnexpectedState(format!("{when}: getTcpPose reported {}, {why}", show(&here.0))));
+    if !here.0.iter().all(|x| x.is_finite()) {
+        return bad("which is not a finite pose".into());
+    }
+    let p = Point3::from(here.position());
+    let reach = p.coords.norm();
+    if reach > MAX_REACH_M {
+        return bad(format!("{reach:.3} m from the robot base: outside the workspace (at most {MAX_REACH_M} m)"));
+    }
+    if let Some((lo, hi)) = near {
+        let out = (0..3).map(|k| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0)).fold(0.0, |s: f64, d| s + d * d).sqrt();
+        if out > NEIGHBOURHOOD_M {
+            return bad(format!(
+                "{:.0} mm outside the box of this program's poses [{}]–[{}] (at most {:.0} mm)",
+                out * 1e3,
+                show(lo),
+                show(hi),
+                NEIGHBOURHOOD_M * 1e3
+            ));
+        }
+    }
+    let tol_mm = POSE_TOLERANCE_M * 1e3;
+    match expect {
+        Expect::Reach => Ok(()),
+        Expect::At(want) => {
+            let d = distance_m(here, want);
+            if d > POSE_TOLERANCE_M {
+                return bad(format!(
+                    "{:.1} mm from the commanded pose {} (tolerance {tol_mm:.1} mm)",
+                    d * 1e3,
+                    show(&want.0)
+                ));
+            }
+            let turn = turn_rad(here, want);
+            if turn > ORIENTATION_TOLERANCE_RAD {
+                return bad(format!(
+                    "its orientation {turn:.3} rad ({:.1}°) from the commanded pose {} (tolerance {ORIENTATION_TOLERANCE_RAD} rad)",
+                    turn.to_degrees(),
+                    show(&want.0)
+                ));
+            }
+            Ok(())
+        }
+        Expect::Along(c) => {
+            let Some(from) = c.from else { return Ok(()) };
+            if c.sent.iter().any(|s| s.joint || s.target.is_none()) {
+                // A joint move's TCP path is not a line: within reach is all that is known.
+                return Ok(());
+            }
+            let poses: Vec<Pose> = std::iter::once(from).chain(c.sent.iter().filter_map(|s| s.target)).collect();
+            let blends: Vec<f64> = std::iter::once(0.0).chain(c.sent.iter().map(|s| s.blend_m)).collect();
+            let mut nearest = f64::INFINITY;
+            // The least turn from the commanded orientation where the position is within
+            // tolerance.
+            let mut least_turn = f64::INFINITY;
+            for i in 0..poses.len() {
+                let (a, b) = (poses[i], poses[(i + 1).min(poses.len() - 1)]);
+                let (pa, pb) = (Point3::from(a.position()), Point3::from(b.position()));
+                let (d, t) = to_segment(&p, &pa, &pb);
+                nearest = nearest.min(d);
+                let blend = blends[i].max(blends[(i + 1).min(poses.len() - 1)]);
+                if d > POSE_TOLERANCE_M + blend {
+                    continue;
+                }
+                let (ra, rb) = (a.to_iso().rotation, b.to_iso().rotation);
+                let rot = here.to_iso().rotation;
+                // Along a line the orientation is where the position is; turning in place, any.
+                let ts: Vec<f64> =
+                    if (pb - pa).norm() < 1e-6 { (0..=16).map(|k| k as f64 / 16.0).collect() } else { vec![t] };
+                let turned = ts
+                    .iter()
+                    .map(|&t| rot.angle_to(&ra.try_slerp(&rb, t, 1e-9).unwrap_or(if t < 0.5 { ra } else { rb })))
+                    .fold(f64::INFINITY, f64::min);
+                if turned <= ORIENTATION_TOLERANCE_RAD {
+                    return Ok(());
+                }
+                least_turn = least_turn.min(turned);
+            }
+            let last = poses.last().copied().unwrap_or(from);
+            if least_turn.is_finite() {
+                return bad(format!(
+                    "at a point of the commanded path ({} move(s) from {} to {}) but with its orientation {least_turn:.3} rad ({:.1}°) from the commanded one there (tolerance {ORIENTATION_TOLERANCE_RAD} rad)",
+                    c.sent.len(),
+                    show(&from.0),
+                    show(&last.0),
+                    least_turn.to_degrees()
+                ));
+            }
+            bad(format!(
+                "{:.1} mm from the nearest point of the commanded path ({} move(s) from {} to {}; tolerance {tol_mm:.1} mm and {ORIENTATION_TOLERANCE_RAD} rad)",
+                nearest * 1e3,
+                c.sent.len(),
+                show(&from.0),
+                show(&last.0)
+            ))
+        }
+    }
+}
+
+/// Checks reported joint positions: six finite angles within the joint limits (±175°).
+fn check_joints(q: &[f64; 6], what: &str) -> Result<(), RobotError> {
+    let ok = q.iter().all(|x| x.is_finite() && x.abs() <= JOINT_LIMIT_RAD + 0.02);
+    if ok {
+        return Ok(());
+    }
+    Err(RobotError::UnexpectedState(format!(
+        "{what}: {}, which are not six finite angles within the joint limits (±{:.0}°)",
+        show(q),
+        JOINT_LIMIT_RAD.to_degrees()
+    )))
+}
+
 /// Runs a program on a controller (or the simulator) at `addr`, stroke by stroke.
 ///
+/// Before the first move the controller must be idle (`getExecId` −1: no motion this run did
+/// not queue) and report a finite pose within reach; after the start move and after every
+/// stroke the reported TCP pose must be the commanded one within [`POSE_TOLERANCE_M`] and
+/// [`ORIENTATION_TOLERANCE_RAD`] (and near the program's poses), and before every stroke the
+/// controller must be idle and at the pose the last stroke left it. Every wait for motion to
+/// finish is bounded: twice the expected duration of what was queued, at least `min_wait`, at
+/// most `max_wait_per_stroke` (unless the moves alone need more: then 1.5 × their duration),
+/// and the run's waiting as a whole by twice the sum of those limits.
+///
 /// On a dropped connection or a timeout it reconnects (at most `max_reconnects` attempts per
-/// fault, waiting `backoff`, doubling up to `max_backoff`), lifts the brush to the safe height
-/// first, and restarts the interrupted stroke from its first point; a stroke whose lift already
-/// finished (the TCP is at its end pose) counts as done and is never written twice. At most
+/// fault, waiting `backoff`, doubling up to `max_backoff`), waits for the controller to finish
+/// what it was sent, checks the reported pose against the path commanded since the arm was
+/// last seen, lifts the brush straight out of the paper to the safe height, and restarts the
+/// interrupted stroke from its first point; a stroke whose lift was sent and has finished (the
+/// TCP is at its end) counts as done and is never written twice. At most
 /// `max_retries_per_stroke` faults per stroke and `max_retries_total` in the run are tolerated,
 /// so a flaky link ends in bounded time.
 ///
 /// # Errors
-/// Before anything moved (connecting, the robot name, setting the tool): the error as it is.
-/// After that, any error (a controller error code, a JSON-RPC error, a spent retry budget,
-/// [`RobotError::GaveUp`]; `opts.stop` set, [`RobotError::Interrupted`]) first lifts the brush
-/// straight out of the paper to `opts.lift_m` above it if the link allows (reconnecting once if
-/// it is down), then returns [`RobotError::RunStopped`] with the cause, the strokes completed
-/// and whether the brush was lifted.
+/// Before anything moved (connecting, the robot name, setting the tool, motion or a pose the
+/// controller should not report, the controller's kinematics refusing the start pose): the
+/// error as it is. After that, any error (a controller error code, a JSON-RPC error, a spent
+/// retry budget, [`RobotError::GaveUp`]; a reported state that disagrees with what was
+/// commanded or motion that does not finish, [`RobotError::UnexpectedState`]; `opts.stop` set,
+/// [`RobotError::Interrupted`]) first lifts the brush straight out of the paper to `opts.lift_m`
+/// above it if the link allows (reconnecting once if it is down): from the reported pose if it
+/// lies on the commanded path, otherwise from the last commanded pose; then returns
+/// [`RobotError::RunStopped`] with the cause, the strokes completed and whether the brush was
+/// seen at the safe height.
 pub fn run_program(
     addr: &str,
     program: &Program,
@@ -162,11 +433,24 @@ pub fn run_program(
     mut progress: impl FnMut(&RunReport),
 ) -> Result<RunReport, RobotError> {
     let report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
-    let idle_limit = opts.timeout * 100;
     let session = open(addr, program, opts, robot_name)?;
-    let mut run = Runner { addr, program, robot_name, opts, idle_limit, session: Some(session), report };
+    let mut run = Runner {
+        addr,
+        program,
+        robot_name,
+        opts,
+        session: Some(session),
+        report,
+        commanded: Commanded::default(),
+        moved: false,
+        started: false,
+        near: program_box(program),
+        wait_left: Duration::ZERO,
+    };
+    run.wait_left = run.wait_budget();
     match run.drive(&mut progress) {
         Ok(()) => Ok(run.report),
+        Err(cause) if !run.moved => Err(cause),
         Err(cause) => Err(run.retreat(cause)),
     }
 }
@@ -177,11 +461,19 @@ struct Runner<'a, 'o> {
     program: &'a Program,
     robot_name: Option<&'a str>,
     opts: &'a RunOptions<'o>,
-    /// How long to wait for the controller to finish the moves it was sent.
-    idle_limit: Duration,
     /// The open connection (`None` after a fault, until reconnected).
     session: Option<Session>,
     report: RunReport,
+    /// What was commanded since the arm was last seen where expected.
+    commanded: Commanded,
+    /// Whether any move was sent (or may have been).
+    moved: bool,
+    /// Whether the arm was seen at the start pose (then the program's neighbourhood applies).
+    started: bool,
+    /// The box of the program's commanded positions, m.
+    near: ([f64; 3], [f64; 3]),
+    /// What is left of the run's budget for waiting on motion.
+    wait_left: Duration,
 }
 
 /// The fault budget of the stroke being written.
@@ -193,14 +485,127 @@ struct StrokeFaults {
 }
 
 impl Runner<'_, '_> {
+    fn session(&mut self) -> &mut Session {
+        self.session.as_mut().expect("connected")
+    }
+
+    /// The wait limit for `expected_s` seconds of queued motion.
+    fn wait_limit(&self, expected_s: f64) -> Duration {
+        let cap = self.opts.max_wait_per_stroke.as_secs_f64().max(1.5 * expected_s);
+        Duration::from_secs_f64((2.0 * expected_s).min(cap).max(self.opts.min_wait.as_secs_f64()))
+    }
+
+    /// Twice the sum of the wait limits of the start move and every stroke: room for each
+    /// stroke to run twice.
+    fn wait_budget(&self) -> Duration {
+        let f = self.program.speed_fraction;
+        let start = Commanded { from: None, sent: vec![Sent::of(&self.program.start)] };
+        let mut total = self.wait_limit(start.duration_s(f));
+        let mut at = start_pose(self.program);
+        for st in &self.program.strokes {
+            let c = Commanded { from: at, sent: st.moves().map(Sent::of).collect() };
+            total += self.wait_limit(c.duration_s(f));
+            at = c.last_pose();
+        }
+        total * 2
+    }
+
+    /// Waits until the controller has executed what was commanded (`what`), within the limit
+    /// for its expected duration and what is left of the run's budget (not counted against
+    /// the budget for a `retreat`).
+    fn wait_done(&mut self, what: &str, retreat: bool) -> Result<(), RobotError> {
+        let expected_s = self.commanded.duration_s(self.program.speed_fraction);
+        let per = self.wait_limit(expected_s);
+        let by_budget = !retreat && self.wait_left < per;
+        let limit = if by_budget { self.wait_left } else { per };
+        let s = self.session();
+        let t0 = Instant::now();
+        let r = s.client.wait_idle(&s.robot, limit);
+        if !retreat {
+            self.wait_left = self.wait_left.saturating_sub(t0.elapsed());
+        }
+        r.map(|_| ()).map_err(|e| match e {
+            RobotError::UnexpectedState(inner) => {
+                let why = if by_budget {
+                    "what was left of the run's waiting budget".to_string()
+                } else {
+                    format!(
+                        "2 × the expected time, at least {:.1} s, at most {:.1} s per stroke unless its moves need more",
+                        self.opts.min_wait.as_secs_f64(),
+                        self.opts.max_wait_per_stroke.as_secs_f64()
+                    )
+                };
+                RobotError::UnexpectedState(format!(
+                    "{what}: {inner}; {expected_s:.1} s of motion was queued (limit: {why})"
+                ))
+            }
+            e => e,
+        })
+    }
+
+    /// Fails unless the controller is idle: motion now is motion this run did not queue.
+    fn expect_idle(&mut self, when: &str) -> Result<(), RobotError> {
+        let s = self.session();
+        let id = s.client.exec_id(&s.robot)?;
+        if id == -1 {
+            return Ok(());
+        }
+        Err(RobotError::UnexpectedState(format!(
+            "{when}: getExecId reported motion {id} though this run has nothing queued (is another client driving the arm?)"
+        )))
+    }
+
+    /// Reads the TCP pose and checks it against `expect`.
+    fn read_pose(&mut self, expect: Expect<'_>, when: &str) -> Result<Pose, RobotError> {
+        let near = if self.started { Some(self.near) } else { None };
+        let s = self.session.as_mut().expect("connected");
+        let here = s.client.tcp_pose(&s.robot)?;
+        check_pose(&here, &expect, near.as_ref(), when)?;
+        Ok(here)
+    }
+
+    /// Waits for what was commanded to finish, then checks the arm is at its end; the arm is
+    /// then seen there.
+    fn settle(&mut self, what: &str) -> Result<Pose, RobotError> {
+        self.wait_done(what, false)?;
+        let expect = self.commanded.last_pose();
+        let when = format!("after {what}");
+        let here = match expect {
+            Some(p) => self.read_pose(Expect::At(p), &when)?,
+            None => self.read_pose(Expect::Reach, &when)?,
+        };
+        self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        Ok(here)
+    }
+
+    /// Sends one move, recording it first (if its answer is lost it may still run).
+    fn send(&mut self, m: &Move) -> Result<(), RobotError> {
+        self.send_recorded(m, Sent::of(m))
+    }
+
+    fn send_recorded(&mut self, m: &Move, sent: Sent) -> Result<(), RobotError> {
+        self.moved = true;
+        self.commanded.sent.push(sent);
+        let s = self.session();
+        s.client.send_move(&s.robot, m)
+    }
+
+    /// The start move, then the arm seen at the start pose.
+    fn start(&mut self) -> Result<(), RobotError> {
+        let start = self.program.start;
+        self.send(&start)?;
+        self.settle("the move to the start pose")?;
+        self.started = true;
+        Ok(())
+    }
+
     /// The run after the connection is open; any error returned leaves the retreat to
     /// [`Runner::retreat`].
     fn drive(&mut self, progress: &mut impl FnMut(&RunReport)) -> Result<(), RobotError> {
-        {
-            let s = self.session.as_mut().expect("open");
-            s.client.send_move(&s.robot, &self.program.start)?;
-            s.client.wait_idle(&s.robot, self.idle_limit)?;
-        }
+        self.expect_idle("before the run")?;
+        let here = self.read_pose(Expect::Reach, "before the run")?;
+        self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        self.start()?;
         let program = self.program;
         let mut k = 0;
         let mut faults = StrokeFaults { count: 0, backoff: self.opts.backoff };
@@ -212,10 +617,7 @@ impl Runner<'_, '_> {
             let st = &program.strokes[k];
             let result = match fault.take() {
                 Some(e) => self.recover(st, &mut faults, e),
-                None => {
-                    let s = self.session.as_mut().expect("connected");
-                    run_stroke(s, st, self.idle_limit, self.opts.stop).map(|()| true)
-                }
+                None => self.run_stroke(st).map(|()| true),
             };
             match result {
                 Ok(true) => {
@@ -232,9 +634,30 @@ impl Runner<'_, '_> {
         Ok(())
     }
 
-    /// After fault `e` on stroke `st`: counts it against the budgets, reconnects, and sees
-    /// where the brush is. `Ok(true)`: the stroke had finished (its lift pose is where the
-    /// brush is); `Ok(false)`: the brush was lifted and the stroke is to run again.
+    /// One stroke: the controller idle, the stroke's moves (stopping early, after the move in
+    /// flight, when `stop` is set), then the arm seen at the stroke's end.
+    fn run_stroke(&mut self, st: &StrokeProgram) -> Result<(), RobotError> {
+        let what = format!("stroke {}", st.index + 1);
+        let before = format!("before {what}");
+        self.expect_idle(&before)?;
+        if let Some(at) = self.commanded.from {
+            let here = self.read_pose(Expect::At(at), &before)?;
+            self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        }
+        for m in st.moves() {
+            if self.opts.stop.load(Ordering::SeqCst) {
+                return Err(RobotError::Interrupted);
+            }
+            self.send(m)?;
+        }
+        self.settle(&what)?;
+        Ok(())
+    }
+
+    /// After fault `e` on stroke `st`: counts it against the budgets, reconnects, waits for the
+    /// controller to finish what it was sent and checks where the arm is. `Ok(true)`: the
+    /// stroke had finished (its lift was sent and the TCP is at its end); `Ok(false)`: the
+    /// brush was lifted and the stroke is to run again.
     fn recover(&mut self, st: &StrokeProgram, faults: &mut StrokeFaults, e: RobotError) -> Result<bool, RobotError> {
         self.report.faults += 1;
         faults.count += 1;
@@ -246,16 +669,47 @@ impl Runner<'_, '_> {
         }
         let s = self.reconnect(st, faults)?;
         self.report.reconnects += 1;
-        let s = self.session.insert(s);
-        // Did the stroke finish before the fault? Then its lift pose is where we are.
-        let here = s.client.tcp_pose(&s.robot)?;
+        self.session = Some(s);
+        let what = format!("stroke {} (after a fault)", st.index + 1);
+        self.wait_done(&what, false)?;
+        let commanded = self.commanded.clone();
+        let here = self.read_pose(Expect::Along(&commanded), &format!("after reconnecting on {what}"))?;
         let Move::Line { pose: end, .. } = st.lift else { unreachable!("a stroke's lift is a line move") };
-        let done = here.position().iter().zip(end.position()).all(|(a, b)| (a - b).abs() < 1e-6);
-        if !done {
-            lift(s, self.program, self.opts.lift_m, self.idle_limit)?;
-            self.report.strokes_resumed += 1;
+        let lift_sent = commanded.sent.len() == st.moves().count()
+            && commanded.sent.last().and_then(|s| s.target).is_some_and(|t| t == end);
+        if lift_sent && distance_m(&here, &end) < DONE_M {
+            self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+            return Ok(true);
         }
-        Ok(done)
+        self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        self.lift_from(here, false)?;
+        self.report.strokes_resumed += 1;
+        Ok(false)
+    }
+
+    /// Lifts the brush straight out of the paper from `from` (the arm is there, or was last
+    /// commanded there), unless that pose is at the safe height already; waits for the lift and
+    /// checks the arm is at its end. Returns what it did, in words.
+    fn lift_from(&mut self, from: Pose, retreat: bool) -> Result<String, RobotError> {
+        let (program, lift_m) = (self.program, self.opts.lift_m);
+        let depth_mm = program.depth_mm(from.position());
+        if depth_mm <= -lift_m * 1000.0 + 0.5 {
+            return Ok(format!("the brush is at the safe height ({:.1} mm above the paper)", -depth_mm));
+        }
+        let pose = program.lifted_out(&from, lift_m);
+        let m = Move::Line { pose, a: program.retreat_acc_m_s2, v: program.retreat_speed_m_s, blend_m: 0.0 };
+        self.send(&m)?;
+        if retreat {
+            self.wait_done("the lift", true)?;
+            let here = self.read_pose(Expect::At(pose), "after the lift")?;
+            self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        } else {
+            self.settle("the lift")?;
+        }
+        Ok(format!(
+            "brush lifted from {depth_mm:.1} mm below the paper to the safe height ({:.1} mm above it)",
+            lift_m * 1000.0
+        ))
     }
 
     /// Reconnects, waiting the back-off (doubled each time, up to the maximum) before each of
@@ -298,21 +752,71 @@ impl Runner<'_, '_> {
         }
     }
 
+    /// The retreat on the open session: waits for the queued motion, then lifts from the
+    /// reported pose if it lies on the commanded path, otherwise from the last commanded pose.
+    /// `Ok((seen at the safe height, words))`.
+    fn retreat_here(&mut self) -> Result<(bool, String), RobotError> {
+        self.wait_done("the moves queued before the stop", true)?;
+        let commanded = self.commanded.clone();
+        let here = match self.read_pose(Expect::Along(&commanded), "before the lift") {
+            Ok(here) => here,
+            Err(RobotError::UnexpectedState(why)) => {
+                let Some(last) = commanded.last_pose() else {
+                    return Ok((
+                        false,
+                        format!("the pose is not trusted ({why}) and no commanded pose is known: nothing sent"),
+                    ));
+                };
+                self.commanded = Commanded { from: Some(last), sent: Vec::new() };
+                let depth_mm = self.program.depth_mm(last.position());
+                if depth_mm <= -self.opts.lift_m * 1000.0 + 0.5 {
+                    return Ok((
+                        false,
+                        format!(
+                            "the pose is not trusted ({why}); the last commanded pose {} is at the safe height, so nothing was sent: check the arm",
+                            show(&last.0)
+                        ),
+                    ));
+                }
+                return match self.lift_from(last, true) {
+                    Ok(words) => {
+                        Ok((true, format!("the pose was not trusted ({why}); from the last commanded pose, {words}")))
+                    }
+                    Err(e) => Ok((
+                        false,
+                        format!(
+                            "the pose is not trusted ({why}); a lift from the last commanded pose {} was sent, but then: {}",
+                            show(&last.0),
+                            with_causes(&e)
+                        ),
+                    )),
+                };
+            }
+            Err(e) => return Err(e),
+        };
+        self.commanded = Commanded { from: Some(here), sent: Vec::new() };
+        self.lift_from(here, true).map(|w| (true, w))
+    }
+
     /// After the run stopped on `cause`: lifts the brush on the open link, or (if it is down or
     /// fails) on a fresh one, and says how far the run got.
     fn retreat(mut self, cause: RobotError) -> RobotError {
-        let (program, opts, idle_limit) = (self.program, self.opts, self.idle_limit);
-        let mut outcome = match self.session.as_mut() {
-            Some(s) => lift(s, program, opts.lift_m, idle_limit),
+        let mut outcome = match self.session {
+            Some(_) => self.retreat_here(),
             None => Err(io_at("lift", std::io::Error::new(std::io::ErrorKind::NotConnected, "not connected"))),
         };
         // A broken stream (a fault, or bytes out of frame) is left for a fresh connection.
         if outcome.as_ref().is_err_and(|e| is_fault(e) || matches!(e, RobotError::Framing(_))) {
-            outcome = open(self.addr, program, opts, self.robot_name)
-                .and_then(|mut s| lift(&mut s, program, opts.lift_m, idle_limit));
+            outcome = match open(self.addr, self.program, self.opts, self.robot_name) {
+                Ok(s) => {
+                    self.session = Some(s);
+                    self.retreat_here()
+                }
+                Err(e) => Err(e),
+            };
         }
         let (lifted, lift) = match outcome {
-            Ok(words) => (true, words),
+            Ok(r) => r,
             Err(e) => (false, format!("could not lift the brush ({}): it may still touch the paper", with_causes(&e))),
         };
         RobotError::RunStopped {
@@ -323,6 +827,14 @@ impl Runner<'_, '_> {
             lifted,
             lift,
         }
+    }
+}
+
+/// The TCP pose the start move ends at, when the program says (a line move's target).
+fn start_pose(program: &Program) -> Option<Pose> {
+    match program.start {
+        Move::Line { pose, .. } => Some(pose),
+        Move::Joint { .. } => None,
     }
 }
 
