@@ -33,6 +33,16 @@ pub fn aubo_lua(program: &Program, title: &str) -> String {
         Move::Joint { q, a, v } => {
             s.push_str(&format!("  mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", list(q), f(*a), f(*v)))
         }
+        Move::JointPose { pose, a, v } => {
+            // The controller solves the joints from where the arm is, and refuses to move when
+            // it cannot.
+            s.push_str(&format!(
+                "  local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {{{}}})\n",
+                list(&pose.0)
+            ));
+            s.push_str("  if ret ~= 0 then error(\"maobi: the controller cannot reach the first pose\") end\n");
+            s.push_str(&format!("  mc:moveJoint(q, {}, {}, 0, 0)\n", f(*a), f(*v)))
+        }
         Move::Line { pose, a, v, blend_m } => {
             s.push_str(&format!("  mc:moveLine({{{}}}, {}, {}, {}, 0)\n", list(&pose.0), f(*a), f(*v), f(*blend_m)))
         }
@@ -60,6 +70,14 @@ pub fn urscript(program: &Program, title: &str) -> String {
     s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", f(program.tcp_offset_m)));
     let emit = |s: &mut String, m: &Move| match m {
         Move::Joint { q, a, v } => s.push_str(&format!("  movej([{}], a={}, v={})\n", list(q), f(*a), f(*v))),
+        // A pose target: the UR controller solves the joints.
+        Move::JointPose { pose, a, v } => s.push_str(&format!(
+            "  movej(p[{}, {}], a={}, v={})\n",
+            list(&pose.position()),
+            list(&pose.rotation_vector()),
+            f(*a),
+            f(*v)
+        )),
         Move::Line { pose, a, v, blend_m } => {
             let p = pose.position();
             let r = pose.rotation_vector();

@@ -14,7 +14,6 @@ use nalgebra::{Point3, Vector3};
 
 use crate::RobotError;
 use crate::aubo::{AuboClient, Link, io_at};
-use crate::kinematics::JOINT_LIMIT_RAD;
 use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
 
@@ -31,11 +30,6 @@ pub const MAX_REACH_M: f64 = 1.2;
 /// How far outside the box of the program's commanded positions a reported TCP may lie once
 /// the arm is at the start pose, m.
 pub const NEIGHBOURHOOD_M: f64 = 0.1;
-/// How far the controller's forward kinematics of its own inverse solution for the start pose
-/// may lie from that pose: position, m (0.5 mm).
-pub const IK_CHECK_M: f64 = 0.0005;
-/// As [`IK_CHECK_M`], orientation, rad.
-pub const IK_CHECK_RAD: f64 = 1e-3;
 /// A stroke whose lift move was sent counts as done after a fault when the TCP is this close
 /// to the lift's end, m.
 const DONE_M: f64 = 0.0005;
@@ -167,6 +161,9 @@ impl Sent {
     fn of(m: &Move) -> Sent {
         match *m {
             Move::Joint { a, v, .. } => Sent { target: None, joint: true, joint_travel_rad: None, v, a, blend_m: 0.0 },
+            Move::JointPose { pose, a, v } => {
+                Sent { target: Some(pose), joint: true, joint_travel_rad: None, v, a, blend_m: 0.0 }
+            }
             Move::Line { pose, a, v, blend_m } => {
                 Sent { target: Some(pose), joint: false, joint_travel_rad: None, v, a, blend_m }
             }
@@ -254,7 +251,7 @@ fn program_box(program: &Program) -> ([f64; 3], [f64; 3]) {
     let mut hi = [f64::NEG_INFINITY; 3];
     let moves = std::iter::once(&program.start).chain(program.strokes.iter().flat_map(StrokeProgram::moves));
     for m in moves {
-        if let Move::Line { pose, .. } = m {
+        if let Move::Line { pose, .. } | Move::JointPose { pose, .. } = m {
             for k in 0..3 {
                 lo[k] = lo[k].min(pose.0[k]);
                 hi[k] = hi[k].max(pose.0[k]);
@@ -379,19 +376,6 @@ fn check_pose(
             ))
         }
     }
-}
-
-/// Checks reported joint positions: six finite angles within the joint limits (±175°).
-fn check_joints(q: &[f64; 6], what: &str) -> Result<(), RobotError> {
-    let ok = q.iter().all(|x| x.is_finite() && x.abs() <= JOINT_LIMIT_RAD + 0.02);
-    if ok {
-        return Ok(());
-    }
-    Err(RobotError::UnexpectedState(format!(
-        "{what}: {}, which are not six finite angles within the joint limits (±{:.0}°)",
-        show(q),
-        JOINT_LIMIT_RAD.to_degrees()
-    )))
 }
 
 /// Runs a program on a controller (or the simulator) at `addr`, stroke by stroke.
@@ -590,10 +574,36 @@ impl Runner<'_, '_> {
         s.client.send_move(&s.robot, m)
     }
 
-    /// The start move, then the arm seen at the start pose.
+    /// The start move, then the arm seen at the start pose. A joint move to a pose is solved
+    /// by the controller first (its inverse kinematics from the joints it reports, checked by
+    /// its forward kinematics); a pose it cannot solve is refused before anything moves.
     fn start(&mut self) -> Result<(), RobotError> {
         let start = self.program.start;
-        self.send(&start)?;
+        match start {
+            Move::JointPose { pose, a, v } => {
+                let s = self.session();
+                let solved = s
+                    .client
+                    .joint_positions(&s.robot)
+                    .and_then(|q0| Ok((q0, s.client.solve_joint_pose_near(&s.robot, &q0, &pose)?)));
+                let (q0, q) = solved.map_err(|e| match e {
+                    e if is_fault(&e) => e,
+                    e => RobotError::Unsafe {
+                        stroke: None,
+                        point: None,
+                        reason: format!(
+                            "the controller gave no joints for the start pose {} that its own kinematics confirm ({}); nothing was moved",
+                            show(&pose.0),
+                            with_causes(&e)
+                        ),
+                    },
+                })?;
+                let travel = q0.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                let sent = Sent { target: Some(pose), joint: true, joint_travel_rad: Some(travel), v, a, blend_m: 0.0 };
+                self.send_recorded(&Move::Joint { q, a, v }, sent)?;
+            }
+            m => self.send(&m)?,
+        }
         self.settle("the move to the start pose")?;
         self.started = true;
         Ok(())
@@ -830,10 +840,10 @@ impl Runner<'_, '_> {
     }
 }
 
-/// The TCP pose the start move ends at, when the program says (a line move's target).
+/// The TCP pose the start move ends at, when the program says (not for joints).
 fn start_pose(program: &Program) -> Option<Pose> {
     match program.start {
-        Move::Line { pose, .. } => Some(pose),
+        Move::Line { pose, .. } | Move::JointPose { pose, .. } => Some(pose),
         Move::Joint { .. } => None,
     }
 }

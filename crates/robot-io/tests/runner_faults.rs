@@ -77,7 +77,7 @@ impl Drop for Fake {
 }
 
 const ROBOT: &str = "rob1";
-const HOME: [f64; 6] = [0.0, 0.3, 1.6, 0.3, 1.57, 0.0];
+const HOME: [f64; 6] = kinematics::READY_JOINTS;
 
 fn fk(q: &[f64; 6], offset_m: f64) -> [f64; 6] {
     Pose::from_iso(&kinematics::forward(q, &tcp_iso(offset_m))).0
