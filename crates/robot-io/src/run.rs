@@ -191,8 +191,8 @@ impl Commanded {
 
     /// Seconds the controller needs for the moves sent: per move, the path length (or a turn
     /// in place at the speed per 0.1 m, as the simulator runs it) at the commanded speed times
-    /// the speed fraction, plus a ramp up and down at the commanded acceleration; a joint move
-    /// of unknown travel counts 2π rad.
+    /// the speed fraction, plus the time a trapezoidal profile loses ramping up and down at the
+    /// commanded acceleration (v / a); a joint move of unknown travel counts 2π rad.
     fn duration_s(&self, speed_fraction: f64) -> f64 {
         let mut at = self.from;
         let mut total = 0.0;
@@ -209,7 +209,7 @@ impl Commanded {
                     _ => MAX_REACH_M * 2.0,
                 }
             };
-            total += path / v + 2.0 * v / s.a.max(1e-9);
+            total += path / v + v / s.a.max(1e-9);
             at = s.target;
         }
         total
@@ -763,12 +763,18 @@ impl Runner<'_, '_> {
     }
 
     /// The retreat on the open session: waits for the queued motion, then lifts from the
-    /// reported pose if it lies on the commanded path, otherwise from the last commanded pose.
+    /// reported pose if it lies on the commanded path (and the controller's reports were not
+    /// already found wrong: `distrust`), otherwise from the last commanded pose.
     /// `Ok((seen at the safe height, words))`.
-    fn retreat_here(&mut self) -> Result<(bool, String), RobotError> {
+    fn retreat_here(&mut self, distrust: bool) -> Result<(bool, String), RobotError> {
         self.wait_done("the moves queued before the stop", true)?;
         let commanded = self.commanded.clone();
-        let here = match self.read_pose(Expect::Along(&commanded), "before the lift") {
+        let reported = if distrust {
+            Err(RobotError::UnexpectedState("the controller's reports disagreed with what was commanded".into()))
+        } else {
+            self.read_pose(Expect::Along(&commanded), "before the lift")
+        };
+        let here = match reported {
             Ok(here) => here,
             Err(RobotError::UnexpectedState(why)) => {
                 let Some(last) = commanded.last_pose() else {
@@ -811,8 +817,9 @@ impl Runner<'_, '_> {
     /// After the run stopped on `cause`: lifts the brush on the open link, or (if it is down or
     /// fails) on a fresh one, and says how far the run got.
     fn retreat(mut self, cause: RobotError) -> RobotError {
+        let distrust = matches!(cause, RobotError::UnexpectedState(_));
         let mut outcome = match self.session {
-            Some(_) => self.retreat_here(),
+            Some(_) => self.retreat_here(distrust),
             None => Err(io_at("lift", std::io::Error::new(std::io::ErrorKind::NotConnected, "not connected"))),
         };
         // A broken stream (a fault, or bytes out of frame) is left for a fresh connection.
@@ -820,7 +827,7 @@ impl Runner<'_, '_> {
             outcome = match open(self.addr, self.program, self.opts, self.robot_name) {
                 Ok(s) => {
                     self.session = Some(s);
-                    self.retreat_here()
+                    self.retreat_here(distrust)
                 }
                 Err(e) => Err(e),
             };

@@ -41,6 +41,8 @@ struct Ctl {
     moves_here: usize,
     /// Move requests seen (executed or not).
     move_requests: usize,
+    /// Every method called, without the robot name, in order.
+    calls: Vec<String>,
 }
 
 /// How the fake answers one request.
@@ -156,6 +158,7 @@ impl Fake {
             connections: 0,
             moves_here: 0,
             move_requests: 0,
+            calls: Vec::new(),
         }));
         let stop = Arc::new(AtomicBool::new(false));
         let (c2, s2) = (ctl.clone(), stop.clone());
@@ -227,6 +230,7 @@ fn serve(mut s: std::net::TcpStream, ctl: &Mutex<Ctl>, hook: &mut Hook, stop: &A
                 if method.starts_with("MotionControl.move") {
                     c.move_requests += 1;
                 }
+                c.calls.push(method.clone());
                 let default = |c: &mut Ctl| match default_reply(c, &method, &params) {
                     Some(r) => json!({"jsonrpc": "2.0", "id": req["id"], "result": r}),
                     None => json!({"jsonrpc": "2.0", "id": req["id"],
@@ -606,7 +610,15 @@ fn an_answer_without_end_is_refused_at_the_byte_limit() {
 
 #[test]
 fn a_controller_that_never_reports_idle_stops_the_run_in_bounded_time_saying_how_long_it_waited() {
-    let prog = program(2, 4);
+    // Fast moves, so that the limits derived from them are short.
+    let cfg = RobotConfig {
+        write_speed_m_s: 0.2,
+        write_acc_m_s2: 2.0,
+        travel_speed_m_s: 0.25,
+        travel_acc_m_s2: 2.0,
+        ..RobotConfig::default()
+    };
+    let prog = build_program(&rows(2, 3), &pen1(), &paper(), &cfg).unwrap().0;
     let fake = Fake::start(|c, m, _| {
         if m == "MotionControl.getExecId" && c.moves.len() > 1 {
             return Reply::Result(json!(3));
@@ -629,29 +641,145 @@ fn a_controller_that_never_reports_idle_stops_the_run_in_bounded_time_saying_how
     assert_eq!(completed, 0);
     // The retreat waits too (bounded), and says it could not lift.
     assert!(!lifted && lift.contains("could not lift the brush") && lift.contains("did not finish"), "{lift}");
-    // The stroke's limit (2 × its expected time, at least 0.2 s, at most 0.5 s unless the
-    // moves need more) and the retreat's: seconds, not minutes.
-    let stroke_s = {
-        let speed = |m: &Move| match m {
-            Move::Line { v, .. } => *v,
-            _ => 1.0,
-        };
-        // Path length / speed of stroke 1's moves, from the start pose.
-        let mut at = match prog.strokes[0].approach[0] {
-            Move::Line { pose, .. } => pose,
-            _ => unreachable!(),
-        };
-        let mut s = 0.0;
-        for m in prog.strokes[0].moves() {
-            if let Move::Line { pose, .. } = m {
-                s += dist_mm(&at.0, &pose.0) / 1e3 / speed(m);
-                at = *pose;
+    // The stroke's expected time: path / speed + speed / acceleration per move, from the start
+    // pose (above its first point); its limit: 2 × that, at least 0.2 s, at most 0.5 s unless
+    // the moves need more (then 1.5 × that).
+    let Move::JointPose { pose: mut at, .. } = prog.start else { panic!("the start is a joint move to a pose") };
+    let mut expected_s = 0.0;
+    for m in prog.strokes[0].moves() {
+        let Move::Line { pose, v, a, .. } = *m else { panic!("line") };
+        expected_s += dist_mm(&at.0, &pose.0) / 1e3 / v + v / a;
+        at = pose;
+    }
+    let limit_s = (2.0 * expected_s).min(0.5f64.max(1.5 * expected_s)).max(0.2);
+    assert!(why.contains(&format!("(limit {limit_s:.1} s)")), "{why}: limit {limit_s:.2} s");
+    assert!(why.contains(&format!("; {expected_s:.1} s of motion was queued")), "{why}: {expected_s:.2} s");
+    // The stroke's wait and the retreat's, each bounded by the limit (and a poll): seconds.
+    assert!(took >= Duration::from_secs_f64(limit_s), "{took:?}");
+    assert!(took < Duration::from_secs_f64(2.0 * limit_s + 2.0), "{took:?} for a limit of {limit_s:.2} s");
+}
+
+// ---------------------------------------------------------------------------------------------
+// 7. The first move: the controller solves the start pose.
+
+#[test]
+fn the_start_pose_is_solved_by_the_controller_and_refused_before_anything_moves_when_it_cannot() {
+    let prog = program(1, 4);
+    let Move::JointPose { pose: start, .. } = prog.start else { panic!("the start is a joint move to a pose") };
+    // (case, the fake's answer to a method, what the refusal says; None: the run finishes)
+    type Answer = fn(&str, &Ctl, &Value) -> Option<Value>;
+    let cases: [(&str, Answer, Option<&str>); 6] = [
+        ("solved", |_, _, _| None, None),
+        (
+            "no solution",
+            |m, _, _| (m == "RobotAlgorithm.inverseKinematics").then(|| json!([[], -23])),
+            Some("controller error code -23"),
+        ),
+        (
+            "joints beyond the limits",
+            |m, _, _| (m == "RobotAlgorithm.inverseKinematics").then(|| json!([[4.0, 0.0, 0.0, 0.0, 0.0, 0.0], 0])),
+            Some("beyond the joint limits"),
+        ),
+        (
+            "its own FK 1 mm away",
+            |m, c, p| {
+                (m == "RobotAlgorithm.forwardKinematics").then(|| {
+                    let mut x = fk(&numbers(arg(p, "q", 0)).unwrap(), c.tcp_offset_m);
+                    x[0] += 0.001;
+                    json!([x, 0])
+                })
+            },
+            Some("1.000 mm"),
+        ),
+        (
+            "a bare list",
+            |m, _, _| (m == "RobotAlgorithm.inverseKinematics").then(|| json!([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])),
+            Some("expected [[six numbers], status]"),
+        ),
+        (
+            "joints of 1e300",
+            |m, _, _| (m == "RobotState.getJointPositions").then(|| json!([1e300f64; 6].to_vec())),
+            Some("getJointPositions reported"),
+        ),
+    ];
+    for (case, answer, needle) in cases {
+        let fake = Fake::start(move |c, m, p| match answer(m, c, p) {
+            Some(r) => Reply::Result(r),
+            None => Reply::Default,
+        });
+        let stop = AtomicBool::new(false);
+        let r = run_program(&fake.addr, &prog, None, &opts(&stop, Transport::Framed), |_| {});
+        let ctl = fake.ctl.lock().unwrap();
+        match needle {
+            None => {
+                r.unwrap_or_else(|e| panic!("{case}: {}", chain(&e)));
+                // Joints read, solved from them, the solution checked, then moved to.
+                let first: Vec<&str> = ctl
+                    .calls
+                    .iter()
+                    .map(String::as_str)
+                    .skip_while(|m| !m.starts_with("RobotState.getJointPositions"))
+                    .take(4)
+                    .collect();
+                assert_eq!(
+                    first,
+                    [
+                        "RobotState.getJointPositions",
+                        "RobotAlgorithm.inverseKinematics",
+                        "RobotAlgorithm.forwardKinematics",
+                        "MotionControl.moveJoint"
+                    ],
+                    "{case}"
+                );
+                let (kind, q) = &ctl.moves[0];
+                assert_eq!(kind, "moveJoint");
+                assert!(dist_mm(&fk(q, prog.tcp_offset_m), &start.0) < 0.01, "{case}: the joints reach the start pose");
+            }
+            Some(needle) => {
+                let e = r.unwrap_err();
+                let msg = chain(&e);
+                assert!(matches!(e, RobotError::Unsafe { .. }), "{case}: {msg}");
+                assert!(
+                    msg.contains("no joints for the start pose")
+                        && msg.contains("nothing was moved")
+                        && msg.contains(needle),
+                    "{case}: {msg}"
+                );
+                assert!(ctl.moves.is_empty() && ctl.move_requests == 0, "{case}");
             }
         }
-        s
-    };
-    assert!(took < Duration::from_secs_f64(4.0 * stroke_s + 3.0), "{took:?} for {stroke_s:.2} s of motion");
-    assert!(took >= Duration::from_millis(400), "{took:?}");
+    }
+}
+
+#[test]
+fn an_arm_that_does_not_arrive_at_the_start_pose_stops_the_run_before_the_first_stroke() {
+    // The controller's FK confirms its IK, but the arm ends 741 mm away (kinematics that do not
+    // describe the arm): the check after the start move stops the run; the start pose is at the
+    // safe height, so nothing more is sent.
+    let prog = program(1, 4);
+    let fake = Fake::start(|c, m, p| {
+        if m == "MotionControl.moveJoint" {
+            let q = numbers(arg(p, "q", 0)).unwrap();
+            let mut x = fk(&q, c.tcp_offset_m);
+            x[0] -= 0.741;
+            c.pose = x;
+            c.moves.push(("moveJoint".into(), q));
+            return Reply::Result(json!(0));
+        }
+        Reply::Default
+    });
+    let stop = AtomicBool::new(false);
+    let e = run_program(&fake.addr, &prog, None, &opts(&stop, Transport::Framed), |_| {}).unwrap_err();
+    let msg = chain(&e);
+    let (cause, completed, lifted, lift) = stopped(e);
+    assert!(matches!(cause, RobotError::UnexpectedState(_)), "{msg}");
+    assert!(
+        msg.contains("after the move to the start pose: getTcpPose reported")
+            && msg.contains("741.0 mm from the commanded pose"),
+        "{msg}"
+    );
+    assert_eq!((completed, fake.moves().len()), (0, 1), "{msg}");
+    assert!(!lifted && lift.contains("nothing was sent"), "{lift}");
 }
 
 // ---------------------------------------------------------------------------------------------
