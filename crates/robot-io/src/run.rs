@@ -286,7 +286,9 @@ fn check_pose(
     let p = Point3::from(here.position());
     let reach = p.coords.norm();
     if reach > MAX_REACH_M {
-        return bad(format!("{reach:.3} m from the robot base: outside the workspace (at most {MAX_REACH_M} m)"));
+        // (The norm of 1e300 overflows: then the largest coordinate says it.)
+        let far = if reach.is_finite() { format!("{reach:.3}") } else { num(p.coords.amax()) };
+        return bad(format!("{far} m from the robot base: outside the workspace (at most {MAX_REACH_M} m)"));
     }
     if let Some((lo, hi)) = near {
         let out = (0..3).map(|k| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0)).fold(0.0, |s: f64, d| s + d * d).sqrt();

@@ -356,7 +356,11 @@ fn a_pose_reported_after_a_reconnect_off_the_commanded_path_stops_the_run_after_
     let cases: Vec<(&str, [f64; 6], Option<&str>)> = vec![
         ("on the path", at_drop.0, None),
         ("4 mm below the path", shifted([0.0, 0.0, -0.004, 0.0, 0.0, 0.0]), None),
-        ("1e300", [1e300, -1e300, 1e300, 1e300, -1e300, 1e300], Some("outside the workspace (at most 1.2 m)")),
+        (
+            "1e300",
+            [1e300, -1e300, 1e300, 1e300, -1e300, 1e300],
+            Some("1e300 m from the robot base: outside the workspace (at most 1.2 m)"),
+        ),
         ("1.5 m from the base", [1.5, 0.0, 0.1, std::f64::consts::PI, 0.0, 0.0], Some("outside the workspace")),
         (
             "300 mm beside the program",
