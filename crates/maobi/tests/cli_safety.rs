@@ -153,10 +153,9 @@ fn a_hostile_char_field_stays_inside_the_exported_comment() {
         let text = std::fs::read_to_string(&prog).unwrap();
         assert!(!text.contains(['\r', '\u{2028}']), "{fmt}");
         let first = text.lines().next().unwrap();
-        assert!(first.contains("十\\u{a}G1 Z-40 F3000\\u{d}\\u{a}\\u{d}\\u{a}os.exit() --"), "{fmt}: {first}");
+        assert!(first.contains("十\\u{a}G1 Z-40 F3000\\u{d}\\u{a}\\u{d}\\u{a}os.exit"), "{fmt}: {first}");
         for l in text.lines().skip(1) {
             assert!(!l.trim_start().starts_with("G1 Z-40") && !l.contains("os.exit"), "{fmt}: {l}");
         }
-        assert!(text.lines().next().unwrap().contains("G1 Z-40"), "{fmt}");
     }
 }
