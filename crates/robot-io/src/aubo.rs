@@ -488,31 +488,80 @@ impl AuboClient {
     /// The method and params of one motion command for this transport: `moveJoint` with
     /// `{q, a, v, blend_radius, duration}` or `moveLine` with `{pose, a, v, blend_radius,
     /// duration}` (positional in that order on lines); duration 0 (the controller times it).
-    pub fn move_request(&self, robot: &str, m: &Move) -> (String, Value) {
+    /// `None` for a [`Move::JointPose`], which is no single request: [`AuboClient::send_move`]
+    /// has the controller solve it first ([`AuboClient::solve_joint_pose`]).
+    pub fn move_request(&self, robot: &str, m: &Move) -> Option<(String, Value)> {
         match m {
-            Move::Joint { q, a, v } => (
+            Move::Joint { q, a, v } => Some((
                 format!("{robot}.MotionControl.moveJoint"),
                 self.params(
                     json!({"q": q, "a": a, "v": v, "blend_radius": 0.0, "duration": 0.0}),
                     json!([q, a, v, 0.0, 0.0]),
                 ),
-            ),
-            Move::Line { pose, a, v, blend_m } => (
+            )),
+            Move::Line { pose, a, v, blend_m } => Some((
                 format!("{robot}.MotionControl.moveLine"),
                 self.params(
                     json!({"pose": pose.0, "a": a, "v": v, "blend_radius": blend_m, "duration": 0.0}),
                     json!([pose.0, a, v, blend_m, 0.0]),
                 ),
-            ),
+            )),
+            Move::JointPose { .. } => None,
         }
     }
 
-    /// Sends one motion command, waiting and retrying while the queue is full (bounded).
+    /// The joints at which the controller puts the TCP at `pose`: its own inverse kinematics
+    /// (`RobotAlgorithm.inverseKinematics`) from the present joints
+    /// (`RobotState.getJointPositions`), checked by its own forward kinematics
+    /// (`RobotAlgorithm.forwardKinematics`), which must reproduce `pose` within
+    /// [`JOINT_POSE_TOLERANCE_M`] and [`JOINT_POSE_TOLERANCE_RAD`].
     ///
     /// # Errors
-    /// As [`AuboClient::call_status`]; [`RobotError::Timeout`] if the queue stays full.
+    /// As [`AuboClient::call`]; [`RobotError::Controller`] when the controller reports that it
+    /// cannot solve the pose; [`RobotError::Protocol`] for an answer that is not six finite
+    /// joints within the joint limits or whose forward kinematics misses the pose.
+    pub fn solve_joint_pose(&mut self, robot: &str, pose: &Pose) -> Result<[f64; 6], RobotError> {
+        let qnear = self.joint_positions(robot)?;
+        let m = format!("{robot}.RobotAlgorithm.inverseKinematics");
+        let p = self.params(json!({"qnear": qnear, "pose": pose.0}), json!([qnear, pose.0]));
+        let q = six_with_status(&m, self.call(&m, p)?)?;
+        if q.iter().any(|v| v.abs() > crate::kinematics::JOINT_LIMIT_RAD) {
+            return Err(RobotError::Protocol(format!("{m}: joints {q:?} rad are beyond the joint limits")));
+        }
+        let mf = format!("{robot}.RobotAlgorithm.forwardKinematics");
+        let p = self.params(json!({"q": q}), json!([q]));
+        let back = Pose(six_with_status(&mf, self.call(&mf, p)?)?);
+        let (want, got) = (pose.to_iso(), back.to_iso());
+        let dp = (want.translation.vector - got.translation.vector).norm();
+        let dr = want.rotation.angle_to(&got.rotation);
+        if dp > JOINT_POSE_TOLERANCE_M || dr > JOINT_POSE_TOLERANCE_RAD {
+            return Err(RobotError::Protocol(format!(
+                "{m}: the controller's forward kinematics of its answer {q:?} is {:.3} mm and {dr:.5} rad from the pose asked for",
+                dp * 1000.0
+            )));
+        }
+        Ok(q)
+    }
+
+    /// Sends one motion command, waiting and retrying while the queue is full (bounded). A
+    /// [`Move::JointPose`] is solved by the controller first ([`AuboClient::solve_joint_pose`])
+    /// and sent as `moveJoint`.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call_status`]; [`RobotError::Timeout`] if the queue stays full; as
+    /// [`AuboClient::solve_joint_pose`].
     pub fn send_move(&mut self, robot: &str, m: &Move) -> Result<(), RobotError> {
-        let (method, params) = self.move_request(robot, m);
+        let solved;
+        let m = match *m {
+            Move::JointPose { pose, a, v } => {
+                solved = Move::Joint { q: self.solve_joint_pose(robot, &pose)?, a, v };
+                &solved
+            }
+            _ => m,
+        };
+        let Some((method, params)) = self.move_request(robot, m) else {
+            return Err(RobotError::Protocol("a joint move to a pose reached the wire unsolved".into()));
+        };
         for attempt in 0..200 {
             match self.call_status(&method, params.clone())? {
                 QUEUE_FULL => std::thread::sleep(Duration::from_millis(5 + attempt.min(20) * 5)),
@@ -536,6 +585,27 @@ impl AuboClient {
         }
         Ok(())
     }
+}
+
+/// How far the controller's forward kinematics of its inverse-kinematics answer may lie from
+/// the pose asked for, m.
+pub const JOINT_POSE_TOLERANCE_M: f64 = 0.5e-3;
+/// How far the orientation may turn likewise, rad.
+pub const JOINT_POSE_TOLERANCE_RAD: f64 = 1e-3;
+
+/// The result of an SDK method returning `(std::vector<double>, int)`: a JSON array
+/// `[[six numbers], status]`; a status other than 0 is [`RobotError::Controller`].
+fn six_with_status(method: &str, r: Value) -> Result<[f64; 6], RobotError> {
+    let (v, code): (Vec<f64>, i64) =
+        serde_json::from_value(r).map_err(|e| bad_json(method, "expected [[six numbers], status]", e))?;
+    if code != 0 {
+        return Err(RobotError::Controller { method: method.to_string(), code });
+    }
+    let q: [f64; 6] = v.try_into().map_err(|_| RobotError::Protocol(format!("{method}: expected six numbers")))?;
+    if !q.iter().all(|x| x.is_finite()) {
+        return Err(RobotError::Protocol(format!("{method}: {q:?} has a value that is not finite")));
+    }
+    Ok(q)
 }
 
 fn io_err(method: &str, e: std::io::Error) -> RobotError {

@@ -21,6 +21,25 @@ pub const CONTROLLER_MAX_TCP_OFFSET_M: f64 = 0.5;
 /// The speed fraction the controller accepts: `0 < f ≤` this.
 pub const CONTROLLER_MAX_SPEED_FRACTION: f64 = 1.0;
 
+/// The slowest linear speed a setting may ask for, m/s: below 1 mm/s a stroke takes minutes
+/// and the brush blots; such a value is a unit mistake, not a writing speed.
+pub const MIN_LINEAR_SPEED_M_S: f64 = 1e-3;
+/// The slowest joint speed a setting may ask for, rad/s.
+pub const MIN_JOINT_SPEED_RAD_S: f64 = 1e-2;
+/// The smallest acceleration a setting may ask for, m/s² (rad/s² for joints).
+pub const MIN_ACC: f64 = 1e-2;
+/// The smallest speed fraction a setting may ask for (1 %, the teach pendant's slowest).
+pub const MIN_SPEED_FRACTION: f64 = 0.01;
+/// The highest travel height (`lift_mm`, `limits.min_lift_mm`), mm.
+pub const MAX_LIFT_MM: f64 = 200.0;
+/// The largest `limits.max_step_mm`, mm.
+pub const MAX_STEP_LIMIT_MM: f64 = 20.0;
+
+/// A number as a message shows it: plain, or in exponent form when very small or large.
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+}
+
 /// An ink-dipping station.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -140,6 +159,11 @@ pub struct Limits {
     /// Largest change of press depth per mm of travel along the paper while pressed, mm/mm
     /// (moves in place, straight down or up, are exempt).
     pub max_depth_change_per_mm: f64,
+    /// Largest distance along the paper between two consecutive pressed points (h > 0 at both)
+    /// of a stroke, mm: the planner's pressed points lie a fraction of a millimetre apart, so a
+    /// longer step with the brush down is a corrupt or hand-edited track. Glides at the surface
+    /// (h = 0) are not bounded.
+    pub max_step_mm: f64,
 }
 
 impl Default for Limits {
@@ -156,6 +180,7 @@ impl Default for Limits {
             max_turn_rad_per_mm: 1.0,
             max_wrist_rate_rad_s: 20.0,
             max_depth_change_per_mm: 40.0,
+            max_step_mm: 5.0,
         }
     }
 }
@@ -243,40 +268,48 @@ impl RobotConfig {
     /// the heights and rates positive.
     fn check_controller_ranges(&self) -> Result<(), String> {
         let l = &self.limits;
-        // (field, value, controller's upper bound, unit)
-        let positive = [
-            ("write_speed_m_s", self.write_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
-            ("write_acc_m_s2", self.write_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
-            ("travel_speed_m_s", self.travel_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
-            ("travel_acc_m_s2", self.travel_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
-            ("joint_speed_rad_s", self.joint_speed_rad_s, CONTROLLER_MAX_SPEED, "rad/s"),
-            ("joint_acc_rad_s2", self.joint_acc_rad_s2, CONTROLLER_MAX_ACC, "rad/s²"),
-            ("speed_fraction", self.speed_fraction, CONTROLLER_MAX_SPEED_FRACTION, ""),
-            ("limits.max_linear_speed_m_s", l.max_linear_speed_m_s, CONTROLLER_MAX_SPEED, "m/s"),
-            ("limits.max_linear_acc_m_s2", l.max_linear_acc_m_s2, CONTROLLER_MAX_ACC, "m/s²"),
-            ("limits.max_joint_speed_rad_s", l.max_joint_speed_rad_s, CONTROLLER_MAX_SPEED, "rad/s"),
-            ("limits.max_joint_acc_rad_s2", l.max_joint_acc_rad_s2, CONTROLLER_MAX_ACC, "rad/s²"),
-            ("limits.max_blend_mm", l.max_blend_mm, CONTROLLER_MAX_BLEND_M * 1000.0, "mm"),
+        // (field, value, the physical lower bound, the controller's upper bound, unit): every
+        // setting has a range, so a unit mistake (mm/s for m/s, 1e-300) is refused rather than
+        // written into a program.
+        let ranged = [
+            ("write_speed_m_s", self.write_speed_m_s, MIN_LINEAR_SPEED_M_S, CONTROLLER_MAX_SPEED, "m/s"),
+            ("write_acc_m_s2", self.write_acc_m_s2, MIN_ACC, CONTROLLER_MAX_ACC, "m/s²"),
+            ("travel_speed_m_s", self.travel_speed_m_s, MIN_LINEAR_SPEED_M_S, CONTROLLER_MAX_SPEED, "m/s"),
+            ("travel_acc_m_s2", self.travel_acc_m_s2, MIN_ACC, CONTROLLER_MAX_ACC, "m/s²"),
+            ("joint_speed_rad_s", self.joint_speed_rad_s, MIN_JOINT_SPEED_RAD_S, CONTROLLER_MAX_SPEED, "rad/s"),
+            ("joint_acc_rad_s2", self.joint_acc_rad_s2, MIN_ACC, CONTROLLER_MAX_ACC, "rad/s²"),
+            ("speed_fraction", self.speed_fraction, MIN_SPEED_FRACTION, CONTROLLER_MAX_SPEED_FRACTION, ""),
+            ("limits.max_linear_speed_m_s", l.max_linear_speed_m_s, MIN_LINEAR_SPEED_M_S, CONTROLLER_MAX_SPEED, "m/s"),
+            ("limits.max_linear_acc_m_s2", l.max_linear_acc_m_s2, MIN_ACC, CONTROLLER_MAX_ACC, "m/s²"),
+            (
+                "limits.max_joint_speed_rad_s",
+                l.max_joint_speed_rad_s,
+                MIN_JOINT_SPEED_RAD_S,
+                CONTROLLER_MAX_SPEED,
+                "rad/s",
+            ),
+            ("limits.max_joint_acc_rad_s2", l.max_joint_acc_rad_s2, MIN_ACC, CONTROLLER_MAX_ACC, "rad/s²"),
+            ("limits.max_blend_mm", l.max_blend_mm, f64::MIN_POSITIVE, CONTROLLER_MAX_BLEND_M * 1000.0, "mm"),
+            ("lift_mm", self.lift_mm, f64::MIN_POSITIVE, MAX_LIFT_MM, "mm"),
+            ("limits.min_lift_mm", l.min_lift_mm, f64::MIN_POSITIVE, MAX_LIFT_MM, "mm"),
+            ("limits.max_tilt_rad", l.max_tilt_rad, f64::MIN_POSITIVE, std::f64::consts::FRAC_PI_2, "rad"),
+            ("limits.max_turn_rad_per_mm", l.max_turn_rad_per_mm, f64::MIN_POSITIVE, 10.0, "rad/mm"),
+            ("limits.max_wrist_rate_rad_s", l.max_wrist_rate_rad_s, f64::MIN_POSITIVE, 100.0, "rad/s"),
+            ("limits.max_depth_change_per_mm", l.max_depth_change_per_mm, f64::MIN_POSITIVE, 1000.0, "mm/mm"),
+            ("limits.max_step_mm", l.max_step_mm, f64::MIN_POSITIVE, MAX_STEP_LIMIT_MM, "mm"),
         ];
-        for (f, v, max, unit) in positive {
+        for (f, v, min, max, unit) in ranged {
+            let (v_s, unit) = (number(v), if unit.is_empty() { String::new() } else { format!(" {unit}") });
             if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{f} must be a positive number, got {v}"));
+                return Err(format!("{f} must be a positive number, got {v_s}"));
+            }
+            if v < min {
+                return Err(format!(
+                    "{f} = {v_s} is below the smallest accepted value {min}{unit} (is it in the wrong unit?)"
+                ));
             }
             if v > max {
-                return Err(format!("{f} = {v} is beyond what the controller accepts (at most {max} {unit})"));
-            }
-        }
-        let free = [
-            ("lift_mm", self.lift_mm),
-            ("limits.min_lift_mm", l.min_lift_mm),
-            ("limits.max_tilt_rad", l.max_tilt_rad),
-            ("limits.max_turn_rad_per_mm", l.max_turn_rad_per_mm),
-            ("limits.max_wrist_rate_rad_s", l.max_wrist_rate_rad_s),
-            ("limits.max_depth_change_per_mm", l.max_depth_change_per_mm),
-        ];
-        for (f, v) in free {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{f} must be a positive number, got {v}"));
+                return Err(format!("{f} = {v_s} is beyond what the controller accepts (at most {max}{unit})"));
             }
         }
         Ok(())

@@ -7,6 +7,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::RobotError;
 
+/// The largest `max_residual_mm` accepted, mm.
+pub const MAX_RESIDUAL_MM: f64 = 5.0;
+/// How far from the robot base a touched point may lie, m (an AUBO-i5 reaches 0.886 m).
+pub const MAX_REACH_M: f64 = 2.0;
+/// The smallest extent of the touched points on the paper, mm.
+pub const MIN_TOUCH_SPAN_MM: f64 = 20.0;
+/// The largest sheet side, mm (A0 is 1189 mm).
+pub const MAX_SHEET_MM: f64 = 2000.0;
+
 /// One touched point: where on the paper (mm, paper frame) and where the robot's TCP was (m,
 /// base frame) when the brush tip just touched it (H = 0).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -27,7 +36,7 @@ pub struct PaperFile {
     /// Sheet size `[width, height]`, mm; default: the touched points' bounding box.
     #[serde(default)]
     pub size_mm: Option<[f64; 2]>,
-    /// Largest RMS fit residual accepted, mm (default 1.0).
+    /// Largest RMS fit residual accepted, mm (default 1.0, at most [`MAX_RESIDUAL_MM`]).
     #[serde(default)]
     pub max_residual_mm: Option<f64>,
 }
@@ -73,6 +82,28 @@ impl PaperFrame {
         if tp.iter().any(|t| t.paper_mm.iter().chain(t.robot_m.iter()).any(|v| !v.is_finite())) {
             return Err(bad("touch_points: every coordinate must be a finite number".into()));
         }
+        // Units: paper positions in mm, robot positions in m. A sheet touched within a few
+        // millimetres, or a robot point metres from the base, is a unit mistake.
+        if let Some((i, t)) = tp.iter().enumerate().find(|(_, t)| Vector3::from(t.robot_m).norm() > MAX_REACH_M) {
+            return Err(bad(format!(
+                "touch_points[{i}].robot_m = {:?} lies {:.3} m from the robot base, beyond {MAX_REACH_M} m: robot_m is in metres",
+                t.robot_m,
+                Vector3::from(t.robot_m).norm()
+            )));
+        }
+        let span = |k: usize| {
+            let v = tp.iter().map(|t| t.paper_mm[k]);
+            v.clone().fold(f64::NEG_INFINITY, f64::max) - v.fold(f64::INFINITY, f64::min)
+        };
+        let span_mm = span(0).max(span(1));
+        if span_mm < MIN_TOUCH_SPAN_MM {
+            return Err(bad(format!(
+                "touch_points span only {span_mm} mm of paper (at least {MIN_TOUCH_SPAN_MM} mm expected): paper_mm is in millimetres"
+            )));
+        }
+        if let Some(size) = file.size_mm.filter(|s| !s.iter().all(|v| v.is_finite() && *v <= MAX_SHEET_MM)) {
+            return Err(bad(format!("size_mm = {size:?} must be finite and at most {MAX_SHEET_MM} mm per side")));
+        }
         let p: Vec<Vector3<f64>> =
             tp.iter().map(|t| Vector3::new(t.paper_mm[0] / 1000.0, t.paper_mm[1] / 1000.0, 0.0)).collect();
         let q: Vec<Vector3<f64>> = tp.iter().map(|t| Vector3::from(t.robot_m)).collect();
@@ -111,6 +142,11 @@ impl PaperFrame {
                 .sqrt()
                 * 1000.0;
         let tol = file.max_residual_mm.unwrap_or(1.0);
+        if !(tol.is_finite() && tol > 0.0 && tol <= MAX_RESIDUAL_MM) {
+            return Err(bad(format!(
+                "max_residual_mm = {tol} must be in (0, {MAX_RESIDUAL_MM}] mm: a larger residual means the touch points do not describe one sheet"
+            )));
+        }
         if residual_mm > tol {
             return Err(bad(format!(
                 "fit residual {residual_mm:.3} mm exceeds the tolerance {tol} mm: re-touch the points"

@@ -1,105 +1,162 @@
-//! AUBO-i5 kinematics: forward kinematics by modified DH and a numerical inverse.
+//! AUBO-i5 kinematics in the controller's own convention: forward kinematics by modified DH and
+//! a numerical inverse.
 //!
-//! Nominal geometry (m): `d1 = 0.122`, `a2 = 0.408`, `a3 = 0.376`, a lateral offset of
-//! `0.1215` (the issue's `d2`), `d5 = 0.1025`, `d6 = 0.094`; joint limits ±175°. The table below
-//! follows the modified-DH layout of the public robotics kinematics catalogue's AUBO models
-//! (`α_{i−1}, a_{i−1}, d_i, θ offset`), with the lateral offset carried at joint 4. It has not
-//! been checked against a controller: treat absolute joint angles as assumed and use the
-//! kinematics for what it is for here, checking that poses are reachable.
+//! The AUBO controller describes its arm by four arrays, `a`, `alpha`, `d` and `theta` (the
+//! joint offsets), as `RobotConfig.getKinematicsParam` reports them. Link `i` is
+//! `Rx(alpha_i) · Tx(a_i) · Rz(q_i + theta_i) · Tz(d_i)` (Craig's modified DH, the row's own
+//! `alpha` and `a`). [`DhParams::AUBO_I5`] holds the i5's nominal arrays. The convention is
+//! verified against a waypoint saved by a real controller (see docs/robot.md, "Kinematics");
+//! the nominal lengths are not a calibrated arm's, so joints computed here are used only to
+//! check reachability and by the simulator. Programs never command joints solved here: the
+//! first move is a [`crate::program::Move::JointPose`], solved by the controller.
 
 use brush_model::wrap_angle_rad;
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::pose::Pose;
 
-/// Modified DH rows `(α_{i−1}, a_{i−1}, d_i, θ offset)`, radians and metres.
-pub const AUBO_I5_MDH: [(f64, f64, f64, f64); 6] = [
-    (0.0, 0.0, 0.122, 0.0),
-    (std::f64::consts::FRAC_PI_2, 0.0, 0.0, std::f64::consts::FRAC_PI_2),
-    (0.0, 0.408, 0.0, 0.0),
-    (0.0, 0.376, 0.1215, -std::f64::consts::FRAC_PI_2),
-    (-std::f64::consts::FRAC_PI_2, 0.0, 0.1025, 0.0),
-    (std::f64::consts::FRAC_PI_2, 0.0, 0.094, 0.0),
-];
+/// An arm's modified-DH parameters as the AUBO controller reports them
+/// (`RobotConfig.getKinematicsParam`): per joint, the link length `a` (m), the twist `alpha`
+/// (rad), the offset `d` (m) and the joint's zero offset `theta` (rad).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DhParams {
+    /// Link lengths `a`, m.
+    pub a_m: [f64; 6],
+    /// Link twists `alpha`, rad.
+    pub alpha_rad: [f64; 6],
+    /// Link offsets `d`, m.
+    pub d_m: [f64; 6],
+    /// Joint zero offsets `theta`, rad (added to the joint angle).
+    pub theta_rad: [f64; 6],
+}
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+impl DhParams {
+    /// The AUBO-i5's nominal parameters in the controller's convention.
+    pub const AUBO_I5: DhParams = DhParams {
+        a_m: [0.0, 0.0, 0.408, 0.376, 0.0, 0.0],
+        alpha_rad: [0.0, -FRAC_PI_2, PI, PI, -FRAC_PI_2, FRAC_PI_2],
+        d_m: [0.122, 0.1215, 0.0, 0.0, 0.1025, 0.094],
+        theta_rad: [PI, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
+    };
+
+    /// Checks that every value is finite, lengths within ±2 m and angles within ±2π; returns
+    /// what is wrong, naming the array and the joint.
+    ///
+    /// # Errors
+    /// A message such as `a[3] = inf m is not finite or beyond ±2 m`.
+    pub fn validate(&self) -> Result<(), String> {
+        let rows: [(&str, &[f64; 6], f64, &str); 4] = [
+            ("a", &self.a_m, 2.0, "m"),
+            ("alpha", &self.alpha_rad, 2.0 * PI, "rad"),
+            ("d", &self.d_m, 2.0, "m"),
+            ("theta", &self.theta_rad, 2.0 * PI, "rad"),
+        ];
+        for (name, v, max, unit) in rows {
+            for (i, x) in v.iter().enumerate() {
+                if !(x.is_finite() && x.abs() <= max) {
+                    return Err(format!("{name}[{i}] = {x} {unit} is not finite or beyond ±{max:.3} {unit}"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Forward kinematics: the flange pose in the base frame for joint angles `q` (rad), then
+    /// the tool transform `tcp` (flange → TCP) applied.
+    pub fn forward(&self, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
+        let mut t = Isometry3::identity();
+        #[allow(clippy::needless_range_loop, reason = "one index runs through q and the four arrays")]
+        for i in 0..6 {
+            let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha_rad[i]);
+            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + self.theta_rad[i]);
+            t = t
+                * Isometry3::from_parts(Translation3::identity(), rx)
+                * Isometry3::from_parts(Translation3::new(self.a_m[i], 0.0, 0.0), UnitQuaternion::identity())
+                * Isometry3::from_parts(Translation3::identity(), rz)
+                * Isometry3::from_parts(Translation3::new(0.0, 0.0, self.d_m[i]), UnitQuaternion::identity());
+        }
+        t * tcp
+    }
+
+    /// Numerical inverse kinematics (damped least squares from `seed`, then from a few standard
+    /// seeds): joint angles within ±[`JOINT_LIMIT_RAD`] that reach `target` to 0.01 mm and
+    /// 1e-4 rad, or `None` when no seed converges.
+    pub fn inverse(&self, target: &Pose, tcp: &Isometry3<f64>, seed: Option<&[f64; 6]>) -> Option<[f64; 6]> {
+        let goal = target.to_iso();
+        if !target.0.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let mut seeds: Vec<[f64; 6]> = seed.into_iter().copied().filter(|s| s.iter().all(|v| v.is_finite())).collect();
+        // The tool-down "ready" pose in front of the arm and its turns about the base, the
+        // elbow down, and the wrist turned.
+        let ready = READY_JOINTS;
+        for q1 in [0.0, FRAC_PI_2, -FRAC_PI_2, PI - 0.1, -PI + 0.1] {
+            seeds.push([q1, ready[1], ready[2], ready[3], ready[4], ready[5]]);
+        }
+        seeds.push([0.0, 0.4, -1.7, -0.5, -1.57, 0.0]);
+        seeds.push([0.0, ready[1], ready[2], ready[3], -ready[4], 0.0]);
+        seeds.into_iter().find_map(|s| self.solve_from(&goal, tcp, s))
+    }
+
+    fn solve_from(&self, goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> Option<[f64; 6]> {
+        let mut lambda = 1e-2;
+        let mut e = error(goal, &self.forward(&q, tcp));
+        for _ in 0..200 {
+            if e.fixed_rows::<3>(0).norm() < 1e-5 && e.fixed_rows::<3>(3).norm() < 1e-4 {
+                return q.iter().all(|v| v.abs() <= JOINT_LIMIT_RAD).then_some(q);
+            }
+            // Numerical Jacobian.
+            let mut j = Matrix6::zeros();
+            let base = self.forward(&q, tcp);
+            for k in 0..6 {
+                let mut qk = q;
+                qk[k] += 1e-6;
+                let d = error(&self.forward(&qk, tcp), &base) / 1e-6;
+                j.set_column(k, &d);
+            }
+            let jt = j.transpose();
+            let step = (jt * j + Matrix6::identity() * lambda).try_inverse()? * jt * e;
+            let mut cand = q;
+            for k in 0..6 {
+                cand[k] = wrap_angle_rad(cand[k] + step[k]);
+            }
+            let e2 = error(goal, &self.forward(&cand, tcp));
+            if e2.norm() < e.norm() {
+                q = cand;
+                e = e2;
+                lambda = (lambda * 0.5).max(1e-6);
+            } else {
+                lambda *= 4.0;
+                if lambda > 1e3 {
+                    return None;
+                }
+            }
+        }
+        None
+    }
+}
 
 /// Joint limit, radians (±175°).
-pub const JOINT_LIMIT_RAD: f64 = 175.0 * std::f64::consts::PI / 180.0;
+pub const JOINT_LIMIT_RAD: f64 = 175.0 * PI / 180.0;
 
-/// Forward kinematics: the flange pose for joint angles `q` (radians), then `tcp` applied.
+/// The i5's tool-down "ready" joints in the controller's convention, rad: with
+/// [`DhParams::AUBO_I5`] the flange is at (0.549, −0.121, 0.263) m with its z pointing down.
+pub const READY_JOINTS: [f64; 6] = [0.0, -0.2618, 1.7453, 0.4363, FRAC_PI_2, 0.0];
+
+/// [`DhParams::forward`] with the i5's nominal parameters.
 pub fn forward(q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
-    let mut t = Isometry3::identity();
-    for (i, &(alpha, a, d, off)) in AUBO_I5_MDH.iter().enumerate() {
-        let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), alpha);
-        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + off);
-        t = t
-            * Isometry3::from_parts(Translation3::identity(), rx)
-            * Isometry3::from_parts(Translation3::new(a, 0.0, 0.0), UnitQuaternion::identity())
-            * Isometry3::from_parts(Translation3::identity(), rz)
-            * Isometry3::from_parts(Translation3::new(0.0, 0.0, d), UnitQuaternion::identity());
-    }
-    t * tcp
+    DhParams::AUBO_I5.forward(q, tcp)
+}
+
+/// [`DhParams::inverse`] with the i5's nominal parameters.
+pub fn inverse(target: &Pose, tcp: &Isometry3<f64>, seed: Option<&[f64; 6]>) -> Option<[f64; 6]> {
+    DhParams::AUBO_I5.inverse(target, tcp, seed)
 }
 
 fn error(target: &Isometry3<f64>, at: &Isometry3<f64>) -> Vector6<f64> {
     let dp = target.translation.vector - at.translation.vector;
     let dr = (target.rotation * at.rotation.inverse()).scaled_axis();
     Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
-}
-
-/// Numerical inverse kinematics (damped least squares from `seed` and a few standard seeds):
-/// joint angles within ±175° reaching `target` to 0.01 mm and 1e-4 rad, or `None`.
-pub fn inverse(target: &Pose, tcp: &Isometry3<f64>, seed: Option<&[f64; 6]>) -> Option<[f64; 6]> {
-    let goal = target.to_iso();
-    let mut seeds: Vec<[f64; 6]> = seed.into_iter().copied().collect();
-    seeds.extend([
-        [0.0, 0.3, 1.6, 0.3, 1.57, 0.0],
-        [0.0, -0.3, -1.6, -0.3, -1.57, 0.0],
-        [1.57, 0.3, 1.6, 0.3, 1.57, 0.0],
-        [-1.57, 0.3, 1.6, 0.3, 1.57, 0.0],
-        [0.0, 0.6, 2.0, 1.0, 1.57, 1.57],
-        [3.0, 0.3, 1.6, 0.3, 1.57, 0.0],
-    ]);
-    for s in seeds {
-        if let Some(q) = solve_from(&goal, tcp, s) {
-            return Some(q);
-        }
-    }
-    None
-}
-
-fn solve_from(goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> Option<[f64; 6]> {
-    let mut lambda = 1e-2;
-    let mut e = error(goal, &forward(&q, tcp));
-    for _ in 0..200 {
-        if e.fixed_rows::<3>(0).norm() < 1e-5 && e.fixed_rows::<3>(3).norm() < 1e-4 {
-            return q.iter().all(|v| v.abs() <= JOINT_LIMIT_RAD).then_some(q);
-        }
-        // Numerical Jacobian.
-        let mut j = Matrix6::zeros();
-        let base = forward(&q, tcp);
-        for k in 0..6 {
-            let mut qk = q;
-            qk[k] += 1e-6;
-            let d = error(&forward(&qk, tcp), &base) / 1e-6;
-            j.set_column(k, &d);
-        }
-        let jt = j.transpose();
-        let step = (jt * j + Matrix6::identity() * lambda).try_inverse()? * jt * e;
-        let mut cand = q;
-        for k in 0..6 {
-            cand[k] = wrap_angle_rad(cand[k] + step[k]);
-        }
-        let e2 = error(goal, &forward(&cand, tcp));
-        if e2.norm() < e.norm() {
-            q = cand;
-            e = e2;
-            lambda = (lambda * 0.5).max(1e-6);
-        } else {
-            lambda *= 4.0;
-            if lambda > 1e3 {
-                return None;
-            }
-        }
-    }
-    None
 }

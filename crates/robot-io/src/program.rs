@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 use crate::RobotError;
 pub use crate::config::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
-    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, Reload, RobotConfig,
+    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_LIFT_MM,
+    MAX_STEP_LIMIT_MM, MIN_ACC, MIN_JOINT_SPEED_RAD_S, MIN_LINEAR_SPEED_M_S, MIN_SPEED_FRACTION, Reload, RobotConfig,
     dip_plan, pressed_mm,
 };
 use crate::frame::PaperFrame;
@@ -20,6 +21,15 @@ use crate::pose::{Pose, brush_pose, lifted_pose};
 /// duration, so no rate per mm or per second is computed for it.
 pub const IN_PLACE_MM: f64 = 1e-3;
 
+/// The smallest extent a track may have, mm (the larger side of its bounding box on the
+/// paper): a smaller one is a track in the wrong unit (metres), not a character.
+pub const MIN_TRACK_EXTENT_MM: f64 = 2.0;
+
+/// The deepest press of a track must reach this fraction of the brush profile's smallest
+/// calibrated press (`ranges.h_mm.min`): a track that never presses that deep is in the wrong
+/// unit or made for another brush.
+pub const MIN_DEEPEST_PRESS_FRACTION: f64 = 0.25;
+
 /// One motion command.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -28,6 +38,17 @@ pub enum Move {
     Joint {
         /// Target joints, rad.
         q: [f64; 6],
+        /// Joint acceleration, rad/s².
+        a: f64,
+        /// Joint speed, rad/s.
+        v: f64,
+    },
+    /// Joint move to a TCP pose: the controller solves the joints (AUBO: inverse kinematics
+    /// from the arm's present joints, `RobotAlgorithm.inverseKinematics`; URScript: `movej`
+    /// to a pose), so no joint angle computed from assumed kinematics is ever commanded.
+    JointPose {
+        /// Target TCP pose.
+        pose: Pose,
         /// Joint acceleration, rad/s².
         a: f64,
         /// Joint speed, rad/s.
@@ -75,7 +96,7 @@ pub struct Program {
     pub tcp_offset_m: f64,
     /// Speed fraction to set first.
     pub speed_fraction: f64,
-    /// Joint move to the first safe pose.
+    /// Joint move to the first safe pose (a [`Move::JointPose`]: the controller solves it).
     pub start: Move,
     /// Strokes in writing order.
     pub strokes: Vec<StrokeProgram>,
@@ -363,7 +384,35 @@ pub fn build_program_chars(
         b.stroke(si, &stroke.points, station.as_ref().filter(|_| dips[si]))?;
     }
     b.check_envelope()?;
+    check_plausible(track, profile)?;
     Ok(b.finish(track, normal_angle, station.map_or(0.0, |s| s.dwell_s)))
+}
+
+/// Refuses a track whose size or depth no brush writes: an extent under
+/// [`MIN_TRACK_EXTENT_MM`], or a deepest press under [`MIN_DEEPEST_PRESS_FRACTION`] of the
+/// profile's smallest calibrated press (both the signs of a track in metres).
+fn check_plausible(track: &Track, profile: &BrushProfile) -> Result<(), RobotError> {
+    let refuse = |reason: String| RobotError::Unsafe { stroke: None, point: None, reason };
+    let (mut lo, mut hi, mut deepest) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2], 0.0f64);
+    for p in track.points() {
+        lo = [lo[0].min(p.x_mm), lo[1].min(p.y_mm)];
+        hi = [hi[0].max(p.x_mm), hi[1].max(p.y_mm)];
+        deepest = deepest.max(p.h_mm);
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if extent < MIN_TRACK_EXTENT_MM {
+        return Err(refuse(format!(
+            "the track spans only {extent:.4} mm on the paper (at least {MIN_TRACK_EXTENT_MM} mm expected): track.json is in millimetres"
+        )));
+    }
+    let need = MIN_DEEPEST_PRESS_FRACTION * profile.ranges.h_mm.min;
+    if deepest < need {
+        return Err(refuse(format!(
+            "the deepest press is {deepest:.4} mm, under {need:.3} mm ({MIN_DEEPEST_PRESS_FRACTION} of the brush profile's smallest calibrated press {} mm): the track is in another unit or for another brush",
+            profile.ranges.h_mm.min
+        )));
+    }
+    Ok(())
 }
 
 /// The program as it is built, stroke by stroke, with what the envelope check needs.
@@ -443,9 +492,9 @@ impl<'a> Builder<'a> {
         }
         let first = &points[0];
         let up = lifted_pose(self.frame, first, self.lift_m);
-        let q_up = self.reach(&up, si, 0, "approach")?;
+        self.reach(&up, si, 0, "approach")?;
         if self.start.is_none() {
-            self.start = Some((Move::Joint { q: q_up, a: cfg.joint_acc_rad_s2, v: cfg.joint_speed_rad_s }, up));
+            self.start = Some((Move::JointPose { pose: up, a: cfg.joint_acc_rad_s2, v: cfg.joint_speed_rad_s }, up));
         }
         if let Some(prev) = self.last_up {
             self.totals.travel_m += dist(&prev, &up);
@@ -526,6 +575,17 @@ impl<'a> Builder<'a> {
             let pose = brush_pose(self.frame, p);
             self.reach(&pose, si, pi, "pressed")?;
             if let Some((pp, pt)) = prev {
+                let step_mm = (p.x_mm - pt.x_mm).hypot(p.y_mm - pt.y_mm);
+                if pt.is_pressed() && p.is_pressed() && step_mm > cfg.limits.max_step_mm {
+                    return Err(unsafe_at(
+                        si,
+                        Some(pi),
+                        format!(
+                            "the brush would move {step_mm:.3} mm along the paper between two points of one stroke, beyond limits.max_step_mm = {} mm",
+                            cfg.limits.max_step_mm
+                        ),
+                    ));
+                }
                 self.totals.pressed_m += dist(&pp, &pose);
                 check_segment(pt, p, &pp, &pose, &cfg.limits, &mut self.peaks, |reason| {
                     unsafe_at(si, Some(pi), reason)

@@ -129,6 +129,18 @@ pub fn execute_program(program: &crate::program::Program) -> Vec<TraceEntry> {
                 q = q1;
                 s
             }
+            crate::program::Move::JointPose { pose: p1, v, .. } => {
+                // Solved as the controller would, from the present joints; a checked program's
+                // poses are reachable, so the straight line is only a fallback.
+                match kinematics::inverse(&p1, &tcp, Some(&q)) {
+                    Some(q1) => {
+                        let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                        q = q1;
+                        s
+                    }
+                    None => line_motion(&pose, &p1, v * f, t),
+                }
+            }
             crate::program::Move::Line { pose: p1, v, .. } => line_motion(&pose, &p1, v * f, t),
         };
         if let Some(last) = samples.last() {
@@ -144,8 +156,9 @@ pub fn execute_program(program: &crate::program::Program) -> Vec<TraceEntry> {
     out
 }
 
-/// The simulator's joint positions at start, rad.
-pub const HOME_JOINTS: [f64; 6] = [0.0, 0.3, 1.6, 0.3, 1.57, 0.0];
+/// The simulator's joint positions at start, rad (controller convention): the tool points
+/// straight down with the flange 0.44 m above the base, in front of the arm.
+pub const HOME_JOINTS: [f64; 6] = [0.0, -0.3, 1.2, -0.0708, std::f64::consts::FRAC_PI_2, 0.0];
 
 /// Kind of executed move.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -552,6 +565,8 @@ fn numbers<const N: usize>(v: &Value) -> Option<[f64; N]> {
 /// Status codes the simulator returns for rejected motions.
 const INVALID_ARGUMENT: i64 = -5;
 const UNREACHABLE: i64 = -10;
+/// The values of a refused `(values, status)` answer.
+const NO_VALUES: [f64; 6] = [0.0; 6];
 /// JSON-RPC error code for a framed call before the login (an assumption).
 const NOT_LOGGED_IN: i64 = -32000;
 
@@ -707,6 +722,33 @@ fn handle(v: &Value, state: &Mutex<State>) -> Reply {
         "RobotState.isSteady" => ok(&id, json!(true)),
         "RobotState.getTcpPose" => ok(&id, json!(st.pose.0)),
         "RobotState.getJointPositions" => ok(&id, json!(st.joints)),
+        // The controller's kinematics services, as the SDK names them; results are the SDK's
+        // `(values, status)` pairs.
+        "RobotAlgorithm.inverseKinematics" => {
+            let qnear = arg(params, "qnear", 0).and_then(numbers::<6>);
+            let pose = arg(params, "pose", 1).and_then(numbers::<6>);
+            match (qnear, pose) {
+                (Some(qnear), Some(pose)) if arity(params, &["qnear", "pose"], &[]) => {
+                    let tcp = tcp_iso(st.tcp_offset_m);
+                    match kinematics::inverse(&Pose(pose), &tcp, Some(&qnear)) {
+                        Some(q) => ok(&id, json!([q, 0])),
+                        None => ok(&id, json!([qnear, UNREACHABLE])),
+                    }
+                }
+                _ => ok(&id, json!([NO_VALUES, INVALID_ARGUMENT])),
+            }
+        }
+        "RobotAlgorithm.forwardKinematics" => match arg(params, "q", 0).and_then(numbers::<6>) {
+            Some(q) if arity(params, &["q"], &[]) => {
+                let pose = Pose::from_iso(&kinematics::forward(&q, &tcp_iso(st.tcp_offset_m)));
+                ok(&id, json!([pose.0, 0]))
+            }
+            _ => ok(&id, json!([NO_VALUES, INVALID_ARGUMENT])),
+        },
+        "RobotConfig.getKinematicsParam" => {
+            let k = kinematics::DhParams::AUBO_I5;
+            ok(&id, json!({"a": k.a_m, "alpha": k.alpha_rad, "d": k.d_m, "theta": k.theta_rad}))
+        }
         "MotionControl.moveJoint" | "MotionControl.moveLine" => {
             let joint = rest == "MotionControl.moveJoint";
             if let Some(fault) = st.move_fault() {

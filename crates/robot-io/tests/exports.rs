@@ -38,6 +38,7 @@ fn small_track() -> Track {
 /// A pot beside the sheet, dipped before every stroke, with a dwell.
 fn inked() -> RobotConfig {
     RobotConfig {
+        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
         ink: Some(InkStation {
             pose: [0.63, 0.10, 0.07, std::f64::consts::PI, 0.0, 0.0],
             depth_mm: 25.0,
@@ -149,6 +150,20 @@ fn exports_read_back_as_the_checked_program() {
         assert!((target[k] - pose.0[k]).abs() <= 1e-9 * pose.0[k].abs().max(1e-3), "{target:?} {pose:?}");
     }
     assert_eq!(read_v, v);
+    // The first move: a joint move to a pose the controller solves, in both languages.
+    let Move::JointPose { pose: start, .. } = p.start else { panic!("{:?}", p.start) };
+    let near = |t: [f64; 6]| t.iter().zip(start.0).all(|(r, w)| (r - w).abs() <= 1e-8);
+    assert!(matches!(lua.moves[0].1, ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua.moves[0]);
+    assert!(matches!(ur.moves[0].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[0]);
+    // Joints given by the program (no longer built, still exported) read back too.
+    let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.5708, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
+    let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
+    assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
+    let ur_q = read_urscript(&urscript(&joints, "q").unwrap()).unwrap();
+    assert!(matches!(ur_q.moves[0].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[0]);
+    // A program whose start differs from the text's is refused.
+    let e = verify_lua(&aubo_lua(&joints, "q").unwrap(), &p).unwrap_err().to_string();
+    assert!(e.contains("line 9"), "{e}");
     let g = read_gcode(&gcode(&small_track(), &cfg, "十").unwrap().0).unwrap();
     let pressed =
         g.iter().filter(|(_, s)| matches!(s, GcodeStatement::Move { rapid: false, x_mm: Some(_), .. })).count();
@@ -192,6 +207,22 @@ fn tampered_exports_are_refused() {
         (Target::Lua, format!("{lua}os.exit()\n"), "nothing after the final `end`"),
         (Target::Lua, lua.replacen("  mc:moveLine(", "  mc:moveLine( ", 1), "expected a move"),
         (Target::Lua, lua.replacen("\n", "\r\n\r\n", 1), "U+000D"),
+        (
+            Target::Lua,
+            lua.replacen("    if ret ~= 0 then error(", "    if ret ~= 1 then error(", 1),
+            "line 11: expected",
+        ),
+        (
+            Target::Lua,
+            lua.replacen(
+                "    mc:moveJoint(q, ",
+                "    mc:moveJoint({0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.000000}, ",
+                1,
+            ),
+            "line 12",
+        ),
+        (Target::Lua, lua.replacen("  do\n", "", 1), "line 9: expected a move"),
+        (Target::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
         (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "expected a move"),
         (Target::UrScript, insert_after(&ur, &ur_line, &format!("{ur_line}\n")), "does not match"),
         (Target::UrScript, ur.replacen(&ur_line, &ur_line.replace("r=0.000000", "r=0.100000"), 1), "blend radius"),

@@ -42,6 +42,12 @@ fn small_track() -> Track {
     }
 }
 
+/// The default settings with steps of up to 16 mm allowed within a stroke: [`small_track`]'s
+/// points lie 10–15 mm apart, where a planned track's lie 0.15 mm apart.
+fn sparse() -> RobotConfig {
+    RobotConfig { limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() }, ..Default::default() }
+}
+
 fn same_rotation(a: &Pose, b: &Pose) -> bool {
     a.to_iso().rotation.angle_to(&b.to_iso().rotation) < 1e-9
 }
@@ -122,7 +128,11 @@ fn kabsch_recovers_a_tilted_sheet_and_refuses_bad_ones() {
 #[test]
 fn inverse_kinematics_round_trips() {
     let tcp = tcp_iso(0.048);
-    for q in [[0.1, 0.4, 1.5, 0.2, 1.4, 0.3], [-0.8, 0.2, 1.9, -0.3, 1.6, -1.0]] {
+    for q in [
+        [0.1, -0.4, 1.5, 0.2, 1.4, 0.3],
+        [-0.8, 0.2, 1.9, -0.3, 1.6, -1.0],
+        [0.5, -0.2618, 1.7453, 0.4363, 1.5708, 0.2],
+    ] {
         let pose = Pose::from_iso(&forward(&q, &tcp));
         let sol = inverse(&pose, &tcp, None).expect("reachable");
         let back = Pose::from_iso(&forward(&sol, &tcp));
@@ -135,13 +145,47 @@ fn inverse_kinematics_round_trips() {
     assert!(inverse(&Pose([2.0, 0.0, 0.2, std::f64::consts::PI, 0.0, 0.0]), &tcp, None).is_none());
 }
 
+/// The kinematics are the AUBO controller's own (modified DH with its `a`, `alpha`, `d`, `theta`
+/// arrays): the i5's nominal arrays put the flange where the controller does, and a waypoint
+/// saved by a real controller (joints, TCP offset, pose, that arm's calibrated arrays) is
+/// reproduced within 1.5 mm. maobi's earlier table put the first of these 0.9 m away.
+#[test]
+fn the_kinematics_are_the_controllers() {
+    use robot_io::kinematics::DhParams;
+    let flange = forward(&[0.0, -0.2618, 1.7453, 0.4363, 1.5708, 0.0], &tcp_iso(0.0));
+    let want = Vector3::new(0.549, -0.121, 0.263);
+    assert!((flange.translation.vector - want).norm() < 1e-3, "{:?}", flange.translation.vector);
+    // The saved waypoint: that controller's arrays (same theta), TCP offset 0.1 m along y.
+    let real = DhParams {
+        a_m: [0.0, 5.8e-5, 0.36851, 0.31634, 4.53e-5, 3.166e-4],
+        alpha_rad: [0.0, -1.56995, 3.13975, 3.14489, -1.57019, 1.56620],
+        d_m: [0.122, 0.12161, -1.145e-4, 1.145e-4, 0.10210, 0.094],
+        theta_rad: DhParams::AUBO_I5.theta_rad,
+    };
+    let tcp = nalgebra::Isometry3::translation(0.0, 0.1, 0.0);
+    let q = [-0.17556, 0.13348, -0.76781, 0.73389, -1.55988, -0.60547];
+    let saved = Pose([-0.49913, -0.09370, 0.57777, -3.09482, -0.04559, -1.14230]);
+    let got = Pose::from_iso(&real.forward(&q, &tcp));
+    let miss_m = (got.to_iso().translation.vector - saved.to_iso().translation.vector).norm();
+    assert!(miss_m < 1.6e-3, "{got:?} is {:.2} mm from the saved pose", miss_m * 1e3);
+    let turn = got.to_iso().rotation.angle_to(&saved.to_iso().rotation);
+    assert!(turn < 0.01, "{got:?} turns {turn} rad from the saved pose");
+    // The inverse in the same convention finds joints that reproduce the saved pose.
+    let back = real.inverse(&saved, &tcp, Some(&q)).expect("the saved pose is reachable");
+    let again = real.forward(&back, &tcp);
+    assert!((again.translation.vector - saved.to_iso().translation.vector).norm() < 2e-5);
+    assert!(real.validate().is_ok());
+    let bad = DhParams { d_m: [0.122, f64::INFINITY, 0.0, 0.0, 0.1, 0.1], ..real };
+    assert!(bad.validate().unwrap_err().contains("d[1]"));
+}
+
 fn same_rotation_loose(a: &Pose, b: &Pose) -> bool {
     a.to_iso().rotation.angle_to(&b.to_iso().rotation) < 2e-4
 }
 
 #[test]
 fn the_safety_envelope_refuses_before_anything_moves() {
-    let (f, cfg) = (paper(), RobotConfig::default());
+    let (f, cfg) = (paper(), sparse());
     let (prog, report) = build_program(&small_track(), &pen1(), &f, &cfg).unwrap();
     assert_eq!(report.strokes, 2);
     assert_eq!(prog.strokes[0].press.len(), 3);
@@ -159,14 +203,14 @@ fn the_safety_envelope_refuses_before_anything_moves() {
     refuse(off, &cfg, &f, "outside the paper");
     let far = PaperFrame::level([1.5, 0.0, 0.05], [200.0, 200.0]);
     refuse(small_track(), &cfg, &far, "not reachable");
-    let fast = RobotConfig { write_speed_m_s: 0.5, ..RobotConfig::default() };
+    let fast = RobotConfig { write_speed_m_s: 0.5, ..sparse() };
     refuse(small_track(), &fast, &f, "write_speed_m_s = 0.5 exceeds the limit 0.25");
     refuse(Track::default(), &cfg, &f, "no points");
 }
 
 #[test]
 fn exports_follow_the_documented_forms() {
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
     let lua = aubo_lua(&prog, "test").unwrap();
     assert!(lua.contains("return function(api)") && lua.trim_end().ends_with("end"));
     assert!(lua.contains("setTcpOffset({0, 0, 0.048000, 0, 0, 0})") && lua.contains("mc:setSpeedFraction(1.000000)"));
@@ -178,7 +222,7 @@ fn exports_follow_the_documented_forms() {
     assert_eq!(inside.split(", ").count(), 6, "{movel}");
     assert!(movel.contains("a=") && movel.contains("v=") && movel.contains("r="));
     // The level paper's upright brush is Rx(π): rotation vector (π, 0, 0) up to sign.
-    let (g, warnings) = gcode(&small_track(), &RobotConfig::default(), "test").unwrap();
+    let (g, warnings) = gcode(&small_track(), &sparse(), "test").unwrap();
     assert!(g.contains("G21") && g.contains("G90") && g.trim_end().ends_with("M2"));
     assert!(g.contains("G1 X40.000000 Y60.000000 Z-15.000000 F1200.000000"), "{g}");
     assert!(warnings.iter().any(|w| w.contains("α")) && warnings.iter().any(|w| w.contains("β")));
@@ -197,7 +241,7 @@ fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::a
 
 #[test]
 fn a_full_run_on_the_simulator_follows_the_track() {
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults { queue_full_every: Some(4), ..Faults::default() }).unwrap();
     let report = run(&sim, &prog).unwrap();
     assert_eq!(report.strokes_completed, vec![0, 1]);
@@ -228,7 +272,7 @@ fn a_full_run_on_the_simulator_follows_the_track() {
 
 #[test]
 fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
     // Moves: 1 joint, stroke 1 = 2 approach + 3 press + 1 lift (moves 2–7); stroke 2 travels
     // (8), descends onto its first point (9), presses (10, 11, ...): the drop hits move 11, in
     // the middle of stroke 2.

@@ -220,6 +220,36 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
             "approach.max_angle_rad",
         ),
         ("empty robot name", RobotConfig { robot_name: Some(" ".into()), ..Default::default() }, "robot_name"),
+        // Physical minimums: values that print as 0.000000 in a program, or unit mistakes.
+        (
+            "write speed 1e-9",
+            RobotConfig { write_speed_m_s: 1e-9, ..Default::default() },
+            "write_speed_m_s = 1e-9 is below",
+        ),
+        (
+            "speed fraction 1e-300",
+            RobotConfig { speed_fraction: 1e-300, ..Default::default() },
+            "speed_fraction = 1e-300 is below",
+        ),
+        ("travel acc 1e-5", RobotConfig { travel_acc_m_s2: 1e-5, ..Default::default() }, "travel_acc_m_s2"),
+        ("joint speed 1e-4", RobotConfig { joint_speed_rad_s: 1e-4, ..Default::default() }, "joint_speed_rad_s"),
+        ("lift 5 m", RobotConfig { lift_mm: 5000.0, ..Default::default() }, "lift_mm = 5000 is beyond"),
+        (
+            "step limit 1 m",
+            RobotConfig {
+                limits: robot_io::program::Limits { max_step_mm: 1000.0, ..Default::default() },
+                ..Default::default()
+            },
+            "limits.max_step_mm = 1000 is beyond",
+        ),
+        (
+            "wrist rate 1e9",
+            RobotConfig {
+                limits: robot_io::program::Limits { max_wrist_rate_rad_s: 1e9, ..Default::default() },
+                ..Default::default()
+            },
+            "limits.max_wrist_rate_rad_s",
+        ),
     ];
     for (what, cfg, needle) in cases {
         let e = build_program(&t, &pen1(), &f, &cfg).unwrap_err().to_string();
@@ -231,6 +261,53 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
     long.brush.length_mm = 600.0;
     let e = build_program(&t, &long, &f, &RobotConfig::default()).unwrap_err().to_string();
     assert!(e.contains("tool offset"), "{e}");
+}
+
+/// Two points of one stroke far apart, a track in metres, and a paper file whose tolerance or
+/// units let a wrong frame through are refused, each naming what is wrong.
+#[test]
+fn jumps_units_and_tolerances_are_bounded() {
+    let (f, cfg) = (paper(), RobotConfig::default());
+    // Two pressed points 100 mm apart in one stroke.
+    let jump = Track {
+        strokes: vec![Stroke { points: vec![pt(40.0, 40.0, 12.0, 0.05, 0.0), pt(140.0, 40.0, 12.0, 0.05, 0.0)] }],
+    };
+    refused(&jump, &f, &cfg, &["stroke 1, point 2", "100.000 mm", "limits.max_step_mm = 5"]);
+    // A step at the limit passes, just beyond it is refused.
+    let step = |d: f64| Track {
+        strokes: vec![Stroke { points: vec![pt(40.0, 40.0, 12.0, 0.05, 0.0), pt(40.0 + d, 40.0, 12.0, 0.05, 0.0)] }],
+    };
+    build_program(&step(4.9), &pen1(), &f, &cfg).unwrap();
+    refused(&step(5.2), &f, &cfg, &["max_step_mm"]);
+    // The same rows written in metres: 0.0225 mm wide, pressed 0.012 mm.
+    let mut metres = rows(2, 5);
+    for p in metres.strokes.iter_mut().flat_map(|s| s.points.iter_mut()) {
+        (p.x_mm, p.y_mm, p.h_mm) = (p.x_mm / 1000.0, p.y_mm / 1000.0, p.h_mm / 1000.0);
+    }
+    refused(&metres, &f, &cfg, &["spans only", "millimetres"]);
+    // Right size, but pressed 0.02 mm deep at most: not a brush's press.
+    let mut shallow = rows(2, 20);
+    for p in shallow.strokes.iter_mut().flat_map(|s| s.points.iter_mut()) {
+        p.h_mm = 0.02;
+    }
+    refused(&shallow, &f, &cfg, &["deepest press is 0.0200 mm", "2.750 mm"]);
+    // paper.json: a tolerance of 1e9 mm, robot points in millimetres, paper points in metres.
+    let file = fixture_paper();
+    let fit_err = |f: &PaperFile| PaperFrame::fit(f).unwrap_err().to_string();
+    let loose = PaperFile { max_residual_mm: Some(1e9), ..file.clone() };
+    assert!(fit_err(&loose).contains("max_residual_mm = 1000000000 must be in (0, 5]"), "{}", fit_err(&loose));
+    let mut robot_mm = file.clone();
+    for t in &mut robot_mm.touch_points {
+        t.robot_m = t.robot_m.map(|v| v * 1000.0);
+    }
+    assert!(fit_err(&robot_mm).contains("robot_m is in metres"), "{}", fit_err(&robot_mm));
+    let mut paper_m = file.clone();
+    for t in &mut paper_m.touch_points {
+        t.paper_mm = t.paper_mm.map(|v| v / 1000.0);
+    }
+    assert!(fit_err(&paper_m).contains("paper_mm is in millimetres"), "{}", fit_err(&paper_m));
+    let huge = PaperFile { size_mm: Some([1e9, 300.0]), ..file };
+    assert!(fit_err(&huge).contains("size_mm"), "{}", fit_err(&huge));
 }
 
 #[test]
@@ -592,7 +669,7 @@ fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifte
 #[test]
 fn program_helpers_measure_depth_along_the_paper_normal() {
     let f = paper();
-    let (prog, _): (Program, _) = build_program(&rows(1, 3), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _): (Program, _) = build_program(&rows(1, 10), &pen1(), &f, &RobotConfig::default()).unwrap();
     let p = robot_io::pose::brush_pose(&f, &pt(10.0, 20.0, 7.0, 0.1, 0.3));
     assert!((prog.depth_mm(p.position()) - 7.0).abs() < 1e-9);
     let up = prog.lifted_out(&p, 0.02);

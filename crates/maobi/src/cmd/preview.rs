@@ -184,6 +184,14 @@ fn execute_tagged(program: &robot_io::program::Program, frame: &PaperFrame) -> V
                 q = q1;
                 s
             }
+            Move::JointPose { pose: p1, v, .. } => match kinematics::inverse(&p1, &tcp, Some(&q)) {
+                Some(q1) => {
+                    let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                    q = q1;
+                    s
+                }
+                None => line_motion(&pose, &p1, v * f, t),
+            },
             Move::Line { pose: p1, v, .. } => line_motion(&pose, &p1, v * f, t),
         };
         if let Some(last) = samples.last() {

@@ -20,7 +20,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use crate::RobotError;
 use crate::pose::Pose;
 use crate::program::{DWELL_SINK_MM, Move, Program, RobotConfig, dip_plan};
-use parse::{GcodeStatement, ReadMove, ReadProgram};
+use parse::{GcodeStatement, LUA_IK_ERROR, ReadMove, ReadProgram};
 use text::{LENGTH_FLOOR, Target, close, comment_text, num};
 
 /// Largest rotation, rad, between a URScript rotation vector read back and the checked pose's
@@ -89,10 +89,19 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
     s.push_str(&format!("  robot:getRobotConfig():setTcpOffset({{0, 0, {}, 0, 0, 0}})\n", len(program.tcp_offset_m)));
     s.push_str("  local mc = robot:getMotionControl()\n");
     s.push_str(&format!("  mc:setSpeedFraction({})\n", rate(program.speed_fraction)));
-    let emit = |s: &mut String, m: &Move| match m {
+    let emit = |s: &mut String, m: &Move| {
+        match m {
         Move::Joint { q, a, v } => {
             s.push_str(&format!("  mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", lens(q), rate(*a), rate(*v)))
         }
+        // The controller solves the joints from where the arm is, and the script stops
+        // (`error`) rather than move when it cannot; `do ... end` keeps `q` and `ret` local.
+        Move::JointPose { pose, a, v } => s.push_str(&format!(
+            "  do\n    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {{{}}})\n    if ret ~= 0 then error(\"{LUA_IK_ERROR}\") end\n    mc:moveJoint(q, {}, {}, 0, 0)\n  end\n",
+            lens(&pose.0),
+            rate(*a),
+            rate(*v)
+        )),
         Move::Line { pose, a, v, blend_m } => s.push_str(&format!(
             "  mc:moveLine({{{}}}, {}, {}, {}, 0)\n",
             lens(&pose.0),
@@ -100,6 +109,7 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
             rate(*v),
             rate(*blend_m)
         )),
+    }
     };
     emit(&mut s, &program.start);
     for st in &program.strokes {
@@ -141,6 +151,14 @@ pub fn urscript(program: &Program, title: &str) -> Result<String, RobotError> {
     s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", len(program.tcp_offset_m)));
     let emit = |s: &mut String, m: &Move| match m {
         Move::Joint { q, a, v } => s.push_str(&format!("  movej([{}], a={}, v={})\n", lens(q), rate(*a), rate(*v))),
+        // A pose target: the UR controller solves the joints.
+        Move::JointPose { pose, a, v } => s.push_str(&format!(
+            "  movej(p[{}, {}], a={}, v={})\n",
+            lens(&pose.position()),
+            lens(&pose.rotation_vector()),
+            rate(*a),
+            rate(*v)
+        )),
         Move::Line { pose, a, v, blend_m } => {
             s.push_str(&format!(
                 "  movel(p[{}, {}], a={}, v={}, r={})\n",
@@ -230,6 +248,11 @@ fn compare_move(target: Target, read: &ReadMove, want: &Move) -> Result<(), Stri
             same("the acceleration", *a, *wa, 0.0)?;
             same("the speed", *v, *wv, 0.0)
         }
+        (ReadMove::JointPose { target: t, a, v }, Move::JointPose { pose, a: wa, v: wv }) => {
+            same_pose(target, t, pose)?;
+            same("the acceleration", *a, *wa, 0.0)?;
+            same("the speed", *v, *wv, 0.0)
+        }
         (ReadMove::Line { target: t, a, v, blend_m }, Move::Line { pose, a: wa, v: wv, blend_m: wb }) => {
             same_pose(target, t, pose)?;
             same("the acceleration", *a, *wa, 0.0)?;
@@ -251,6 +274,7 @@ fn read_kind(m: &ReadMove) -> &'static str {
 fn move_kind(m: &Move) -> &'static str {
     match m {
         Move::Joint { .. } => "a joint move to joints",
+        Move::JointPose { .. } => "a joint move to a pose",
         Move::Line { .. } => "a line move",
     }
 }

@@ -224,7 +224,7 @@ fn after_header<'a>(
 }
 
 /// The Lua error a joint move to a pose raises when the controller cannot solve it.
-pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller found no joints for the pose; not moving";
+pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller cannot reach the first pose";
 
 /// Reads back an ARCS Lua program as [`super::aubo_lua`] writes it: header comments
 /// (`-- text`), `return function(api)`, the robot and motion-control lookups,
