@@ -156,7 +156,7 @@ fn exports_read_back_as_the_checked_program() {
     assert!(matches!(lua.moves[0].1, ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua.moves[0]);
     assert!(matches!(ur.moves[0].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[0]);
     // Joints given by the program (no longer built, still exported) read back too.
-    let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.5708, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
+    let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.2, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
     let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
     assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
     let ur_q = read_urscript(&urscript(&joints, "q").unwrap()).unwrap();
