@@ -97,7 +97,7 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
         // The controller solves the joints from where the arm is, and the script stops
         // (`error`) rather than move when it cannot; `do ... end` keeps `q` and `ret` local.
         Move::JointPose { pose, a, v } => s.push_str(&format!(
-            "  do\n    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {{{}}})\n    if ret ~= 0 then error(\"{LUA_IK_ERROR}\") end\n    mc:moveJoint(q, {}, {}, 0, 0)\n  end\n",
+            "  do\n    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {{{}}})\n    if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end\n    mc:moveJoint(q, {}, {}, 0, 0)\n  end\n",
             lens(&pose.0),
             rate(*a),
             rate(*v)

@@ -287,7 +287,13 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
                 Some(p)
             })
             .ok_or_else(|| unexpected(m, l, "`    local q, ret = ...inverseKinematics(..., {pose})`"))?;
-            expect(&mut it, &format!("    if ret ~= 0 then error(\"{LUA_IK_ERROR}\") end"), last)?;
+            expect(
+                &mut it,
+                &format!(
+                    "    if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end"
+                ),
+                last,
+            )?;
             let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
             let (a, v) = whole(l, |c| {
                 c.lit("    mc:moveJoint(q, ")?;
