@@ -475,10 +475,9 @@ impl Runner<'_, '_> {
         self.session.as_mut().expect("connected")
     }
 
-    /// The wait limit for `expected_s` seconds of queued motion.
+    /// The wait limit for `expected_s` seconds of queued motion ([`wait_limit`]).
     fn wait_limit(&self, expected_s: f64) -> Duration {
-        let cap = self.opts.max_wait_per_stroke.as_secs_f64().max(1.5 * expected_s);
-        Duration::from_secs_f64((2.0 * expected_s).min(cap).max(self.opts.min_wait.as_secs_f64()))
+        wait_limit(expected_s, self.opts.min_wait, self.opts.max_wait_per_stroke)
     }
 
     /// Twice the sum of the wait limits of the start move and every stroke: room for each
@@ -849,6 +848,13 @@ impl Runner<'_, '_> {
     }
 }
 
+/// How long to wait for `expected_s` seconds of queued motion: twice that, at least
+/// `min_wait`, at most `cap` unless the motion alone needs more (then 1.5 × it).
+fn wait_limit(expected_s: f64, min_wait: Duration, cap: Duration) -> Duration {
+    let cap = cap.as_secs_f64().max(1.5 * expected_s);
+    Duration::from_secs_f64((2.0 * expected_s).min(cap).max(min_wait.as_secs_f64()))
+}
+
 /// The TCP pose the start move ends at, when the program says (not for joints).
 fn start_pose(program: &Program) -> Option<Pose> {
     match program.start {
@@ -868,4 +874,89 @@ fn with_causes(e: &dyn std::error::Error) -> String {
         cause = c.source();
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const S: fn(f64) -> Duration = Duration::from_secs_f64;
+
+    #[test]
+    fn wait_limits_follow_the_queued_motion_within_the_floor_and_the_cap() {
+        // (expected s, floor s, cap s, limit s)
+        for (expected, floor, cap, want) in [
+            (0.0, 10.0, 120.0, 10.0),    // nothing queued: the floor
+            (3.0, 10.0, 120.0, 10.0),    // 2 × 3 s under the floor
+            (20.0, 10.0, 120.0, 40.0),   // 2 × the expected time
+            (70.0, 10.0, 120.0, 120.0),  // capped
+            (100.0, 10.0, 120.0, 150.0), // the moves alone need more than the cap: 1.5 ×
+        ] {
+            let got = wait_limit(expected, S(floor), S(cap)).as_secs_f64();
+            assert!((got - want).abs() < 1e-9, "{expected} s: {got} s, not {want} s");
+        }
+    }
+
+    fn line(pose: [f64; 6], v: f64, blend_m: f64) -> Sent {
+        Sent { target: Some(Pose(pose)), joint: false, joint_travel_rad: None, v, a: 1.0, blend_m }
+    }
+
+    #[test]
+    fn the_expected_duration_counts_path_speed_and_ramps() {
+        let from = Pose([0.4, 0.0, 0.1, std::f64::consts::PI, 0.0, 0.0]);
+        let c =
+            Commanded { from: Some(from), sent: vec![line([0.5, 0.0, 0.1, std::f64::consts::PI, 0.0, 0.0], 0.1, 0.0)] };
+        // 0.1 m at 0.1 m/s, plus v / a = 0.1 s; at half speed 2 s plus 0.05 s.
+        assert!((c.duration_s(1.0) - 1.1).abs() < 1e-9, "{}", c.duration_s(1.0));
+        assert!((c.duration_s(0.5) - 2.05).abs() < 1e-9, "{}", c.duration_s(0.5));
+        // A joint move of unknown travel counts a full turn at its speed.
+        let j = Commanded { from: None, sent: vec![Sent { joint: true, target: None, ..line([0.0; 6], 0.5, 0.0) }] };
+        assert!((j.duration_s(1.0) - (std::f64::consts::TAU / 0.5 + 0.5)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn reported_poses_are_checked_against_what_was_commanded() {
+        let pi = std::f64::consts::PI;
+        let a = [0.4, 0.0, 0.1, pi, 0.0, 0.0];
+        let b = [0.5, 0.0, 0.1, pi, 0.0, 0.0];
+        // A path a → b with a 1 mm blend at b, then a turn in place at b.
+        let turned = [0.5, 0.0, 0.1, pi, 0.0, 0.5];
+        let c = Commanded { from: Some(Pose(a)), sent: vec![line(b, 0.1, 0.001), line(turned, 0.1, 0.0)] };
+        let at = |x: [f64; 6]| Pose(x);
+        let near = ([0.4, 0.0, 0.1], [0.5, 0.0, 0.1]);
+        // (case, reported, expectation, error needle; None: accepted)
+        let cases: Vec<(&str, [f64; 6], Expect<'_>, Option<&str>)> = vec![
+            ("at the target", b, Expect::At(at(b)), None),
+            ("4.9 mm off", [0.5, 0.0049, 0.1, pi, 0.0, 0.0], Expect::At(at(b)), None),
+            ("5.1 mm off", [0.5, 0.0051, 0.1, pi, 0.0, 0.0], Expect::At(at(b)), Some("5.1 mm from the commanded pose")),
+            ("turned 0.1 rad", [0.5, 0.0, 0.1, pi, 0.0, 0.1], Expect::At(at(b)), Some("orientation 0.100 rad")),
+            ("mid-path", [0.45, 0.003, 0.1, pi, 0.0, 0.0], Expect::Along(&c), None),
+            ("mid-path, 5.4 mm off within the blend", [0.5, 0.0054, 0.1, pi, 0.0, 0.0], Expect::Along(&c), None),
+            (
+                "mid-path, 7 mm off",
+                [0.45, 0.007, 0.1, pi, 0.0, 0.0],
+                Expect::Along(&c),
+                Some("7.0 mm from the nearest point"),
+            ),
+            ("mid-turn", [0.5, 0.0, 0.1, pi, 0.0, 0.25], Expect::Along(&c), None),
+            ("turned beyond the turn", [0.5, 0.0, 0.1, pi, 0.0, 0.8], Expect::Along(&c), Some("orientation 0.300 rad")),
+            (
+                "before the path",
+                [0.35, 0.0, 0.1, pi, 0.0, 0.0],
+                Expect::Along(&c),
+                Some("50.0 mm from the nearest point"),
+            ),
+            ("out of the neighbourhood", [0.7, 0.0, 0.1, pi, 0.0, 0.0], Expect::Reach, Some("outside the box")),
+            ("out of reach", [1.0, 1.0, 0.1, pi, 0.0, 0.0], Expect::Reach, Some("1.418 m from the robot base")),
+            ("huge", [1e300, 0.0, 0.0, 0.0, 0.0, 0.0], Expect::Reach, Some("1e300 m from the robot base")),
+        ];
+        for (case, reported, expect, needle) in cases {
+            let r = check_pose(&Pose(reported), &expect, Some(&near), "test");
+            match (r, needle) {
+                (Ok(()), None) => {}
+                (Err(RobotError::UnexpectedState(m)), Some(n)) => assert!(m.contains(n), "{case}: {m}"),
+                (r, _) => panic!("{case}: {r:?}"),
+            }
+        }
+    }
 }
