@@ -111,6 +111,63 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     assert!(help.contains("UNAUTHENTICATED"), "{help}");
 }
 
+/// A one-stroke track (一, 60 mm, points 4 mm apart) with the built-in pen1 brush.
+fn one_stroke_track(dir: &Path) -> PathBuf {
+    let brush = brush_model::BrushProfile::builtin("pen1").unwrap();
+    let pt = |x: f64| brush_model::TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 14.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    let track = dir.join("track.json");
+    let t = serde_json::json!({
+        "char": "一",
+        "brush": brush,
+        "strokes": [brush_model::Stroke { points: (0..16).map(|i| pt(30.0 + 4.0 * f64::from(i))).collect() }],
+        "char_box_mm": [20.0, 20.0, 80.0],
+    });
+    std::fs::write(&track, t.to_string()).unwrap();
+    track
+}
+
+#[test]
+fn the_simulator_serves_framed_by_default_and_lines_only_where_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = one_stroke_track(dir.path());
+    let (port, lines) = (free_port(), free_port());
+    let trace = dir.path().join("trace.jsonl");
+    let _sim = Sim::start(port, &["--lines-port", &lines.to_string(), "--trace", s(&trace)]);
+    let paper_json = paper();
+    let send = |extra: &[&str]| {
+        let mut args = vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--timeout-ms", "1000"]);
+        maobi(&args)
+    };
+    let p = port.to_string();
+    let o = ok(&send(&["--port", &p]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // One program after the other: the second session gets motion once the first has closed.
+    let o = ok(&send(&["--transport", "lines", "--port", &lines.to_string()]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // The default port does not speak the unauthenticated lines transport.
+    let o = send(&["--transport", "lines", "--port", &p]);
+    assert!(!o.status.success());
+    // The simulator wrote every executed sample as it went; the trace renders.
+    let img = dir.path().join("trace.png");
+    let out = ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "64",
+        "-o",
+        s(&img),
+    ]));
+    let n = std::fs::read_to_string(&trace).unwrap().lines().count();
+    assert!(out.contains(&format!("{n} trace samples")) && !out.contains("(0 pressed)"), "{out}");
+}
+
 #[test]
 fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
     // A one-stroke track and the trace the simulator records for it (a pressed line on the
