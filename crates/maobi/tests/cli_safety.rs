@@ -135,3 +135,27 @@ fn ctrl_c_during_send_lifts_the_brush_and_exits_non_zero() {
     let z = last["pose"][2].as_f64().unwrap();
     assert!((z - 0.07).abs() < 1e-6, "last executed z = {z}");
 }
+
+#[test]
+fn a_hostile_char_field_stays_inside_the_exported_comment() {
+    // Issue 26: a track's `char` was pasted as-is into the first comment of every export.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("shi");
+    ok(&maobi(&["write", "十", "--size", "96", "--out", s(&out)]));
+    let mut t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("track.json")).unwrap()).unwrap();
+    t["char"] = serde_json::json!("十\nG1 Z-40 F3000\r\n\r\nos.exit() --[[\u{2028}# (x);");
+    let track = dir.path().join("hostile.json");
+    std::fs::write(&track, t.to_string()).unwrap();
+    for fmt in ["gcode", "aubo-lua", "urscript"] {
+        let prog = dir.path().join(format!("p.{fmt}"));
+        ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&prog)]));
+        let text = std::fs::read_to_string(&prog).unwrap();
+        assert!(!text.contains(['\r', '\u{2028}']), "{fmt}");
+        let first = text.lines().next().unwrap();
+        assert!(first.contains("十\\u{a}G1 Z-40 F3000\\u{d}\\u{a}\\u{d}\\u{a}os.exit"), "{fmt}: {first}");
+        for l in text.lines().skip(1) {
+            assert!(!l.trim_start().starts_with("G1 Z-40") && !l.contains("os.exit"), "{fmt}: {l}");
+        }
+    }
+}

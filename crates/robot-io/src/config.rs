@@ -159,9 +159,10 @@ pub struct Limits {
     /// Largest change of press depth per mm of travel along the paper while pressed, mm/mm
     /// (moves in place, straight down or up, are exempt).
     pub max_depth_change_per_mm: f64,
-    /// Largest distance between two consecutive points of a stroke along the paper, mm: a stroke
-    /// is written in one contact, and the planner's points lie a fraction of a millimetre
-    /// apart, so a longer step is a corrupt or hand-edited track.
+    /// Largest distance along the paper between two consecutive pressed points (h > 0 at both)
+    /// of a stroke, mm: the planner's pressed points lie a fraction of a millimetre apart, so a
+    /// longer step with the brush down is a corrupt or hand-edited track. Glides at the surface
+    /// (h = 0) are not bounded.
     pub max_step_mm: f64,
 }
 

@@ -576,7 +576,7 @@ impl<'a> Builder<'a> {
             self.reach(&pose, si, pi, "pressed")?;
             if let Some((pp, pt)) = prev {
                 let step_mm = (p.x_mm - pt.x_mm).hypot(p.y_mm - pt.y_mm);
-                if step_mm > cfg.limits.max_step_mm {
+                if pt.is_pressed() && p.is_pressed() && step_mm > cfg.limits.max_step_mm {
                     return Err(unsafe_at(
                         si,
                         Some(pi),

@@ -219,10 +219,10 @@ fn export(a: ExportArgs) -> Result<()> {
     let (program, _) = build_program_chars(&track, l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     let t = title(&l.track);
     let text = match a.format.as_str() {
-        "aubo-lua" => robot_io::export::aubo_lua(&program, &t),
-        "urscript" => robot_io::export::urscript(&program, &t),
+        "aubo-lua" => robot_io::export::aubo_lua(&program, &t)?,
+        "urscript" => robot_io::export::urscript(&program, &t)?,
         _ => {
-            let (g, warnings) = robot_io::export::gcode_chars(&track, l.track.stroke_chars.as_deref(), &l.cfg, &t);
+            let (g, warnings) = robot_io::export::gcode_chars(&track, l.track.stroke_chars.as_deref(), &l.cfg, &t)?;
             for w in warnings {
                 eprintln!("warning: {w}");
             }

@@ -1,0 +1,517 @@
+//! Reading an exported program back: one small parser per format that accepts exactly the
+//! grammar the exporters write (the statements, in their places, and inert comments) and
+//! refuses anything else, naming the line. The exporters compare what these read with the
+//! checked program before they return the text.
+
+use super::text::{MAX_DECIMALS, Target, is_inert_comment, unsafe_anywhere};
+use crate::RobotError;
+
+/// A move of an exported arm program (ARCS Lua or URScript), as read back from its text.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ReadMove {
+    /// A joint move to joints the program gives: Lua `mc:moveJoint({q}, a, v, 0, 0)`,
+    /// URScript `movej([q], a=a, v=v)`.
+    Joint {
+        /// Target joints, rad.
+        q: [f64; 6],
+        /// Joint acceleration, rad/s².
+        a: f64,
+        /// Joint speed, rad/s.
+        v: f64,
+    },
+    /// A joint move to a TCP pose that the controller solves: Lua `inverseKinematics` from the
+    /// current joints, refusing to move when it fails, then `mc:moveJoint(q, a, v, 0, 0)`;
+    /// URScript `movej(p[...], a=a, v=v)`.
+    JointPose {
+        /// Lua: the pose `[x, y, z, rx, ry, rz]` as AUBO writes it (m, rad, `R = Rz·Ry·Rx`);
+        /// URScript: position (m) and rotation vector (rad).
+        target: [f64; 6],
+        /// Joint acceleration, rad/s².
+        a: f64,
+        /// Joint speed, rad/s.
+        v: f64,
+    },
+    /// A linear TCP move: Lua `mc:moveLine({pose}, a, v, blend, 0)`, URScript
+    /// `movel(p[...], a=a, v=v, r=blend)`.
+    Line {
+        /// As in [`ReadMove::JointPose`].
+        target: [f64; 6],
+        /// Acceleration, m/s².
+        a: f64,
+        /// Speed, m/s.
+        v: f64,
+        /// Blend radius, m.
+        blend_m: f64,
+    },
+}
+
+/// An exported arm program as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadProgram {
+    /// The tool offset along the flange z, m.
+    pub tcp_offset_m: f64,
+    /// The speed fraction (Lua; URScript has none).
+    pub speed_fraction: Option<f64>,
+    /// The moves in the order they run, each with its line number (from 1).
+    pub moves: Vec<(usize, ReadMove)>,
+}
+
+/// A statement of an exported G-code program, as read back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GcodeStatement {
+    /// `G21`: millimetres.
+    Millimetres,
+    /// `G90`: absolute coordinates.
+    Absolute,
+    /// `G0` (rapid) or `G1` (feed) with the words given: one of `G0 Z`, `G0 X Y F`, `G1 Z F`,
+    /// `G1 X Y Z F`.
+    Move {
+        /// `G0` rather than `G1`.
+        rapid: bool,
+        /// X, paper mm.
+        x_mm: Option<f64>,
+        /// Y, paper mm.
+        y_mm: Option<f64>,
+        /// Z, mm (0 where the tip touches the paper, positive up).
+        z_mm: Option<f64>,
+        /// Feed rate, mm/min.
+        f_mm_min: Option<f64>,
+    },
+    /// `M2`: end of program (the last line).
+    End,
+}
+
+/// Where a parse failed: the line (from 1) and why.
+pub(crate) struct At {
+    pub(crate) line: usize,
+    pub(crate) reason: String,
+}
+
+/// The refusal of a text in `target`'s format.
+pub(crate) fn refused(target: Target, stroke: Option<usize>, at: At) -> RobotError {
+    RobotError::Unsafe {
+        stroke,
+        point: None,
+        reason: format!(
+            "the exported {} program, line {}: {}; the export is refused",
+            target.name(),
+            at.line,
+            at.reason
+        ),
+    }
+}
+
+/// A line as an error quotes it: escaped, at most 80 characters.
+fn quote(line: &str) -> String {
+    let cut: String = line.chars().take(80).collect();
+    let more = if cut.len() < line.len() { "…" } else { "" };
+    format!("{cut:?}{more}")
+}
+
+/// The lines of `text` with their numbers (from 1): `\n` ends every line, including the last;
+/// no other control character, line separator or invisible format character anywhere.
+fn lines(text: &str) -> Result<Vec<(usize, &str)>, At> {
+    let Some(body) = text.strip_suffix('\n') else {
+        return Err(At { line: text.lines().count().max(1), reason: "the text does not end with a line end".into() });
+    };
+    let mut out = Vec::new();
+    for (i, l) in body.split('\n').enumerate() {
+        if let Some(c) = l.chars().find(|&c| unsafe_anywhere(c)) {
+            return Err(At {
+                line: i + 1,
+                reason: format!(
+                    "U+{:04X} (a control character, line separator or invisible format character) in {}",
+                    c as u32,
+                    quote(l)
+                ),
+            });
+        }
+        out.push((i + 1, l));
+    }
+    Ok(out)
+}
+
+/// A cursor over one line.
+struct Cur<'a>(&'a str);
+
+impl Cur<'_> {
+    fn lit(&mut self, l: &str) -> Option<()> {
+        self.0 = self.0.strip_prefix(l)?;
+        Some(())
+    }
+
+    /// A number as the exporters print it: `-?[0-9]+\.[0-9]{6,20}`.
+    fn num(&mut self) -> Option<f64> {
+        let b = self.0.as_bytes();
+        let digits = |from: usize| b[from..].iter().take_while(|c| c.is_ascii_digit()).count();
+        let sign = usize::from(b.first() == Some(&b'-'));
+        let int = digits(sign);
+        if int == 0 || b.get(sign + int) != Some(&b'.') {
+            return None;
+        }
+        let frac = digits(sign + int + 1);
+        if !(6..=MAX_DECIMALS).contains(&frac) {
+            return None;
+        }
+        let end = sign + int + 1 + frac;
+        let v = self.0[..end].parse().ok()?;
+        self.0 = &self.0[end..];
+        Some(v)
+    }
+
+    /// `N` numbers separated by `, `.
+    fn nums<const N: usize>(&mut self) -> Option<[f64; N]> {
+        let mut out = [0.0; N];
+        for (i, o) in out.iter_mut().enumerate() {
+            if i > 0 {
+                self.lit(", ")?;
+            }
+            *o = self.num()?;
+        }
+        Some(out)
+    }
+
+    fn end(&self) -> Option<()> {
+        self.0.is_empty().then_some(())
+    }
+}
+
+/// Parses a whole line with `f`, which must consume all of it.
+fn whole<T>(line: &str, f: impl FnOnce(&mut Cur<'_>) -> Option<T>) -> Option<T> {
+    let mut c = Cur(line);
+    let v = f(&mut c)?;
+    c.end()?;
+    Some(v)
+}
+
+/// Whether `line` is a comment line of `target`: `indent`, the marker, a space and inert text.
+fn is_comment(line: &str, indent: &str, marker: &str, target: Target) -> bool {
+    line.strip_prefix(indent)
+        .and_then(|l| l.strip_prefix(marker))
+        .and_then(|l| l.strip_prefix(' '))
+        .is_some_and(|t| is_inert_comment(t, target))
+}
+
+fn unexpected(line: usize, l: &str, want: &str) -> At {
+    At { line, reason: format!("expected {want}, found {}", quote(l)) }
+}
+
+/// The next line, which must be exactly `want`.
+fn expect<'a>(it: &mut impl Iterator<Item = (usize, &'a str)>, want: &str, last: usize) -> Result<(), At> {
+    match it.next() {
+        Some((_, l)) if l == want => Ok(()),
+        Some((n, l)) => Err(unexpected(n, l, &format!("`{want}`"))),
+        None => Err(At { line: last, reason: format!("the text ends before `{want}`") }),
+    }
+}
+
+/// The first line that is not a header comment (`marker` at the start), with the lines after.
+fn after_header<'a>(
+    it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
+    marker: &str,
+    target: Target,
+) -> Result<(), At> {
+    while let Some(&(n, l)) = it.peek() {
+        if !l.starts_with(marker) {
+            break;
+        }
+        if !is_comment(l, "", marker, target) {
+            return Err(At { line: n, reason: format!("a comment that is not inert: {}", quote(l)) });
+        }
+        it.next();
+    }
+    Ok(())
+}
+
+/// The Lua error a joint move to a pose raises when the controller cannot solve it.
+pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller cannot reach the first pose";
+
+/// Reads back an ARCS Lua program as [`super::aubo_lua`] writes it: header comments
+/// (`-- text`), `return function(api)`, the robot and motion-control lookups,
+/// `setTcpOffset({0, 0, z, 0, 0, 0})`, `setSpeedFraction(f)`, then moves and `  -- text`
+/// comments, `end`. Numbers are `-?d+.d{6,20}`; comment text must be inert (see
+/// [`super::text::comment_text`]).
+///
+/// # Errors
+/// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
+pub fn read_lua(text: &str) -> Result<ReadProgram, RobotError> {
+    read_lua_at(text).map_err(|at| refused(Target::Lua, None, at))
+}
+
+fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
+    let all = lines(text)?;
+    let last = all.len();
+    let mut it = all.into_iter().peekable();
+    after_header(&mut it, "--", Target::Lua)?;
+    for want in [
+        "return function(api)",
+        "  local robot_name = api:getRobotNames()[1]",
+        "  local robot = api:getRobotInterface(robot_name)",
+    ] {
+        expect(&mut it, want, last)?;
+    }
+    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setTcpOffset".into() })?;
+    let tcp_offset_m = whole(l, |c| {
+        c.lit("  robot:getRobotConfig():setTcpOffset({0, 0, ")?;
+        let z = c.num()?;
+        c.lit(", 0, 0, 0})")?;
+        Some(z)
+    })
+    .ok_or_else(|| unexpected(n, l, "`  robot:getRobotConfig():setTcpOffset({0, 0, z, 0, 0, 0})`"))?;
+    expect(&mut it, "  local mc = robot:getMotionControl()", last)?;
+    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setSpeedFraction".into() })?;
+    let speed_fraction = whole(l, |c| {
+        c.lit("  mc:setSpeedFraction(")?;
+        let f = c.num()?;
+        c.lit(")")?;
+        Some(f)
+    })
+    .ok_or_else(|| unexpected(n, l, "`  mc:setSpeedFraction(f)`"))?;
+    let mut moves = Vec::new();
+    loop {
+        let Some((n, l)) = it.next() else {
+            return Err(At { line: last, reason: "the program does not end with `end`".into() });
+        };
+        if l == "end" {
+            break;
+        }
+        if is_comment(l, "  ", "--", Target::Lua) {
+            continue;
+        }
+        let m = if l == "  do" {
+            let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
+            let pose = whole(l, |c| {
+                c.lit("    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {")?;
+                let p = c.nums::<6>()?;
+                c.lit("})")?;
+                Some(p)
+            })
+            .ok_or_else(|| unexpected(m, l, "`    local q, ret = ...inverseKinematics(..., {pose})`"))?;
+            expect(
+                &mut it,
+                &format!(
+                    "    if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end"
+                ),
+                last,
+            )?;
+            let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
+            let (a, v) = whole(l, |c| {
+                c.lit("    mc:moveJoint(q, ")?;
+                let [a, v] = c.nums::<2>()?;
+                c.lit(", 0, 0)")?;
+                Some((a, v))
+            })
+            .ok_or_else(|| unexpected(m, l, "`    mc:moveJoint(q, a, v, 0, 0)`"))?;
+            expect(&mut it, "  end", last)?;
+            ReadMove::JointPose { target: pose, a, v }
+        } else {
+            whole(l, |c| {
+                if c.lit("  mc:moveJoint({").is_some() {
+                    let q = c.nums::<6>()?;
+                    c.lit("}, ")?;
+                    let [a, v] = c.nums::<2>()?;
+                    c.lit(", 0, 0)")?;
+                    Some(ReadMove::Joint { q, a, v })
+                } else {
+                    c.lit("  mc:moveLine({")?;
+                    let target = c.nums::<6>()?;
+                    c.lit("}, ")?;
+                    let [a, v, blend_m] = c.nums::<3>()?;
+                    c.lit(", 0)")?;
+                    Some(ReadMove::Line { target, a, v, blend_m })
+                }
+            })
+            .ok_or_else(|| unexpected(n, l, "a move (`mc:moveLine`, `mc:moveJoint`, `do`), a `--` comment or `end`"))?
+        };
+        moves.push((n, m));
+    }
+    if let Some((n, l)) = it.next() {
+        return Err(unexpected(n, l, "nothing after the final `end`"));
+    }
+    Ok(ReadProgram { tcp_offset_m, speed_fraction: Some(speed_fraction), moves })
+}
+
+/// Reads back a URScript program as [`super::urscript`] writes it: header comments
+/// (`# text`), `def maobi_write():`, `set_tcp(p[0, 0, z, 0, 0, 0])`, then `movej([q], a=, v=)`,
+/// `movej(p[...], a=, v=)`, `movel(p[...], a=, v=, r=)` and `  # text` comments, `end`,
+/// `maobi_write()`.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
+pub fn read_urscript(text: &str) -> Result<ReadProgram, RobotError> {
+    read_urscript_at(text).map_err(|at| refused(Target::UrScript, None, at))
+}
+
+fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
+    let all = lines(text)?;
+    let last = all.len();
+    let mut it = all.into_iter().peekable();
+    after_header(&mut it, "#", Target::UrScript)?;
+    expect(&mut it, "def maobi_write():", last)?;
+    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before set_tcp".into() })?;
+    let tcp_offset_m = whole(l, |c| {
+        c.lit("  set_tcp(p[0, 0, ")?;
+        let z = c.num()?;
+        c.lit(", 0, 0, 0])")?;
+        Some(z)
+    })
+    .ok_or_else(|| unexpected(n, l, "`  set_tcp(p[0, 0, z, 0, 0, 0])`"))?;
+    let mut moves = Vec::new();
+    loop {
+        let Some((n, l)) = it.next() else {
+            return Err(At { line: last, reason: "the program does not end with `end`".into() });
+        };
+        if l == "end" {
+            break;
+        }
+        if is_comment(l, "  ", "#", Target::UrScript) {
+            continue;
+        }
+        let m = whole(l, |c| {
+            if c.lit("  movej([").is_some() {
+                let q = c.nums::<6>()?;
+                c.lit("], a=")?;
+                let a = c.num()?;
+                c.lit(", v=")?;
+                let v = c.num()?;
+                c.lit(")")?;
+                Some(ReadMove::Joint { q, a, v })
+            } else if c.lit("  movej(p[").is_some() {
+                let target = c.nums::<6>()?;
+                c.lit("], a=")?;
+                let a = c.num()?;
+                c.lit(", v=")?;
+                let v = c.num()?;
+                c.lit(")")?;
+                Some(ReadMove::JointPose { target, a, v })
+            } else {
+                c.lit("  movel(p[")?;
+                let target = c.nums::<6>()?;
+                c.lit("], a=")?;
+                let a = c.num()?;
+                c.lit(", v=")?;
+                let v = c.num()?;
+                c.lit(", r=")?;
+                let blend_m = c.num()?;
+                c.lit(")")?;
+                Some(ReadMove::Line { target, a, v, blend_m })
+            }
+        })
+        .ok_or_else(|| unexpected(n, l, "a move (`movel(p[...])`, `movej(...)`), a `#` comment or `end`"))?;
+        moves.push((n, m));
+    }
+    expect(&mut it, "maobi_write()", last)?;
+    if let Some((n, l)) = it.next() {
+        return Err(unexpected(n, l, "nothing after `maobi_write()`"));
+    }
+    Ok(ReadProgram { tcp_offset_m, speed_fraction: None, moves })
+}
+
+/// Reads back G-code as [`super::gcode`] writes it: comment lines (`; text`), and the
+/// statements `G21`, `G90`, `G0 Z`, `G0 X Y F`, `G1 Z F`, `G1 X Y Z F` (words in that order,
+/// one space apart), each optionally followed by ` ; text`, and `M2` on the last line. No
+/// `( ... )` comments, line numbers, checksums or other words.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
+pub fn read_gcode(text: &str) -> Result<Vec<(usize, GcodeStatement)>, RobotError> {
+    read_gcode_at(text).map_err(|at| refused(Target::Gcode, None, at))
+}
+
+fn read_gcode_at(text: &str) -> Result<Vec<(usize, GcodeStatement)>, At> {
+    let all = lines(text)?;
+    let mut out = Vec::new();
+    let mut ended = false;
+    for (n, l) in all {
+        if l.starts_with(';') {
+            if !is_comment(l, "", ";", Target::Gcode) {
+                return Err(At { line: n, reason: format!("a comment that is not inert: {}", quote(l)) });
+            }
+            continue;
+        }
+        if ended {
+            return Err(unexpected(n, l, "nothing after `M2`"));
+        }
+        let code = match l.split_once(" ; ") {
+            Some((code, comment)) if is_inert_comment(comment, Target::Gcode) => code,
+            Some(_) => return Err(At { line: n, reason: format!("a comment that is not inert: {}", quote(l)) }),
+            None => l,
+        };
+        let st = match code {
+            "G21" => Some(GcodeStatement::Millimetres),
+            "G90" => Some(GcodeStatement::Absolute),
+            "M2" => Some(GcodeStatement::End),
+            _ => gcode_move(code),
+        }
+        .ok_or_else(|| {
+            unexpected(n, l, "`G21`, `G90`, `G0 Z`, `G0 X Y F`, `G1 Z F`, `G1 X Y Z F`, `M2` or a `;` comment")
+        })?;
+        ended = st == GcodeStatement::End;
+        out.push((n, st));
+    }
+    if !ended {
+        return Err(At { line: out.last().map_or(1, |s| s.0), reason: "the program does not end with `M2`".into() });
+    }
+    Ok(out)
+}
+
+fn gcode_move(code: &str) -> Option<GcodeStatement> {
+    let mut c = Cur(code);
+    let rapid = if c.lit("G0").is_some() {
+        true
+    } else {
+        c.lit("G1")?;
+        false
+    };
+    let mut words: [Option<f64>; 4] = [None; 4];
+    let mut shape = String::new();
+    for (k, letter) in ["X", "Y", "Z", "F"].iter().enumerate() {
+        let mut t = Cur(c.0);
+        if t.lit(" ").and_then(|_| t.lit(letter)).is_some() {
+            words[k] = Some(t.num()?);
+            c = t;
+            shape.push_str(letter);
+        }
+    }
+    c.end()?;
+    let allowed: &[&str] = if rapid { &["Z", "XYF"] } else { &["ZF", "XYZF"] };
+    if !allowed.contains(&shape.as_str()) {
+        return None;
+    }
+    let [x_mm, y_mm, z_mm, f_mm_min] = words;
+    Some(GcodeStatement::Move { rapid, x_mm, y_mm, z_mm, f_mm_min })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gcode_lines_outside_the_grammar_are_refused() {
+        let ok = "; t\nG21 ; millimetres\nG90\nG0 Z20.000000\nG0 X1.000000 Y2.000000 F6000.000000\nG1 Z-1.000000 F3000.000000\nG1 X1.000000 Y2.000000 Z-3.000000 F1200.000000\nM2\n";
+        assert_eq!(read_gcode_at(ok).map(|v| v.len()).ok(), Some(7));
+        for (bad, line) in [
+            ("G1 Z-40\n", 1),
+            ("G1 Z-40.000000\n", 1),
+            ("G0 X1.000000 Y2.000000\n", 1),
+            ("G1 Z-4.000000 F1.000000 (x)\n", 1),
+            ("G1 Z-4.000000 F1.000000 ; (x)\n", 1),
+            ("G1 Z-4.0 F1.000000\n", 1),
+            ("G1 Z1e3 F1.000000\n", 1),
+            ("G1 Z-4.000000  F1.000000\n", 1),
+            ("G1 F1.000000 Z-4.000000\n", 1),
+            ("g1 Z-4.000000 F1.000000\n", 1),
+            ("N1 G1 Z-4.000000 F1.000000\n", 1),
+            ("G21\n(G1 Z-4)\n", 2),
+            ("G21\r\nM2\n", 1),
+            ("G21\n;x\u{2028}G1\nM2\n", 2),
+            ("G21\n", 1),
+            ("G21\nM2\nG21\n", 3),
+            ("M2", 1),
+            ("G0 ZNaN\n", 1),
+        ] {
+            let e = read_gcode_at(bad).err().unwrap_or_else(|| panic!("{bad:?} was read"));
+            assert_eq!(e.line, line, "{bad:?}: {}", e.reason);
+        }
+    }
+}

@@ -1,0 +1,279 @@
+//! Exported programs carry only checked lines (issue 26): a hostile title stays inside the
+//! first comment of every format, each export reads back as the checked program, a tampered
+//! text is refused by the parse-back check, and a number that would print as something else
+//! (a speed of 1e-300 as `0.000000`) refuses the export.
+
+use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use robot_io::export::parse::{GcodeStatement, ReadMove, read_gcode, read_lua, read_urscript};
+use robot_io::export::text::{MAX_COMMENT_CHARS, Target, comment_text};
+use robot_io::export::{aubo_lua, gcode, urscript, verify_gcode, verify_lua, verify_urscript};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{Move, Program, RobotConfig, build_program};
+use robot_io::{InkStation, Reload, RobotError};
+
+fn pen1() -> BrushProfile {
+    BrushProfile::builtin("pen1").unwrap()
+}
+
+fn paper() -> PaperFrame {
+    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
+}
+
+/// Two short strokes, pressed at 15 mm, tilted 0.05 rad.
+fn small_track() -> Track {
+    let line = |pts: &[(f64, f64)], beta: f64| Stroke {
+        points: pts
+            .iter()
+            .map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta })
+            .collect(),
+    };
+    Track {
+        strokes: vec![
+            line(&[(40.0, 60.0), (50.0, 60.0), (60.0, 61.0), (70.0, 62.0)], std::f64::consts::PI),
+            line(&[(55.0, 40.0), (55.0, 55.0), (55.0, 70.0), (55.5, 85.0)], -std::f64::consts::FRAC_PI_2),
+        ],
+    }
+}
+
+/// A pot beside the sheet, dipped before every stroke, with a dwell.
+fn inked() -> RobotConfig {
+    RobotConfig {
+        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
+        ink: Some(InkStation {
+            pose: [0.63, 0.10, 0.07, std::f64::consts::PI, 0.0, 0.0],
+            depth_mm: 25.0,
+            dwell_s: 0.5,
+            reload: Reload::EveryStrokes(1),
+            paper_mm: Some([330.0, 150.0]),
+        }),
+        ..RobotConfig::default()
+    }
+}
+
+fn program(cfg: &RobotConfig) -> Program {
+    build_program(&small_track(), &pen1(), &paper(), cfg).unwrap().0
+}
+
+/// The three exports of the small track (with dips) under `title`.
+fn exports(title: &str) -> [(Target, String); 3] {
+    let cfg = inked();
+    let p = program(&cfg);
+    [
+        (Target::Lua, aubo_lua(&p, title).unwrap()),
+        (Target::UrScript, urscript(&p, title).unwrap()),
+        (Target::Gcode, gcode(&small_track(), &cfg, title).unwrap().0),
+    ]
+}
+
+/// Statements of an export as read back: moves (arm) or G-code statements.
+fn statements(target: Target, text: &str) -> usize {
+    match target {
+        Target::Lua => read_lua(text).unwrap().moves.len(),
+        Target::UrScript => read_urscript(text).unwrap().moves.len(),
+        Target::Gcode => read_gcode(text).unwrap().len(),
+    }
+}
+
+fn verify(target: Target, text: &str) -> Result<(), RobotError> {
+    let cfg = inked();
+    match target {
+        Target::Lua => verify_lua(text, &program(&cfg)),
+        Target::UrScript => verify_urscript(text, &program(&cfg)),
+        Target::Gcode => verify_gcode(text, &small_track(), None, &cfg),
+    }
+}
+
+#[test]
+fn hostile_titles_stay_inside_the_first_comment() {
+    let plain = exports("t");
+    let long = format!("{}\nG1 Z-40 F3000", "十".repeat(5000));
+    let titles = [
+        "十\nG1 Z-40 F3000",
+        "十\r\n\r\nos.execute('x')",
+        "a\rG1 Z-40 F3000",
+        "a\u{2028}G1 Z-40\u{2029}b",
+        "a\u{85}G1 Z-40",
+        "a\u{0}b\u{1b}[2Jc\u{7f}",
+        "a\u{b}b\u{c}c\td",
+        "; G1 Z-40 F3000",
+        "(G1 Z-40) %",
+        "--[[ os.exit() ]]",
+        "]] os.exit() --[[",
+        "--[==[\nos.exit()\n]==]",
+        "# movel(p[0, 0, 0, 0, 0, 0])",
+        "\"'`\\\" ; os.exit() --",
+        "\u{202e}0-Z 1G\u{2066}",
+        long.as_str(),
+    ];
+    for title in titles {
+        for ((target, text), (_, base)) in exports(title).iter().zip(&plain) {
+            let what = format!("{target:?} for {title:?}");
+            assert!(verify(*target, text).is_ok(), "{what}");
+            // One line for the title, whatever it holds; the rest is the plain title's program.
+            assert_eq!(text.split('\n').count(), base.split('\n').count(), "{what}");
+            let (first, rest) = text.split_once('\n').unwrap();
+            assert_eq!(rest, base.split_once('\n').unwrap().1, "{what}");
+            assert_eq!(statements(*target, text), statements(*target, base), "{what}");
+            let marker = match target {
+                Target::Lua => "-- maobi writing program: ",
+                Target::UrScript => "# maobi writing program: ",
+                Target::Gcode => "; maobi writing program: ",
+            };
+            let kept = first.strip_prefix(marker).unwrap();
+            assert_eq!(kept, comment_text(title, *target), "{what}");
+            assert!(kept.chars().count() <= MAX_COMMENT_CHARS * 10 + 1, "{what}");
+            let special: &[char] = match target {
+                Target::Lua => &['[', ']', '\'', '"'],
+                Target::UrScript => &['#', '\'', '"'],
+                Target::Gcode => &[';', '(', ')', '%'],
+            };
+            assert!(!kept.contains(special), "{what}: {kept}");
+            assert!(!text.contains(['\r', '\u{85}', '\u{2028}', '\u{2029}', '\u{0}', '\u{202e}']), "{what}");
+        }
+    }
+}
+
+#[test]
+fn exports_read_back_as_the_checked_program() {
+    let cfg = inked();
+    let p = program(&cfg);
+    let lua = read_lua(&aubo_lua(&p, "十").unwrap()).unwrap();
+    let ur = read_urscript(&urscript(&p, "十").unwrap()).unwrap();
+    assert_eq!((lua.moves.len(), ur.moves.len()), (p.move_count(), p.move_count()));
+    assert_eq!(lua.speed_fraction, Some(p.speed_fraction));
+    assert_eq!(lua.tcp_offset_m, p.tcp_offset_m);
+    // Lua carries the poses as the program has them, to the bit here.
+    let Move::Line { pose, v, .. } = p.strokes[1].press[1] else { panic!() };
+    let n = 1 + p.strokes[0].moves().count() + p.strokes[1].dip.len() + p.strokes[1].approach.len() + 1;
+    let ReadMove::Line { target, v: read_v, .. } = lua.moves[n].1 else { panic!("{:?}", lua.moves[n]) };
+    for k in 0..6 {
+        assert!((target[k] - pose.0[k]).abs() <= 1e-9 * pose.0[k].abs().max(1e-3), "{target:?} {pose:?}");
+    }
+    assert_eq!(read_v, v);
+    // The first move: a joint move to a pose the controller solves, in both languages.
+    let Move::JointPose { pose: start, .. } = p.start else { panic!("{:?}", p.start) };
+    let near = |t: [f64; 6]| t.iter().zip(start.0).all(|(r, w)| (r - w).abs() <= 1e-8);
+    assert!(matches!(lua.moves[0].1, ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua.moves[0]);
+    assert!(matches!(ur.moves[0].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[0]);
+    // Joints given by the program (no longer built, still exported) read back too.
+    let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.2, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
+    let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
+    assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
+    let ur_q = read_urscript(&urscript(&joints, "q").unwrap()).unwrap();
+    assert!(matches!(ur_q.moves[0].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[0]);
+    // A program whose start differs from the text's is refused.
+    let e = verify_lua(&aubo_lua(&joints, "q").unwrap(), &p).unwrap_err().to_string();
+    assert!(e.contains("line 9"), "{e}");
+    let g = read_gcode(&gcode(&small_track(), &cfg, "十").unwrap().0).unwrap();
+    let pressed =
+        g.iter().filter(|(_, s)| matches!(s, GcodeStatement::Move { rapid: false, x_mm: Some(_), .. })).count();
+    assert_eq!(pressed, small_track().point_count());
+    assert_eq!(g.first().map(|s| s.1), Some(GcodeStatement::Millimetres));
+    assert_eq!(g.last().map(|s| s.1), Some(GcodeStatement::End));
+}
+
+#[test]
+fn tampered_exports_are_refused() {
+    let [(_, lua), (_, ur), (_, g)] = exports("十");
+    let insert_after = |text: &str, prefix: &str, extra: &str| {
+        let i = text.find(prefix).unwrap_or_else(|| panic!("{prefix}"));
+        let end = i + text[i..].find('\n').unwrap() + 1;
+        format!("{}{extra}{}", &text[..end], &text[end..])
+    };
+    let first_line = |text: &str, prefix: &str| {
+        let i = text.find(prefix).unwrap();
+        text[i..i + text[i..].find('\n').unwrap()].to_string()
+    };
+    let lua_line = first_line(&lua, "  mc:moveLine(");
+    let ur_line = first_line(&ur, "  movel(");
+    let g_line = first_line(&g, "G1 X");
+    let cases: Vec<(Target, String, &str)> = vec![
+        (Target::Gcode, insert_after(&g, "; maobi", "G1 Z-40.000000 F3000.000000\n"), "line 2"),
+        (Target::Gcode, insert_after(&g, "; maobi", "G1 Z-40\n"), "line 2: expected `G21`"),
+        (Target::Gcode, insert_after(&g, &g_line, "(G1 Z-40)\n"), "expected `G21`"),
+        (Target::Gcode, insert_after(&g, &g_line, &format!("{g_line}\n")), "does not match"),
+        (Target::Gcode, g.replacen(&g_line, &g_line.replace(" F", " F1"), 1), "F reads"),
+        (Target::Gcode, g.replacen("G21 ; millimetres", "G21 ; (millimetres)", 1), "not inert"),
+        (Target::Gcode, g.replacen("\n", "\r\n", 1), "U+000D"),
+        (Target::Gcode, format!("{g}G1 Z-40.000000 F1.000000\n"), "nothing after `M2`"),
+        (Target::Gcode, g.replace("M2\n", ""), "does not end with `M2`"),
+        (Target::Lua, insert_after(&lua, "  mc:setSpeedFraction", "  os.execute(\"x\")\n"), "line 9: expected a move"),
+        (Target::Lua, insert_after(&lua, "-- maobi", "--[[\n"), "line 2: a comment that is not inert"),
+        (Target::Lua, insert_after(&lua, &lua_line, "  --[[ x ]] os.exit()\n"), "expected a move"),
+        (Target::Lua, insert_after(&lua, &lua_line, &format!("{lua_line}\n")), "does not match"),
+        (Target::Lua, lua.replacen(", 0.020000, 0.000000, 0)", ", 0.000000, 0.000000, 0)", 1), "the speed reads 0"),
+        (Target::Lua, lua.replacen("setSpeedFraction(1.000000)", "setSpeedFraction(0.000000)", 1), "speed fraction"),
+        (Target::Lua, lua.replacen("0.048000", "0.148000", 1), "tool offset"),
+        (Target::Lua, format!("{lua}os.exit()\n"), "nothing after the final `end`"),
+        (Target::Lua, lua.replacen("  mc:moveLine(", "  mc:moveLine( ", 1), "expected a move"),
+        (Target::Lua, lua.replacen("\n", "\r\n\r\n", 1), "U+000D"),
+        (
+            Target::Lua,
+            lua.replacen("(ret ~= nil and ret ~= 0) then error(", "(ret ~= nil and ret ~= 1) then error(", 1),
+            "line 11: expected",
+        ),
+        (
+            Target::Lua,
+            lua.replacen(
+                "    mc:moveJoint(q, ",
+                "    mc:moveJoint({0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.000000}, ",
+                1,
+            ),
+            "line 12",
+        ),
+        (Target::Lua, lua.replacen("  do\n", "", 1), "line 9: expected a move"),
+        (Target::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
+        (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "expected a move"),
+        (Target::UrScript, insert_after(&ur, &ur_line, &format!("{ur_line}\n")), "does not match"),
+        (Target::UrScript, ur.replacen(&ur_line, &ur_line.replace("r=0.000000", "r=0.100000"), 1), "blend radius"),
+        (Target::UrScript, ur.replacen("movel(p[0.", "movel(p[1.", 1), "x reads"),
+        (Target::UrScript, insert_after(&ur, "def maobi_write", "  # x\u{2028}movel(p[0])\n"), "U+2028"),
+        (Target::UrScript, ur.replace("maobi_write()\n", ""), "`maobi_write()`"),
+    ];
+    for (target, text, needle) in cases {
+        let e = verify(target, &text).expect_err(needle);
+        assert!(matches!(e, RobotError::Unsafe { .. }), "{e}");
+        let msg = e.to_string();
+        assert!(msg.contains(needle) && msg.contains(target.name()), "{target:?} {needle}: {msg}");
+    }
+}
+
+#[test]
+fn numbers_that_would_print_as_something_else_refuse_the_export() {
+    let cfg = inked();
+    let base = program(&cfg);
+    fn slow_line(p: &mut Program, v_m_s: f64) {
+        if let Move::Line { v, .. } = &mut p.strokes[0].press[0] {
+            *v = v_m_s;
+        }
+    }
+    // URScript has no speed fraction: it runs the checked speeds themselves.
+    type Change = fn(&mut Program);
+    let arm: [(Change, &str, bool); 4] = [
+        (|p| p.speed_fraction = 1e-300, "the speed fraction reads 0 where it is 1e-300", false),
+        (|p| slow_line(p, 1e-300), "the speed reads 0 where it is 1e-300", true),
+        (|p| p.tcp_offset_m = f64::NAN, "expected `  robot:getRobotConfig():setTcpOffset", true),
+        (|p| slow_line(p, f64::INFINITY), "expected a move", true),
+    ];
+    for (change, needle, ur_refuses) in arm {
+        let mut p = base.clone();
+        change(&mut p);
+        let e = aubo_lua(&p, "t").unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+        assert_eq!(urscript(&p, "t").is_err(), ur_refuses, "{needle}");
+    }
+    // A write speed of 1e-9 m/s prints in full and reads back as itself.
+    let mut p = base.clone();
+    slow_line(&mut p, 1e-9);
+    let lua = aubo_lua(&p, "t").unwrap();
+    assert!(lua.contains(", 0.000000001, 0.000500, 0)"), "{lua}");
+    assert!(urscript(&p, "t").is_ok());
+    // G-code: a feed rate that prints as 0, and one that prints in full.
+    for (write, ok) in [(1e-300, false), (1e-9, true), (f64::NAN, false)] {
+        let c = RobotConfig { write_speed_m_s: write, ..cfg.clone() };
+        match gcode(&small_track(), &c, "t") {
+            Ok((g, _)) => assert!(ok && g.contains(" F0.000060\n"), "{write:e}: {g}"),
+            Err(e) => assert!(!ok && e.to_string().contains("G-code"), "{write:e}: {e}"),
+        }
+    }
+}
