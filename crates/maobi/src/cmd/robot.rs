@@ -388,7 +388,12 @@ fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::sim::TraceEntry>> 
         match serde_json::from_str(line) {
             Ok(t) => out.push(t),
             // The last line, unfinished: the file was cut there.
-            Err(e) if Some(i) == last && (e.is_eof() || !text.ends_with('\n')) => {
+            // (A last line that is complete JSON but not a sample is an error like any other.)
+            Err(e)
+                if Some(i) == last
+                    && (e.is_eof()
+                        || (!text.ends_with('\n') && serde_json::from_str::<serde_json::Value>(line).is_err())) =>
+            {
                 eprintln!(
                     "warning: {name}:{}: skipped a cut last line ({} bytes): the trace ends at the sample before",
                     i + 1,
