@@ -346,9 +346,11 @@ fn an_interrupted_dataset_leaves_a_consistent_prefix_and_no_temporary_files() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // Wait for the first chunk's rows, then press Ctrl-C.
+    // Wait for the first chunk's rows (in the staging folder beside the output), then press
+    // Ctrl-C.
+    let stage = dir.path().join(format!(".ds.maobi-partial-{}", child.id()));
     let t0 = Instant::now();
-    while labels_rows(&out.join("labels.csv")).is_empty() {
+    while labels_rows(&stage.join("labels.csv")).is_empty() {
         assert!(t0.elapsed() < Duration::from_secs(120), "no labels after two minutes");
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -372,6 +374,8 @@ fn an_interrupted_dataset_leaves_a_consistent_prefix_and_no_temporary_files() {
     for (i, f) in listed.iter().enumerate() {
         assert_eq!(f, &format!("fp_{i:08}.png"));
     }
+    // The prefix was installed (there was no older dataset); no staging folder or lock is left.
+    assert_eq!(names(dir.path()), ["ds"]);
 }
 
 #[cfg(unix)]
@@ -389,4 +393,310 @@ fn ctrl_c_exits_130_saying_interrupted() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(130), "{e}");
     assert!(e.contains("interrupted"), "{e}");
+}
+
+// Issue 26, "Files and concurrent runs": outputs are staged and swapped in, one run per output
+// at a time, and Ctrl-C, a kill or a full disk at any step leaves the old output or the new one,
+// never neither and never a mix. The binary's test hook (`MAOBI_TEST_HOOK`, debug builds only)
+// makes a named step fail as a full disk would (`fail:STEP`) or pause there (`pause:STEP`: it
+// creates `MAOBI_TEST_HOOK_MARKER` and waits until the file is removed or a signal arrives).
+
+/// `maobi` with a test hook, not yet waited for.
+fn spawn_hooked(args: &[&str], hook: Option<&str>, marker: &Path) -> std::process::Child {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_maobi"));
+    c.args(args).stdout(Stdio::null()).stderr(Stdio::piped()).env("MAOBI_TEST_HOOK_MARKER", marker);
+    if let Some(h) = hook {
+        c.env("MAOBI_TEST_HOOK", h);
+    }
+    c.spawn().unwrap()
+}
+
+/// `maobi` with a test hook, run to the end.
+fn hooked(args: &[&str], hook: &str, marker: &Path) -> std::process::Output {
+    spawn_hooked(args, Some(hook), marker).wait_with_output().unwrap()
+}
+
+/// Waits (at most a minute) for a paused run's marker.
+fn wait_for(marker: &Path) {
+    let t0 = Instant::now();
+    while !marker.exists() {
+        assert!(t0.elapsed() < Duration::from_secs(60), "the run never reached its pause");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// The names in a folder, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+/// Whether a dataset folder is consistent: labels.csv lists exactly its images, in order.
+fn dataset_rows(out: &Path) -> usize {
+    let rows = labels_rows(&out.join("labels.csv"));
+    let listed: Vec<String> = rows.iter().map(|r| r.split(',').next().unwrap().to_string()).collect();
+    let files: Vec<String> = names(out).into_iter().filter(|n| n != "labels.csv").collect();
+    assert_eq!(listed, files, "labels.csv lists exactly the images in {}", out.display());
+    rows.len()
+}
+
+#[test]
+fn dataset_refuses_a_used_folder_and_replaces_it_only_when_finished() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ds");
+    let marker = dir.path().join("marker");
+    let ds = |n: &str, size: &str, force: bool| -> Vec<String> {
+        let mut a = vec!["dataset", "--n", n, "--size", size, "-o", s(&out)];
+        if force {
+            a.push("--force");
+        }
+        a.into_iter().map(String::from).collect()
+    };
+    let run = |a: &[String]| maobi(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    ok(&run(&ds("30", "16", false)));
+    assert_eq!(dataset_rows(&out), 30);
+    // Before: a second run into the folder exited 0 and mixed with the first.
+    fails(&run(&ds("10", "24", false)), "already exists and is not empty; give --force");
+    assert_eq!(dataset_rows(&out), 30);
+    // --force replaces the whole folder: a smaller --n leaves none of the old images.
+    ok(&run(&ds("10", "24", true)));
+    assert_eq!(dataset_rows(&out), 10);
+    let size = image::image_dimensions(out.join("fp_000000.png")).unwrap();
+    assert_eq!(size, (24, 24));
+    // A full disk after 700 images (before: 768 PNGs and a header-only labels.csv): the old
+    // dataset stays, and no staging folder or lock is left.
+    let a = ds("800", "16", true);
+    let o = hooked(&a.iter().map(String::as_str).collect::<Vec<_>>(), "fail:dataset-image-700", &marker);
+    fails(&o, "No space left on device");
+    assert_eq!(dataset_rows(&out), 10);
+    assert_eq!(names(dir.path()), ["ds"], "leftovers beside the output");
+    // Two runs at once into one new folder: one writes it, the other says why it did not.
+    let out2 = dir.path().join("ds2");
+    let both: Vec<_> = (0..2)
+        .map(|_| {
+            Command::new(env!("CARGO_BIN_EXE_maobi"))
+                .args(["dataset", "--n", "200", "--size", "16", "-o", s(&out2)])
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let outs: Vec<_> = both.into_iter().map(|c| c.wait_with_output().unwrap()).collect();
+    let won = outs.iter().filter(|o| o.status.success()).count();
+    assert_eq!(won, 1, "exactly one run writes the folder");
+    let lost = outs.iter().find(|o| !o.status.success()).unwrap();
+    let e = String::from_utf8_lossy(&lost.stderr);
+    assert!(e.contains("another maobi run") || e.contains("already exists"), "{e}");
+    assert_eq!(dataset_rows(&out2), 200);
+}
+
+#[cfg(unix)]
+#[test]
+fn write_force_swap_survives_an_error_a_signal_or_a_kill_at_each_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let marker = dir.path().join("marker");
+    let write = ["write", "十", "--size", "64", "--out", s(&out), "--force"];
+    let old = |out: &Path| {
+        std::fs::create_dir_all(out).unwrap();
+        std::fs::write(out.join("old.txt"), "old").unwrap();
+    };
+    old(&out);
+    for step in ["swap-aside", "swap-install", "swap-cleanup"] {
+        // An error at the step (a full disk): exit 2, the old folder in place, nothing left.
+        fails(&hooked(&write, &format!("fail:{step}"), &marker), "No space left on device");
+        assert_eq!(names(&out), ["old.txt"], "{step}: error");
+        assert_eq!(names(dir.path()), ["out"], "{step}: error");
+        // Ctrl-C at the step (before: a SIGINT between removing the old and installing the new
+        // left neither): exit 130, the old folder in place, nothing left.
+        let child = spawn_hooked(&write, Some(&format!("pause:{step}")), &marker);
+        wait_for(&marker);
+        interrupt(&child);
+        let o = child.wait_with_output().unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(130), "{step}: {e}");
+        assert!(e.contains("interrupted"), "{step}: {e}");
+        assert_eq!(names(&out), ["old.txt"], "{step}: Ctrl-C");
+        std::fs::remove_file(&marker).unwrap();
+        assert_eq!(names(dir.path()), ["out"], "{step}: Ctrl-C");
+        // Killed at the step: the next run puts the old folder back (or, once the new one is in
+        // place, removes the old) and says so; then it refuses to replace it without --force.
+        let mut child = spawn_hooked(&write, Some(&format!("pause:{step}")), &marker);
+        wait_for(&marker);
+        child.kill().unwrap();
+        child.wait().unwrap();
+        std::fs::remove_file(&marker).unwrap();
+        let o = maobi(&write[..write.len() - 1]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{step}: {e}");
+        assert!(e.contains("already exists and is not empty"), "{step}: {e}");
+        assert!(e.contains("taking over the lock"), "{step}: {e}");
+        if step == "swap-cleanup" {
+            assert!(e.contains("note: removed") && e.contains(".old, the old"), "{step}: {e}");
+            assert!(out.join("track.json").exists(), "{step}: the new outputs stay");
+            std::fs::remove_dir_all(&out).unwrap();
+            old(&out);
+        } else {
+            if step == "swap-install" {
+                assert!(e.contains("note: put back"), "{step}: {e}");
+            }
+            assert_eq!(names(&out), ["old.txt"], "{step}: kill");
+        }
+        assert_eq!(names(dir.path()), ["out"], "{step}: kill");
+    }
+    // Undisturbed, --force replaces the old folder.
+    ok(&maobi(&write));
+    assert!(out.join("track.json").exists() && !out.join("old.txt").exists());
+    assert_eq!(names(dir.path()), ["out"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn interrupted_sheets_leave_no_staging_folder() {
+    // Before: 2 of 24 interrupted sheets left `.X.maobi-partial-PID/` behind (Ctrl-C removed
+    // the staging folder while the run re-created it). Signals at several points of the run.
+    let dir = tempfile::tempdir().unwrap();
+    for (i, delay_ms) in [0u64, 150, 300, 450, 600, 750, 900, 1100].into_iter().enumerate() {
+        let out = dir.path().join(format!("s{i}"));
+        let child = Command::new(env!("CARGO_BIN_EXE_maobi"))
+            .args(["write", "十口人大", "--size", "64", "--out", s(&out)])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        interrupt(&child);
+        let o = child.wait_with_output().unwrap();
+        // Either finished before the signal, or interrupted with nothing written.
+        match o.status.code() {
+            Some(0) => assert!(out.join("track.json").exists()),
+            // 130: interrupted; none: killed by the signal before the handler was installed.
+            Some(130) | None => assert!(!out.exists(), "an interrupted run wrote {}", out.display()),
+            c => panic!("exit {c:?}: {}", String::from_utf8_lossy(&o.stderr)),
+        }
+    }
+    let left: Vec<String> = names(dir.path()).into_iter().filter(|n| n.starts_with('.')).collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+#[cfg(unix)]
+#[test]
+fn two_writes_into_one_folder_one_wins_and_the_other_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let marker = dir.path().join("marker");
+    let write = ["write", "十", "--size", "64", "--out", s(&out)];
+    // The first run holds the folder (paused before its swap); the second is refused at once.
+    let first = spawn_hooked(&write, Some("pause:swap-aside"), &marker);
+    wait_for(&marker);
+    refused(&["write", "口", "--size", "64", "--out", s(&out)], "another maobi run (process");
+    std::fs::remove_file(&marker).unwrap();
+    let o = first.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let track: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("track.json")).unwrap()).unwrap();
+    assert_eq!(track["char"], "十");
+    // Before: both of two runs started together succeeded and one silently replaced the other.
+    let out2 = dir.path().join("out2");
+    let both: Vec<_> = ["十", "口"]
+        .into_iter()
+        .map(|c| spawn_hooked(&["write", c, "--size", "64", "--out", s(&out2)], None, &marker))
+        .collect();
+    let outs: Vec<_> = both.into_iter().map(|c| c.wait_with_output().unwrap()).collect();
+    assert_eq!(outs.iter().filter(|o| o.status.success()).count(), 1, "exactly one run writes the folder");
+    let lost = outs.iter().find(|o| !o.status.success()).unwrap();
+    let e = String::from_utf8_lossy(&lost.stderr);
+    assert_eq!(lost.status.code(), Some(2), "{e}");
+    assert!(e.contains("another maobi run (process") || e.contains("already exists and is not empty"), "{e}");
+    // A lock left by a process that no longer runs is taken over.
+    let gone = Command::new("true").spawn().unwrap();
+    let pid = gone.id();
+    gone.wait_with_output().unwrap();
+    let out3 = dir.path().join("out3");
+    std::fs::write(dir.path().join(".out3.maobi-lock"), format!("{pid}\n")).unwrap();
+    let o = maobi(&["write", "十", "--size", "64", "--out", s(&out3)]);
+    let e = ok_stderr(&o);
+    assert!(e.contains("taking over the lock"), "{e}");
+    assert_eq!(names(dir.path()), ["out", "out2", "out3"]);
+}
+
+/// Asserts success and returns stderr.
+fn ok_stderr(o: &std::process::Output) -> String {
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{e}");
+    e
+}
+
+#[cfg(unix)]
+#[test]
+fn an_unfinished_train_never_replaces_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path().join("w.safetensors");
+    let marker = dir.path().join("marker");
+    let train =
+        ["train", "--arch", "tiny", "--steps", "4", "--batch", "2", "--val-every", "1", "--eval-n", "2", "-o", s(&w)];
+    ok(&maobi(&train));
+    let files = ["w.safetensors", "w.json", "loss.csv", "loss.png"];
+    let read = || files.map(|f| std::fs::read(dir.path().join(f)).unwrap());
+    let first = read();
+    let cfg: serde_json::Value = serde_json::from_slice(&first[1]).unwrap();
+    assert!(cfg["recipe"].is_object() && cfg["metrics"].is_object(), "{cfg}");
+    assert_eq!(names(dir.path()), ["loss.csv", "loss.png", "w.json", "w.safetensors"], "the checkpoint is removed");
+    // A different run that fails (a full disk) or is interrupted just before its outputs move
+    // into place: the finished model and its loss files stay; the checkpoint is beside them.
+    let mut other = train.to_vec();
+    other.extend(["--seed", "7"]);
+    let o = hooked(&other, "fail:train-install", &marker);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("error: train-install: No space left on device"), "{e}");
+    assert!(read() == first, "a failed train changed the model");
+    let child = spawn_hooked(&other, Some("pause:train-install"), &marker);
+    wait_for(&marker);
+    interrupt(&child);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_file(&marker).unwrap();
+    assert!(read() == first, "an interrupted train changed the model");
+    let ckpt: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("w.checkpoint.json")).unwrap()).unwrap();
+    assert!(ckpt["recipe"].is_null(), "the checkpoint is the mid-run one");
+    assert_eq!(
+        names(dir.path()),
+        ["loss.csv", "loss.png", "w.checkpoint.json", "w.checkpoint.safetensors", "w.json", "w.safetensors"]
+    );
+    // A finished run replaces all four and removes the checkpoint.
+    ok(&maobi(&other));
+    let second = read();
+    assert!(second[0] != first[0] && second[2] != first[2], "the new run's weights and losses");
+    assert_eq!(names(dir.path()), ["loss.csv", "loss.png", "w.json", "w.safetensors"]);
+}
+
+#[test]
+fn ink_in_the_alpha_channel_is_read_on_white() {
+    // Before: black RGB with the ink in alpha was "no contrast" (write --image) and "100% of
+    // the image is ink" (fit-stroke).
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let to_alpha = |src: &Path, dst: &Path| {
+        let g = image::open(src).unwrap().to_luma8();
+        let rgba = image::RgbaImage::from_fn(g.width(), g.height(), |x, y| {
+            image::Rgba([0, 0, 0, 255 - g.get_pixel(x, y).0[0]])
+        });
+        rgba.save(dst).unwrap();
+    };
+    ok(&maobi(&["write", "永", "--size", "128", "--out", s(&d.join("ref"))]));
+    let (yong, stroke, w) = (d.join("yong.png"), d.join("stroke.png"), d.join("w"));
+    to_alpha(&d.join("ref/reference.png"), &yong);
+    to_alpha(&fixtures().join("photos/stroke_05.png"), &stroke);
+    ok(&maobi(&["write", "永", "--image", s(&yong), "--size", "128", "--out", s(&w)]));
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(w.join("report.json")).unwrap()).unwrap();
+    assert!(rep["strokes_found"].as_u64().unwrap() >= 3, "{rep}");
+    // The alpha-ink stroke fits as the opaque original does (its scale given: the PNG lost it).
+    let plain = ok(&maobi(&["fit-stroke", &fixture("photos/stroke_05.png")]));
+    let alpha = ok(&maobi(&["fit-stroke", s(&stroke), "--px-per-mm", "8"]));
+    assert_eq!(plain.lines().next(), alpha.lines().next(), "{plain}\n{alpha}");
 }

@@ -109,9 +109,19 @@ pub fn scale_from_metadata(path: &Path) -> Option<f64> {
 pub fn load_ink(path: &Path) -> Result<InkMask, PhotoError> {
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
     let img = decode_image(path).map_err(|source| PhotoError::Image { path: path.to_path_buf(), source })?;
-    let g = img.to_luma32f();
-    let (w, h) = (g.width() as usize, g.height() as usize);
-    mask_from_gray(g.into_raw(), w, h, path)
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    mask_from_gray(gray_on_white(&img), w, h, path)
+}
+
+/// Grey levels (0 black … 1 white) of an image as printed on white paper: transparency is
+/// composited on white, so a stroke drawn only in the alpha channel (black RGB, alpha = ink)
+/// reads as ink rather than as an all-black image.
+fn gray_on_white(img: &image::DynamicImage) -> Vec<f32> {
+    if !img.color().has_alpha() {
+        return img.to_luma32f().into_raw();
+    }
+    let la = img.to_luma_alpha32f();
+    la.pixels().map(|p| p.0[0] * p.0[1] + (1.0 - p.0[1])).collect()
 }
 
 /// As [`load_ink`], from grey levels in memory (0 black … 1 white); `name` labels errors.
@@ -229,4 +239,25 @@ fn solve3(m: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
         *o = det(a) / d;
     }
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stroke_in_the_alpha_channel_is_ink_on_white() {
+        // Black RGB everywhere; the stroke is the opaque part.
+        let img = image::DynamicImage::ImageRgba8(image::RgbaImage::from_fn(96, 64, |x, y| {
+            let a = if (20..76).contains(&x) && (26..38).contains(&y) { 255 } else { 0 };
+            image::Rgba([0, 0, 0, a])
+        }));
+        let plain = img.to_luma32f().into_raw();
+        assert!(matches!(mask_from_gray(plain, 96, 64, "t.png"), Err(PhotoError::AllInk { .. })));
+        let grey = gray_on_white(&img);
+        assert_eq!((grey[0], grey[32 * 96 + 48]), (1.0, 0.0));
+        let mask = mask_from_gray(grey, 96, 64, "t.png").expect("the stroke is found");
+        let n = mask.ink.iter().filter(|&&b| b).count();
+        assert!((500..=800).contains(&n), "{n} ink pixels for a 56×12 stroke");
+    }
 }

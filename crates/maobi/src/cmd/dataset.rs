@@ -8,7 +8,10 @@ use anyhow::{Context, Result};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer};
 use rayon::prelude::*;
 
-use crate::common::{BrushArg, check_range, interrupted, load_brush, parse_model, progress, write_atomic};
+use crate::common::{
+    BrushArg, OutputLock, Stage, check_output_folder, check_range, interrupted, load_brush, output_is_vacant,
+    parse_model, progress, recover_leftovers, test_hook, write_atomic,
+};
 
 /// Arguments of `maobi dataset`.
 #[derive(clap::Args, Debug)]
@@ -27,9 +30,14 @@ pub struct Args {
     /// Stroke model to draw with.
     #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
-    /// Output folder (created if missing).
+    /// Output folder (created if missing). An existing non-empty folder is refused unless
+    /// --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
+    /// Replace an existing output folder (the new dataset is written beside it and swapped in
+    /// once complete; an error or Ctrl-C leaves the old one in place).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The most images one run may write.
@@ -40,22 +48,29 @@ const CHUNK: u64 = 1024;
 
 /// Runs the command.
 ///
-/// `labels.csv` is streamed: it is created first (header only) and, after each chunk of images
-/// has been written (each one atomically), that chunk's rows are appended in index order and
-/// flushed. An interrupted run therefore leaves a consistent prefix: every row names an image
-/// that is complete, and at most the images of the chunk in flight have no row yet; Ctrl-C
-/// (or SIGTERM) stops at the end of the current image, removes that chunk's images past the
-/// last row, and exits 130 saying `interrupted`. Memory stays at one chunk's rows whatever `--n`.
+/// Everything is written into a staging folder beside `--output` (`.NAME.maobi-partial-PID`)
+/// that replaces it only once complete, so a run never mixes with an older dataset and an error
+/// (a full disk) leaves the old folder as it was and no staging folder. `labels.csv` is
+/// streamed: it is created first (header only) and, after each chunk of images has been written
+/// (each one atomically), that chunk's rows are appended in index order and flushed. Ctrl-C (or
+/// SIGTERM) stops at the end of the current image and removes that chunk's images past the last
+/// row, leaving a consistent prefix (every row names a complete image and every image has its
+/// row); that prefix is installed as `--output` when there was no older dataset there, and
+/// discarded when there was one (the old dataset stays); either way the run exits 130 saying
+/// `interrupted`. Memory stays at one chunk's rows whatever `--n`.
 pub fn run(args: Args) -> Result<()> {
     check_range("--n", args.n, 1, MAX_IMAGES, "images")?;
     check_range("--size", args.size, 8, 4096, "px")?;
     let profile = load_brush(&args.brush.brush)?;
     let spec = DatasetSpec::new(profile, args.size, args.seed);
-    std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create folder {}", args.output.display()))?;
-    let labels_path = args.output.join("labels.csv");
-    let labels_target = crate::common::output_target(&labels_path)?;
+    let lock = OutputLock::acquire("--output", &args.output)?;
+    recover_leftovers(&args.output)?;
+    check_output_folder("--output", &args.output, args.force)?;
+    let stage = Stage::new(&args.output)?;
+    let dir = stage.path().to_path_buf();
+    let labels_path = dir.join("labels.csv");
     let mut labels = std::io::BufWriter::new(
-        std::fs::File::create(&labels_target).with_context(|| format!("cannot write {}", labels_path.display()))?,
+        std::fs::File::create(&labels_path).with_context(|| format!("cannot write {}", labels_path.display()))?,
     );
     let write_err = || format!("cannot write {}", labels_path.display());
     labels
@@ -82,7 +97,10 @@ pub fn run(args: Args) -> Result<()> {
                     let s = spec.sample(i)?;
                     spec.render(&s, args.model.model(), raster, img);
                     let file = file_name(i);
-                    write_atomic(&args.output.join(&file), &img.encode_png()?)?;
+                    if i == 700 {
+                        test_hook("dataset-image-700")?;
+                    }
+                    write_atomic(&dir.join(&file), &img.encode_png()?)?;
                     pb.inc(1);
                     let (p, f) = (s.press, s.footprint);
                     Ok(Some(format!(
@@ -110,17 +128,35 @@ pub fn run(args: Args) -> Result<()> {
         if done < rows.len() {
             for (k, r) in rows.iter().enumerate().skip(done) {
                 if r.is_some() {
-                    let _ = std::fs::remove_file(args.output.join(file_name(start + k as u64)));
+                    let _ = std::fs::remove_file(dir.join(file_name(start + k as u64)));
                 }
             }
             pb.finish_and_clear();
+            drop(labels);
             let written = start + done as u64;
-            eprintln!("error: interrupted: {written} of {} images written, labels.csv lists exactly those", args.n);
+            if output_is_vacant(&args.output) {
+                stage.install("--output", &args.output, false)?;
+                eprintln!(
+                    "error: interrupted: {written} of {} images written to {}, labels.csv lists exactly those",
+                    args.n,
+                    args.output.display()
+                );
+            } else {
+                drop(stage);
+                eprintln!(
+                    "error: interrupted after {written} of {} images; {} keeps the older dataset, the new one was removed",
+                    args.n,
+                    args.output.display()
+                );
+            }
+            drop(lock);
             std::process::exit(130);
         }
         start = end;
     }
     pb.finish_and_clear();
+    drop(labels);
+    stage.install("--output", &args.output, args.force)?;
     let secs = started.elapsed().as_secs_f64();
     let mut msg = String::new();
     let _ = write!(

@@ -1,11 +1,14 @@
 //! `maobi train`: train the neural footprint generator.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
 
-use crate::common::{BrushArg, StepProgress, check_range, load_brush, write_atomic};
+use crate::common::{
+    BrushArg, OutputLock, StepProgress, TempGuard, check_range, load_brush, output_gate, output_target, signal_count,
+    test_hook,
+};
 
 /// Arguments of `maobi train`.
 #[derive(clap::Args, Debug)]
@@ -37,7 +40,9 @@ pub struct Args {
     #[arg(long, default_value_t = 500)]
     eval_n: usize,
     /// Output weights (`.safetensors`); the config goes beside as `.json`, plus `loss.csv` and
-    /// `loss.png`.
+    /// `loss.png`. All four are replaced only by a finished run; while it trains, the best
+    /// weights so far are saved beside them as `NAME.checkpoint.safetensors` (and `.json`; give
+    /// it to --resume after an interruption), removed once the run has finished.
     #[arg(short, long)]
     output: PathBuf,
 }
@@ -45,9 +50,11 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_args(&args)?;
+    let _lock = OutputLock::acquire("-o", &args.output)?;
+    let checkpoint = checkpoint_path(&args.output);
     // The checkpoints are written to these and renamed (neural_gen::Generator::save).
-    crate::common::remove_on_interrupt(&args.output.with_extension("safetensors.tmp"));
-    crate::common::remove_on_interrupt(&neural_gen::model::config_path(&args.output).with_extension("json.tmp"));
+    crate::common::remove_on_interrupt(&checkpoint.with_extension("safetensors.tmp"));
+    crate::common::remove_on_interrupt(&neural_gen::model::config_path(&checkpoint).with_extension("json.tmp"));
     let profile = load_brush(&args.brush.brush)?;
     let mut g = start_generator(&args, profile)?;
     let a = &g.config.arch;
@@ -66,7 +73,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         val_every: args.val_every,
         patience: 8,
-        checkpoint: Some(args.output.clone()),
+        checkpoint: Some(checkpoint.clone()),
     };
     let mut last_val = f64::NAN;
     let report = neural_gen::train(&mut g, &opts, |p| {
@@ -79,8 +86,10 @@ pub fn run(args: Args) -> Result<()> {
     progress.finish();
     let (csim, ssim) = neural_gen::eval::evaluate(&g, args.eval_n)?;
     record(&mut g, &args, &report, &csim, &ssim);
-    g.save(&args.output)?;
-    let dir = write_loss_files(&args.output, &report)?;
+    let dir = install_outputs(&g, &args.output, &report)?;
+    for p in [checkpoint.clone(), neural_gen::model::config_path(&checkpoint)] {
+        let _ = std::fs::remove_file(p);
+    }
     crate::outln!(
         "{} steps in {:.1} s ({:.3} s/step, data {:.1}%){}; best validation MSE {:.6} at step {}; held-out (n = {}): SSIM mean {:.4} worst {:.4}, CSIM mean {:.4}",
         report.steps_run,
@@ -169,23 +178,78 @@ fn record(
     });
 }
 
-/// `loss.csv` and `loss.png` beside the weights; returns their folder.
-fn write_loss_files(output: &std::path::Path, report: &neural_gen::TrainReport) -> Result<PathBuf> {
-    let mut csv = String::from("step,train_mse,val_mse,lr\n");
-    for p in &report.history {
-        csv.push_str(&format!(
-            "{},{},{},{}\n",
-            p.step,
-            p.train_mse,
-            p.val_mse.map_or(String::new(), |v| v.to_string()),
-            p.lr
-        ));
-    }
+/// Where the checkpoints of a run writing `output` go: `NAME.checkpoint.safetensors` beside it.
+pub fn checkpoint_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
+    output.with_file_name(format!("{stem}.checkpoint.safetensors"))
+}
+
+/// Writes the weights, their config, `loss.csv` and `loss.png` beside one another: each first to
+/// a hidden temporary file (`.NAME.maobi-partial-PID…`) so that a failure (a full disk) changes
+/// none of the outputs, then all renamed into place, with Ctrl-C held off until the last rename.
+/// Returns the folder.
+fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainReport) -> Result<PathBuf> {
     let dir =
         output.parent().filter(|d| !d.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."));
-    write_atomic(&dir.join("loss.csv"), csv.as_bytes())?;
-    let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
-    let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
-    write_atomic(&dir.join("loss.png"), &maobi::plot::loss_png(&[("train", train), ("validation", val)])?)?;
-    Ok(dir)
+    let pid = std::process::id();
+    let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
+    let staged = dir.join(format!(".{stem}.maobi-partial-{pid}.safetensors"));
+    let staged_cfg = neural_gen::model::config_path(&staged);
+    let staged_csv = dir.join(format!(".loss.csv.maobi-partial-{pid}"));
+    let staged_png = dir.join(format!(".loss.png.maobi-partial-{pid}"));
+    // Removed on Ctrl-C while they live; removed below on any error (a rename moves them away).
+    let temps = [
+        staged.clone(),
+        staged.with_extension("safetensors.tmp"),
+        staged_cfg.clone(),
+        staged_cfg.with_extension("json.tmp"),
+        staged_csv.clone(),
+        staged_png.clone(),
+    ];
+    let _guards: Vec<TempGuard> = temps.iter().map(|p| TempGuard::new(p)).collect();
+    let signals = signal_count();
+    let result = (|| -> Result<()> {
+        let _gate = output_gate();
+        g.save(&staged)?;
+        let mut csv = String::from("step,train_mse,val_mse,lr\n");
+        for p in &report.history {
+            csv.push_str(&format!(
+                "{},{},{},{}\n",
+                p.step,
+                p.train_mse,
+                p.val_mse.map_or(String::new(), |v| v.to_string()),
+                p.lr
+            ));
+        }
+        std::fs::write(&staged_csv, csv).with_context(|| format!("cannot write {}", staged_csv.display()))?;
+        let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
+        let val: Vec<(f64, f64)> =
+            report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
+        let png = maobi::plot::loss_png(&[("train", train), ("validation", val)])?;
+        std::fs::write(&staged_png, png).with_context(|| format!("cannot write {}", staged_png.display()))?;
+        // Through symlinks; folders and special files refused before anything moves.
+        let targets = [
+            (&staged, output_target(output)?),
+            (&staged_cfg, output_target(&neural_gen::model::config_path(output))?),
+            (&staged_csv, output_target(&dir.join("loss.csv"))?),
+            (&staged_png, output_target(&dir.join("loss.png"))?),
+        ];
+        test_hook("train-install")?;
+        if signal_count() != signals {
+            bail!("interrupted");
+        }
+        for (from, to) in targets {
+            std::fs::rename(from, &to).with_context(|| format!("cannot move the new {} into place", to.display()))?;
+        }
+        Ok(())
+    })();
+    if result.is_err() {
+        for p in &temps {
+            let _ = std::fs::remove_file(p);
+        }
+        if signal_count() != signals {
+            crate::common::exit_interrupted();
+        }
+    }
+    result.map(|()| dir)
 }

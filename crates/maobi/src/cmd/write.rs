@@ -15,7 +15,8 @@ use serde_json::json;
 use trajectory::{CharBox, Method, glyph};
 
 use crate::common::{
-    BrushArg, RendererArgs, check_range, load_brush, parse_method, parse_model, print_json, progress, write_atomic,
+    BrushArg, OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
+    print_json, progress, recover_leftovers, write_atomic,
 };
 
 /// Arguments of `maobi write`.
@@ -80,8 +81,8 @@ pub struct Args {
     /// Output folder. An existing non-empty folder is refused unless --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
-    /// Replace an existing output folder (the old contents are removed once the new run is
-    /// complete).
+    /// Replace an existing output folder (the new run is written beside it and swapped in once
+    /// complete; an error or Ctrl-C leaves the old one in place).
     #[arg(long)]
     force: bool,
     /// Print the summary as JSON on stdout.
@@ -252,6 +253,11 @@ pub fn run(args: Args) -> Result<()> {
     let (sheet, sheet_layout) = planned_sheet(&args, chars.len(), flow)?;
     let profile = load_brush(&args.brush.brush)?;
     let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
+    // One run per output folder at a time; what a run that died left beside it is cleaned up
+    // (or the old folder put back) before deciding whether the folder may be replaced.
+    let _lock = OutputLock::acquire("--output", &args.output)?;
+    recover_leftovers(&args.output)?;
+    check_output_folder("--output", &args.output, args.force)?;
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
     let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
@@ -301,10 +307,14 @@ pub fn run(args: Args) -> Result<()> {
     }
     let single = results.len() == 1;
     // Everything goes to a staging folder beside --output, swapped in at the end: a run never
-    // mixes with an older one, and a failed run leaves the old folder as it was.
+    // mixes with an older one, and a failed or interrupted run leaves the old folder as it was.
     let stage = Stage::new(&args.output)?;
     for (i, r) in results.iter().enumerate() {
-        let dir = if single { stage.path.clone() } else { stage.path.join(format!("{:02}-{}", i + 1, r.report.char)) };
+        let dir = if single {
+            stage.path().to_path_buf()
+        } else {
+            stage.path().join(format!("{:02}-{}", i + 1, r.report.char))
+        };
         write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
@@ -318,13 +328,13 @@ pub fn run(args: Args) -> Result<()> {
     );
     if !single {
         let img = sheet_image(&results, &profile, args.model, &lay, args.size)?;
-        write_atomic(&stage.path.join("sheet.png"), &img.encode_png()?)?;
-        write_atomic(&stage.path.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
-        write_atomic(&stage.path.join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+        write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
+        write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
     }
     let preview = crate::cmd::preview::sheet_preview(&sheet_track, None, None)?;
-    write_atomic(&stage.path.join("preview.html"), preview.as_bytes())?;
-    stage.commit(&args.output)?;
+    write_atomic(&stage.path().join("preview.html"), preview.as_bytes())?;
+    stage.install("--output", &args.output, args.force)?;
     if args.json {
         print_json(&summary)?;
     } else {
@@ -362,7 +372,6 @@ fn checked_chars(args: &Args) -> Result<Vec<char>> {
         check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
     }
     check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
-    check_out(&args.output, args.force)?;
     Ok(chars)
 }
 
@@ -593,87 +602,6 @@ fn check_sheet_px(l: &Layout, size: u32) -> Result<()> {
     Ok(())
 }
 
-/// Refuses an existing non-empty `--output` (a file, or a folder with anything in it) unless
-/// `--force`.
-fn check_out(out: &Path, force: bool) -> Result<()> {
-    let meta = match std::fs::symlink_metadata(out) {
-        Ok(m) => m,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => bail!("--output {}: {e}", out.display()),
-    };
-    if force {
-        if !meta.is_dir() {
-            bail!("--output {}: exists and is not a folder; --force replaces folders only", out.display());
-        }
-        return Ok(());
-    }
-    let empty = meta.is_dir()
-        && std::fs::read_dir(out).with_context(|| format!("--output {}: cannot read", out.display()))?.next().is_none();
-    if !empty {
-        bail!(
-            "--output {}: already exists and is not empty; give --force to replace it (a run never mixes with an older one)",
-            out.display()
-        );
-    }
-    Ok(())
-}
-
-/// A staging folder beside `--output`; `commit` swaps it in, dropping it uncommitted removes it.
-struct Stage {
-    path: PathBuf,
-    done: bool,
-}
-
-impl Stage {
-    fn new(out: &Path) -> Result<Self> {
-        let parent = match out.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        std::fs::create_dir_all(&parent).with_context(|| format!("cannot create folder {}", parent.display()))?;
-        let name = out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned());
-        let path = parent.join(format!(".{name}.maobi-partial-{}", std::process::id()));
-        if path.exists() {
-            std::fs::remove_dir_all(&path).with_context(|| format!("cannot remove {}", path.display()))?;
-        }
-        std::fs::create_dir(&path).with_context(|| format!("cannot create folder {}", path.display()))?;
-        crate::common::remove_on_interrupt(&path);
-        Ok(Stage { path, done: false })
-    }
-
-    /// Replaces `out` by the staged folder (the old one, if any, is moved aside first and
-    /// removed after the swap).
-    fn commit(mut self, out: &Path) -> Result<()> {
-        let old = self.path.with_file_name(format!(
-            "{}.old",
-            self.path.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
-        ));
-        let had_old = std::fs::symlink_metadata(out).is_ok();
-        if had_old {
-            std::fs::rename(out, &old).with_context(|| format!("cannot move the old {} aside", out.display()))?;
-        }
-        if let Err(e) = std::fs::rename(&self.path, out) {
-            if had_old {
-                let _ = std::fs::rename(&old, out);
-            }
-            return Err(e).with_context(|| format!("cannot move the new outputs to {}", out.display()));
-        }
-        self.done = true;
-        if had_old {
-            std::fs::remove_dir_all(&old).with_context(|| format!("cannot remove the old {}", old.display()))?;
-        }
-        Ok(())
-    }
-}
-
-impl Drop for Stage {
-    fn drop(&mut self) {
-        if !self.done {
-            let _ = std::fs::remove_dir_all(&self.path);
-        }
-    }
-}
-
 /// Whether the brush's width range covers the glyphs at the chosen size: the size where it
 /// does (`trajectory::auto_char_mm`) and the share of points whose width had to be clamped.
 fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json::Value {
@@ -732,8 +660,8 @@ fn sheet_image(
     )?)
 }
 
+/// One character's files in `dir` (created by the first write, under the output gate).
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create folder {}", dir.display()))?;
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
     write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;

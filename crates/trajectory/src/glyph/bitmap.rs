@@ -14,7 +14,23 @@ pub(crate) fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
     let img = bezier_raster::coverage::decode_image(path)
         .map_err(|source| GlyphError::Image { path: path.to_path_buf(), source: std::sync::Arc::new(source) })?;
-    clean_gray(&name, img.to_luma8())
+    clean_gray(&name, on_white(&img))
+}
+
+/// An image's grey levels as printed on white paper: transparency composited on white, so ink
+/// drawn only in the alpha channel (black or any colour, alpha = ink) reads as ink, as it does
+/// in every viewer; an opaque image is its plain grey.
+fn on_white(img: &image::DynamicImage) -> GrayImage {
+    if !img.color().has_alpha() {
+        return img.to_luma8();
+    }
+    let la = img.to_luma_alpha8();
+    let (w, h) = la.dimensions();
+    let grey = la.pixels().map(|p| {
+        let (l, a) = (p.0[0] as u32, p.0[1] as u32);
+        ((l * a + 255 * (255 - a) + 127) / 255) as u8
+    });
+    GrayImage::from_raw(w, h, grey.collect()).expect("one grey byte per pixel")
 }
 
 /// A glyph from an 8-bit grey photo or scan already in memory (dark ink on light paper), cleaned
@@ -157,4 +173,46 @@ fn clean_gray(name: &str, gray: GrayImage) -> Result<(u32, Vec<f32>), GlyphError
         }
     }
     Ok((side as u32, out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 64×64 RGBA image of black (or white) RGB everywhere, alpha 255 on a bar and `bg_alpha`
+    /// elsewhere.
+    fn bar(rgb: u8, bg_alpha: u8) -> image::DynamicImage {
+        image::DynamicImage::ImageRgba8(image::RgbaImage::from_fn(64, 64, |x, y| {
+            let a = if (28..36).contains(&x) && (8..56).contains(&y) { 255 } else { bg_alpha };
+            image::Rgba([rgb, rgb, rgb, a])
+        }))
+    }
+
+    #[test]
+    fn ink_in_the_alpha_channel_is_ink_on_white() {
+        // Black RGB, alpha = ink: plain grey conversion sees an all-black image.
+        let img = bar(0, 0);
+        assert!(matches!(clean_gray("t", img.to_luma8()), Err(GlyphError::BadImage { .. })));
+        let (side, ink) = clean_gray("t", on_white(&img)).unwrap();
+        assert_eq!(side, 64);
+        let on = |x: usize, y: usize| ink[y * 64 + x] > 0.5;
+        assert!(on(32, 32) && on(29, 10), "the bar is ink");
+        assert!(!on(5, 5) && !on(60, 32), "the transparent background is paper");
+        let frac = ink.iter().filter(|&&v| v > 0.5).count() as f64 / ink.len() as f64;
+        assert!((frac - 8.0 * 48.0 / 4096.0).abs() < 0.03, "ink share {frac}");
+    }
+
+    #[test]
+    fn compositing_on_white_follows_alpha() {
+        let table: &[(u8, u8, u8)] = &[(0, 255, 0), (0, 0, 255), (0, 128, 127), (200, 255, 200), (255, 0, 255)];
+        for &(l, a, want) in table {
+            let img = image::DynamicImage::ImageLumaA8(image::GrayAlphaImage::from_pixel(1, 1, image::LumaA([l, a])));
+            assert_eq!(on_white(&img).get_pixel(0, 0).0[0], want, "grey {l} alpha {a}");
+        }
+        // An opaque image is its plain grey.
+        let rgb = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(2, 2, image::Rgb([10, 20, 30])));
+        assert_eq!(on_white(&rgb), rgb.to_luma8());
+        // White RGB: white on white, still no ink.
+        assert!(clean_gray("t", on_white(&bar(255, 0))).is_err());
+    }
 }

@@ -1,0 +1,666 @@
+//! Every export format read by a parser that is not ours (issue 26: "an external parser for
+//! every export format"). The ARCS Lua script is compiled by the real Lua compiler
+//! (`luac5.4 -p`) and run by the real interpreter (`lua5.4`) against a stub of the ARCS `api`
+//! object that records every call; the G-code is parsed by the `gcodeparser` package from PyPI.
+//! Without a tool a test prints `SKIPPED <name>: <why>` and returns (`.ci/run` installs them).
+//! URScript has no offline parser outside a UR controller or URSim (docs/robot.md says so).
+//!
+//! Each tool runs once per case on a few kB of text read from its standard input, under a
+//! time limit; nothing touches the network.
+
+use std::io::{Read, Write};
+use std::process::{Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use robot_io::export::{aubo_lua, gcode};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{Move, Program, RobotConfig, build_program};
+use robot_io::{InkStation, Reload};
+use serde_json::Value;
+
+/// Longest a tool may take on one case before the test fails.
+const TOOL_LIMIT: Duration = Duration::from_secs(20);
+
+/// Relative tolerance between a number as the external tool read it and the checked value
+/// (the exporters print numbers to read back within 1e-9 relative), with a 1e-12 absolute
+/// floor for lengths and angles that are rounding noise around 0.
+fn close(read: f64, want: f64) -> bool {
+    (read - want).abs() <= 1e-9 * want.abs() + 1e-12
+}
+
+fn pen1() -> BrushProfile {
+    BrushProfile::builtin("pen1").unwrap()
+}
+
+fn paper() -> PaperFrame {
+    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
+}
+
+/// Two short strokes, pressed at 15 and 18 mm, tilted 0.05 rad.
+fn small_track() -> Track {
+    let line = |pts: &[(f64, f64, f64)], beta: f64| Stroke {
+        points: pts
+            .iter()
+            .map(|&(x, y, h)| TrackPoint { x_mm: x, y_mm: y, h_mm: h, alpha_rad: 0.05, beta_rad: beta })
+            .collect(),
+    };
+    Track {
+        strokes: vec![
+            line(
+                &[(40.0, 60.0, 15.0), (50.0, 60.0, 16.5), (60.0, 61.0, 18.0), (70.0, 62.0, 15.0)],
+                std::f64::consts::PI,
+            ),
+            line(
+                &[(55.0, 40.0, 15.0), (55.0, 55.0, 17.25), (55.0, 70.0, 15.0), (55.5, 85.0, 15.0)],
+                -std::f64::consts::FRAC_PI_2,
+            ),
+        ],
+    }
+}
+
+/// Where the plotter finds the ink, paper mm.
+const POT_MM: [f64; 2] = [330.0, 150.0];
+
+/// A pot beside the sheet, dipped before every stroke, `dwell_s` in the ink; `None`: no pot.
+fn config(dwell_s: Option<f64>) -> RobotConfig {
+    RobotConfig {
+        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
+        ink: dwell_s.map(|dwell_s| InkStation {
+            pose: [0.63, 0.10, 0.07, std::f64::consts::PI, 0.0, 0.0],
+            depth_mm: 25.0,
+            dwell_s,
+            reload: Reload::EveryStrokes(1),
+            paper_mm: Some(POT_MM),
+        }),
+        ..RobotConfig::default()
+    }
+}
+
+fn program(cfg: &RobotConfig) -> Program {
+    build_program(&small_track(), &pen1(), &paper(), cfg).unwrap().0
+}
+
+/// Titles that try to leave the first comment of a Lua or G-code program.
+const HOSTILE_TITLES: &[&str] = &[
+    "十\nos.exit(3)",
+    "十\r\nos.exit(3)",
+    "十\ros.exit(3)",
+    "]] os.exit(3) --[[",
+    "]==] os.exit(3) --[==[",
+    "--[[\nos.exit(3)\n]]",
+    "--[==[\nos.exit(3)\n]==]",
+    "十\nreturn function() os.exit(3) end",
+    "十\napi:getRobotInterface('rob1'):getMotionControl():moveLine({0, 0, 0, 0, 0, 0}, 1, 1, 0, 0)",
+    "a\u{2028}os.exit(3)\u{2029}b",
+    "a\u{85}os.exit(3)",
+    "a\u{0}os.exit(3)\u{1b}[2J",
+    "\"'`\\\" ; os.exit(3) --",
+    "十\nG1 Z-40 F3000",
+    "十\r\n\r\nG1 Z-40 F3000",
+    "; G1 Z-40 F3000",
+    "(G1 Z-40) M2 %",
+    "十 G1 Z-40 ; M2",
+    "\u{202e}0-Z 1G\u{2066}",
+];
+
+/// What a tool did with one input.
+struct Ran {
+    status: ExitStatus,
+    stdout: String,
+    stderr: String,
+}
+
+/// Runs `program args` with `input` on its standard input, within [`TOOL_LIMIT`]; `None`
+/// when the program cannot be started (not installed).
+fn run_tool(program: &str, args: &[&str], input: &str) -> Option<Ran> {
+    let mut child = Command::new(program)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .ok()?;
+    let mut stdin = child.stdin.take().unwrap();
+    let input = input.to_owned();
+    // Written from a thread so that a tool that answers before reading everything cannot
+    // block the test on a full pipe.
+    let writer = std::thread::spawn(move || {
+        let _ = stdin.write_all(input.as_bytes());
+    });
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = out.read_to_end(&mut s);
+        s
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = err.read_to_end(&mut s);
+        s
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > TOOL_LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{program} {args:?} ran past {TOOL_LIMIT:?}");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    writer.join().unwrap();
+    let stdout = String::from_utf8_lossy(&reader.join().unwrap()).into_owned();
+    let stderr = String::from_utf8_lossy(&err_reader.join().unwrap()).into_owned();
+    Some(Ran { status, stdout, stderr })
+}
+
+/// Says that a test was skipped, on the terminal (not captured), and why.
+fn skipped(test: &str, why: &str) {
+    let _ = writeln!(std::io::stderr(), "SKIPPED {test}: {why}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// ARCS Lua under the real Lua 5.4
+
+/// Whether `lua5.4` and `luac5.4` run here.
+fn have_lua() -> bool {
+    ["lua5.4", "luac5.4"].iter().all(|tool| Command::new(tool).arg("-v").output().is_ok_and(|o| o.status.success()))
+}
+
+const NO_LUA: &str = "lua5.4/luac5.4 not installed (Debian: `apt-get install lua5.4`)";
+
+/// The joints the arm reports before the program moves it, rad.
+const HOME_Q: [f64; 6] = [0.0, -0.2618, 1.7453, 0.4363, 1.5, 0.0];
+/// The joints the stub's inverse kinematics answers, rad.
+const IK_Q: [f64; 6] = [0.1, -0.2, 1.3, 0.4, 1.5, -0.6];
+
+/// The stub of the ARCS script API (the methods the exported script calls, as the ARCS
+/// documentation names them) and the driver that loads the script from standard input and
+/// calls the function it returns with the stub. Every call, getters included, is written to
+/// standard output as one JSON line `{"call": NAME, "args": [...]}`; numbers as `%.17g` (they
+/// read back to the bit). `IK_MODE` picks what `inverseKinematics` answers. The stub is also a
+/// global `api`, so code that escaped into the script's top level could reach it.
+const LUA_DRIVER: &str = r##"
+local function num(v)
+  if math.type(v) == nil then error("not a number: " .. tostring(v)) end
+  return string.format("%.17g", v)
+end
+local function value(v)
+  if type(v) == "table" then
+    local o = {}
+    for i = 1, #v do o[i] = num(v[i]) end
+    return "[" .. table.concat(o, ",") .. "]"
+  elseif type(v) == "string" then
+    if v:find('[^%w_]') then error("unexpected string argument") end
+    return '"' .. v .. '"'
+  else
+    return num(v)
+  end
+end
+local function rec(name, ...)
+  local parts = {}
+  for i = 1, select("#", ...) do parts[i] = value((select(i, ...))) end
+  io.write('{"call":"', name, '","args":[', table.concat(parts, ","), ']}\n')
+end
+local function copy(t) local o = {} for i = 1, #t do o[i] = t[i] end return o end
+local joints = copy(HOME_Q)
+local function method(obj, name, f)
+  obj[name] = function(self, ...)
+    if self ~= obj then error(name .. " called without its object") end
+    rec(name, ...)
+    return f(...)
+  end
+end
+local mc, cfg, alg, state, robot, api = {}, {}, {}, {}, {}, {}
+method(mc, "setSpeedFraction", function() return 0 end)
+method(mc, "moveLine", function() return 0 end)
+method(mc, "moveJoint", function(q) joints = copy(q) return 0 end)
+method(cfg, "setTcpOffset", function() return 0 end)
+method(state, "getJointPositions", function() return copy(joints) end)
+method(alg, "inverseKinematics", function()
+  if IK_MODE == "status" then return copy(IK_Q), 0
+  elseif IK_MODE == "joints" then return copy(IK_Q)
+  elseif IK_MODE == "refused" then return copy(IK_Q), -23
+  elseif IK_MODE == "nil" then return nil, -5
+  elseif IK_MODE == "five" then return {0.1, 0.2, 0.3, 0.4, 0.5}
+  end
+  error("unknown IK_MODE")
+end)
+method(robot, "getRobotConfig", function() return cfg end)
+method(robot, "getMotionControl", function() return mc end)
+method(robot, "getRobotAlgorithm", function() return alg end)
+method(robot, "getRobotState", function() return state end)
+method(api, "getRobotNames", function() return {"rob1"} end)
+method(api, "getRobotInterface", function(name)
+  if name ~= "rob1" then error("no robot " .. tostring(name)) end
+  return robot
+end)
+_G.api = api
+local chunk = assert(load(io.read("a"), "=export", "t"))
+local main = chunk()
+if type(main) ~= "function" then error("the script does not return a function") end
+main(api)
+io.write('{"call":"done","args":[]}\n')
+"##;
+
+fn lua_list(v: &[f64]) -> String {
+    format!("{{{}}}", v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", "))
+}
+
+/// Runs `script` under `lua5.4` with the stub.
+fn run_lua(script: &str, ik_mode: &str) -> Ran {
+    let driver = format!(
+        "local IK_MODE = {ik_mode:?}\nlocal HOME_Q = {}\nlocal IK_Q = {}\n{LUA_DRIVER}",
+        lua_list(&HOME_Q),
+        lua_list(&IK_Q)
+    );
+    run_tool("lua5.4", &["-e", &driver], script).expect("lua5.4 starts")
+}
+
+/// One recorded call: its name and arguments (numbers or lists of numbers).
+#[derive(Debug, Clone, PartialEq)]
+struct Call {
+    name: String,
+    args: Vec<Arg>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Arg {
+    Num(f64),
+    List(Vec<f64>),
+    Text(String),
+}
+
+fn parse_calls(stdout: &str) -> Vec<Call> {
+    stdout
+        .lines()
+        .map(|l| {
+            let v: Value = serde_json::from_str(l).unwrap_or_else(|e| panic!("{e}: {l}"));
+            let args = v["args"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|a| match a {
+                    Value::Number(n) => Arg::Num(n.as_f64().unwrap()),
+                    Value::Array(xs) => Arg::List(xs.iter().map(|x| x.as_f64().unwrap()).collect()),
+                    Value::String(s) => Arg::Text(s.clone()),
+                    other => panic!("{other}"),
+                })
+                .collect();
+            Call { name: v["call"].as_str().unwrap().to_string(), args }
+        })
+        .collect()
+}
+
+/// The calls that change the arm or its settings, as `program` makes them, in order: the
+/// tool offset, the speed fraction, then per move the controller's inverse kinematics (from
+/// the joints the arm reports) and a joint move to its answer, or a line move.
+fn expected_calls(program: &Program) -> Vec<Call> {
+    let call = |name: &str, args: Vec<Arg>| Call { name: name.into(), args };
+    let mut out = vec![
+        call("setTcpOffset", vec![Arg::List(vec![0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0])]),
+        call("setSpeedFraction", vec![Arg::Num(program.speed_fraction)]),
+    ];
+    let mut joints = HOME_Q;
+    let moves = std::iter::once(&program.start).chain(program.strokes.iter().flat_map(|s| s.moves()));
+    for m in moves {
+        match *m {
+            Move::Joint { q, a, v } => {
+                joints = q;
+                out.push(call(
+                    "moveJoint",
+                    vec![Arg::List(q.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(0.0), Arg::Num(0.0)],
+                ));
+            }
+            Move::JointPose { pose, a, v } => {
+                out.push(call("inverseKinematics", vec![Arg::List(joints.to_vec()), Arg::List(pose.0.to_vec())]));
+                joints = IK_Q;
+                out.push(call(
+                    "moveJoint",
+                    vec![Arg::List(IK_Q.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(0.0), Arg::Num(0.0)],
+                ));
+            }
+            Move::Line { pose, a, v, blend_m } => out.push(call(
+                "moveLine",
+                vec![Arg::List(pose.0.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(blend_m), Arg::Num(0.0)],
+            )),
+        }
+    }
+    out
+}
+
+/// The calls that change the arm or its settings (not the getters).
+fn effects(calls: &[Call]) -> Vec<Call> {
+    calls
+        .iter()
+        .filter(|c| {
+            matches!(
+                c.name.as_str(),
+                "setTcpOffset" | "setSpeedFraction" | "inverseKinematics" | "moveLine" | "moveJoint"
+            )
+        })
+        .cloned()
+        .collect()
+}
+
+/// Whether the recorded calls are the expected ones: same count, order, names and argument
+/// shapes, every number [`close`] to the checked value. `Err` names the first difference.
+fn same_calls(got: &[Call], want: &[Call]) -> Result<(), String> {
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        let differs = || format!("call {}: {g:?} where the program has {w:?}", i + 1);
+        if g.name != w.name || g.args.len() != w.args.len() {
+            return Err(differs());
+        }
+        for (ga, wa) in g.args.iter().zip(&w.args) {
+            let ok = match (ga, wa) {
+                (Arg::Num(r), Arg::Num(x)) => close(*r, *x),
+                (Arg::List(r), Arg::List(x)) => r.len() == x.len() && r.iter().zip(x).all(|(r, x)| close(*r, *x)),
+                (Arg::Text(r), Arg::Text(x)) => r == x,
+                _ => false,
+            };
+            if !ok {
+                return Err(differs());
+            }
+        }
+    }
+    if got.len() != want.len() {
+        return Err(format!("{} calls where the program makes {}", got.len(), want.len()));
+    }
+    Ok(())
+}
+
+/// The real compiler's syntax check.
+fn luac_check(script: &str) -> Ran {
+    run_tool("luac5.4", &["-p", "-"], script).expect("luac5.4 starts")
+}
+
+#[test]
+fn lua_exports_compile_and_run_as_the_checked_program_under_real_lua() {
+    if !have_lua() {
+        return skipped("lua_exports_compile_and_run_as_the_checked_program_under_real_lua", NO_LUA);
+    }
+    for cfg in [config(Some(0.5)), config(None)] {
+        let p = program(&cfg);
+        let script = aubo_lua(&p, "十").unwrap();
+        let c = luac_check(&script);
+        assert!(c.status.success(), "luac5.4 -p: {}\n{script}", c.stderr);
+        // The controller's inverse kinematics answers with a status (0) or the joints alone.
+        for mode in ["status", "joints"] {
+            let ran = run_lua(&script, mode);
+            assert!(ran.status.success(), "{mode}: {}", ran.stderr);
+            let calls = parse_calls(&ran.stdout);
+            assert_eq!(calls.last().map(|c| c.name.as_str()), Some("done"), "{mode}");
+            assert_eq!(calls[0].name, "getRobotNames", "{mode}");
+            let want = expected_calls(&p);
+            assert_eq!(want.len(), 2 + p.move_count() + 1, "one IK call for the start");
+            if let Err(e) = same_calls(&effects(&calls), &want) {
+                panic!("{mode}: {e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn lua_script_stops_before_moving_when_the_controller_cannot_solve_the_first_pose() {
+    if !have_lua() {
+        return skipped("lua_script_stops_before_moving_when_the_controller_cannot_solve_the_first_pose", NO_LUA);
+    }
+    let p = program(&config(Some(0.5)));
+    let script = aubo_lua(&p, "十").unwrap();
+    let want = expected_calls(&p);
+    // A refusal status, no joints, or a table that is not six joints: the script raises an
+    // error after the IK call and commands nothing.
+    for mode in ["refused", "nil", "five"] {
+        let ran = run_lua(&script, mode);
+        assert!(!ran.status.success(), "{mode}: {}", ran.stdout);
+        assert!(ran.stderr.contains("cannot reach the first pose"), "{mode}: {}", ran.stderr);
+        let got = effects(&parse_calls(&ran.stdout));
+        assert!(same_calls(&got, &want[..3]).is_ok(), "{mode}: {got:?}");
+        assert!(!ran.stdout.contains("\"done\""), "{mode}");
+    }
+}
+
+#[test]
+fn hostile_titles_add_no_lua_call() {
+    if !have_lua() {
+        return skipped("hostile_titles_add_no_lua_call", NO_LUA);
+    }
+    let p = program(&config(Some(0.5)));
+    let plain = run_lua(&aubo_lua(&p, "t").unwrap(), "status");
+    assert!(plain.status.success(), "{}", plain.stderr);
+    for title in HOSTILE_TITLES {
+        let script = aubo_lua(&p, title).unwrap();
+        let c = luac_check(&script);
+        assert!(c.status.success(), "{title:?}: luac5.4 -p: {}", c.stderr);
+        let ran = run_lua(&script, "status");
+        assert!(ran.status.success(), "{title:?}: exit {:?}: {}", ran.status.code(), ran.stderr);
+        // Every call, getters included, as with a plain title.
+        assert_eq!(ran.stdout, plain.stdout, "{title:?}");
+    }
+}
+
+/// The harness sees what it is meant to catch: a line that escaped the comment runs under the
+/// real interpreter (exit 3, or an extra recorded move), and an unclosed long comment does not
+/// compile.
+#[test]
+fn lua_harness_catches_injected_code() {
+    if !have_lua() {
+        return skipped("lua_harness_catches_injected_code", NO_LUA);
+    }
+    let p = program(&config(None));
+    let script = aubo_lua(&p, "t").unwrap();
+    let (first, rest) = script.split_once('\n').unwrap();
+    let exits = format!("{first}\nos.exit(3)\n{rest}");
+    assert_eq!(run_lua(&exits, "status").status.code(), Some(3));
+    let moves = format!(
+        "{first}\napi:getRobotInterface('rob1'):getMotionControl():moveLine({{0.3, 0.1, 0.0, 3.14, 0, 0}}, 1, 1, 0, 0)\n{rest}"
+    );
+    let ran = run_lua(&moves, "status");
+    assert!(ran.status.success(), "{}", ran.stderr);
+    let e = same_calls(&effects(&parse_calls(&ran.stdout)), &expected_calls(&p)).unwrap_err();
+    assert!(e.contains("call 1"), "{e}");
+    let unclosed = format!("{first}\n--[[\n{rest}");
+    let c = luac_check(&unclosed);
+    assert!(!c.status.success() && c.stderr.contains("unfinished long comment"), "{}", c.stderr);
+    // A number that lost its value on the way is named.
+    let slower = script.replacen("setSpeedFraction(1.000000)", "setSpeedFraction(0.500000)", 1);
+    assert_ne!(slower, script);
+    let ran = run_lua(&slower, "status");
+    let e = same_calls(&effects(&parse_calls(&ran.stdout)), &expected_calls(&p)).unwrap_err();
+    assert!(e.contains("call 2") && e.contains("setSpeedFraction"), "{e}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// G-code through gcodeparser (PyPI)
+
+/// Reads a JSON list of G-code texts from standard input, parses each with
+/// `gcodeparser.parse_gcode_lines` (one Python process for a whole batch), and prints a JSON
+/// list with, per text, the commands it found: `{"line": N, "cmd": "G1", "params": {"X":
+/// 40.0, ...}}` (comment-only lines are left out; a word without a value is `true`).
+const GCODE_SCRIPT: &str = r#"
+import json, sys
+from gcodeparser import parse_gcode_lines
+out = []
+for text in json.load(sys.stdin):
+    out.append([{"line": l.line_index + 1, "cmd": l.command_str, "params": l.params}
+                for l in parse_gcode_lines(text, include_comments=False)])
+print(json.dumps(out))
+"#;
+
+/// Whether python3 can import `gcodeparser`.
+fn have_gcodeparser() -> bool {
+    Command::new("python3").args(["-c", "import gcodeparser"]).output().is_ok_and(|o| o.status.success())
+}
+
+const NO_GCODEPARSER: &str = "python3 cannot import gcodeparser (`python3 -m pip install gcodeparser==0.3.0`)";
+
+/// A command as gcodeparser read it.
+#[derive(Debug, Clone, PartialEq)]
+struct GCommand {
+    line: usize,
+    cmd: String,
+    params: Vec<(String, f64)>,
+}
+
+impl GCommand {
+    fn get(&self, letter: &str) -> Option<f64> {
+        self.params.iter().find(|(l, _)| l == letter).map(|p| p.1)
+    }
+}
+
+/// Every text of `texts` as gcodeparser reads it.
+fn parse_gcode_external(texts: &[String]) -> Vec<Vec<GCommand>> {
+    let input = serde_json::to_string(texts).unwrap();
+    let ran = run_tool("python3", &["-c", GCODE_SCRIPT], &input).expect("python3 starts");
+    assert!(ran.status.success(), "gcodeparser: {}", ran.stderr);
+    let all: Vec<Vec<Value>> = serde_json::from_str(&ran.stdout).unwrap_or_else(|e| panic!("{e}: {}", ran.stdout));
+    assert_eq!(all.len(), texts.len());
+    all.iter()
+        .map(|commands| {
+            commands
+                .iter()
+                .map(|v| {
+                    let params = v["params"]
+                        .as_object()
+                        .unwrap()
+                        .iter()
+                        // A word without a number (`true`) reads as NaN, which no check accepts.
+                        .map(|(k, x)| (k.clone(), x.as_f64().unwrap_or(f64::NAN)))
+                        .collect();
+                    let line = v["line"].as_u64().unwrap() as usize;
+                    GCommand { line, cmd: v["cmd"].as_str().unwrap().into(), params }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// What the G-code of `track` must be, as the external parser reads it: only `G21`, `G90`,
+/// `G0`, `G1`, `M2` (the first two first, `M2` last); each command's words from its own set;
+/// one `G1` per track point, at the point (X, Y, Z = −h) in track order, plus `dip_g1` per ink
+/// dip (down, and the soak when there is a dwell); Z never below −`h_max_mm` except over the
+/// ink pot. `Err` names the line and what is wrong.
+fn check_gcode(commands: &[GCommand], track: &Track, dips: usize, dip_g1: usize, h_max_mm: f64) -> Result<(), String> {
+    let at = |c: &GCommand, what: String| Err(format!("line {}: `{}` {:?}: {what}", c.line, c.cmd, c.params));
+    let names: Vec<&str> = commands.iter().map(|c| c.cmd.as_str()).collect();
+    if names.len() < 3 || names[..2] != ["G21", "G90"] || names.last() != Some(&"M2") {
+        return Err(format!("expected G21, G90 first and M2 last: {names:?}"));
+    }
+    if names.iter().filter(|n| **n == "M2").count() != 1 {
+        return Err(format!("more than one M2: {names:?}"));
+    }
+    let points: Vec<&TrackPoint> = track.points().collect();
+    let mut pressed = 0;
+    let mut g1 = 0;
+    let (mut x, mut y) = (None::<f64>, None::<f64>);
+    for c in commands {
+        let allowed: &[&str] = match c.cmd.as_str() {
+            "G21" | "G90" | "M2" => &[],
+            "G0" | "G1" => &["X", "Y", "Z", "F"],
+            _ => return at(c, "not one of G21, G90, G0, G1, M2".into()),
+        };
+        if let Some((l, v)) = c.params.iter().find(|(l, v)| !allowed.contains(&l.as_str()) || !v.is_finite()) {
+            return at(c, format!("word {l}{v} not expected"));
+        }
+        x = c.get("X").or(x);
+        y = c.get("Y").or(y);
+        if c.cmd == "G1" {
+            g1 += 1;
+            if c.get("X").is_some() {
+                let Some(p) = points.get(pressed) else { return at(c, "more pressed moves than track points".into()) };
+                let want = [p.x_mm, p.y_mm, -p.h_mm];
+                let read = [c.get("X").unwrap(), c.get("Y").unwrap_or(f64::NAN), c.get("Z").unwrap_or(f64::NAN)];
+                if !read.iter().zip(want).all(|(r, w)| close(*r, w)) {
+                    return at(c, format!("track point {} is {want:?}", pressed + 1));
+                }
+                pressed += 1;
+            }
+        }
+        if let Some(z) = c.get("Z") {
+            let over_pot = x.is_some_and(|x| close(x, POT_MM[0])) && y.is_some_and(|y| close(y, POT_MM[1]));
+            if z < -h_max_mm && !over_pot {
+                return at(c, format!("Z below -{h_max_mm} mm away from the ink pot"));
+            }
+        }
+    }
+    if pressed != points.len() || g1 != points.len() + dips * dip_g1 {
+        return Err(format!(
+            "{g1} G1 moves ({pressed} with X) where the track has {} points and {dips} dips of {dip_g1}",
+            points.len()
+        ));
+    }
+    Ok(())
+}
+
+#[test]
+fn gcode_exports_read_by_gcodeparser_match_the_track() {
+    if !have_gcodeparser() {
+        return skipped("gcode_exports_read_by_gcodeparser_match_the_track", NO_GCODEPARSER);
+    }
+    let track = small_track();
+    let h_max_mm = pen1().ranges.h_mm.max;
+    // (settings, dips, G1 per dip: down, and the soak when there is a dwell)
+    let cases = [(config(Some(0.5)), 2, 2), (config(Some(0.0)), 2, 1), (config(None), 0, 0)];
+    let texts: Vec<String> = cases.iter().map(|(cfg, ..)| gcode(&track, cfg, "十").unwrap().0).collect();
+    for (((_, dips, dip_g1), text), commands) in cases.iter().zip(&texts).zip(parse_gcode_external(&texts)) {
+        let (dips, dip_g1) = (*dips, *dip_g1);
+        if let Err(e) = check_gcode(&commands, &track, dips, dip_g1, h_max_mm) {
+            panic!("{e}\n{text}");
+        }
+        // Below the brush's deepest press only in the pot: the check above is not vacuous.
+        let deepest = commands.iter().filter_map(|c| c.get("Z")).fold(f64::INFINITY, f64::min);
+        assert_eq!(deepest < -h_max_mm, dips > 0, "{deepest}");
+    }
+}
+
+#[test]
+fn hostile_titles_add_no_gcode_command() {
+    if !have_gcodeparser() {
+        return skipped("hostile_titles_add_no_gcode_command", NO_GCODEPARSER);
+    }
+    let track = small_track();
+    let cfg = config(Some(0.5));
+    let texts: Vec<String> =
+        std::iter::once(&"t").chain(HOSTILE_TITLES).map(|title| gcode(&track, &cfg, title).unwrap().0).collect();
+    let read = parse_gcode_external(&texts);
+    assert!(!read[0].is_empty());
+    for ((title, text), commands) in HOSTILE_TITLES.iter().zip(&texts[1..]).zip(&read[1..]) {
+        assert_eq!(commands, &read[0], "{title:?}\n{text}");
+    }
+}
+
+/// The external check sees what it is meant to catch: a plunge on its own line, one in a
+/// `( … )` comment (which gcodeparser, like some senders, does not treat as a comment), a
+/// command it does not allow and a pressed point moved.
+#[test]
+fn gcode_harness_catches_injected_commands() {
+    if !have_gcodeparser() {
+        return skipped("gcode_harness_catches_injected_commands", NO_GCODEPARSER);
+    }
+    let track = small_track();
+    let cfg = config(Some(0.5));
+    let h_max_mm = pen1().ranges.h_mm.max;
+    let text = gcode(&track, &cfg, "t").unwrap().0;
+    let (first, rest) = text.split_once('\n').unwrap();
+    let cases = [
+        (format!("{first}\nG1 Z-40 F3000\n{rest}"), "G21, G90 first"),
+        (text.replacen("Y60.000000 F6000.000000\n", "Y60.000000 F6000.000000\nG1 Z-40 F3000\n", 1), "Z below"),
+        (format!("{first}\n(G1 Z-40)\n{rest}"), "G21, G90 first"),
+        (text.replacen("G21 ; millimetres", "G21 (M3 S1000) ; millimetres", 1), "M3"),
+        (text.replacen("M2", "M2\nG0 Z20", 1), "M2 last"),
+        (text.replacen("X50.000000", "X51.000000", 1), "track point 2"),
+        (text.replacen("X50.000000 Y60.000000 Z-16.500000", "X50.000000 Y60.000000 Z-16.500000 E5", 1), "word E"),
+    ];
+    let texts: Vec<String> = std::iter::once(text.clone()).chain(cases.iter().map(|c| c.0.clone())).collect();
+    let read = parse_gcode_external(&texts);
+    assert_eq!(check_gcode(&read[0], &track, 2, 2, h_max_mm), Ok(()));
+    for ((bad, needle), commands) in cases.iter().zip(&read[1..]) {
+        assert_ne!(bad, &text, "{needle}");
+        let e = check_gcode(commands, &track, 2, 2, h_max_mm).unwrap_err();
+        assert!(e.contains(needle), "{needle}: {e}");
+    }
+}
