@@ -106,6 +106,131 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     // An unknown transport names the choices.
     let o = send(&["--transport", "tcp"]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("expected framed, lines or http"));
+    // The simulator's help says which transports have no login.
+    let help = ok(&maobi(&["robot", "sim", "--help"]));
+    assert!(help.contains("UNAUTHENTICATED"), "{help}");
+}
+
+/// A one-stroke track (一, 60 mm, points 4 mm apart) with the built-in pen1 brush.
+fn one_stroke_track(dir: &Path) -> PathBuf {
+    let brush = brush_model::BrushProfile::builtin("pen1").unwrap();
+    let pt = |x: f64| brush_model::TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 14.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    let track = dir.join("track.json");
+    let t = serde_json::json!({
+        "char": "一",
+        "brush": brush,
+        "strokes": [brush_model::Stroke { points: (0..16).map(|i| pt(30.0 + 4.0 * f64::from(i))).collect() }],
+        "char_box_mm": [20.0, 20.0, 80.0],
+    });
+    std::fs::write(&track, t.to_string()).unwrap();
+    track
+}
+
+#[test]
+fn the_simulator_serves_framed_by_default_and_lines_only_where_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = one_stroke_track(dir.path());
+    let (port, lines) = (free_port(), free_port());
+    let trace = dir.path().join("trace.jsonl");
+    let _sim = Sim::start(port, &["--lines-port", &lines.to_string(), "--trace", s(&trace)]);
+    let paper_json = paper();
+    let send = |extra: &[&str]| {
+        let mut args = vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--timeout-ms", "1000"]);
+        maobi(&args)
+    };
+    let p = port.to_string();
+    let o = ok(&send(&["--port", &p]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // One program after the other: the second session gets motion once the first has closed.
+    let o = ok(&send(&["--transport", "lines", "--port", &lines.to_string()]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // The default port does not speak the unauthenticated lines transport.
+    let o = send(&["--transport", "lines", "--port", &p]);
+    assert!(!o.status.success());
+    // The simulator wrote every executed sample as it went; the trace renders.
+    let img = dir.path().join("trace.png");
+    let out = ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "64",
+        "-o",
+        s(&img),
+    ]));
+    let n = std::fs::read_to_string(&trace).unwrap().lines().count();
+    assert!(out.contains(&format!("{n} trace samples")) && !out.contains("(0 pressed)"), "{out}");
+}
+
+#[test]
+fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
+    // A one-stroke track and the trace the simulator records for it (a pressed line on the
+    // paper between two lifted points), written as `robot sim --trace` writes it.
+    let dir = tempfile::tempdir().unwrap();
+    let brush = brush_model::BrushProfile::builtin("pen1").unwrap();
+    let pt = |x: f64, h: f64| brush_model::TrackPoint { x_mm: x, y_mm: 60.0, h_mm: h, alpha_rad: 0.0, beta_rad: 0.0 };
+    let track = dir.path().join("track.json");
+    let t = serde_json::json!({
+        "char": "一",
+        "brush": brush,
+        "strokes": [brush_model::Stroke { points: vec![pt(30.0, 2.0), pt(90.0, 2.0)] }],
+        "char_box_mm": [20.0, 20.0, 80.0],
+    });
+    std::fs::write(&track, t.to_string()).unwrap();
+    let frame = robot_io::frame::PaperFrame::load(&paper()).unwrap();
+    let poses = [pt(30.0, -10.0), pt(30.0, 2.0), pt(90.0, 2.0), pt(90.0, -10.0)]
+        .map(|p| robot_io::pose::brush_pose(&frame, &p));
+    let mut samples = vec![];
+    for w in poses.windows(2) {
+        let t0 = samples.last().map_or(0.0, |s: &robot_io::sim::TraceEntry| s.t_s);
+        samples.extend(robot_io::sim::line_motion(&w[0], &w[1], 0.02, t0));
+    }
+    let full: String = samples.iter().map(|s| serde_json::to_string(s).unwrap() + "\n").collect();
+    let n = samples.len();
+    let img = dir.path().join("trace.png");
+    let render = |t: &Path| {
+        maobi(&[
+            "robot",
+            "render-trace",
+            s(t),
+            "--track",
+            s(&track),
+            "--paper",
+            s(&paper()),
+            "--size",
+            "64",
+            "-o",
+            s(&img),
+        ])
+    };
+    let whole = dir.path().join("whole.jsonl");
+    std::fs::write(&whole, &full).unwrap();
+    let o = render(&whole);
+    assert!(ok(&o).contains(&format!("{n} trace samples")));
+    assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Cut inside the last line (as a full disk or a kill mid-write leaves it): rendered up to
+    // the line before, saying what was skipped.
+    let cut = dir.path().join("cut.jsonl");
+    let last_at = full.trim_end().rfind('\n').unwrap() + 1;
+    for keep in [1, 29, full.trim_end().len() - last_at - 1] {
+        let at = last_at + keep;
+        std::fs::write(&cut, &full[..at]).unwrap();
+        let o = render(&cut);
+        assert!(ok(&o).contains(&format!("{} trace samples", n - 1)), "keep {keep}");
+        let warn = String::from_utf8_lossy(&o.stderr);
+        assert!(warn.contains(&format!("cut.jsonl:{n}: skipped a cut last line")), "keep {keep}: {warn}");
+    }
+    // A bad line before the last is still an error, naming its line.
+    let mut bad: Vec<&str> = full.lines().collect();
+    bad[1] = "{\"t_s\": 1,";
+    std::fs::write(&cut, bad.join("\n") + "\n").unwrap();
+    fails(&render(&cut), "cut.jsonl:2: not a simulator trace sample");
 }
 
 /// Drives the simulator with the official SDK: every call maobi makes, and what the SDK sees.
@@ -133,6 +258,14 @@ out["isSteady"] = rs.isSteady()
 out["target"] = target
 out["getTcpPose"] = rs.getTcpPose()
 out["getJointPositions"] = rs.getJointPositions()
+alg = r.getRobotAlgorithm()
+ik_target = list(out["getTcpPose"])
+ik_target[0] += 0.02
+out["ik"] = alg.inverseKinematics(out["getJointPositions"], ik_target)
+out["fk"] = alg.forwardKinematics(list(out["ik"][0]))
+out["ik_target"] = ik_target
+out["ik_far"] = alg.inverseKinematics(out["getJointPositions"], [3.0, 0.0, 0.1, 3.14, 0.0, 0.0])
+out["kinematics"] = r.getRobotConfig().getKinematicsParam(True)
 try:
     rs.getJointSpeeds()
 except Exception as e:
@@ -191,6 +324,23 @@ fn the_official_sdk_client_drives_the_simulator() {
     let target: Vec<f64> = serde_json::from_value(j["target"].clone()).unwrap();
     assert!(pose.iter().zip(&target).all(|(a, b)| (a - b).abs() < 1e-12), "{pose:?} vs {target:?}");
     assert_eq!(serde_json::from_value::<Vec<f64>>(j["getJointPositions"].clone()).unwrap().len(), 6);
+    // The kinematics services reach the SDK as its (values, status) tuples and its dict: the
+    // forward kinematics of the inverse's answer reproduces the pose asked for.
+    assert_eq!(j["ik"][1], 0, "{j}");
+    assert_eq!(j["fk"][1], 0, "{j}");
+    let fk: Vec<f64> = serde_json::from_value(j["fk"][0].clone()).unwrap();
+    let want: Vec<f64> = serde_json::from_value(j["ik_target"].clone()).unwrap();
+    let (a, b) = (robot_io::pose::Pose(fk.try_into().unwrap()), robot_io::pose::Pose(want.try_into().unwrap()));
+    let (a, b) = (a.to_iso(), b.to_iso());
+    // Within the inverse's own tolerance (0.01 mm, 1e-4 rad: `kinematics::DhParams::inverse`).
+    assert!((a.translation.vector - b.translation.vector).norm() < 1e-5, "{j}");
+    assert!(a.rotation.angle_to(&b.rotation) < 1e-4, "{j}");
+    assert_eq!(j["ik_far"][1], -10, "an unreachable pose: {j}");
+    let k = robot_io::kinematics::DhParams::AUBO_I5;
+    for (name, want) in [("a", k.a_m), ("alpha", k.alpha_rad), ("d", k.d_m), ("theta", k.theta_rad)] {
+        let got: Vec<f64> = serde_json::from_value(j["kinematics"][name].clone()).unwrap();
+        assert_eq!(got, want, "{name}");
+    }
     // A JSON-RPC error reaches the SDK as an exception naming the method, code and message.
     let e = j["unknown_method"].as_str().unwrap();
     assert!(e.contains("getJointSpeeds") && e.contains("-32601") && e.contains("method not found"), "{e}");

@@ -139,6 +139,13 @@ impl FrameDecoder {
         self.buf.len()
     }
 
+    /// Whether the bytes held start like a frame (`SOF`, or a prefix of it): false once the
+    /// stream is not in the framed format at all, so an error frame would not be understood.
+    pub fn in_sync(&self) -> bool {
+        let n = self.buf.len().min(3);
+        self.buf[..n] == MAGIC[..n]
+    }
+
     /// The next whole frame's payload, or `None` until more bytes arrive.
     ///
     /// # Errors
@@ -406,24 +413,15 @@ impl HttpHead {
     }
 }
 
-/// Takes one HTTP/1.1 message (head and a `Content-Length` body) off the front of `buf`, or
-/// `None` until it is complete.
+/// Parses an HTTP/1.1 head (without its blank line): the start line, the headers and the
+/// body length its `Content-Length` states (`None` without one).
 ///
 /// # Errors
-/// [`RobotError::Framing`] for a head over [`MAX_HTTP_HEAD_BYTES`] or not UTF-8, a malformed
-/// header line, chunked transfer coding, a missing or unreadable `Content-Length` when
-/// `need_length` is set, or a body over [`MAX_FRAME_BYTES`].
-pub fn take_http_message(buf: &mut Vec<u8>, need_length: bool) -> Result<Option<(HttpHead, Vec<u8>)>, RobotError> {
-    let Some(end) = buf.windows(4).position(|w| w == b"\r\n\r\n") else {
-        if buf.len() > MAX_HTTP_HEAD_BYTES {
-            return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
-        }
-        return Ok(None);
-    };
-    if end > MAX_HTTP_HEAD_BYTES {
-        return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
-    }
-    let text = std::str::from_utf8(&buf[..end]).map_err(|_| RobotError::Framing("HTTP head is not UTF-8".into()))?;
+/// [`RobotError::Framing`] for a head that is not UTF-8, a malformed header line, chunked
+/// transfer coding, a `Content-Length` that is not a number, or two `Content-Length` headers
+/// that disagree (the message could be read two ways; identical repeats are accepted).
+pub fn parse_http_head(head: &[u8]) -> Result<(HttpHead, Option<usize>), RobotError> {
+    let text = std::str::from_utf8(head).map_err(|_| RobotError::Framing("HTTP head is not UTF-8".into()))?;
     let mut lines = text.split("\r\n");
     let start = lines.next().unwrap_or("").to_string();
     let mut headers = Vec::new();
@@ -436,10 +434,40 @@ pub fn take_http_message(buf: &mut Vec<u8>, need_length: bool) -> Result<Option<
     if head.header("transfer-encoding").is_some_and(|v| !v.eq_ignore_ascii_case("identity")) {
         return Err(RobotError::Framing("chunked HTTP bodies are not supported: send Content-Length".into()));
     }
-    let len = match head.header("content-length") {
-        Some(v) => {
-            v.parse::<usize>().map_err(|_| RobotError::Framing(format!("Content-Length {v:?} is not a number")))?
+    let mut len = None;
+    for (_, v) in head.headers.iter().filter(|(k, _)| k == "content-length") {
+        let n = v.parse::<usize>().map_err(|_| RobotError::Framing(format!("Content-Length {v:?} is not a number")))?;
+        if len.is_some_and(|l| l != n) {
+            return Err(RobotError::Framing(format!(
+                "two Content-Length headers that disagree ({} and {n} bytes)",
+                len.unwrap_or_default()
+            )));
         }
+        len = Some(n);
+    }
+    Ok((head, len))
+}
+
+/// Takes one HTTP/1.1 message (head and a `Content-Length` body) off the front of `buf`, or
+/// `None` until it is complete.
+///
+/// # Errors
+/// [`RobotError::Framing`] for a head over [`MAX_HTTP_HEAD_BYTES`] or one [`parse_http_head`]
+/// refuses, a missing `Content-Length` when `need_length` is set, or a body over
+/// [`MAX_FRAME_BYTES`].
+pub fn take_http_message(buf: &mut Vec<u8>, need_length: bool) -> Result<Option<(HttpHead, Vec<u8>)>, RobotError> {
+    let Some(end) = buf.windows(4).position(|w| w == b"\r\n\r\n") else {
+        if buf.len() > MAX_HTTP_HEAD_BYTES {
+            return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
+        }
+        return Ok(None);
+    };
+    if end > MAX_HTTP_HEAD_BYTES {
+        return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
+    }
+    let (head, len) = parse_http_head(&buf[..end])?;
+    let len = match len {
+        Some(n) => n,
         None if need_length => return Err(RobotError::Framing("HTTP message without Content-Length".into())),
         None => 0,
     };
@@ -455,6 +483,176 @@ pub fn take_http_message(buf: &mut Vec<u8>, need_length: bool) -> Result<Option<
     let body = buf[end + 4..total].to_vec();
     buf.drain(..total);
     Ok(Some((head, body)))
+}
+
+/// Splits a byte stream into HTTP/1.1 requests, scanning every byte once: the search for the
+/// end of a head resumes where the last one stopped, so a head or a body arriving in many small
+/// pieces costs time in proportion to its length. Bodies longer than the limit, and heads
+/// longer than [`MAX_HTTP_HEAD_BYTES`], are refused before they are buffered.
+#[derive(Debug)]
+pub struct HttpDecoder {
+    buf: Vec<u8>,
+    scanned: usize,
+    head: Option<(HttpHead, Option<usize>, usize)>,
+    limit: usize,
+}
+
+impl HttpDecoder {
+    /// A decoder that refuses bodies longer than `limit_bytes`.
+    pub fn new(limit_bytes: usize) -> Self {
+        Self { buf: Vec::new(), scanned: 0, head: None, limit: limit_bytes }
+    }
+
+    /// Appends bytes read from the stream.
+    pub fn push(&mut self, bytes: &[u8]) {
+        self.buf.extend_from_slice(bytes);
+    }
+
+    /// Bytes held that do not yet make a whole message.
+    pub fn pending(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// The next whole request: its head and its body (empty when the head states no
+    /// `Content-Length`; [`HttpHead::header`] tells the two apart), or `None` until more bytes
+    /// arrive.
+    ///
+    /// # Errors
+    /// [`RobotError::Framing`] for a head over [`MAX_HTTP_HEAD_BYTES`] or one
+    /// [`parse_http_head`] refuses, or a body over the limit; the stream cannot be used after
+    /// that.
+    pub fn next_message(&mut self) -> Result<Option<(HttpHead, Vec<u8>)>, RobotError> {
+        if self.head.is_none() {
+            let from = self.scanned.saturating_sub(3);
+            let Some(at) = self.buf[from..].windows(4).position(|w| w == b"\r\n\r\n") else {
+                self.scanned = self.buf.len();
+                if self.buf.len() > MAX_HTTP_HEAD_BYTES {
+                    return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
+                }
+                return Ok(None);
+            };
+            let end = from + at;
+            if end > MAX_HTTP_HEAD_BYTES {
+                return Err(RobotError::Framing(format!("HTTP head longer than {MAX_HTTP_HEAD_BYTES} bytes")));
+            }
+            let (head, len) = parse_http_head(&self.buf[..end])?;
+            if len.is_some_and(|n| n > self.limit) {
+                return Err(RobotError::Framing(format!(
+                    "HTTP body of {} bytes exceeds the limit of {} bytes",
+                    len.unwrap_or_default(),
+                    self.limit
+                )));
+            }
+            self.head = Some((head, len, end + 4));
+        }
+        let Some((_, len, body_at)) = &self.head else { return Ok(None) };
+        let total = body_at + len.unwrap_or(0);
+        if self.buf.len() < total {
+            return Ok(None);
+        }
+        let body = self.buf[*body_at..total].to_vec();
+        self.buf.drain(..total);
+        self.scanned = 0;
+        Ok(self.head.take().map(|(h, _, _)| (h, body)))
+    }
+}
+
+/// Splits a byte stream into JSON texts, each an object or an array (the line-delimited
+/// transport: whitespace, newlines included, may separate them), scanning every byte once: the
+/// scan of an unfinished text resumes where it stopped, so a text arriving in many small pieces
+/// costs time in proportion to its length. A text longer than the limit is refused before it
+/// is buffered whole.
+#[derive(Debug)]
+pub struct JsonTextDecoder {
+    buf: Vec<u8>,
+    scanned: usize,
+    depth: usize,
+    in_string: bool,
+    escaped: bool,
+    limit: usize,
+}
+
+impl JsonTextDecoder {
+    /// A decoder that refuses texts longer than `limit_bytes`.
+    pub fn new(limit_bytes: usize) -> Self {
+        Self { buf: Vec::new(), scanned: 0, depth: 0, in_string: false, escaped: false, limit: limit_bytes }
+    }
+
+    /// Appends bytes read from the stream; whitespace between texts is dropped as it arrives.
+    pub fn push(&mut self, bytes: &[u8]) {
+        let bytes = if self.buf.is_empty() {
+            let skip = bytes.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(bytes.len());
+            &bytes[skip..]
+        } else {
+            bytes
+        };
+        self.buf.extend_from_slice(bytes);
+    }
+
+    /// Bytes held that do not yet make a whole text.
+    pub fn pending(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// The next whole text's bytes (not yet parsed: brackets and strings balance, the JSON
+    /// parser judges the rest), or `None` until more bytes arrive.
+    ///
+    /// # Errors
+    /// [`RobotError::Framing`] when a text starts with something other than `{` or `[`, or
+    /// grows past the limit; the stream cannot be used after that.
+    pub fn next_text(&mut self) -> Result<Option<Vec<u8>>, RobotError> {
+        let mut i = self.scanned;
+        while i < self.buf.len() {
+            let b = self.buf[i];
+            if self.depth == 0 {
+                // Between texts: only whitespace, then an object or an array.
+                match b {
+                    b if b.is_ascii_whitespace() => {
+                        let n =
+                            self.buf[i..].iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(self.buf.len() - i);
+                        self.buf.drain(..i + n);
+                        i = 0;
+                        continue;
+                    }
+                    b'{' | b'[' => self.depth = 1,
+                    _ => {
+                        return Err(RobotError::Framing(format!(
+                            "expected a JSON object or array, got {}",
+                            show_bytes(&self.buf[i..self.buf.len().min(i + 8)])
+                        )));
+                    }
+                }
+            } else if self.in_string {
+                if self.escaped {
+                    self.escaped = false;
+                } else if b == b'\\' {
+                    self.escaped = true;
+                } else if b == b'"' {
+                    self.in_string = false;
+                }
+            } else {
+                match b {
+                    b'"' => self.in_string = true,
+                    b'{' | b'[' => self.depth += 1,
+                    b'}' | b']' => {
+                        self.depth -= 1;
+                        if self.depth == 0 {
+                            let text: Vec<u8> = self.buf.drain(..=i).collect();
+                            self.scanned = 0;
+                            return Ok(Some(text));
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            i += 1;
+            if i > self.limit {
+                return Err(RobotError::Framing(format!("a JSON text longer than the limit of {} bytes", self.limit)));
+            }
+        }
+        self.scanned = i;
+        Ok(None)
+    }
 }
 
 /// An HTTP/1.1 POST of a JSON body to [`HTTP_PATH`] on `host` (keep-alive).

@@ -133,14 +133,23 @@ fn frames_over_a_megabyte_pass_both_ways() {
     let names = c.call("getRobotNames", Value::Null).unwrap();
     assert_eq!(names.as_array().map(Vec::len), Some(1));
     assert_eq!(names[0].as_str().map(str::len), Some(1_500_000));
-    // The simulator takes a 1.5 MB request (the version query ignores its params).
+    // The simulator takes a request just under its 1 MiB limit (the version query ignores its
+    // params), and refuses the 1.5 MB one, saying so before it closes.
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
+    let req = |pad: &str| {
+        let r = json!({"id": "big", "jsonrpc": "2.0", "method": "SystemInfo.getInterfaceVersionCode", "params": {"pad": pad}});
+        encode_frame(&serde_json::to_vec(&r).unwrap()).unwrap()
+    };
     let mut s = TcpStream::connect(sim.addr).unwrap();
-    let req =
-        json!({"id": "big", "jsonrpc": "2.0", "method": "SystemInfo.getInterfaceVersionCode", "params": {"pad": big}});
-    s.write_all(&encode_frame(&serde_json::to_vec(&req).unwrap()).unwrap()).unwrap();
+    s.write_all(&req(&"x".repeat(1_000_000))).unwrap();
     let v: Value = serde_json::from_slice(&read_frame(&mut s).unwrap()).unwrap();
     assert_eq!(v["result"], 24000);
+    let mut s = TcpStream::connect(sim.addr).unwrap();
+    let _ = s.write_all(&req(&big));
+    let v: Value = serde_json::from_slice(&read_frame(&mut s).unwrap()).unwrap();
+    let m = v["error"]["message"].as_str().unwrap();
+    assert!(m.contains("exceeds the limit of 1048576 bytes"), "{v}");
+    assert_eq!(s.read(&mut [0u8; 16]).unwrap(), 0, "closed after the error");
 }
 
 #[test]
@@ -182,11 +191,12 @@ fn a_length_beyond_the_limit_is_refused_at_once() {
     );
     assert!(t0.elapsed() < T);
     assert!(encode_frame(&vec![0u8; MAX_FRAME_BYTES + 1]).is_err());
-    // The simulator closes the connection instead of waiting for 4 GB.
+    // The simulator closes the connection instead of waiting for 2 GB, saying why.
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     let mut s = TcpStream::connect(sim.addr).unwrap();
     s.write_all(b"SOF\x01\x7f\xff\xff\xff{").unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let v: Value = serde_json::from_slice(&read_frame(&mut s).unwrap()).unwrap();
+    assert!(v["error"]["message"].as_str().unwrap().contains("exceeds the limit of 1048576 bytes"), "{v}");
     let mut buf = [0u8; 16];
     assert_eq!(s.read(&mut buf).unwrap(), 0);
 }

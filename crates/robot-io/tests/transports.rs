@@ -30,16 +30,16 @@ fn program() -> (Program, PaperFrame) {
 
 /// One simulator with a port per transport (and the shared port first).
 fn sim(options: SimOptions) -> Simulator {
-    let any = |t| Listen { bind: "127.0.0.1:0".into(), transport: t };
+    let any = |t: &[Transport]| Listen { bind: "127.0.0.1:0".into(), transports: t.to_vec() };
     Simulator::start_with(
-        &[any(None), any(Some(Transport::Framed)), any(Some(Transport::Lines)), any(Some(Transport::Http))],
+        &[any(&Transport::ALL), any(&[Transport::Framed]), any(&[Transport::Lines]), any(&[Transport::Http])],
         options,
     )
     .unwrap()
 }
 
 fn port_of(s: &Simulator, t: Transport) -> String {
-    s.addrs().iter().find(|(x, _)| *x == Some(t)).unwrap().1.to_string()
+    s.addrs().iter().find(|(x, _)| *x == [t]).unwrap().1.to_string()
 }
 
 #[test]
@@ -109,12 +109,10 @@ fn named_and_positional_params_are_both_understood() {
     let s = sim(SimOptions::default());
     let mut named =
         AuboClient::connect_with(&port_of(&s, Transport::Http), Transport::Http, Duration::from_secs(1)).unwrap();
-    let mut positional = AuboClient::connect(&port_of(&s, Transport::Lines), Duration::from_secs(1)).unwrap();
     let pose = [0.4, 0.1, 0.1, std::f64::consts::PI, 0.0, 0.0];
     let m = "rob1.MotionControl.moveLine";
     let ok = serde_json::json!({"pose": pose, "a": 0.5, "v": 0.1, "blend_radius": 0.0, "duration": 0.0});
     assert_eq!(named.call_status(m, ok).unwrap(), 0);
-    assert_eq!(positional.call_status(m, serde_json::json!([pose, 0.5, 0.1, 0.0, 0.0])).unwrap(), 0);
     // A misspelt or missing name is an invalid argument (−5), as is a positional list too short.
     for bad in [
         serde_json::json!({"pose": pose, "a": 0.5, "v": 0.1, "blend": 0.0, "duration": 0.0}),
@@ -127,6 +125,10 @@ fn named_and_positional_params_are_both_understood() {
     let e = named.call(m, serde_json::json!("pose")).unwrap_err();
     assert!(matches!(e, RobotError::Rpc { code: -32602, .. }), "{e}");
     assert!(named.is_steady("rob1").unwrap());
+    // The HTTP session owns motion until its connection closes; then positional params move.
+    drop(named);
+    let mut positional = AuboClient::connect(&port_of(&s, Transport::Lines), Duration::from_secs(2)).unwrap();
+    assert_eq!(positional.call_status(m, serde_json::json!([pose, 0.5, 0.1, 0.0, 0.0])).unwrap(), 0);
 }
 
 #[test]

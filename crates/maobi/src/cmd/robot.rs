@@ -121,14 +121,19 @@ pub struct SendArgs {
 /// Arguments of `maobi robot sim`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
-    /// Port to listen on (127.0.0.1); it serves all three transports, told apart by each
-    /// connection's first bytes.
+    /// Port to listen on (127.0.0.1).
     #[arg(long, default_value_t = RPC_PORT)]
     port: u16,
-    /// Also serve JSON-RPC over HTTP alone on this port (AUBO's is 9012).
+    /// Transports served on --port: framed (the AUBO SDK's protocol, with login; the default),
+    /// lines (line-delimited JSON) or http (JSON-RPC over HTTP), repeated or a comma-separated
+    /// list; with several, each connection's first bytes tell them apart. lines and http are
+    /// UNAUTHENTICATED: anyone who reaches the port can move the arm.
+    #[arg(long = "transport", value_delimiter = ',', default_value = "framed")]
+    transports: Vec<Transport>,
+    /// Also serve JSON-RPC over HTTP alone on this port (AUBO's is 9012). UNAUTHENTICATED.
     #[arg(long)]
     http_port: Option<u16>,
-    /// Also serve the line-delimited transport alone on this port.
+    /// Also serve the line-delimited transport alone on this port. UNAUTHENTICATED.
     #[arg(long)]
     lines_port: Option<u16>,
     /// Also serve the framed transport alone on this port.
@@ -143,9 +148,16 @@ pub struct SimArgs {
     /// Inject a fault: drop-after=N, delay-ms=D or queue-full-every=K (repeatable).
     #[arg(long)]
     fault: Vec<String>,
-    /// Write the executed TCP path here (JSON), updated as moves arrive.
+    /// Write the executed TCP path here (JSON lines), flushed after every move. If a write fails
+    /// (a full disk) the file ends there, the failure is reported and the simulator goes on.
     #[arg(long)]
     trace: Option<PathBuf>,
+    /// Most connections served at once (1 to 1024); further ones are closed at once.
+    #[arg(long, default_value_t = 16)]
+    max_connections: usize,
+    /// Close a connection that sends nothing for this many seconds (1 to 86400).
+    #[arg(long, default_value_t = 60)]
+    idle_timeout_s: u64,
 }
 
 /// Runs a `maobi robot` subcommand.
@@ -295,28 +307,38 @@ fn sim(a: SimArgs) -> Result<()> {
             _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
         }
     }
-    // Validate the trace path before listening: a folder or an unwritable path fails now.
-    let mut trace_file = match &a.trace {
-        Some(path) => Some(std::io::BufWriter::new(
-            std::fs::File::create(path)
-                .with_context(|| format!("--trace {}: cannot create the file", path.display()))?,
-        )),
-        None => None,
-    };
-    let mut listen = vec![Listen { bind: format!("127.0.0.1:{}", a.port), transport: None }];
+    if !(1..=1024).contains(&a.max_connections) {
+        bail!("--max-connections must be between 1 and 1024, got {}", a.max_connections);
+    }
+    if !(1..=86_400).contains(&a.idle_timeout_s) {
+        bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
+    }
+    let mut listen = vec![Listen { bind: format!("127.0.0.1:{}", a.port), transports: a.transports.clone() }];
     for (port, t) in
         [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)]
     {
         if let Some(p) = port {
-            listen.push(Listen { bind: format!("127.0.0.1:{p}"), transport: Some(t) });
+            listen.push(Listen { bind: format!("127.0.0.1:{p}"), transports: vec![t] });
         }
     }
-    let sim = Simulator::start_with(&listen, SimOptions { faults, user: a.user.clone(), password: a.password.clone() })
-        .context("cannot start the simulator")?;
+    let options = SimOptions {
+        faults,
+        user: a.user.clone(),
+        password: a.password.clone(),
+        max_connections: a.max_connections,
+        idle_timeout: Duration::from_secs(a.idle_timeout_s),
+        trace_path: a.trace.clone(),
+        ..SimOptions::default()
+    };
+    // The trace file is created before anything listens: a folder or an unwritable path fails now.
+    let sim = Simulator::start_with(&listen, options).context("cannot start the simulator")?;
     let ports: Vec<String> = sim
         .addrs()
         .iter()
-        .map(|(t, addr)| format!("{addr} ({})", t.map_or("framed, lines, http", |t| t.name())))
+        .map(|(ts, addr)| {
+            let names: Vec<&str> = ts.iter().map(|t| t.name()).collect();
+            format!("{addr} ({})", names.join(", "))
+        })
         .collect();
     eprintln!(
         "simulating an AUBO-i5 (robot `{}`, login `{}`) on {}; Ctrl-C to stop",
@@ -324,52 +346,66 @@ fn sim(a: SimArgs) -> Result<()> {
         a.user,
         ports.join(", ")
     );
+    if sim.addrs().iter().any(|(ts, _)| ts.iter().any(|t| *t != Transport::Framed)) {
+        eprintln!("warning: the lines and http transports have no login: anyone who reaches them can move the arm");
+    }
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
-    // Ctrl-C and SIGTERM both stop the loop, which writes out what is left of the trace.
+    // Ctrl-C and SIGTERM both stop the loop (the trace file is flushed after every move).
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
-    let mut written = 0;
-    loop {
-        let stopping = stop.load(Ordering::SeqCst);
-        if let (Some(out), Some(path)) = (trace_file.as_mut(), &a.trace) {
-            let new = sim.trace_since(written);
-            written += new.len();
-            append_trace(out, &new).with_context(|| format!("--trace {}: cannot write", path.display()))?;
-        }
-        if stopping {
-            break;
+    let mut reported = false;
+    while !stop.load(Ordering::SeqCst) {
+        if !reported && let Some(e) = sim.trace_error() {
+            eprintln!("error: {e}");
+            reported = true;
         }
         std::thread::sleep(Duration::from_millis(50));
     }
     Ok(())
 }
 
-/// Appends trace samples as JSON lines and flushes them to the file.
-fn append_trace(out: &mut impl std::io::Write, samples: &[robot_io::sim::TraceEntry]) -> Result<()> {
-    for t in samples {
-        serde_json::to_writer(&mut *out, t)?;
-        out.write_all(b"\n")?;
-    }
-    out.flush()?;
-    Ok(())
-}
-
 /// Reads a simulator trace: JSON lines (one sample per line, as `robot sim --trace` writes), or
-/// one JSON array.
+/// one JSON array. A last line cut short (the simulator stopped mid-write, or its disk filled)
+/// is skipped with a warning on stderr; a bad line before it is an error.
 fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::sim::TraceEntry>> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).with_context(|| format!("{name}: cannot read"))?;
+    let bytes = std::fs::read(path).with_context(|| format!("{name}: cannot read"))?;
+    // A cut can split a UTF-8 character: the text is read up to what decodes.
+    let text = match std::str::from_utf8(&bytes) {
+        Ok(t) => t,
+        Err(e) => std::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default(),
+    };
     if text.trim_start().starts_with('[') {
-        return serde_json::from_str(&text).with_context(|| format!("{name}: not a simulator trace"));
+        return serde_json::from_str(text).with_context(|| format!("{name}: not a simulator trace"));
     }
     let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
+    let lines: Vec<&str> = text.split('\n').collect();
+    let last = lines.iter().rposition(|l| !l.trim().is_empty());
+    for (i, line) in lines.iter().enumerate() {
         if line.trim().is_empty() {
             continue;
         }
-        out.push(serde_json::from_str(line).with_context(|| {
-            format!("{name}:{}: not a simulator trace sample (expected {{\"t_s\", \"kind\", \"pose\"}})", i + 1)
-        })?);
+        match serde_json::from_str(line) {
+            Ok(t) => out.push(t),
+            // The last line, unfinished: the file was cut there.
+            // (A last line that is complete JSON but not a sample is an error like any other.)
+            Err(e)
+                if Some(i) == last
+                    && (e.is_eof()
+                        || (!text.ends_with('\n') && serde_json::from_str::<serde_json::Value>(line).is_err())) =>
+            {
+                eprintln!(
+                    "warning: {name}:{}: skipped a cut last line ({} bytes): the trace ends at the sample before",
+                    i + 1,
+                    line.len()
+                );
+            }
+            Err(e) => {
+                return Err(e).with_context(|| {
+                    format!("{name}:{}: not a simulator trace sample (expected {{\"t_s\", \"kind\", \"pose\"}})", i + 1)
+                });
+            }
+        }
     }
     if out.is_empty() {
         bail!("{name}: the trace is empty (did the simulator execute any move?)");

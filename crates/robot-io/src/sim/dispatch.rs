@@ -1,0 +1,482 @@
+//! The simulated controller behind every connection: its state, who owns motion, the trace
+//! (a bounded window in memory, all of it streamed to the trace file), and the answer to each
+//! JSON-RPC request.
+
+use std::collections::VecDeque;
+use std::io::Write as _;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
+
+use nalgebra::Isometry3;
+use serde_json::{Value, json};
+
+use super::{
+    MIN_MOVE_SPEED, MIN_SPEED_FRACTION, MOTION_OWNED, SIM_ROBOT, SimOptions, TraceEntry, line_motion,
+    motion::joint_motion_dh,
+};
+use crate::RobotError;
+use crate::kinematics;
+use crate::pose::Pose;
+use crate::program::{
+    CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
+    CONTROLLER_MAX_TCP_OFFSET_M,
+};
+use crate::wire;
+
+/// The arm and its bookkeeping, behind one lock that is never held while a move is computed.
+#[derive(Debug)]
+struct State {
+    tcp: Isometry3<f64>,
+    speed_fraction: f64,
+    joints: [f64; 6],
+    pose: Pose,
+    time_s: f64,
+    moves_seen: usize,
+    dropped: bool,
+    /// The session that owns motion.
+    owner: Option<u64>,
+    /// The latest trace samples.
+    window: VecDeque<TraceEntry>,
+    recorded: u64,
+    trace_error: Option<String>,
+}
+
+/// The trace file while it is written.
+struct TraceFile {
+    path: String,
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+/// What every connection of one simulator shares.
+pub(super) struct Shared {
+    state: Mutex<State>,
+    owner_changed: Condvar,
+    trace_file: Mutex<Option<TraceFile>>,
+    pub(super) options: SimOptions,
+    login_digest: String,
+    next_session: AtomicU64,
+    pub(super) connections: AtomicUsize,
+}
+
+/// What to do with a request's answer.
+pub(super) enum Reply {
+    /// Send it.
+    Answer(Value),
+    /// Close the connection without answering (an injected fault).
+    Drop,
+}
+
+impl Shared {
+    /// A controller at the home position; creates the trace file.
+    pub(super) fn new(options: SimOptions) -> Result<Self, RobotError> {
+        let trace_file = match &options.trace_path {
+            Some(p) => {
+                let path = p.display().to_string();
+                let f = std::fs::File::create(p)
+                    .map_err(|source| RobotError::Io { context: format!("trace file {path}"), source })?;
+                Some(TraceFile { path, out: std::io::BufWriter::new(f) })
+            }
+            None => None,
+        };
+        let tcp = Isometry3::identity();
+        let q0 = super::HOME_JOINTS;
+        let home = Pose::from_iso(&options.kinematics.forward(&q0, &tcp));
+        Ok(Self {
+            state: Mutex::new(State {
+                tcp,
+                speed_fraction: 1.0,
+                joints: q0,
+                pose: home,
+                time_s: 0.0,
+                moves_seen: 0,
+                dropped: false,
+                owner: None,
+                window: VecDeque::new(),
+                recorded: 0,
+                trace_error: None,
+            }),
+            owner_changed: Condvar::new(),
+            trace_file: Mutex::new(trace_file),
+            login_digest: wire::login_digest(&options.password),
+            options,
+            next_session: AtomicU64::new(1),
+            connections: AtomicUsize::new(0),
+        })
+    }
+
+    fn lock(&self) -> MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// A new session's number.
+    pub(super) fn new_session(&self) -> u64 {
+        self.next_session.fetch_add(1, Ordering::SeqCst)
+    }
+
+    /// Whether `user` and `digest` are the login's.
+    pub(super) fn login_ok(&self, user: &str, digest: &str) -> bool {
+        user == self.options.user && digest == self.login_digest
+    }
+
+    /// Ends `session`: if it owned motion, motion is free (its moves have all been executed:
+    /// the arm is idle).
+    pub(super) fn release(&self, session: u64) {
+        let mut st = self.lock();
+        if st.owner == Some(session) {
+            st.owner = None;
+            self.owner_changed.notify_all();
+        }
+    }
+
+    pub(super) fn trace(&self) -> Vec<TraceEntry> {
+        self.lock().window.iter().copied().collect()
+    }
+
+    pub(super) fn samples_recorded(&self) -> u64 {
+        self.lock().recorded
+    }
+
+    pub(super) fn trace_error(&self) -> Option<String> {
+        self.lock().trace_error.clone()
+    }
+
+    pub(super) fn connections(&self) -> usize {
+        self.connections.load(Ordering::SeqCst)
+    }
+
+    /// Takes motion for `session` (or finds it already its own), waiting up to
+    /// [`SimOptions::owner_wait`] for another owner to go; the refusal otherwise.
+    fn claim<'a>(
+        &'a self,
+        st: MutexGuard<'a, State>,
+        session: u64,
+        id: &Value,
+    ) -> Result<MutexGuard<'a, State>, Reply> {
+        let (mut st, _) = self
+            .owner_changed
+            .wait_timeout_while(st, self.options.owner_wait, |s| s.owner.is_some_and(|o| o != session))
+            .unwrap_or_else(PoisonError::into_inner);
+        match st.owner {
+            Some(o) if o != session => Err(err(
+                id,
+                MOTION_OWNED,
+                &format!(
+                    "motion is owned by another session (connection #{o}): the controller runs one program at a \
+                     time; motion is free once that connection closes"
+                ),
+            )),
+            _ => {
+                st.owner = Some(session);
+                Ok(st)
+            }
+        }
+    }
+
+    /// Records a move's samples: into the window, and to the trace file (a failed write stops
+    /// the file and is kept as the trace error; the state goes on).
+    fn record(&self, samples: &[TraceEntry]) {
+        {
+            let mut st = self.lock();
+            if let Some(last) = samples.last() {
+                st.time_s = last.t_s;
+            }
+            let cap = self.options.trace_window;
+            let keep = samples.len().min(cap);
+            let excess = (st.window.len() + keep).saturating_sub(cap);
+            st.window.drain(..excess);
+            st.window.extend(&samples[samples.len() - keep..]);
+            st.recorded += samples.len() as u64;
+        }
+        let mut file = self.trace_file.lock().unwrap_or_else(PoisonError::into_inner);
+        let Some(f) = file.as_mut() else { return };
+        let written = samples
+            .iter()
+            .try_for_each(|t| {
+                serde_json::to_writer(&mut f.out, t).map_err(std::io::Error::from)?;
+                f.out.write_all(b"\n")
+            })
+            .and_then(|()| f.out.flush());
+        if let Err(e) = written {
+            let message =
+                format!("trace file {}: {e}; it ends here (its last line may be cut), the simulator goes on", f.path);
+            *file = None;
+            self.lock().trace_error = Some(message);
+        }
+    }
+}
+
+pub(super) fn err(id: &Value, code: i64, message: &str) -> Reply {
+    Reply::Answer(json!({"jsonrpc": "2.0", "id": id, "error": {"code": code, "message": message}}))
+}
+
+fn ok(id: &Value, result: Value) -> Reply {
+    Reply::Answer(json!({"jsonrpc": "2.0", "id": id, "result": result}))
+}
+
+pub(super) fn parse_error(message: &str) -> Value {
+    json!({"jsonrpc": "2.0", "id": null, "error": {"code": -32700, "message": format!("parse error: {message}")}})
+}
+
+fn numbers<const N: usize>(v: &Value) -> Option<[f64; N]> {
+    let a = v.as_array()?;
+    if a.len() != N {
+        return None;
+    }
+    let mut out = [0.0; N];
+    for (o, x) in out.iter_mut().zip(a) {
+        *o = x.as_f64().filter(|f| f.is_finite())?;
+    }
+    Some(out)
+}
+
+/// Status codes the simulator returns for rejected motions.
+const INVALID_ARGUMENT: i64 = -5;
+const UNREACHABLE: i64 = -10;
+/// The values of a refused `(values, status)` answer.
+const NO_VALUES: [f64; 6] = [0.0; 6];
+/// JSON-RPC error code for a framed call before the login (an assumption).
+pub(super) const NOT_LOGGED_IN: i64 = -32000;
+
+/// The argument `name` (named params) or at `pos` (positional params).
+fn arg<'a>(params: &'a Value, name: &str, pos: usize) -> Option<&'a Value> {
+    match params {
+        Value::Object(m) => m.get(name),
+        Value::Array(a) => a.get(pos),
+        _ => None,
+    }
+}
+
+/// Whether `params` holds exactly the arguments `names` (by name or, positionally, by count);
+/// `optional` names may be left out of named params.
+fn arity(params: &Value, names: &[&str], optional: &[&str]) -> bool {
+    match params {
+        Value::Object(m) => {
+            m.keys().all(|k| names.contains(&k.as_str()))
+                && names.iter().all(|n| optional.contains(n) || m.contains_key(*n))
+        }
+        Value::Array(a) => a.len() == names.len(),
+        _ => names.is_empty(),
+    }
+}
+
+/// A fault the simulator injects on a move request.
+enum MoveFault {
+    /// Drop the connection without answering.
+    Drop,
+    /// Answer that the motion queue is full.
+    QueueFull,
+}
+
+/// The arguments of `moveJoint` (`target`: joints, rad) or `moveLine` (`target`: the TCP pose).
+struct MoveArgs {
+    joint: bool,
+    target: [f64; 6],
+    /// Speed, m/s or rad/s.
+    v: f64,
+}
+
+impl MoveArgs {
+    /// Parses the params, `None` when they are not what the controller accepts (the names or
+    /// count, the ranges of acceleration, speed and blend radius; a speed below
+    /// [`MIN_MOVE_SPEED`]).
+    fn parse(params: &Value, joint: bool) -> Option<Self> {
+        let target = if joint { "q" } else { "pose" };
+        if !arity(params, &[target, "a", "v", "blend_radius", "duration"], &["duration"]) {
+            return None;
+        }
+        let num = |name: &str, pos: usize| arg(params, name, pos).and_then(Value::as_f64);
+        let (a, v, blend) = (num("a", 1)?, num("v", 2)?, num("blend_radius", 3)?);
+        let accepted = a > 0.0
+            && a <= CONTROLLER_MAX_ACC
+            && (MIN_MOVE_SPEED..=CONTROLLER_MAX_SPEED).contains(&v)
+            && (0.0..=CONTROLLER_MAX_BLEND_M).contains(&blend);
+        if !accepted {
+            return None;
+        }
+        let target = arg(params, target, 0).and_then(numbers::<6>)?;
+        Some(Self { joint, target, v })
+    }
+}
+
+impl State {
+    /// Counts a move request and says whether a fault is injected on it.
+    fn move_fault(&mut self, faults: &super::Faults) -> Option<MoveFault> {
+        self.moves_seen += 1;
+        let n = self.moves_seen;
+        if faults.drop_after_moves == Some(n) && !self.dropped {
+            self.dropped = true;
+            return Some(MoveFault::Drop);
+        }
+        match faults.queue_full_every {
+            Some(k) if k > 0 && n % k == 0 => Some(MoveFault::QueueFull),
+            _ => None,
+        }
+    }
+}
+
+/// A TCP offset the controller accepts: `[x, y, z, rx, ry, rz]` (m, rad), the translation
+/// shorter than [`CONTROLLER_MAX_TCP_OFFSET_M`], each rotation within ±2π.
+fn tcp_offset(params: &Value) -> Option<Isometry3<f64>> {
+    if !arity(params, &["offset"], &[]) {
+        return None;
+    }
+    let o = arg(params, "offset", 0).and_then(numbers::<6>)?;
+    let reach = (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt();
+    let turn_ok = o[3..].iter().all(|r| r.abs() <= std::f64::consts::TAU);
+    (reach < CONTROLLER_MAX_TCP_OFFSET_M && turn_ok).then(|| Pose(o).to_iso())
+}
+
+/// Executes a move for `session`, which owns motion: the motion is computed with the state
+/// unlocked (only the owner moves the arm, so nothing changes it meanwhile). Returns the status
+/// (0, or [`UNREACHABLE`]).
+fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
+    let dh = &shared.options.kinematics;
+    let (joints, pose, tcp, t0) = {
+        let st = shared.lock();
+        (st.joints, st.pose, st.tcp, st.time_s)
+    };
+    let (q, to, samples) = if m.joint {
+        let q = m.target;
+        if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
+            return UNREACHABLE;
+        }
+        let samples = joint_motion_dh(dh, &joints, &q, v, &tcp, t0);
+        (q, Pose::from_iso(&dh.forward(&q, &tcp)), samples)
+    } else {
+        let to = Pose(m.target);
+        let Some(q) = dh.inverse(&to, &tcp, Some(&joints)) else { return UNREACHABLE };
+        (q, to, line_motion(&pose, &to, v, t0))
+    };
+    {
+        let mut st = shared.lock();
+        st.joints = q;
+        st.pose = to;
+    }
+    shared.record(&samples);
+    0
+}
+
+/// Answers one JSON-RPC request from `session`.
+pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
+    let id = v.get("id").cloned().unwrap_or(Value::Null);
+    if v.get("jsonrpc") != Some(&json!("2.0"))
+        || !v.get("method").is_some_and(Value::is_string)
+        || v.get("id").is_none()
+    {
+        return err(&id, -32600, "invalid request: need jsonrpc \"2.0\", a method and an id");
+    }
+    // Params: positional (an array), named (an object) or none (no `params` key, or null).
+    let params = v.get("params").unwrap_or(&Value::Null);
+    if !matches!(params, Value::Array(_) | Value::Object(_) | Value::Null) {
+        return err(&id, -32602, "params must be an array or an object");
+    }
+    let method = v["method"].as_str().unwrap_or_default();
+    match method {
+        "getRobotNames" => return ok(&id, json!([SIM_ROBOT])),
+        "getAxisNames" => return ok(&id, json!([])),
+        "SystemInfo.getInterfaceVersionCode" => return ok(&id, json!(wire::INTERFACE_VERSION)),
+        _ => {}
+    }
+    let Some((robot, rest)) = method.split_once('.') else {
+        return err(&id, -32601, "method not found");
+    };
+    if robot != SIM_ROBOT {
+        return err(&id, -32601, &format!("unknown robot `{robot}`"));
+    }
+    match rest {
+        // Reads: for every session. Moves execute at once: the arm is always idle and steady
+        // between requests.
+        "MotionControl.getExecId" => ok(&id, json!(-1)),
+        "RobotState.isSteady" => ok(&id, json!(true)),
+        "RobotState.getTcpPose" => ok(&id, json!(shared.lock().pose.0)),
+        "RobotState.getJointPositions" => ok(&id, json!(shared.lock().joints)),
+        // The controller's kinematics services, as the SDK names them and their params (checked
+        // with pyaubo_sdk 0.24.1): results are the SDK's `(values, status)` tuples, which it
+        // reads as two-element JSON arrays; computed with the TCP offset set.
+        "RobotAlgorithm.inverseKinematics" => {
+            let qnear = arg(params, "qnear", 0).and_then(numbers::<6>);
+            let pose = arg(params, "pose", 1).and_then(numbers::<6>);
+            match (qnear, pose) {
+                (Some(qnear), Some(pose)) if arity(params, &["qnear", "pose"], &[]) => {
+                    let tcp = shared.lock().tcp;
+                    match shared.options.kinematics.inverse(&Pose(pose), &tcp, Some(&qnear)) {
+                        Some(q) => ok(&id, json!([q, 0])),
+                        None => ok(&id, json!([qnear, UNREACHABLE])),
+                    }
+                }
+                _ => ok(&id, json!([NO_VALUES, INVALID_ARGUMENT])),
+            }
+        }
+        "RobotAlgorithm.forwardKinematics" => match arg(params, "q", 0).and_then(numbers::<6>) {
+            Some(q) if arity(params, &["q"], &[]) => {
+                let tcp = shared.lock().tcp;
+                ok(&id, json!([Pose::from_iso(&shared.options.kinematics.forward(&q, &tcp)).0, 0]))
+            }
+            _ => ok(&id, json!([NO_VALUES, INVALID_ARGUMENT])),
+        },
+        // `real`: the calibrated parameters (true) or the nominal ones; the simulator has one set.
+        "RobotConfig.getKinematicsParam" => match arg(params, "real", 0) {
+            Some(Value::Bool(_)) if arity(params, &["real"], &[]) => {
+                let k = &shared.options.kinematics;
+                ok(&id, json!({"a": k.a_m, "alpha": k.alpha_rad, "d": k.d_m, "theta": k.theta_rad}))
+            }
+            _ => err(&id, -32602, "getKinematicsParam takes one argument, `real` (a bool)"),
+        },
+        // What changes motion: for the session that owns it.
+        "RobotConfig.setTcpOffset" => {
+            let st = match shared.claim(shared.lock(), session, &id) {
+                Ok(st) => st,
+                Err(refused) => return refused,
+            };
+            let mut st = st;
+            match tcp_offset(params) {
+                Some(tcp) => {
+                    st.tcp = tcp;
+                    let q = st.joints;
+                    st.pose = Pose::from_iso(&shared.options.kinematics.forward(&q, &tcp));
+                    ok(&id, json!(0))
+                }
+                None => ok(&id, json!(INVALID_ARGUMENT)),
+            }
+        }
+        "MotionControl.setSpeedFraction" => {
+            let mut st = match shared.claim(shared.lock(), session, &id) {
+                Ok(st) => st,
+                Err(refused) => return refused,
+            };
+            match arg(params, "fraction", 0).and_then(Value::as_f64) {
+                Some(f)
+                    if arity(params, &["fraction"], &[])
+                        && (MIN_SPEED_FRACTION..=CONTROLLER_MAX_SPEED_FRACTION).contains(&f) =>
+                {
+                    st.speed_fraction = f;
+                    ok(&id, json!(0))
+                }
+                _ => ok(&id, json!(INVALID_ARGUMENT)),
+            }
+        }
+        "MotionControl.moveJoint" | "MotionControl.moveLine" => {
+            let joint = rest == "MotionControl.moveJoint";
+            let mut st = match shared.claim(shared.lock(), session, &id) {
+                Ok(st) => st,
+                Err(refused) => return refused,
+            };
+            if let Some(fault) = st.move_fault(&shared.options.faults) {
+                return match fault {
+                    MoveFault::Drop => Reply::Drop,
+                    MoveFault::QueueFull => ok(&id, json!(crate::aubo::QUEUE_FULL)),
+                };
+            }
+            let Some(m) = MoveArgs::parse(params, joint) else {
+                return ok(&id, json!(INVALID_ARGUMENT));
+            };
+            let v = m.v * st.speed_fraction;
+            if v < MIN_MOVE_SPEED {
+                return ok(&id, json!(INVALID_ARGUMENT));
+            }
+            drop(st);
+            ok(&id, json!(execute(shared, &m, v)))
+        }
+        _ => err(&id, -32601, &format!("method not found: {method}")),
+    }
+}
