@@ -349,3 +349,37 @@ fn the_simulator_validates_requests() {
     let mut c = robot_io::aubo::AuboClient::connect(&slow.addr.to_string(), Duration::from_millis(100)).unwrap();
     assert!(matches!(c.robot_names(), Err(RobotError::Timeout(_))));
 }
+
+/// The first move reaches the pose above the first stroke on a controller whose kinematics are
+/// not maobi's nominal table (a real i5's calibrated arrays): the controller solves it. With
+/// joints from maobi's earlier nominal table, a controller in this convention put the brush
+/// 741 mm from that pose.
+#[test]
+fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kinematics() {
+    use robot_io::kinematics::DhParams;
+    use robot_io::program::Move;
+    use robot_io::sim::{Listen, SimOptions};
+    use robot_io::wire::Transport;
+    let real = DhParams {
+        a_m: [0.0, 5.8e-5, 0.36851, 0.31634, 4.53e-5, 3.166e-4],
+        alpha_rad: [0.0, -1.56995, 3.13975, 3.14489, -1.57019, 1.56620],
+        d_m: [0.122, 0.12161, -1.145e-4, 1.145e-4, 0.10210, 0.094],
+        theta_rad: DhParams::AUBO_I5.theta_rad,
+    };
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
+    let Move::JointPose { pose: above, .. } = prog.start else { panic!("the start is {:?}", prog.start) };
+    let sim = Simulator::start_with(
+        &[Listen { bind: "127.0.0.1:0".into(), transports: vec![Transport::Framed] }],
+        SimOptions { kinematics: real, ..SimOptions::default() },
+    )
+    .unwrap();
+    let stop = AtomicBool::new(false);
+    let opts = RunOptions { timeout: Duration::from_millis(500), ..RunOptions::new(&stop) };
+    let report = run_program(&sim.addr.to_string(), &prog, None, &opts, |_| {}).unwrap();
+    assert_eq!(report.strokes_completed, vec![0, 1]);
+    // The joint move's last sample is the pose asked for, in the controller's own model.
+    let trace = sim.trace();
+    let end_of_start = trace.iter().take_while(|t| t.kind == TraceKind::Joint).last().unwrap();
+    let miss_m = (end_of_start.pose.to_iso().translation.vector - above.to_iso().translation.vector).norm();
+    assert!(miss_m < 2e-5, "the first move ends {:.3} mm from the pose above the first stroke", miss_m * 1e3);
+}
