@@ -111,22 +111,28 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
         )),
     }
     };
-    emit(&mut s, &program.start);
-    for st in &program.strokes {
-        if !st.dip.is_empty() {
-            s.push_str(&format!("  -- ink dip before stroke {}\n", st.index + 1));
-            for m in &st.dip {
-                emit(&mut s, m);
-            }
-        }
-        s.push_str(&format!("  -- stroke {}\n", st.index + 1));
-        for m in st.moves().skip(st.dip.len()) {
-            emit(&mut s, m);
-        }
-    }
+    emit_moves(&mut s, program, "--", emit);
     s.push_str("end\n");
     verify_lua(&s, program)?;
     Ok(s)
+}
+
+/// Every move of `program` in order, through `emit`: the start, then per stroke its dip (after
+/// a `comment` line `ink dip before stroke N`) and its other moves (after `stroke N`).
+fn emit_moves(s: &mut String, program: &Program, comment: &str, emit: impl Fn(&mut String, &Move)) {
+    emit(s, &program.start);
+    for st in &program.strokes {
+        if !st.dip.is_empty() {
+            s.push_str(&format!("  {comment} ink dip before stroke {}\n", st.index + 1));
+            for m in &st.dip {
+                emit(s, m);
+            }
+        }
+        s.push_str(&format!("  {comment} stroke {}\n", st.index + 1));
+        for m in st.moves().skip(st.dip.len()) {
+            emit(s, m);
+        }
+    }
 }
 
 /// Checks an ARCS Lua script against the program it should run: reads it back
@@ -170,19 +176,7 @@ pub fn urscript(program: &Program, title: &str) -> Result<String, RobotError> {
             ));
         }
     };
-    emit(&mut s, &program.start);
-    for st in &program.strokes {
-        if !st.dip.is_empty() {
-            s.push_str(&format!("  # ink dip before stroke {}\n", st.index + 1));
-            for m in &st.dip {
-                emit(&mut s, m);
-            }
-        }
-        s.push_str(&format!("  # stroke {}\n", st.index + 1));
-        for m in st.moves().skip(st.dip.len()) {
-            emit(&mut s, m);
-        }
-    }
+    emit_moves(&mut s, program, "#", emit);
     s.push_str("end\nmaobi_write()\n");
     verify_urscript(&s, program)?;
     Ok(s)
