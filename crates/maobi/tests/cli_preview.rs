@@ -118,3 +118,32 @@ fn the_preview_plays_in_headless_chromium() {
     assert!(png.starts_with(b"\x89PNG") && png.len() > 10_000, "screenshot of {} bytes", png.len());
     eprintln!("screenshot: {}", shot.display());
 }
+
+/// A hostile `char` field cannot add markup or script to the page: the title is escaped, the
+/// inline JSON holds no `<`, and neither placeholder is filled from the other's text.
+#[test]
+fn a_hostile_char_field_stays_text_in_the_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("w");
+    ok(&maobi(&["write", "十", "--size", "64", "--out", s(&out)]));
+    let track = out.join("track.json");
+    let mut t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&track).unwrap()).unwrap();
+    let hostile = "十</script><script>document.title='pwned'</script><!--<script>__DATA__ __TITLE__ '\"&";
+    t["char"] = serde_json::Value::String(hostile.into());
+    std::fs::write(&track, serde_json::to_string(&t).unwrap()).unwrap();
+    let p = dir.path().join("p.html");
+    ok(&maobi(&["preview", s(&track), "-o", s(&p)]));
+    let html = std::fs::read_to_string(&p).unwrap();
+    let template = include_str!("../src/cmd/preview.html");
+    assert_eq!(html.matches("<script").count(), template.matches("<script").count());
+    assert_eq!(html.matches("</script").count(), template.matches("</script").count());
+    assert!(!html.contains("<!--"), "a comment opener reached the page");
+    // The data element still parses, and its title is the text as given.
+    let start = html.find("id=\"data\">").unwrap() + "id=\"data\">".len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    assert_eq!(data["title"], hostile);
+    // The <title> holds the escaped text once; the placeholders were filled once each.
+    let title = &html[html.find("<title>").unwrap()..html.find("</title>").unwrap()];
+    assert!(title.contains("十&lt;/script&gt;") && title.contains("__DATA__ __TITLE__ &#39;&quot;&amp;"), "{title}");
+}

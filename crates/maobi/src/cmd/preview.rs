@@ -353,13 +353,37 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
         "feet": feet,
         "brush": input.brush.name,
     });
-    // `</` inside the inline JSON would end the script element.
-    let data = serde_json::to_string(&data)?.replace("</", "<\\/");
-    Ok(TEMPLATE.replace("__TITLE__", &html_escape(&input.title)).replace("__DATA__", &data))
+    // No `<` at all inside the inline JSON (`\u003c` is the same string to JSON): `</script`
+    // would end the element and `<!--` would change how the browser reads the rest of it.
+    let data = serde_json::to_string(&data)?.replace('<', "\\u003c");
+    Ok(fill(TEMPLATE, &html_escape(&input.title), &data))
+}
+
+/// The template with its two placeholders filled in one pass, so that text put in for one can
+/// never be read as the other.
+fn fill(template: &str, title: &str, data: &str) -> String {
+    let mut out = String::with_capacity(template.len() + title.len() + data.len());
+    let mut rest = template;
+    while let Some(i) = rest.find("__") {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        if let Some(r) = tail.strip_prefix("__TITLE__") {
+            out.push_str(title);
+            rest = r;
+        } else if let Some(r) = tail.strip_prefix("__DATA__") {
+            out.push_str(data);
+            rest = r;
+        } else {
+            out.push_str("__");
+            rest = &tail[2..];
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
 }
 
 const TEMPLATE: &str = include_str!("preview.html");
