@@ -354,6 +354,16 @@ impl RobotConfig {
         if self.robot_name.as_deref().is_some_and(|n| n.trim().is_empty()) {
             return Err("robot_name must not be empty (omit it to use the controller's first robot)".into());
         }
+        // The name goes into every method name sent to the controller (`NAME.MotionControl…`).
+        if let Some(n) = self
+            .robot_name
+            .as_deref()
+            .filter(|n| n.len() > 64 || !n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+        {
+            return Err(format!(
+                "robot_name {n:?} must be 1 to 64 letters, digits or underscores (it becomes part of every method name)"
+            ));
+        }
         let a = &self.approach;
         let n = Vector3::from(a.into_paper_base);
         if !(n.iter().all(|v| v.is_finite()) && n.norm() > 1e-9) {

@@ -223,9 +223,22 @@ pub enum RobotError {
 /// Reads and parses a JSON file; errors are [`RobotError::Read`] and [`RobotError::Json`]
 /// naming the file.
 pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RobotError> {
-    let text = std::fs::read_to_string(path).map_err(|source| RobotError::Read { path: path.to_path_buf(), source })?;
+    use std::io::Read;
+    let read_err = |source| RobotError::Read { path: path.to_path_buf(), source };
+    let mut text = String::new();
+    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text)).map_err(read_err)?;
+    if text.len() as u64 > MAX_FILE_BYTES {
+        return Err(RobotError::Config {
+            file: path.to_path_buf(),
+            message: format!("larger than {} MiB: not a paper, robot or track file maobi writes", MAX_FILE_BYTES >> 20),
+        });
+    }
     serde_json::from_str(&text).map_err(|source| RobotError::Json { path: path.to_path_buf(), source })
 }
+
+/// The largest `paper.json`, `robot.json` or `track.json` read, bytes (64 MiB: an A4 sheet's
+/// track of 44 strokes is about 10 MiB).
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
 
 /// `track.json` as `maobi write` writes it: the brush profile and the strokes (other fields
 /// ignored).

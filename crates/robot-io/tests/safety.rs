@@ -220,6 +220,11 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
             "approach.max_angle_rad",
         ),
         ("empty robot name", RobotConfig { robot_name: Some(" ".into()), ..Default::default() }, "robot_name"),
+        (
+            "robot name with a method in it",
+            RobotConfig { robot_name: Some("rob1.MotionControl.moveLine".into()), ..Default::default() },
+            "robot_name \"rob1.MotionControl.moveLine\" must be 1 to 64 letters",
+        ),
         // Physical minimums: values that print as 0.000000 in a program, or unit mistakes.
         (
             "write speed 1e-9",
@@ -701,6 +706,25 @@ fn the_robot_json_fixture_spells_out_the_defaults() {
     let e = chain(&RobotConfig::load(&bad).unwrap_err());
     assert!(e.contains("robot.json") && e.contains("max_tilt_deg"), "{e}");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A file larger than any paper, robot or track file maobi writes is refused without reading
+/// it whole (a sparse 65 MiB file: its size is all it costs).
+#[test]
+fn oversized_robot_files_are_refused_by_size() {
+    let path = tempfile_dir().join("huge.json");
+    let f = std::fs::File::create(&path).unwrap();
+    f.set_len(robot_io::MAX_FILE_BYTES + 1024).unwrap();
+    drop(f);
+    for e in [
+        RobotConfig::load(&path).unwrap_err(),
+        PaperFrame::load(&path).unwrap_err(),
+        robot_io::TrackFile::load(&path).unwrap_err(),
+    ] {
+        let m = e.to_string();
+        assert!(m.contains("huge.json") && m.contains("larger than 64 MiB"), "{m}");
+    }
+    std::fs::remove_file(&path).unwrap();
 }
 
 fn tempfile_dir() -> std::path::PathBuf {
