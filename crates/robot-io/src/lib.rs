@@ -226,8 +226,14 @@ pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
     use std::io::Read;
     let read_err = |source| RobotError::Read { path: path.to_path_buf(), source };
     let mut text = String::new();
-    std::fs::File::open(path).and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_string(&mut text)).map_err(read_err)?;
-    if text.len() as u64 > MAX_FILE_BYTES {
+    let file = std::fs::File::open(path).map_err(read_err)?;
+    // The size from the metadata first (nothing read), then a bounded read (a pipe or a device
+    // has no size).
+    let listed = file.metadata().map(|m| m.len()).unwrap_or(0);
+    if listed <= MAX_FILE_BYTES {
+        file.take(MAX_FILE_BYTES + 1).read_to_string(&mut text).map_err(read_err)?;
+    }
+    if listed > MAX_FILE_BYTES || text.len() as u64 > MAX_FILE_BYTES {
         return Err(RobotError::Config {
             file: path.to_path_buf(),
             message: format!("larger than {} MiB: not a paper, robot or track file maobi writes", MAX_FILE_BYTES >> 20),

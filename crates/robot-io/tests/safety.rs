@@ -712,7 +712,10 @@ fn the_robot_json_fixture_spells_out_the_defaults() {
 /// it whole (a sparse 65 MiB file: its size is all it costs).
 #[test]
 fn oversized_robot_files_are_refused_by_size() {
-    let path = tempfile_dir().join("huge.json");
+    // Its own folder: another test removes `tempfile_dir()` when it ends.
+    let dir = std::env::temp_dir().join(format!("robot-io-huge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("huge.json");
     let f = std::fs::File::create(&path).unwrap();
     f.set_len(robot_io::MAX_FILE_BYTES + 1024).unwrap();
     drop(f);
@@ -724,7 +727,7 @@ fn oversized_robot_files_are_refused_by_size() {
         let m = e.to_string();
         assert!(m.contains("huge.json") && m.contains("larger than 64 MiB"), "{m}");
     }
-    std::fs::remove_file(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 fn tempfile_dir() -> std::path::PathBuf {
