@@ -268,14 +268,14 @@ pub struct CharResult {
     pub executed_states: Option<Vec<TrackPoint>>,
 }
 
-/// The paper frame `maobi write` runs its program on: a level sheet (the simulator's), placed so
-/// the char box's centre lies in front of the AUBO-i5 at base (0.45, 0.05, 0.05) m, and large
-/// enough for the box.
+/// The paper frame `maobi write` runs its program on: a level sheet
+/// ([`robot_io::exec::level_frame_in_front`]) with the char box's centre in front of the AUBO-i5
+/// at base (0.45, 0.05, 0.05) m, usable one box size around the box.
 pub fn level_frame_for(b: &CharBox) -> PaperFrame {
-    let (cx, cy) = (b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0);
-    let mut f = PaperFrame::level([0.45 - cx / 1000.0, 0.05 + cy / 1000.0, 0.05], [0.0, 0.0]);
-    f.bounds_mm = [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm];
-    f
+    robot_io::exec::level_frame_in_front(
+        [b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0],
+        [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm],
+    )
 }
 
 /// Builds the robot program of a track (checked like `maobi robot check`) and executes it as the
@@ -290,8 +290,8 @@ pub fn execute_track(
     cfg: &RobotConfig,
 ) -> Result<Vec<TrackPoint>> {
     let (program, _) = build_program(track, profile, frame, cfg).context("the track fails `robot check`")?;
-    let trace = robot_io::sim::execute_program(&program);
-    Ok(robot_io::sim::trace_to_states(&trace, frame))
+    let trace = robot_io::exec::execute_program(&program);
+    Ok(robot_io::exec::trace_to_states(&trace, frame))
 }
 
 /// Renders brush states (an executed path) through the forward model over a char box onto a

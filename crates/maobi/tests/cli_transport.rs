@@ -188,8 +188,8 @@ fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
         .map(|p| robot_io::pose::brush_pose(&frame, &p));
     let mut samples = vec![];
     for w in poses.windows(2) {
-        let t0 = samples.last().map_or(0.0, |s: &robot_io::sim::TraceEntry| s.t_s);
-        samples.extend(robot_io::sim::line_motion(&w[0], &w[1], 0.02, t0));
+        let t0 = samples.last().map_or(0.0, |s: &robot_io::exec::TraceEntry| s.t_s);
+        samples.extend(robot_io::exec::line_motion(&w[0], &w[1], 0.02, t0));
     }
     let full: String = samples.iter().map(|s| serde_json::to_string(s).unwrap() + "\n").collect();
     let n = samples.len();

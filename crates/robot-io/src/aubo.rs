@@ -15,15 +15,7 @@ use serde_json::{Value, json};
 use crate::RobotError;
 use crate::pose::Pose;
 use crate::program::Move;
-pub use crate::wire::Transport;
-use crate::wire::{self, FrameDecoder};
-
-/// The controller's JSON-RPC port (framed and line-delimited).
-pub const RPC_PORT: u16 = 30004;
-/// The controller's script port.
-pub const SCRIPT_PORT: u16 = 30002;
-/// The controller's JSON-RPC over HTTP port.
-pub const HTTP_PORT: u16 = wire::HTTP_PORT;
+use crate::wire::{self, FrameDecoder, Transport};
 
 /// How to reach and log in to a controller: the transport and the credentials (used by the
 /// framed transport only).

@@ -12,9 +12,12 @@
 //! * [`aubo`]: the ARCS JSON-RPC client (the SDK's framed protocol with its login, line-delimited
 //!   JSON, or HTTP) and a fault-tolerant runner (reconnect, lift, resume).
 //! * [`export`]: ARCS Lua script, URScript, G-code.
-//! * [`sim`]: a loopback simulator of the controller for tests and dry runs.
+//! * [`exec`]: the pure motion executor (no sockets): a program executed as the controller
+//!   would move, sampled in time, tagged by stroke and ink dip, and turned back into brush
+//!   states on the paper; the level sheet in front of the arm.
+//! * [`sim`]: a loopback TCP simulator of the controller for tests and dry runs.
 //! * [`wire`]: the controller's wire formats (the SDK's frames, JSON text and login; lines;
-//!   JSON-RPC over HTTP).
+//!   JSON-RPC over HTTP), the transports and the controller's ports.
 //!
 //! ```
 //! use robot_io::{frame::PaperFrame, pose::{brush_pose, Pose}};
@@ -40,6 +43,7 @@ struct ReadmeDoctests;
 
 pub mod aubo;
 mod config;
+pub mod exec;
 pub mod export;
 pub mod frame;
 pub mod kinematics;
@@ -49,7 +53,10 @@ mod run;
 pub mod sim;
 pub mod wire;
 
-pub use aubo::{AuboClient, Link, RunOptions, RunReport, Transport, run_program, send_script};
+pub use aubo::{AuboClient, Link, RunOptions, RunReport, run_program, send_script};
+pub use exec::{
+    TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
+};
 pub use export::{aubo_lua, gcode, gcode_chars, urscript};
 pub use frame::{PaperFile, PaperFrame, TouchPoint};
 pub use pose::{Pose, brush_pose};
@@ -57,7 +64,8 @@ pub use program::{
     Approach, CheckReport, DipStation, InkStation, Limits, Move, Program, Reload, RobotConfig, StrokeProgram,
     build_program, build_program_chars,
 };
-pub use sim::{Faults, Listen, SimOptions, Simulator, TraceEntry, TraceKind, execute_program, trace_to_states};
+pub use sim::{Faults, Listen, SimOptions, Simulator};
+pub use wire::Transport;
 
 use std::path::{Path, PathBuf};
 

@@ -22,6 +22,10 @@ pub const MAX_FRAME_BYTES: usize = 8 << 20;
 pub const MAX_HTTP_HEAD_BYTES: usize = 16 << 10;
 /// The JSON-RPC over HTTP port AUBO documents.
 pub const HTTP_PORT: u16 = 9012;
+/// The controller's JSON-RPC port (framed and line-delimited).
+pub const RPC_PORT: u16 = 30004;
+/// The controller's script port.
+pub const SCRIPT_PORT: u16 = 30002;
 /// The path maobi posts JSON-RPC requests to (an assumption; the simulator accepts any path).
 pub const HTTP_PATH: &str = "/jsonrpc";
 /// `SystemInfo.getInterfaceVersionCode` of the interface maobi speaks (SDK 0.24.0).
@@ -62,7 +66,7 @@ impl Transport {
     /// The controller's port for this transport: 30004 (framed, lines) or 9012 (HTTP).
     pub fn default_port(self) -> u16 {
         match self {
-            Transport::Framed | Transport::Lines => crate::aubo::RPC_PORT,
+            Transport::Framed | Transport::Lines => RPC_PORT,
             Transport::Http => HTTP_PORT,
         }
     }

@@ -5,11 +5,11 @@
 #![allow(clippy::approx_constant, reason = "3.14 rad is a pendant-style rx, deliberately not π")]
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use robot_io::exec::{execute_program, execute_program_tagged, trace_to_states};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{
     DWELL_SINK_MM, InkStation, Move, Reload, RobotConfig, build_program, build_program_chars, dip_plan,
 };
-use robot_io::sim::{execute_program, trace_to_states};
 
 fn pen1() -> BrushProfile {
     BrushProfile::builtin("pen1").unwrap()
@@ -71,6 +71,39 @@ fn reload_rules_pick_stroke_boundaries() {
     assert!(e.contains("before_each_char") && e.contains("stroke_chars"), "{e}");
     let e = dip_plan(&t, Some(&[0, 1]), &station(Reload::BeforeEachChar)).unwrap_err().to_string();
     assert!(e.contains("2 entries for 6 strokes"), "{e}");
+}
+
+#[test]
+fn the_tagged_execution_is_the_plain_one_with_its_dips_and_strokes_marked() {
+    let t = rows(4);
+    let f = paper();
+    let (prog, _) = build_program_chars(&t, Some(&[0, 0, 1, 1]), &pen1(), &f, &cfg(Reload::BeforeEachChar)).unwrap();
+    let plain = execute_program(&prog);
+    let tagged = execute_program_tagged(&prog);
+    // The same samples in the same order.
+    assert_eq!(tagged.iter().map(|e| e.entry).collect::<Vec<_>>(), plain);
+    // The first move (from home) comes first and is untagged; then strokes 0..4 in order.
+    let start = tagged.iter().take_while(|e| e.stroke.is_none()).count();
+    assert!(start > 0 && tagged[..start].iter().all(|e| !e.dip));
+    let strokes: Vec<usize> = tagged[start..].iter().map(|e| e.stroke.expect("a stroke's sample")).collect();
+    assert!(strokes.windows(2).all(|w| w[1] == w[0] || w[1] == w[0] + 1));
+    assert_eq!((strokes[0], strokes[strokes.len() - 1]), (0, 3));
+    // Dip samples: only before the strokes that dip (0 and 2), each stroke's dip before its
+    // other moves, and every sample in the pot is one of them.
+    let mut dipping: Vec<usize> = tagged.iter().filter(|e| e.dip).filter_map(|e| e.stroke).collect();
+    dipping.dedup();
+    assert_eq!(dipping, [0, 2]);
+    for k in [0, 2] {
+        let own: Vec<bool> = tagged.iter().filter(|e| e.stroke == Some(k)).map(|e| e.dip).collect();
+        let first_non_dip = own.iter().position(|d| !d).unwrap();
+        assert!(first_non_dip > 0 && own[first_non_dip..].iter().all(|d| !d), "stroke {k}");
+    }
+    let states = trace_to_states(&plain, &f);
+    for (e, s) in tagged.iter().zip(&states) {
+        if s.x_mm > 300.0 && s.h_mm > 0.0 {
+            assert!(e.dip, "a sample in the pot not tagged as a dip: {s:?}");
+        }
+    }
 }
 
 #[test]

@@ -11,12 +11,13 @@ use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use nalgebra::{Rotation3, Vector3};
 use robot_io::RobotError;
 use robot_io::aubo::{RunOptions, run_program};
+use robot_io::exec::TraceKind;
 use robot_io::export::{aubo_lua, gcode, urscript};
 use robot_io::frame::{PaperFile, PaperFrame, TouchPoint};
 use robot_io::kinematics::{forward, inverse};
 use robot_io::pose::{Pose, brush_pose};
 use robot_io::program::{RobotConfig, build_program, tcp_iso};
-use robot_io::sim::{Faults, Simulator, TraceKind};
+use robot_io::sim::{Faults, Simulator};
 
 fn pen1() -> BrushProfile {
     BrushProfile::builtin("pen1").unwrap()
@@ -265,8 +266,8 @@ fn a_full_run_on_the_simulator_follows_the_track() {
     for w in trace.windows(2).filter(|w| w[1].kind == TraceKind::Line) {
         let (a, b) = (w[0].pose.position(), w[1].pose.position());
         let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
-        assert!(d <= robot_io::sim::TRACE_STEP_M + 1e-9, "a jump of {} mm", d * 1e3);
-        assert!(w[1].t_s >= w[0].t_s && w[1].t_s - w[0].t_s <= robot_io::sim::TRACE_STEP_S + 1e-9);
+        assert!(d <= robot_io::exec::TRACE_STEP_M + 1e-9, "a jump of {} mm", d * 1e3);
+        assert!(w[1].t_s >= w[0].t_s && w[1].t_s - w[0].t_s <= robot_io::exec::TRACE_STEP_S + 1e-9);
     }
 }
 

@@ -14,7 +14,8 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::RobotError;
-use robot_io::aubo::{AuboClient, Link, RunOptions, Transport, run_program, send_script};
+use robot_io::Transport;
+use robot_io::aubo::{AuboClient, Link, RunOptions, run_program, send_script};
 use robot_io::frame::PaperFrame;
 use robot_io::kinematics;
 use robot_io::pose::Pose;

@@ -10,13 +10,15 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::RobotError;
-use robot_io::aubo::{AuboClient, Link, RunOptions, Transport, run_program};
+use robot_io::Transport;
+use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
+use robot_io::exec::TraceEntry;
 use robot_io::frame::{PaperFile, PaperFrame};
 use robot_io::program::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
     CONTROLLER_MAX_TCP_OFFSET_M, DipStation, Move, Program, RobotConfig, build_program,
 };
-use robot_io::sim::{Faults, Simulator, TraceEntry};
+use robot_io::sim::{Faults, Simulator};
 
 fn pen1() -> BrushProfile {
     BrushProfile::builtin("pen1").unwrap()

@@ -10,10 +10,10 @@ use std::time::Duration;
 
 use proptest::prelude::*;
 use robot_io::RobotError;
-use robot_io::aubo::{AuboClient, Link, Transport};
-use robot_io::sim::{
-    Faults, Listen, MAX_REQUEST_BYTES, MAX_SAMPLES_PER_MOVE, SimOptions, Simulator, line_motion, serve_bytes,
-};
+use robot_io::Transport;
+use robot_io::aubo::{AuboClient, Link};
+use robot_io::exec::{MAX_SAMPLES_PER_MOVE, line_motion};
+use robot_io::sim::{Faults, Listen, MAX_REQUEST_BYTES, SimOptions, Simulator, serve_bytes};
 use serde_json::{Value, json};
 
 const T: Duration = Duration::from_secs(3);

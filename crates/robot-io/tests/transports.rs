@@ -9,7 +9,8 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::RobotError;
-use robot_io::aubo::{AuboClient, Link, RunOptions, Transport, run_program};
+use robot_io::Transport;
+use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{Program, RobotConfig, build_program};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
@@ -85,7 +86,7 @@ fn the_framed_login_is_checked() {
             .unwrap();
     assert_eq!(names, vec!["rob1".to_string()]);
     assert_eq!(c.interface_version(), Some(robot_io::wire::INTERFACE_VERSION));
-    assert_eq!(c.joint_positions("rob1").unwrap(), robot_io::sim::HOME_JOINTS);
+    assert_eq!(c.joint_positions("rob1").unwrap(), robot_io::exec::HOME_JOINTS);
     // A wrong password or user: refused, saying who.
     for link in [Link::default(), Link { user: "root".into(), password: "brush".into(), ..Link::default() }] {
         let e = AuboClient::open(&addr, &link, Duration::from_millis(500)).err().unwrap();

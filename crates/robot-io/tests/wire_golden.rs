@@ -7,7 +7,8 @@ use std::net::TcpListener;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use robot_io::aubo::{AuboClient, Transport};
+use robot_io::Transport;
+use robot_io::aubo::AuboClient;
 use robot_io::pose::Pose;
 use robot_io::program::Move;
 use serde_json::{Value, json};

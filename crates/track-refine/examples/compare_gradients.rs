@@ -37,7 +37,7 @@ fn level_frame_for(b: &CharBox) -> PaperFrame {
 fn executed(track: &Track, pen: &BrushProfile, b: &CharBox, reference: &Coverage) -> Option<(f64, f64)> {
     let frame = level_frame_for(b);
     let (program, _) = build_program(track, pen, &frame, &RobotConfig::default()).ok()?;
-    let states = robot_io::sim::trace_to_states(&robot_io::sim::execute_program(&program), &frame);
+    let states = robot_io::exec::trace_to_states(&robot_io::exec::execute_program(&program), &frame);
     let stamps = sweep_stamps(&states, pen, Extrapolation::Refuse);
     let img = render_stamps(
         &stamps,

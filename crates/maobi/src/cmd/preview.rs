@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, Track, TrackPoint};
 use maobi::sheet::{Grid, SheetTrack, parse_sheet};
+use robot_io::TrackFile;
+use robot_io::exec::{TraceEntry, execute_program_tagged, level_frame_in_front, trace_to_states};
 use robot_io::frame::PaperFrame;
-use robot_io::program::{Move, RobotConfig, build_program_chars};
-use robot_io::sim::{HOME_JOINTS, joint_motion, line_motion};
-use robot_io::{TrackFile, kinematics, pose::Pose};
+use robot_io::program::{RobotConfig, build_program_chars};
 use serde_json::{Value, json};
 
 use crate::common::write_atomic;
@@ -152,8 +152,7 @@ pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&Ro
 /// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
 /// `maobi write` places a character for its executed figure).
 fn level_frame(sheet_mm: [f64; 2]) -> PaperFrame {
-    let (cx, cy) = (sheet_mm[0] / 2.0, sheet_mm[1] / 2.0);
-    PaperFrame::level([0.45 - cx / 1000.0, 0.05 + cy / 1000.0, 0.05], sheet_mm)
+    level_frame_in_front([sheet_mm[0] / 2.0, sheet_mm[1] / 2.0], [0.0, 0.0, sheet_mm[0], sheet_mm[1]])
 }
 
 fn r2(v: f64) -> f64 {
@@ -168,53 +167,17 @@ struct Sample {
     dip: bool,
 }
 
-/// Executes the program as the simulator does (`line_motion`, `joint_motion`), tagging each
-/// sample with whether its move is part of an ink dip.
+/// Executes the program as the simulator does ([`robot_io::exec::execute_program_tagged`]),
+/// tagging each sample with whether its move is part of an ink dip. The first joint move from the
+/// controller's home pose is left out: the timeline starts (t = 0) with the brush at the safe
+/// height above the first stroke.
 fn execute_tagged(program: &robot_io::program::Program, frame: &PaperFrame) -> Vec<Sample> {
-    let tcp = program.tcp();
-    let mut q = HOME_JOINTS;
-    let mut pose = Pose::from_iso(&kinematics::forward(&q, &tcp));
-    let mut t = 0.0;
-    let f = program.speed_fraction;
-    let mut out = Vec::new();
-    let mut run = |m: &Move, dip: bool, out: &mut Vec<Sample>| {
-        let samples = match *m {
-            Move::Joint { q: q1, v, .. } => {
-                let s = joint_motion(&q, &q1, v * f, &tcp, t);
-                q = q1;
-                s
-            }
-            Move::JointPose { pose: p1, v, .. } => match kinematics::inverse(&p1, &tcp, Some(&q)) {
-                Some(q1) => {
-                    let s = joint_motion(&q, &q1, v * f, &tcp, t);
-                    q = q1;
-                    s
-                }
-                None => line_motion(&pose, &p1, v * f, t),
-            },
-            Move::Line { pose: p1, v, .. } => line_motion(&pose, &p1, v * f, t),
-        };
-        if let Some(last) = samples.last() {
-            pose = last.pose;
-            t = last.t_s;
-        }
-        let states = robot_io::sim::trace_to_states(&samples, frame);
-        out.extend(samples.iter().zip(states).map(|(e, p)| Sample { t: e.t_s, p, dip }));
-    };
-    // The first joint move from the controller's home pose is left out: the timeline starts
-    // with the brush at the safe height above the first stroke.
-    run(&program.start, false, &mut out);
-    let t0 = out.last().map_or(0.0, |s| s.t);
-    out.clear();
-    for st in &program.strokes {
-        for (i, m) in st.moves().enumerate() {
-            run(m, i < st.dip.len(), &mut out);
-        }
-    }
-    for s in &mut out {
-        s.t -= t0;
-    }
-    out
+    let tagged = execute_program_tagged(program);
+    let start = tagged.iter().take_while(|e| e.stroke.is_none()).count();
+    let t0 = if start > 0 { tagged[start - 1].entry.t_s } else { 0.0 };
+    let (entries, dips): (Vec<TraceEntry>, Vec<bool>) = tagged[start..].iter().map(|e| (e.entry, e.dip)).unzip();
+    let states = trace_to_states(&entries, frame);
+    entries.iter().zip(states).zip(dips).map(|((e, p), dip)| Sample { t: e.t_s - t0, p, dip }).collect()
 }
 
 /// Builds the preview HTML: the program is checked with `paper` (default: a level sheet in front

@@ -6,10 +6,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use robot_io::aubo::{Link, RPC_PORT, RunOptions, Transport, run_program};
+use robot_io::Transport;
+use robot_io::aubo::{Link, RunOptions, run_program};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program_chars};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
+use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{RobotError, TrackFile};
 
 use crate::common::{print_json, progress, write_atomic};
@@ -233,7 +235,7 @@ fn export(a: ExportArgs) -> Result<()> {
         if a.format != "aubo-lua" {
             bail!("--send-script sends ARCS Lua scripts: use --format aubo-lua");
         }
-        let addr = if host.contains(':') { host.clone() } else { format!("{host}:{}", robot_io::aubo::SCRIPT_PORT) };
+        let addr = if host.contains(':') { host.clone() } else { format!("{host}:{}", SCRIPT_PORT) };
         robot_io::aubo::send_script(&addr, &text, Duration::from_secs(5))
             .with_context(|| format!("sending the script to {addr}"))?;
         println!("script of {} moves sent to {addr}", program.move_count());
@@ -367,7 +369,7 @@ fn sim(a: SimArgs) -> Result<()> {
 /// Reads a simulator trace: JSON lines (one sample per line, as `robot sim --trace` writes), or
 /// one JSON array. A last line cut short (the simulator stopped mid-write, or its disk filled)
 /// is skipped with a warning on stderr; a bad line before it is an error.
-fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::sim::TraceEntry>> {
+fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::exec::TraceEntry>> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).with_context(|| format!("{name}: cannot read"))?;
     // A cut can split a UTF-8 character: the text is read up to what decodes.
@@ -425,7 +427,7 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = read_trace(&a.trace)?;
-    let states = robot_io::sim::trace_to_states(&trace, &frame);
+    let states = robot_io::exec::trace_to_states(&trace, &frame);
     let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
     let img = maobi::pipeline::render_states(

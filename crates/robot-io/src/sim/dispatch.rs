@@ -10,11 +10,9 @@ use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
 use nalgebra::Isometry3;
 use serde_json::{Value, json};
 
-use super::{
-    MIN_MOVE_SPEED, MIN_SPEED_FRACTION, MOTION_OWNED, SIM_ROBOT, SimOptions, TraceEntry, line_motion,
-    motion::joint_motion_dh,
-};
+use super::{MIN_MOVE_SPEED, MIN_SPEED_FRACTION, MOTION_OWNED, SIM_ROBOT, SimOptions};
 use crate::RobotError;
+use crate::exec::{TraceEntry, joint_motion_dh, line_motion};
 use crate::kinematics;
 use crate::pose::Pose;
 use crate::program::{
@@ -79,7 +77,7 @@ impl Shared {
             None => None,
         };
         let tcp = Isometry3::identity();
-        let q0 = super::HOME_JOINTS;
+        let q0 = crate::exec::HOME_JOINTS;
         let home = Pose::from_iso(&options.kinematics.forward(&q0, &tcp));
         Ok(Self {
             state: Mutex::new(State {

@@ -1,8 +1,8 @@
 //! A loopback AUBO JSON-RPC simulator: serves the SDK's framed transport (with its login) and,
 //! only when asked, the line-delimited form and JSON-RPC over HTTP (both unauthenticated);
-//! validates every request (named or positional params), executes moves on a model of the arm,
-//! answers `getExecId`, `isSteady`, `getTcpPose` and `getJointPositions`, injects faults, and
-//! records the executed TCP path.
+//! validates every request (named or positional params), executes moves on a model of the arm
+//! (the executor in [`crate::exec`]), answers `getExecId`, `isSteady`, `getTcpPose` and
+//! `getJointPositions`, injects faults, and records the executed TCP path.
 //!
 //! It is built to survive a hostile client (docs/robot.md, "The simulator as a server"): one
 //! session at a time owns motion, requests are parsed incrementally under a byte limit,
@@ -10,7 +10,6 @@
 //! to the trace file, and no lock is held while a move is computed.
 
 mod dispatch;
-mod motion;
 mod server;
 mod session;
 
@@ -22,8 +21,8 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::RobotError;
-pub use crate::wire::Transport;
-pub use motion::{HOME_JOINTS, MAX_SAMPLES_PER_MOVE, execute_program, joint_motion, line_motion};
+use crate::exec::TraceEntry;
+use crate::wire::Transport;
 
 /// Faults to inject.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -38,26 +37,6 @@ pub struct Faults {
 
 /// The robot name the simulator answers to.
 pub const SIM_ROBOT: &str = "rob1";
-
-/// One sample of the executed TCP path.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TraceEntry {
-    /// Time since the simulator started executing, s (at the commanded speeds).
-    #[serde(default)]
-    pub t_s: f64,
-    /// The move this sample belongs to (`moveLine` or `moveJoint`).
-    pub kind: TraceKind,
-    /// TCP pose at this instant.
-    pub pose: crate::pose::Pose,
-}
-
-/// Largest TCP travel between two trace samples, m.
-pub const TRACE_STEP_M: f64 = 0.2e-3;
-/// Largest time between two trace samples, s (unless a move would need more than
-/// [`MAX_SAMPLES_PER_MOVE`] samples).
-pub const TRACE_STEP_S: f64 = 0.005;
-/// Largest tool rotation between two trace samples, rad.
-pub const TRACE_STEP_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
 /// Slowest move the simulator executes, m/s for `moveLine` and rad/s for `moveJoint`: a
 /// commanded speed below it (or one the speed fraction brings below it) is refused with
@@ -75,16 +54,6 @@ pub const MAX_REQUEST_BYTES: usize = 1 << 20;
 /// JSON-RPC error code for a motion request while another session owns motion (an assumption:
 /// the code a real controller uses is not known).
 pub const MOTION_OWNED: i64 = -32001;
-
-/// Kind of executed move.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum TraceKind {
-    /// A joint move.
-    Joint,
-    /// A linear move.
-    Line,
-}
 
 /// What the simulator answers to besides its listeners: the faults to inject, the one user who
 /// may log in over the framed transport, the arm's kinematics, and its limits.
@@ -272,26 +241,4 @@ pub fn serve_bytes(
         }
     }
     Ok((out, false))
-}
-
-/// Turns an executed TCP path back into commanded brush states on the paper, for the forward
-/// model (`brush_model::ForwardModel`): the position where the tool axis meets the paper, the
-/// depth below it (H; negative above the paper, where the brush leaves nothing), the tilt α of
-/// the tool axis from the paper normal and the direction β it leans towards. Joint moves are
-/// included (they happen above the paper). The result is one sequence: the forward model ends a
-/// contact wherever H ≤ 0.
-pub fn trace_to_states(trace: &[TraceEntry], frame: &crate::frame::PaperFrame) -> Vec<brush_model::TrackPoint> {
-    let inv = frame.iso.rotation.inverse();
-    trace
-        .iter()
-        .map(|t| {
-            let p = frame.to_paper(t.pose.position());
-            let z = inv * (t.pose.to_iso().rotation * nalgebra::Vector3::z());
-            let alpha = z.z.clamp(-1.0, 1.0).acos();
-            let beta = if z.x.hypot(z.y) > 1e-12 { z.y.atan2(z.x) } else { 0.0 };
-            // Round-off of a pose at the surface must not count as contact.
-            let h = if p[2].abs() < 1e-6 { 0.0 } else { p[2] };
-            brush_model::TrackPoint { x_mm: p[0], y_mm: p[1], h_mm: h, alpha_rad: alpha, beta_rad: beta }
-        })
-        .collect()
 }

@@ -11,10 +11,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::Listen;
 use super::dispatch::Shared;
 use super::session::Session;
-use super::{Listen, Transport};
 use crate::RobotError;
+use crate::wire::Transport;
 
 /// Every listener's transports and address.
 pub(super) type Bound = Vec<(Vec<Transport>, SocketAddr)>;
