@@ -28,9 +28,8 @@ const JUDGE_PX: u32 = 256;
 
 fn level_frame_for(b: &CharBox) -> PaperFrame {
     let (cx, cy) = (b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0);
-    let mut f = PaperFrame::level([0.45 - cx / 1000.0, 0.05 + cy / 1000.0, 0.05], [0.0, 0.0]);
-    f.bounds_mm = [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm];
-    f
+    let bounds = [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm];
+    robot_io::exec::level_frame_in_front([cx, cy], bounds)
 }
 
 /// Executed CSIM and IoU of a track against the glyph (None when the robot check refuses it).
