@@ -187,12 +187,11 @@ fn footprint_sheet() -> Result<Vec<u8>> {
 }
 
 fn character_render(ch: char, method: trajectory::Method) -> Result<Vec<u8>> {
-    use maobi::pipeline::{WriteOptions, prepare, write_char};
+    use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
     let pen1 = BrushProfile::builtin("pen1")?;
     let p = prepare(trajectory::glyph::embedded(ch)?, Some(method))?;
-    let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
     let opts = WriteOptions { size: 256, free_widths: false, ..WriteOptions::default() };
-    let r = write_char(&p, &pen1, trajectory::CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
+    let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
     Ok(r.render.encode_png()?)
 }
 

@@ -10,11 +10,11 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeModel};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare, write_char};
+use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
-use trajectory::{CharBox, Method, glyph};
+use trajectory::{Method, glyph};
 
 use crate::fixtures::root;
 
@@ -157,17 +157,14 @@ pub fn character_figures() -> Result<Figures> {
     let mut f = Figures::new();
     for method in [Method::Medians, Method::Skeleton] {
         let prepared =
-            chars.par_iter().map(|&c| prepare(glyph::embedded(c)?, Some(method))).collect::<Result<Vec<_>>>()?;
+            chars.par_iter().map(|&c| Ok(prepare(glyph::embedded(c)?, Some(method))?)).collect::<Result<Vec<_>>>()?;
         for model in ModelKind::ALL {
             // The executed figures (the program run as the simulator moves) for the B-BSM only.
             let execute = model == ModelKind::Bsm;
             let opts = WriteOptions { model, size: 256, free_widths: false, execute, ..WriteOptions::default() };
             let reports = prepared
                 .par_iter()
-                .map(|p| {
-                    let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
-                    Ok(write_char(p, &pen1, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?.report)
-                })
+                .map(|p| Ok(write_placed(p, &pen1, &opts, BoxRule::Auto)?.report))
                 .collect::<Result<Vec<_>>>()?;
             let n = reports.len() as f64;
             let key = |m: &str| format!("chars/{}/{}/{m}", method.name(), model.name());
@@ -192,10 +189,17 @@ pub fn character_figures() -> Result<Figures> {
     Ok(f)
 }
 
+/// The committed pen1 generator (`fixtures/generator/pen1.*`, the one the `maobi` binary
+/// compiles in).
+fn committed_generator() -> Result<neural_gen::Generator> {
+    let path = crate::fixtures::root().join("fixtures/generator/pen1.safetensors");
+    Ok(neural_gen::Generator::load(&path)?)
+}
+
 /// Generator figures: the committed pen1 generator against the analytic B-BSM on 200 held-out
 /// presses (CSIM and SSIM mean and worst).
 pub fn generator_figures() -> Result<Figures> {
-    let g = maobi::generator::load_generator(None)?;
+    let g = committed_generator()?;
     let (c, s) = neural_gen::eval::evaluate(&g, 200)?;
     Ok(Figures::from([
         ("generator/csim_mean".to_string(), fig(c.mean, 0.003, Better::Higher)),

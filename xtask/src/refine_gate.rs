@@ -5,9 +5,9 @@
 
 use anyhow::{Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{RefineOptions, WriteOptions, prepare, write_char};
+use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
-use trajectory::{CharBox, Method, glyph};
+use trajectory::{Method, glyph};
 
 use crate::gates::{Better, Figure, Figures};
 
@@ -35,8 +35,7 @@ pub fn refine_figures() -> Result<Figures> {
         .par_iter()
         .map(|&c| {
             let p = prepare(glyph::embedded(c)?, Some(Method::Medians))?;
-            let mm = trajectory::auto_char_mm(&p.paths, &pen1, 0.0);
-            Ok(write_char(&p, &pen1, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?.report)
+            Ok(write_placed(&p, &pen1, &opts, BoxRule::Auto)?.report)
         })
         .collect::<Result<Vec<_>>>()?;
     let mut after = (0.0, 0.0);

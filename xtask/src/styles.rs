@@ -15,11 +15,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use maobi::pipeline::{WriteOptions, prepare_with_template, searched_placement, write_char};
+use pipeline::{BoxRule, WriteOptions, prepare_with_template, write_placed};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
-use trajectory::{CharBox, Glyph, GlyphError, Method, glyph};
+use trajectory::{Glyph, GlyphError, Method, glyph};
 
 use crate::io::write_atomic;
 
@@ -39,7 +39,7 @@ cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --
   --free-widths  also score the plan with widths unconstrained (the brush's range not applied)
   --char-box R   each character's box: search (default: the best of a few sizes around the
                  automatic one, each stroke split at its corners or written in one piece, by
-                 the plan's CSIM; maobi::pipeline::searched_placement) or auto
+                 the plan's CSIM; pipeline::searched_placement) or auto
                  (trajectory::auto_char_mm alone, corners split, as `maobi evaluate` does)
   --json OUT     write every character's row and the summary
 ";
@@ -151,7 +151,7 @@ fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
 enum CharBoxRule {
     /// `trajectory::auto_char_mm` (the glyph's typical widths onto the brush's width range).
     Auto,
-    /// `maobi::pipeline::searched_placement` (the best of a few sizes and of the strokes split
+    /// `pipeline::searched_placement` (the best of a few sizes and of the strokes split
     /// at their corners or not, by the plan's CSIM).
     Search,
 }
@@ -176,17 +176,11 @@ fn score(
     let doubled: Vec<usize> = t.map_or(Vec::new(), |t| t.doubled.iter().map(|d| d[0] - 1).collect());
     let fits_ok = t.is_none_or(|t| t.strokes_ok);
     let uncovered_ink = t.map(|t| t.uncovered_ink);
-    let (p, mm) = match char_box {
-        CharBoxRule::Auto => {
-            let mm = trajectory::auto_char_mm(&p.paths, pen, opts.alpha_rad);
-            (p, mm)
-        }
-        CharBoxRule::Search => {
-            let pl = searched_placement(&p, pen, opts)?;
-            (p.placed(&pl), pl.size_mm)
-        }
+    let rule = match char_box {
+        CharBoxRule::Auto => BoxRule::Auto,
+        CharBoxRule::Search => BoxRule::Search(None),
     };
-    let res = write_char(&p, pen, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, opts)?;
+    let res = write_placed(&p, pen, opts, rule)?;
     let (missing_ink, extra_ink) = ink_balance(&res.reference, res.executed.as_ref().unwrap_or(&res.render));
     let r = res.report;
     let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));

@@ -7,6 +7,10 @@
 //! it differs from the documented value by more than the documented value's last printed digit
 //! (0.65 stands for 0.645..0.655; 2.0944 for 2π/3). A constant listed twice, missing from the
 //! code or defined twice there is an error too.
+//!
+//! It also holds docs/ARCHITECTURE.md's invariant "the pipeline is not CLI-aware":
+//! crates/pipeline depends on no CLI, progress or plotting crate, and its sources neither print,
+//! exit, write files nor name a command-line flag.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -91,7 +95,87 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
         bail!("tuned constants out of step between {DOC} and the code:\n{problems}");
     }
     println!("tidy: {} tuned constants in {DOC} agree with {CODE_DIR}", rows.len());
+    pipeline_not_cli_aware(&root)?;
+    println!("tidy: {PIPELINE_DIR} knows no command line");
     Ok(())
+}
+
+const PIPELINE_DIR: &str = "crates/pipeline";
+
+/// Crates the pipeline must not depend on: command-line parsing, terminal progress, plotting,
+/// the binary's allocator and signal handling, and `anyhow` (its errors are typed).
+const CLI_CRATES: &[&str] = &["clap", "indicatif", "plotters", "mimalloc", "ctrlc", "anyhow"];
+
+/// What the pipeline's sources must not do: print, exit, write files.
+const CLI_CALLS: &[&str] =
+    &["println!", "eprintln!", "print!(", "eprint!(", "process::exit", "fs::write", "File::create"];
+
+/// Fails naming every place where crates/pipeline depends on a CLI crate, prints, exits, writes
+/// a file or names a flag.
+fn pipeline_not_cli_aware(root: &Path) -> Result<()> {
+    let manifest = root.join(PIPELINE_DIR).join("Cargo.toml");
+    let toml = std::fs::read_to_string(&manifest).with_context(|| format!("reading {}", manifest.display()))?;
+    let mut problems = cli_dependencies(&toml)
+        .into_iter()
+        .map(|d| format!("{PIPELINE_DIR}/Cargo.toml: depends on `{d}`"))
+        .collect::<Vec<_>>();
+    let mut files = Vec::new();
+    rust_files(&root.join(PIPELINE_DIR).join("src"), &mut files)?;
+    for f in files {
+        let text = std::fs::read_to_string(&f).with_context(|| format!("reading {}", f.display()))?;
+        for (line, what) in cli_lines(&text) {
+            problems.push(format!("{}:{line}: {what}", rel(root, &f)));
+        }
+    }
+    if !problems.is_empty() {
+        bail!("the pipeline is CLI-aware (docs/ARCHITECTURE.md, invariants):\n{}", problems.join("\n"));
+    }
+    Ok(())
+}
+
+/// The CLI crates among the `[dependencies]` (not dev-dependencies) of a manifest.
+fn cli_dependencies(toml: &str) -> Vec<String> {
+    let mut in_deps = false;
+    let mut out = Vec::new();
+    for l in toml.lines().map(str::trim) {
+        if l.starts_with('[') {
+            in_deps = l == "[dependencies]";
+            continue;
+        }
+        let name = l.split(['=', '.', ' ']).next().unwrap_or("");
+        if in_deps && CLI_CRATES.contains(&name) {
+            out.push(name.to_string());
+        }
+    }
+    out
+}
+
+/// `(line, what)` for each line of Rust code (comments skipped) that prints, exits, writes a
+/// file or has a string naming a flag (`"--name`, or ` --name` inside a string).
+fn cli_lines(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        let code = l.trim_start();
+        if code.starts_with("//") {
+            continue;
+        }
+        if let Some(c) = CLI_CALLS.iter().find(|c| code.contains(*c)) {
+            out.push((i + 1, format!("`{c}`")));
+        }
+        // Inside string literals: the text between the first and the last quote.
+        if let (Some(a), Some(b)) = (code.find('"'), code.rfind('"')) {
+            let lit = &code[a..=b];
+            let flag = lit.match_indices("--").any(|(j, _)| {
+                let before = lit[..j].chars().last();
+                let after = lit[j + 2..].chars().next();
+                matches!(before, Some('"' | ' ' | '`' | '(')) && after.is_some_and(|c| c.is_ascii_lowercase())
+            });
+            if flag {
+                out.push((i + 1, "a string names a command-line flag".to_string()));
+            }
+        }
+    }
+    out
 }
 
 fn rel(root: &Path, p: &Path) -> String {
@@ -233,5 +317,24 @@ mod tests {
         let rows = documented(doc).unwrap();
         assert_eq!(rows.len(), 1);
         assert_eq!((rows[0].name.as_str(), rows[0].value, rows[0].line), ("B", 0.5, 6));
+    }
+}
+
+#[cfg(test)]
+mod cli_awareness_tests {
+    use super::*;
+
+    #[test]
+    fn flags_prints_and_cli_crates_are_found_and_comments_are_not() {
+        let src = "// --sheet in a comment is fine\nlet a = 1;\nbail!(\"--char-mm {c}: too big\");\nprintln!(\"x\");\nlet s = \"a -- b\";\n";
+        let found = cli_lines(src);
+        assert_eq!(found.iter().map(|(l, _)| *l).collect::<Vec<_>>(), vec![3, 4], "{found:?}");
+        let toml = "[dependencies]\nclap.workspace = true\nserde = \"1\"\n\n[dev-dependencies]\nanyhow = \"1\"\n";
+        assert_eq!(cli_dependencies(toml), vec!["clap".to_string()]);
+    }
+
+    #[test]
+    fn the_pipeline_crate_passes() {
+        pipeline_not_cli_aware(&crate::fixtures::root()).unwrap();
     }
 }

@@ -19,3 +19,17 @@ pub fn load_generator(path: Option<&Path>) -> Result<Generator> {
         None => Ok(Generator::from_bytes(WEIGHTS, CONFIG, "embedded pen1.safetensors", "embedded pen1.json")?),
     }
 }
+
+/// The committed pen1 generator prepared for refinement (`--gradients generator`), loaded once.
+///
+/// # Errors
+/// When the embedded files do not load (a broken build).
+pub fn committed_gen_model() -> Result<std::sync::Arc<track_refine::generator::GenModel>> {
+    static CELL: std::sync::OnceLock<std::sync::Arc<track_refine::generator::GenModel>> = std::sync::OnceLock::new();
+    if let Some(m) = CELL.get() {
+        return Ok(m.clone());
+    }
+    let g = load_generator(None)?;
+    let m = track_refine::generator::GenModel::new(&g).context("the committed generator")?;
+    Ok(CELL.get_or_init(|| std::sync::Arc::new(m)).clone())
+}

@@ -70,7 +70,7 @@ pub use wire::Transport;
 use std::path::{Path, PathBuf};
 
 use brush_model::{BrushProfile, ProfileError, Stroke, Track};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// Errors of robot-io.
@@ -254,20 +254,27 @@ pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
 /// track of 44 strokes is about 10 MiB).
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
 
-/// `track.json` as `maobi write` writes it: the brush profile and the strokes (other fields
-/// ignored).
-#[derive(Debug, Deserialize)]
+/// `track.json` as `maobi write` writes it for one character and reads it back: the brush
+/// profile and the strokes, with where the character sits. A sheet's `track.json` (more fields,
+/// which this type ignores) reads through it too.
+#[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct TrackFile {
     /// The character, if recorded.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char: Option<String>,
+    /// The char box on the paper, `[x0, y0, size]` mm, if recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub char_box_mm: Option<[f64; 3]>,
+    /// The sheet the character was laid out on, `[width, height]` mm, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sheet_mm: Option<[f64; 2]>,
     /// The brush profile the track was made for.
     pub brush: BrushProfile,
     /// The strokes.
     pub strokes: Vec<Stroke>,
     /// For a sheet: the character (index) of each stroke, which the ink reload rule
     /// `before_each_char` needs (absent for a single character).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stroke_chars: Option<Vec<usize>>,
 }
 

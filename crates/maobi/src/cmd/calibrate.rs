@@ -104,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(out, profile.to_json().as_bytes())?;
         if args.images.is_some() {
             let plot = out.with_file_name("regression.png");
-            write_atomic(&plot, &maobi::plot::regression_png(&rows, &profile)?)?;
+            write_atomic(&plot, &crate::plot::regression_png(&rows, &profile)?)?;
             eprintln!("wrote {} and {}", out.with_file_name("measurements.csv").display(), plot.display());
         }
     }

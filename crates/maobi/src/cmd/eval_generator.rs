@@ -30,7 +30,7 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_range("--n", args.n, 1, 100_000, "presses")?;
-    let g = maobi::generator::load_generator(args.generator.as_deref())?;
+    let g = crate::generator::load_generator(args.generator.as_deref())?;
     let t0 = std::time::Instant::now();
     let (gc, gs) = neural_gen::eval::evaluate(&g, args.n)?;
     let secs = t0.elapsed().as_secs_f64();

@@ -2,13 +2,14 @@
 
 use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
-use maobi::pipeline::{CharReport, WriteOptions, searched_placement, searched_splits, write_char};
+use pipeline::{BoxRule, CharReport, GlyphInput, WriteOptions, write_placed};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{CharBox, Method, glyph};
+use trajectory::{Method, glyph};
 
-use crate::cmd::write::{GlyphInput, prepare_loaded};
+use crate::cmd::write::{glyph_input, prepare_char};
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
+use crate::generator::committed_gen_model;
 
 /// Arguments of `maobi evaluate`.
 #[derive(clap::Args, Debug)]
@@ -75,12 +76,17 @@ pub fn run(args: Args) -> Result<()> {
     let (chars, input) = chars_and_input(&args)?;
     let alpha_rad = args.alpha.to_radians();
     let refine = args.refine.options()?;
+    let generator = match refine {
+        Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
+        _ => None,
+    };
     let opts = WriteOptions {
         model: args.model,
         size: args.size,
         free_widths: true,
         alpha_rad,
         refine,
+        generator,
         ..WriteOptions::default()
     };
     let pb = progress(chars.len() as u64, "evaluate");
@@ -88,25 +94,19 @@ pub fn run(args: Args) -> Result<()> {
     let reports: Vec<Option<CharReport>> = chars
         .par_iter()
         .map(|&c| {
-            let loaded = match input.load(c) {
+            let p = match prepare_char(&input, c, args.method, true) {
                 Err(e) if !args.font.is_empty() && is_uncovered(&e) => {
                     pb.inc(1);
                     return Ok(None);
                 }
                 r => r?,
             };
-            let p = prepare_loaded(loaded, args.method, true)?;
-            let (p, mm) = if args.placement.search() && p.method == Method::Template {
-                let pl = match args.char_mm {
-                    Some(mm) => searched_splits(&p, &profile, &opts, mm)?,
-                    None => searched_placement(&p, &profile, &opts)?,
-                };
-                (p.placed(&pl), pl.size_mm)
-            } else {
-                let mm = args.char_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, alpha_rad));
-                (p, mm)
+            let rule = match args.char_mm {
+                _ if args.placement.search() && p.method == Method::Template => BoxRule::Search(args.char_mm),
+                Some(mm) => BoxRule::Fixed(mm),
+                None => BoxRule::Auto,
             };
-            let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm }, &opts)?;
+            let r = write_placed(&p, &profile, &opts, rule)?;
             pb.inc(1);
             Ok(Some(r.report))
         })
@@ -154,7 +154,7 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
         .count();
     let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
     let fw: Vec<_> = r.iter().filter_map(|c| c.free_widths).collect();
-    let mean_sim = |v: Vec<maobi::pipeline::Similarity>| {
+    let mean_sim = |v: Vec<pipeline::Similarity>| {
         let k = v.len() as f64;
         if v.is_empty() {
             return serde_json::Value::Null;
@@ -188,11 +188,11 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
 
 /// Means of the refinement's before/after figures (`None` when nothing was refined).
 fn refine_summary(r: &[CharReport]) -> Option<serde_json::Value> {
-    let rf: Vec<&maobi::pipeline::RefineReport> = r.iter().filter_map(|c| c.refine.as_ref()).collect();
+    let rf: Vec<&pipeline::RefineReport> = r.iter().filter_map(|c| c.refine.as_ref()).collect();
     if rf.is_empty() {
         return None;
     }
-    let mean = |v: Vec<maobi::pipeline::Similarity>| {
+    let mean = |v: Vec<pipeline::Similarity>| {
         let k = v.len() as f64;
         if v.is_empty() {
             return serde_json::Value::Null;
@@ -226,7 +226,7 @@ fn method_name(reports: &[CharReport]) -> String {
 
 /// Whether a glyph error says the fonts do not cover the character.
 fn is_uncovered(e: &anyhow::Error) -> bool {
-    matches!(e.downcast_ref::<glyph::GlyphError>(), Some(glyph::GlyphError::Unknown { .. }))
+    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(glyph::GlyphError::Unknown { .. })))
 }
 
 /// The images of `--images DIR`: files `<char>.png|jpg|jpeg`, one character per name, sorted.
@@ -287,12 +287,7 @@ fn chars_and_input(args: &Args) -> Result<(Vec<char>, GlyphInput)> {
     if args.hanzi_data.is_some() && args.chars.is_none() && !style {
         bail!("--hanzi-data needs --chars: name the characters to read from it");
     }
-    let input = if !args.font.is_empty() {
-        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
-    } else if args.images.is_some() {
-        GlyphInput::Images(image_files, args.hanzi_data.clone())
-    } else {
-        GlyphInput::Hanzi(args.hanzi_data.clone())
-    };
+    let images = args.images.is_some().then_some(image_files);
+    let input = glyph_input(&args.font, args.font_index, images, args.hanzi_data.clone())?;
     Ok((chars, input))
 }

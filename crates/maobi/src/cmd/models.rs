@@ -83,7 +83,7 @@ pub fn run(args: Args) -> Result<()> {
             alpha_rad: 0.5 * (r.alpha_rad.min + r.alpha_rad.max),
             beta_rad: 0.0,
         };
-        crate::common::write_atomic(plot, &maobi::plot::models_png(&profile, &press)?)?;
+        crate::common::write_atomic(plot, &crate::plot::models_png(&profile, &press)?)?;
         eprintln!("wrote {}: every stroke model's footprint of one press, axes in mm", plot.display());
     }
     let (targets, size, models, reference) = match &args.reference {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, Track, TrackPoint};
-use maobi::sheet::{Grid, SheetTrack, parse_sheet};
+use pipeline::{Grid, SheetTrack, parse_sheet};
 use robot_io::TrackFile;
 use robot_io::exec::{TraceEntry, execute_program_tagged, level_frame_in_front, trace_to_states};
 use robot_io::frame::PaperFrame;
@@ -98,7 +98,7 @@ pub fn run(a: Args) -> Result<()> {
         Some(x) => serde_json::from_value(x.clone()).with_context(|| format!("{name}: field `grid`"))?,
     };
     let sheet_mm = if let Some(s) = &a.sheet {
-        let s = parse_sheet(s)?;
+        let s = parse_sheet(s).with_context(|| format!("--sheet {s}"))?;
         [s.width_mm, s.height_mm]
     } else if let Some(s) = nums("sheet_mm", 2)? {
         [s[0], s[1]]
@@ -115,7 +115,7 @@ pub fn run(a: Args) -> Result<()> {
         }
         [w + 10.0, h + 10.0]
     };
-    if !(sheet_mm.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= maobi::sheet::MAX_SHEET_MM)) {
+    if !(sheet_mm.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= pipeline::MAX_SHEET_MM)) {
         bail!("{name}: the sheet {:?} mm is not a usable size", sheet_mm);
     }
     let frame = a.paper.as_deref().map(PaperFrame::load).transpose()?;

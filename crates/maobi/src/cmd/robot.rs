@@ -430,7 +430,7 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     let states = robot_io::exec::trace_to_states(&trace, &frame);
     let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
-    let img = maobi::pipeline::render_states(
+    let img = pipeline::render_states(
         &states,
         &tf.brush,
         bezier_raster::ModelKind::Bsm,

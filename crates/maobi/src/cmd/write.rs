@@ -4,15 +4,17 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use bezier_raster::{ModelKind, coverage::overlay_png};
-use brush_model::{BrushProfile, Extrapolation, Track};
-use maobi::pipeline::{
-    CharReport, CharResult, Prepared, WriteOptions, prepare_with_template, searched_placement, searched_splits,
-    write_char,
+use brush_model::BrushProfile;
+use pipeline::{
+    BrushFit, BrushMiss, CharReport, CharResult, Flow, GlyphInput, Grid, Layout, Prepared, Sheet, SheetError,
+    SheetTrack, TextOptions, WriteOptions, WrittenText, auto_layout, layout_on_sheet, parse_sheet, prepare_loaded,
+    rerender_with_generator, write_text,
 };
-use maobi::sheet::{Flow, Grid, Layout, Sheet, SheetTrack, layout_on_sheet, parse_sheet};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{CharBox, Method, glyph};
+use trajectory::Method;
+
+use crate::generator::committed_gen_model;
 
 use crate::common::{
     BrushArg, OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
@@ -154,85 +156,37 @@ impl RefineArgs {
     }
 }
 
-/// Where `write` and `evaluate` take glyphs from, opened once.
-pub(crate) enum GlyphInput {
-    /// The embedded set, or a hanzi-writer-data folder.
-    Hanzi(Option<PathBuf>),
-    /// Fonts, with hanzi stroke data (embedded, or the folder) as templates.
-    Fonts(glyph::FontSet, Option<PathBuf>),
-    /// Images, with hanzi stroke data as templates: one file (`write --image`) or, for
-    /// `evaluate --images`, a file per character.
-    Images(Vec<(char, PathBuf)>, Option<PathBuf>),
+/// The glyph source the flags name: `--font` files, an `--image` per character, or hanzi stroke
+/// data (embedded, or `--hanzi-data`), which is also where templates come from.
+pub(crate) fn glyph_input(
+    fonts: &[PathBuf],
+    face_index: Option<u32>,
+    images: Option<Vec<(char, PathBuf)>>,
+    hanzi: Option<PathBuf>,
+) -> Result<GlyphInput> {
+    Ok(if !fonts.is_empty() {
+        GlyphInput::fonts(fonts, face_index, hanzi).context("--font")?
+    } else if let Some(images) = images {
+        GlyphInput::Images(images, hanzi)
+    } else {
+        GlyphInput::Hanzi(hanzi)
+    })
 }
 
-impl GlyphInput {
-    /// Opens the fonts of `--font` (files or folders; nothing decoded yet).
-    pub(crate) fn fonts(paths: &[PathBuf], face_index: Option<u32>, hanzi: Option<PathBuf>) -> Result<Self> {
-        let set = glyph::FontSet::open(paths, face_index).context("--font")?;
-        Ok(GlyphInput::Fonts(set, hanzi))
-    }
-
-    /// The glyph of `ch` and, for a font or image glyph, the character's stroke template when
-    /// there is one (`None` when neither the embedded set nor the folder has the character).
-    pub(crate) fn load(&self, ch: char) -> Result<(glyph::Glyph, Option<glyph::Glyph>)> {
-        let template = |dir: &Option<PathBuf>| -> Result<Option<glyph::Glyph>> {
-            let found = match dir {
-                Some(d) => glyph::from_hanzi_dir(d, ch),
-                None => glyph::embedded(ch),
-            };
-            match found {
-                Ok(g) => Ok(Some(g)),
-                Err(glyph::GlyphError::Unknown { .. }) => Ok(None),
-                Err(e) => Err(e).context("the stroke template"),
-            }
-        };
-        Ok(match self {
-            GlyphInput::Hanzi(Some(dir)) => (glyph::from_hanzi_dir(dir, ch)?, None),
-            GlyphInput::Hanzi(None) => (glyph::embedded(ch)?, None),
-            GlyphInput::Fonts(set, dir) => (set.glyph(ch)?, template(dir)?),
-            GlyphInput::Images(files, dir) => {
-                let path = files
-                    .iter()
-                    .find(|(c, _)| *c == ch)
-                    .map(|(_, p)| p)
-                    .with_context(|| format!("no image for {ch:?}"))?;
-                (glyph::from_image(path, ch)?, template(dir)?)
-            }
-        })
-    }
-}
-
-/// Finds the centre lines of a loaded glyph (see [`maobi::pipeline::prepare_with_template`]);
-/// prints the strokes a template registration found no ink for.
-pub(crate) fn prepare_loaded(
-    loaded: (glyph::Glyph, Option<glyph::Glyph>),
-    method: Option<Method>,
-    quiet: bool,
-) -> Result<Prepared> {
-    let (g, template) = loaded;
-    let p = prepare_with_template(g, method, template.as_ref())?;
-    // A registration where most strokes find no ink means the glyph is not this character (or
-    // not legible): writing the template where it landed would be a guess, not the glyph.
-    let missing = p.template.as_ref().map_or((0, 0), |t| (t.missing.len(), t.strokes));
-    let mostly_missing = missing.0 * 2 > missing.1;
-    if p.paths.is_empty() || mostly_missing {
-        let from = match &p.glyph.source {
-            glyph::GlyphSource::Image(path) => format!(" in --image {path}"),
-            _ => String::new(),
-        };
-        let why = if mostly_missing {
-            format!(
-                " for {} of the template's {} strokes (try --from skeleton if it is another character)",
-                missing.0, missing.1
-            )
-        } else {
-            String::new()
-        };
-        bail!(
-            "{}: found no strokes{from}{why} (is it one character, dark ink on light paper, strokes wider than a hair?)",
-            p.glyph.ch
-        );
-    }
+/// Loads `ch` and finds its centre lines ([`pipeline::prepare_loaded`]); says on stderr (unless
+/// `quiet`) which template strokes found no ink, and turns a glyph without strokes into advice.
+pub(crate) fn prepare_char(input: &GlyphInput, ch: char, method: Option<Method>, quiet: bool) -> Result<Prepared> {
+    let p = match prepare_loaded(input.load(ch)?, method) {
+        Ok(p) => p,
+        Err(pipeline::Error::NoStrokes { ch, image, missing }) => bail!(
+            "{ch}: found no strokes{}{} (is it one character, dark ink on light paper, strokes wider than a hair?)",
+            image.map_or(String::new(), |p| format!(" in --image {}", p.display())),
+            missing.map_or(String::new(), |(m, n)| format!(
+                " for {m} of the template's {n} strokes (try --from skeleton if it is another character)"
+            ))
+        ),
+        Err(e) => return Err(e.into()),
+    };
     if let (Some(t), false) = (&p.template, quiet) {
         if !t.missing.is_empty() {
             let list: Vec<String> = t.missing.iter().map(|i| i.to_string()).collect();
@@ -244,6 +198,16 @@ pub(crate) fn prepare_loaded(
         }
     }
     Ok(p)
+}
+
+/// A sheet error with the flag its value came from and what to change.
+pub(crate) fn sheet_advice(e: SheetError, spec: &str, margin_mm: f64) -> anyhow::Error {
+    let flag = match &e {
+        SheetError::NoRoom { .. } => format!("--margin-mm {margin_mm}"),
+        SheetError::DoesNotFit { char_mm, .. } => format!("--char-mm {char_mm}"),
+        _ => format!("--sheet {spec}"),
+    };
+    anyhow::Error::new(e).context(flag)
 }
 
 /// Runs the command.
@@ -260,50 +224,28 @@ pub fn run(args: Args) -> Result<()> {
     check_output_folder("--output", &args.output, args.force)?;
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
-    let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
-    let brush_mm = trajectory::auto_char_mm(&all, &profile, alpha_rad);
     let refine = args.refine.options()?;
-    let opts = WriteOptions { model: args.model, size: args.size, alpha_rad, refine, ..WriteOptions::default() };
-    let search = |p: &Prepared| args.placement.search() && p.method == Method::Template;
-    // One template character on its own: its box size is searched too.
-    let single_searched = match (&prepared[..], &sheet_layout, args.char_mm) {
-        ([p], None, None) if search(p) => Some(searched_placement(p, &profile, &opts)?),
+    let generator = match refine {
+        Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
         _ => None,
     };
-    let lay = match sheet_layout {
-        Some(l) => l,
-        None => auto_layout(
-            chars.len(),
-            args.char_mm.or(single_searched.as_ref().map(|pl| pl.size_mm)).unwrap_or(brush_mm),
-            args.per_line.unwrap_or(4),
-            args.rows,
-        ),
+    let opts =
+        WriteOptions { model: args.model, size: args.size, alpha_rad, refine, generator, ..WriteOptions::default() };
+    let text = TextOptions {
+        layout: sheet_layout,
+        char_mm: args.char_mm,
+        per_line: args.per_line.unwrap_or(4),
+        flow,
+        search_templates: args.placement.search(),
     };
-    let char_mm = lay.char_mm;
-    let boxes = lay.boxes.clone();
-    // Template characters sharing the box size: their corner splits are searched.
-    let prepared: Vec<Prepared> = prepared
-        .into_par_iter()
-        .map(|p| match &single_searched {
-            Some(pl) => Ok(p.placed(pl)),
-            None if search(&p) => Ok(p.placed(&searched_splits(&p, &profile, &opts, char_mm)?)),
-            None => Ok(p),
-        })
-        .collect::<Result<_>>()?;
     let pb = progress(chars.len() as u64, "write");
-    let results: Vec<CharResult> = prepared
-        .par_iter()
-        .zip(boxes.par_iter())
-        .map(|(p, b)| {
-            let r = write_char(p, &profile, *b, &opts);
-            pb.inc(1);
-            r
-        })
-        .collect::<Result<_>>()?;
+    let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
     pb.finish_and_clear();
-    let mut results = results;
+    let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
+    let char_mm = lay.char_mm;
     if args.renderer.neural() {
-        rerender_neural(&args, &profile, &mut results)?;
+        let g = args.renderer.generator()?;
+        rerender_with_generator(&mut results, &g, &profile, args.size).context("--renderer neural")?;
     }
     let single = results.len() == 1;
     // Everything goes to a staging folder beside --output, swapped in at the end: a run never
@@ -327,7 +269,7 @@ pub fn run(args: Args) -> Result<()> {
         &profile,
     );
     if !single {
-        let img = sheet_image(&results, &profile, args.model, &lay, args.size)?;
+        let img = pipeline::sheet_image(&results, &profile, args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
         write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
@@ -377,57 +319,9 @@ fn checked_chars(args: &Args) -> Result<Vec<char>> {
 
 /// Loads every character's glyph from the source the flags name and finds its centre lines.
 fn prepare_all(args: &Args, chars: &[char]) -> Result<Vec<Prepared>> {
-    let input = if !args.font.is_empty() {
-        GlyphInput::fonts(&args.font, args.font_index, args.hanzi_data.clone())?
-    } else if let Some(img) = &args.image {
-        GlyphInput::Images(vec![(chars[0], img.clone())], args.hanzi_data.clone())
-    } else {
-        GlyphInput::Hanzi(args.hanzi_data.clone())
-    };
-    let prepared: Vec<Prepared> =
-        chars.par_iter().map(|&c| prepare_loaded(input.load(c)?, args.method, args.json)).collect::<Result<_>>()?;
-    Ok(prepared)
-}
-
-/// Renders every result again through the B-BSMG generator (`--renderer neural`) and scores
-/// those images instead.
-fn rerender_neural(args: &Args, profile: &BrushProfile, results: &mut [CharResult]) -> Result<()> {
-    let g = args.renderer.generator()?;
-    if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
-        bail!(
-            "--renderer neural: the generator was trained for brush `{}`, not `{}`",
-            g.config.profile.name,
-            profile.name
-        );
-    }
-    for r in results.iter_mut() {
-        let b = r.char_box;
-        let neural = |t: &brush_model::Track| {
-            neural_gen::compose::render_track(
-                &g,
-                t,
-                brush_model::PointMm::new(b.x0_mm, b.y0_mm),
-                args.size as f64 / b.size_mm,
-                args.size,
-                args.size,
-                64,
-            )
-        };
-        let img = neural(&r.track)?;
-        let sim = maobi::pipeline::similarity(&r.reference, &img)?;
-        (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
-        if let Some(states) = &r.executed_states {
-            // The executed path through the same generator.
-            let executed = brush_model::Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
-            let ex = neural(&executed)?;
-            r.report.executed = Some(maobi::pipeline::similarity(&r.reference, &ex)?);
-            r.report.agreement = Some(maobi::pipeline::similarity(&img, &ex)?);
-            r.executed = Some(ex);
-        }
-        r.report.model = "b-bsmg";
-        r.render = img;
-    }
-    Ok(())
+    let images = args.image.as_ref().map(|img| vec![(chars[0], img.clone())]);
+    let input = glyph_input(&args.font, args.font_index, images, args.hanzi_data.clone())?;
+    chars.par_iter().map(|&c| prepare_char(&input, c, args.method, args.json)).collect()
 }
 
 /// One character's line (and its refinement's) on stdout.
@@ -453,7 +347,7 @@ fn print_char(r: &CharReport) {
         r.millis
     );
     if let Some(rf) = &r.refine {
-        let fig = |s: Option<maobi::pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
+        let fig = |s: Option<pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
         println!(
             "  refined ({} steps, {:.0} ms): executed CSIM {} → {}, planned CSIM {:.4} → {:.4}{}",
             rf.options.iterations,
@@ -483,16 +377,21 @@ fn checked_alpha_rad(alpha_deg: f64, profile: &BrushProfile) -> Result<f64> {
 /// The `--sheet` and, with one, the layout on it (known before any glyph work unless the size
 /// comes from the glyphs); refuses a sheet image over the size limit either way.
 fn planned_sheet(args: &Args, n: usize, flow: Flow) -> Result<(Option<Sheet>, Option<Layout>)> {
-    let sheet = args.sheet.as_deref().map(parse_sheet).transpose()?;
-    let layout = match &sheet {
-        Some(sh) => Some(layout_on_sheet(sh, n, flow, args.per_line, args.margin_mm, args.char_mm)?),
-        None => None,
+    let Some(spec) = args.sheet.as_deref() else {
+        // Without a sheet the image's size in px does not depend on the box side: check it at 1 mm.
+        if n >= 2 {
+            let per_line = args.per_line.unwrap_or(4);
+            auto_layout(n, 1.0, per_line, flow).check_image_size(args.size).with_context(|| {
+                format!("--size {} with --per-line {per_line}: lower --size or change --per-line", args.size)
+            })?;
+        }
+        return Ok((None, None));
     };
-    match &layout {
-        Some(l) => check_sheet_px(l, args.size)?,
-        None => check_sheet_size(n, args.size, args.per_line.unwrap_or(4), args.rows)?,
-    }
-    Ok((sheet, layout))
+    let advice = |e| sheet_advice(e, spec, args.margin_mm);
+    let sheet = parse_sheet(spec).map_err(advice)?;
+    let layout = layout_on_sheet(&sheet, n, flow, args.per_line, args.margin_mm, args.char_mm).map_err(advice)?;
+    layout.check_image_size(args.size).with_context(|| format!("--size {}: lower --size", args.size))?;
+    Ok((Some(sheet), Some(layout)))
 }
 
 /// `summary.json`: the text, the sheet, the means and every character's report.
@@ -533,131 +432,16 @@ pub const MIN_CHAR_MM: f64 = 1.0;
 /// The largest character box a flag may ask for, mm (a metre: beyond any robot's reach).
 pub const MAX_CHAR_MM: f64 = 1000.0;
 
-/// Refuses a layout whose sheet image would exceed the largest image side, before any work.
-/// The sheet's size in pixels does not depend on the box size in mm.
-fn check_sheet_size(n: usize, size: u32, per_line: usize, rows: bool) -> Result<()> {
-    if n < 2 {
-        return Ok(());
-    }
-    let px_per_mm = size as f64; // a 1 mm box: scale-free
-    let boxes = layout(n, 1.0, per_line, rows);
-    let w = boxes.iter().map(|b| b.x0_mm + b.size_mm).fold(0.0, f64::max) + 0.1;
-    let h = boxes.iter().map(|b| b.y0_mm + b.size_mm).fold(0.0, f64::max) + 0.1;
-    let (wp, hp) = ((w * px_per_mm).ceil(), (h * px_per_mm).ceil());
-    let max = bezier_raster::coverage::MAX_SIDE as f64;
-    if wp > max || hp > max {
-        bail!(
-            "--size {size} with --per-line {per_line}: the sheet of {n} characters would be {wp}×{hp} px, over the {max} px limit of an image side; lower --size or change --per-line"
-        );
-    }
-    Ok(())
-}
-
-/// Character boxes on the paper: columns right to left (or rows left to right), a gap of a
-/// tenth of the box between characters and around the sheet.
-fn layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Vec<CharBox> {
-    let per_line = per_line.clamp(1, n.max(1));
-    let gap = 0.1 * char_mm;
-    let step = char_mm + gap;
-    let lines = n.div_ceil(per_line);
-    (0..n)
-        .map(|i| {
-            let (line, pos) = (i / per_line, i % per_line);
-            let (x, y) = if rows { (pos, line) } else { (lines - 1 - line, pos) };
-            CharBox { x0_mm: gap + x as f64 * step, y0_mm: gap + y as f64 * step, size_mm: char_mm }
-        })
-        .collect()
-}
-
-/// The layout without `--sheet`: the old automatic one (a gap of a tenth of the box around and
-/// between the characters), the sheet just large enough for it.
-fn auto_layout(n: usize, char_mm: f64, per_line: usize, rows: bool) -> Layout {
-    let boxes = layout(n, char_mm, per_line, rows);
-    let gap = 0.1 * char_mm;
-    let w = boxes.iter().map(|b| b.x0_mm + b.size_mm).fold(0.0, f64::max) + gap;
-    let h = boxes.iter().map(|b| b.y0_mm + b.size_mm).fold(0.0, f64::max) + gap;
-    let per = per_line.clamp(1, n.max(1));
-    Layout {
-        sheet: Sheet { name: "automatic".into(), width_mm: w, height_mm: h },
-        boxes,
-        char_mm,
-        per_line: per,
-        lines: n.div_ceil(per),
-        margin_mm: gap,
-    }
-}
-
-/// Refuses a sheet whose image would exceed the largest image side.
-fn check_sheet_px(l: &Layout, size: u32) -> Result<()> {
-    let ppm = size as f64 / l.char_mm;
-    let (wp, hp) = ((l.sheet.width_mm * ppm).ceil(), (l.sheet.height_mm * ppm).ceil());
-    let max = bezier_raster::coverage::MAX_SIDE as f64;
-    if wp > max || hp > max {
-        bail!(
-            "--size {size} on the {} sheet with {:.1} mm characters: the sheet image would be {wp}×{hp} px, over the {max} px limit of an image side; lower --size",
-            l.sheet.name,
-            l.char_mm
-        );
-    }
-    Ok(())
-}
-
-/// Whether the brush's width range covers the glyphs at the chosen size: the size where it
-/// does (`trajectory::auto_char_mm`) and the share of points whose width had to be clamped.
+/// Whether the brush's width range covers the glyphs at the chosen size
+/// ([`pipeline::BrushFit`]), with what to change when it does not.
 fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json::Value {
-    let points: usize = reports.iter().map(|r| r.points).sum();
-    let (low, high): (usize, usize) = reports.iter().fold((0, 0), |(l, h), r| (l + r.clamped_low, h + r.clamped_high));
-    let share = |n: usize| if points == 0 { 0.0 } else { n as f64 / points as f64 };
-    // At the automatic size about a fifth of the points lie beyond each end of the range by
-    // construction (it maps the 20th–80th percentile widths onto it), so only a size well off
-    // the brush's, or far more clamping than that, is worth a word.
-    let note = if share(low) > 0.25 || char_mm < brush_mm / 1.15 {
-        format!(
-            "at {char_mm:.1} mm the glyphs' strokes are thinner than the brush can make at {:.0}% of the points (its width range suits about {brush_mm:.0} mm characters): give a larger sheet, fewer characters or a smaller brush",
-            100.0 * share(low)
-        )
-    } else if share(high) > 0.25 || char_mm > brush_mm * 1.15 {
-        format!(
-            "at {char_mm:.1} mm the glyphs' strokes are wider than the brush can make at {:.0}% of the points (its width range suits about {brush_mm:.0} mm characters): give --char-mm or a larger brush",
-            100.0 * share(high)
-        )
-    } else {
-        "the brush's width range covers the glyphs at this size".into()
-    };
-    json!({
-        "brush_char_mm": brush_mm,
-        "char_mm": char_mm,
-        "points": points,
-        "clamped_thin": low,
-        "clamped_wide": high,
-        "covered": !note.starts_with("at "),
-        "note": note,
-    })
-}
-
-fn sheet_image(
-    results: &[CharResult],
-    profile: &BrushProfile,
-    model: ModelKind,
-    lay: &Layout,
-    size: u32,
-) -> Result<bezier_raster::Coverage> {
-    let mut all = Track::default();
-    for r in results {
-        all.strokes.extend(r.track.strokes.iter().cloned());
+    let mut fit = BrushFit::of(reports, char_mm, brush_mm);
+    match fit.miss {
+        Some(BrushMiss::TooWide) => fit.note.push_str(": give a larger sheet, fewer characters or a smaller brush"),
+        Some(BrushMiss::TooNarrow) => fit.note.push_str(": give --char-mm or a larger brush"),
+        None => {}
     }
-    let px_per_mm = size as f64 / lay.char_mm;
-    let (wp, hp) = ((lay.sheet.width_mm * px_per_mm).ceil() as u32, (lay.sheet.height_mm * px_per_mm).ceil() as u32);
-    Ok(bezier_raster::render_track(
-        &all,
-        profile,
-        model.model(),
-        Extrapolation::Refuse,
-        brush_model::PointMm::new(0.0, 0.0),
-        px_per_mm,
-        wp,
-        hp,
-    )?)
+    json!(fit)
 }
 
 /// One character's files in `dir` (created by the first write, under the output gate).
@@ -667,26 +451,18 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
     write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;
     if let Some(ex) = &r.executed {
         write_atomic(&dir.join("executed.png"), &ex.encode_png()?)?;
-        let row = maobi::pipeline::side_by_side(&[&r.reference, &r.render, ex]);
+        let row = pipeline::side_by_side(&[&r.reference, &r.render, ex]);
         write_atomic(&dir.join("side-by-side.png"), &row.encode_png()?)?;
     }
-    let mut track = json!({
-        "char": r.report.char,
-        "char_box_mm": [r.char_box.x0_mm, r.char_box.y0_mm, r.char_box.size_mm],
-        "brush": profile,
-        "strokes": r.track.strokes,
-    });
-    if let Some(l) = sheet {
-        // Where this character sits: on the --sheet, in paper mm.
-        track["sheet_mm"] = json!([l.sheet.width_mm, l.sheet.height_mm]);
-    }
+    // Where this character sits: in its box and, with --sheet, on the sheet, in paper mm.
+    let track = r.track_file(profile, sheet.map(|l| [l.sheet.width_mm, l.sheet.height_mm]));
     write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
     write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
     if let Some(rf) = &r.report.refine {
         let series = |f: fn(&track_refine::LossTerms) -> f64| -> Vec<(f64, f64)> {
             rf.curve.iter().enumerate().map(|(i, l)| (i as f64, f(l))).collect()
         };
-        let png = maobi::plot::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
+        let png = crate::plot::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
         write_atomic(&dir.join("refine.png"), &png)?;
     }
     Ok(())

@@ -1,0 +1,19 @@
+//! The `maobi` binary's tests, run against the real binary: one test binary for the package
+//! (a `tests/*.rs` file each would link its own copy of everything), one module per area.
+
+mod common;
+
+mod brush;
+mod neural;
+mod photos;
+mod preview;
+mod prop_parsers;
+mod raster;
+mod refine;
+mod robot;
+mod robustness;
+mod safety;
+mod sheet;
+mod styles;
+mod transport;
+mod write;

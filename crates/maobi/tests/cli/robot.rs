@@ -1,0 +1,169 @@
+//! `maobi robot` end to end: check, refusals, exports, and a run against the simulator process.
+
+use crate::common::{fails, maobi, ok, s};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn paper() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")
+}
+
+fn written(dir: &Path) -> PathBuf {
+    let out = dir.join("shi");
+    ok(&maobi(&["write", "十", "--size", "96", "--out", s(&out)]));
+    out.join("track.json")
+}
+
+#[test]
+fn check_and_export_a_written_character() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = written(dir.path());
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
+    assert_eq!(j["strokes"], 2);
+    assert!(j["max_press_mm"].as_f64().unwrap() <= 20.0);
+    for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
+        let out = dir.path().join(format!("prog.{fmt}"));
+        let o = maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&out)]);
+        let said = ok(&o);
+        assert!(said.contains(&format!("{fmt} program of")) && said.contains(&out.display().to_string()), "{said}");
+        assert!(std::fs::read_to_string(&out).unwrap().contains(needle), "{fmt}");
+        if fmt == "gcode" {
+            assert!(String::from_utf8_lossy(&o.stderr).contains("β is ignored"));
+        }
+    }
+}
+
+#[test]
+fn refusals_name_the_problem_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = written(dir.path());
+    // A sheet too small for the character.
+    let small = dir.path().join("small.json");
+    std::fs::write(
+        &small,
+        std::fs::read_to_string(paper()).unwrap().replace("\"size_mm\": [300, 300]", "\"size_mm\": [20, 20]"),
+    )
+    .unwrap();
+    let out = dir.path().join("p.lua");
+    fails(
+        &maobi(&["robot", "export", s(&track), "--paper", s(&small), "--format", "aubo-lua", "-o", s(&out)]),
+        "outside the paper",
+    );
+    assert!(!out.exists());
+    // A press deeper than the brush's range.
+    let mut t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&track).unwrap()).unwrap();
+    t["strokes"][0][3]["h_mm"] = serde_json::json!(26.0);
+    let deep = dir.path().join("deep.json");
+    std::fs::write(&deep, t.to_string()).unwrap();
+    fails(
+        &maobi(&["robot", "check", s(&deep), "--paper", s(&paper())]),
+        "stroke 1, point 4: press h = 26.000 mm is deeper",
+    );
+    // Robot config over the limits, collinear paper points, malformed files.
+    let fast = dir.path().join("robot.json");
+    std::fs::write(&fast, r#"{"travel_speed_m_s": 1.0}"#).unwrap();
+    fails(
+        &maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--robot", s(&fast)]),
+        "travel_speed_m_s = 1 exceeds the limit",
+    );
+    let line = dir.path().join("line.json");
+    std::fs::write(&line, r#"{"touch_points": [{"paper_mm": [0, 0], "robot_m": [0.3, 0.2, 0.05]}, {"paper_mm": [100, 0], "robot_m": [0.4, 0.2, 0.05]}, {"paper_mm": [200, 0], "robot_m": [0.5, 0.2, 0.05]}]}"#).unwrap();
+    fails(&maobi(&["robot", "check", s(&track), "--paper", s(&line)]), "collinear");
+    std::fs::write(&line, r#"{"touch_points": [}"#).unwrap();
+    fails(&maobi(&["robot", "check", s(&track), "--paper", s(&line)]), "line.json");
+    fails(&maobi(&["robot", "sim", "--fault", "explode=1"]), "unknown fault");
+}
+
+#[test]
+fn send_runs_on_the_simulator_and_survives_a_drop() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = written(dir.path());
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let trace = dir.path().join("trace.json");
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
+        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=40", "--trace", s(&trace)])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait for the simulator to listen.
+    let mut up = false;
+    for _ in 0..100 {
+        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
+            up = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(up, "simulator did not start");
+    let o = maobi(&[
+        "robot",
+        "send",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--host",
+        "127.0.0.1",
+        "--port",
+        &port.to_string(),
+        "--timeout-ms",
+        "1000",
+    ]);
+    let out = ok(&o);
+    assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let _ = sim.kill();
+    let _ = sim.wait();
+    // The executed path renders back to the planned image: the same forward model sees the same
+    // motion (the stroke cut by the drop is written again over itself).
+    let img = dir.path().join("trace.png");
+    ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "96",
+        "-o",
+        s(&img),
+    ]));
+    let render = track.parent().unwrap().join("render.png");
+    let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["compare", s(&render), s(&img), "--json"]))).unwrap();
+    assert!(j["csim"].as_f64().unwrap() > 0.97, "{j}");
+    // The Lua script goes to the script port framed by \r\n\r\n.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let reader = std::thread::spawn(move || {
+        use std::io::Read;
+        let (mut c, _) = listener.accept().unwrap();
+        let mut buf = String::new();
+        c.read_to_string(&mut buf).unwrap();
+        buf
+    });
+    ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", "aubo-lua", "--send-script", &addr]));
+    let got = reader.join().unwrap();
+    assert!(got.starts_with("-- maobi") && got.ends_with("end\n\r\n\r\n"), "{}", &got[got.len() - 20..]);
+    // A file that is not a trace is refused, naming it.
+    let bad = dir.path().join("bad-trace.json");
+    std::fs::write(&bad, "{}").unwrap();
+    fails(
+        &maobi(&[
+            "robot",
+            "render-trace",
+            s(&bad),
+            "--track",
+            s(&track),
+            "--paper",
+            s(&paper()),
+            "-o",
+            s(&dir.path().join("t.png")),
+        ]),
+        "bad-trace.json:1: not a simulator trace",
+    );
+    // Dry run connects to nothing.
+    ok(&maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "192.0.2.1", "--dry-run"]));
+}

@@ -1,0 +1,353 @@
+//! `maobi robot send` over each transport against `maobi robot sim` (issue #16): 永 over the
+//! framed transport through a dropped link, the same program over lines and HTTP, a refused
+//! login; and the official AUBO SDK client (`pyaubo_sdk`) driving the simulator end to end.
+
+use crate::common::{fails, maobi, ok, s};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+fn paper() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+/// `maobi robot sim` with `args`, once its first port accepts connections (at most 5 s).
+struct Sim(Child);
+
+impl Sim {
+    fn start(port: u16, args: &[&str]) -> Sim {
+        let child = Command::new(env!("CARGO_BIN_EXE_maobi"))
+            .args(["robot", "sim", "--port", &port.to_string()])
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let sim = Sim(child);
+        for _ in 0..250 {
+            if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
+                return sim;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        panic!("the simulator did not start");
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("yong");
+    ok(&maobi(&["write", "永", "--size", "128", "--out", s(&out)]));
+    let track = out.join("track.json");
+    let check: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
+    let (strokes, moves) = (check["strokes"].as_u64().unwrap(), check["moves"].as_u64().unwrap());
+    // Drop the link at the middle move: inside a stroke, not at its boundary.
+    let (port, lines, http) = (free_port(), free_port(), free_port());
+    let trace = dir.path().join("trace.jsonl");
+    let drop = format!("drop-after={}", moves / 2);
+    let (lines_s, http_s) = (lines.to_string(), http.to_string());
+    let _sim =
+        Sim::start(port, &["--lines-port", &lines_s, "--http-port", &http_s, "--fault", &drop, "--trace", s(&trace)]);
+    let paper_json = paper();
+    let send = |extra: &[&str]| {
+        let mut args = vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--timeout-ms", "1000"]);
+        maobi(&args)
+    };
+    let p = port.to_string();
+    let framed = ok(&send(&["--port", &p]));
+    assert!(
+        framed.contains(&format!("{strokes} of {strokes} strokes completed; 1 reconnect(s), 1 stroke(s) resumed")),
+        "{framed}"
+    );
+    // The drop fires once: the other transports run straight through on their own ports.
+    for (t, port) in [("lines", &lines_s), ("http", &http_s)] {
+        let o = ok(&send(&["--transport", t, "--port", port]));
+        assert!(o.contains(&format!("{strokes} of {strokes} strokes completed; 0 reconnect(s)")), "{t}: {o}");
+    }
+    // The executed path renders back to the planned image.
+    std::thread::sleep(Duration::from_millis(300));
+    let img = dir.path().join("trace.png");
+    ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "128",
+        "-o",
+        s(&img),
+    ]));
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&maobi(&["compare", s(&out.join("render.png")), s(&img), "--json"]))).unwrap();
+    assert!(j["csim"].as_f64().unwrap() > 0.9, "{j}");
+    // A wrong password is refused before anything moves, naming the user.
+    fails(&send(&["--port", &p, "--password", "nope"]), "login as `aubo` refused");
+    // An unknown transport names the choices.
+    let o = send(&["--transport", "tcp"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected framed, lines or http"));
+    // The simulator's help says which transports have no login.
+    let help = ok(&maobi(&["robot", "sim", "--help"]));
+    assert!(help.contains("UNAUTHENTICATED"), "{help}");
+}
+
+/// A one-stroke track (一, 60 mm, points 4 mm apart) with the built-in pen1 brush.
+fn one_stroke_track(dir: &Path) -> PathBuf {
+    let brush = brush_model::BrushProfile::builtin("pen1").unwrap();
+    let pt = |x: f64| brush_model::TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 14.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    let track = dir.join("track.json");
+    let t = serde_json::json!({
+        "char": "一",
+        "brush": brush,
+        "strokes": [brush_model::Stroke { points: (0..16).map(|i| pt(30.0 + 4.0 * f64::from(i))).collect() }],
+        "char_box_mm": [20.0, 20.0, 80.0],
+    });
+    std::fs::write(&track, t.to_string()).unwrap();
+    track
+}
+
+#[test]
+fn the_simulator_serves_framed_by_default_and_lines_only_where_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = one_stroke_track(dir.path());
+    let (port, lines) = (free_port(), free_port());
+    let trace = dir.path().join("trace.jsonl");
+    let _sim = Sim::start(port, &["--lines-port", &lines.to_string(), "--trace", s(&trace)]);
+    let paper_json = paper();
+    let send = |extra: &[&str]| {
+        let mut args = vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--timeout-ms", "1000"]);
+        maobi(&args)
+    };
+    let p = port.to_string();
+    let o = ok(&send(&["--port", &p]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // One program after the other: the second session gets motion once the first has closed.
+    let o = ok(&send(&["--transport", "lines", "--port", &lines.to_string()]));
+    assert!(o.contains("1 of 1 strokes completed"), "{o}");
+    // The default port does not speak the unauthenticated lines transport.
+    let o = send(&["--transport", "lines", "--port", &p]);
+    assert!(!o.status.success());
+    // The simulator wrote every executed sample as it went; the trace renders.
+    let img = dir.path().join("trace.png");
+    let out = ok(&maobi(&[
+        "robot",
+        "render-trace",
+        s(&trace),
+        "--track",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--size",
+        "64",
+        "-o",
+        s(&img),
+    ]));
+    let n = std::fs::read_to_string(&trace).unwrap().lines().count();
+    assert!(out.contains(&format!("{n} trace samples")) && !out.contains("(0 pressed)"), "{out}");
+}
+
+#[test]
+fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
+    // A one-stroke track and the trace the simulator records for it (a pressed line on the
+    // paper between two lifted points), written as `robot sim --trace` writes it.
+    let dir = tempfile::tempdir().unwrap();
+    let brush = brush_model::BrushProfile::builtin("pen1").unwrap();
+    let pt = |x: f64, h: f64| brush_model::TrackPoint { x_mm: x, y_mm: 60.0, h_mm: h, alpha_rad: 0.0, beta_rad: 0.0 };
+    let track = dir.path().join("track.json");
+    let t = serde_json::json!({
+        "char": "一",
+        "brush": brush,
+        "strokes": [brush_model::Stroke { points: vec![pt(30.0, 2.0), pt(90.0, 2.0)] }],
+        "char_box_mm": [20.0, 20.0, 80.0],
+    });
+    std::fs::write(&track, t.to_string()).unwrap();
+    let frame = robot_io::frame::PaperFrame::load(&paper()).unwrap();
+    let poses = [pt(30.0, -10.0), pt(30.0, 2.0), pt(90.0, 2.0), pt(90.0, -10.0)]
+        .map(|p| robot_io::pose::brush_pose(&frame, &p));
+    let mut samples = vec![];
+    for w in poses.windows(2) {
+        let t0 = samples.last().map_or(0.0, |s: &robot_io::exec::TraceEntry| s.t_s);
+        samples.extend(robot_io::exec::line_motion(&w[0], &w[1], 0.02, t0));
+    }
+    let full: String = samples.iter().map(|s| serde_json::to_string(s).unwrap() + "\n").collect();
+    let n = samples.len();
+    let img = dir.path().join("trace.png");
+    let render = |t: &Path| {
+        maobi(&[
+            "robot",
+            "render-trace",
+            s(t),
+            "--track",
+            s(&track),
+            "--paper",
+            s(&paper()),
+            "--size",
+            "64",
+            "-o",
+            s(&img),
+        ])
+    };
+    let whole = dir.path().join("whole.jsonl");
+    std::fs::write(&whole, &full).unwrap();
+    let o = render(&whole);
+    assert!(ok(&o).contains(&format!("{n} trace samples")));
+    assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Cut inside the last line (as a full disk or a kill mid-write leaves it): rendered up to
+    // the line before, saying what was skipped.
+    let cut = dir.path().join("cut.jsonl");
+    let last_at = full.trim_end().rfind('\n').unwrap() + 1;
+    for keep in [1, 29, full.trim_end().len() - last_at - 1] {
+        let at = last_at + keep;
+        std::fs::write(&cut, &full[..at]).unwrap();
+        let o = render(&cut);
+        assert!(ok(&o).contains(&format!("{} trace samples", n - 1)), "keep {keep}");
+        let warn = String::from_utf8_lossy(&o.stderr);
+        assert!(warn.contains(&format!("cut.jsonl:{n}: skipped a cut last line")), "keep {keep}: {warn}");
+    }
+    // A bad line before the last is still an error, naming its line.
+    let mut bad: Vec<&str> = full.lines().collect();
+    bad[1] = "{\"t_s\": 1,";
+    std::fs::write(&cut, bad.join("\n") + "\n").unwrap();
+    fails(&render(&cut), "cut.jsonl:2: not a simulator trace sample");
+}
+
+/// Drives the simulator with the official SDK: every call maobi makes, and what the SDK sees.
+const SDK_SCRIPT: &str = r#"
+import json, sys, pyaubo_sdk
+port = int(sys.argv[1])
+c = pyaubo_sdk.RpcClient()
+c.setRequestTimeout(3000)
+out = {"connect": c.connect("127.0.0.1", port)}
+out["login"] = c.login("aubo", "123456")
+out["logined"] = c.hasLogined()
+out["names"] = c.getRobotNames()
+r = c.getRobotInterface(out["names"][0])
+mc, rs = r.getMotionControl(), r.getRobotState()
+out["setTcpOffset"] = r.getRobotConfig().setTcpOffset([0.0, 0.0, 0.2, 0.0, 0.0, 0.0])
+out["setSpeedFraction"] = mc.setSpeedFraction(0.5)
+out["moveJoint"] = mc.moveJoint([0.0, 0.3, 1.6, 0.3, 1.57, 0.0], 1.0, 0.5, 0.0, 0.0)
+start = rs.getTcpPose()
+target = list(start)
+target[2] -= 0.05
+out["moveLine"] = mc.moveLine(target, 0.3, 0.05, 0.0, 0.0)
+out["moveLine_too_fast"] = mc.moveLine(start, 0.3, 9.0, 0.0, 0.0)
+out["getExecId"] = mc.getExecId()
+out["isSteady"] = rs.isSteady()
+out["target"] = target
+out["getTcpPose"] = rs.getTcpPose()
+out["getJointPositions"] = rs.getJointPositions()
+alg = r.getRobotAlgorithm()
+ik_target = list(out["getTcpPose"])
+ik_target[0] += 0.02
+out["ik"] = alg.inverseKinematics(out["getJointPositions"], ik_target)
+out["fk"] = alg.forwardKinematics(list(out["ik"][0]))
+out["ik_target"] = ik_target
+out["ik_far"] = alg.inverseKinematics(out["getJointPositions"], [3.0, 0.0, 0.1, 3.14, 0.0, 0.0])
+out["kinematics"] = r.getRobotConfig().getKinematicsParam(True)
+try:
+    rs.getJointSpeeds()
+except Exception as e:
+    out["unknown_method"] = str(e)
+c.disconnect()
+print(json.dumps(out))
+"#;
+
+#[test]
+fn the_official_sdk_client_drives_the_simulator() {
+    let have = Command::new("python3").args(["-c", "import pyaubo_sdk"]).output().is_ok_and(|o| o.status.success());
+    if !have {
+        // Written to the terminal directly (not captured), so a skipped run says so.
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED the_official_sdk_client_drives_the_simulator: python3 cannot import pyaubo_sdk \
+             (`python3 -m pip install pyaubo-sdk`, CPython 3.11 on x86-64 Linux)"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace.jsonl");
+    let port = free_port();
+    let sim = Sim::start(port, &["--trace", s(&trace)]);
+    let mut py = Command::new("python3")
+        .args(["-c", SDK_SCRIPT, &port.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Bounded: the SDK's own request timeout is 3 s per call.
+    let mut done = None;
+    for _ in 0..300 {
+        if let Some(st) = py.try_wait().unwrap() {
+            done = Some(st);
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    if done.is_none() {
+        let _ = py.kill();
+    }
+    let o = py.wait_with_output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "the SDK script failed:\n{stdout}\n{stderr}");
+    let j: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    for k in ["connect", "login", "setTcpOffset", "setSpeedFraction", "moveJoint", "moveLine"] {
+        assert_eq!(j[k], 0, "{k}: {j}");
+    }
+    assert_eq!(j["logined"], true);
+    assert_eq!(j["names"], serde_json::json!(["rob1"]));
+    assert_eq!(j["moveLine_too_fast"], -5, "the simulator's range check reaches the SDK");
+    assert_eq!(j["getExecId"], -1);
+    assert_eq!(j["isSteady"], true);
+    let pose: Vec<f64> = serde_json::from_value(j["getTcpPose"].clone()).unwrap();
+    let target: Vec<f64> = serde_json::from_value(j["target"].clone()).unwrap();
+    assert!(pose.iter().zip(&target).all(|(a, b)| (a - b).abs() < 1e-12), "{pose:?} vs {target:?}");
+    assert_eq!(serde_json::from_value::<Vec<f64>>(j["getJointPositions"].clone()).unwrap().len(), 6);
+    // The kinematics services reach the SDK as its (values, status) tuples and its dict: the
+    // forward kinematics of the inverse's answer reproduces the pose asked for.
+    assert_eq!(j["ik"][1], 0, "{j}");
+    assert_eq!(j["fk"][1], 0, "{j}");
+    let fk: Vec<f64> = serde_json::from_value(j["fk"][0].clone()).unwrap();
+    let want: Vec<f64> = serde_json::from_value(j["ik_target"].clone()).unwrap();
+    let (a, b) = (robot_io::pose::Pose(fk.try_into().unwrap()), robot_io::pose::Pose(want.try_into().unwrap()));
+    let (a, b) = (a.to_iso(), b.to_iso());
+    // Within the inverse's own tolerance (0.01 mm, 1e-4 rad: `kinematics::DhParams::inverse`).
+    assert!((a.translation.vector - b.translation.vector).norm() < 1e-5, "{j}");
+    assert!(a.rotation.angle_to(&b.rotation) < 1e-4, "{j}");
+    assert_eq!(j["ik_far"][1], -10, "an unreachable pose: {j}");
+    let k = robot_io::kinematics::DhParams::AUBO_I5;
+    for (name, want) in [("a", k.a_m), ("alpha", k.alpha_rad), ("d", k.d_m), ("theta", k.theta_rad)] {
+        let got: Vec<f64> = serde_json::from_value(j["kinematics"][name].clone()).unwrap();
+        assert_eq!(got, want, "{name}");
+    }
+    // A JSON-RPC error reaches the SDK as an exception naming the method, code and message.
+    let e = j["unknown_method"].as_str().unwrap();
+    assert!(e.contains("getJointSpeeds") && e.contains("-32601") && e.contains("method not found"), "{e}");
+    // The simulator executed the SDK's moves: a joint move, then a line 50 mm straight down.
+    std::thread::sleep(Duration::from_millis(300));
+    drop(sim);
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let samples: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert!(samples.iter().any(|t| t["kind"] == "joint") && samples.iter().any(|t| t["kind"] == "line"));
+    let last: Vec<f64> = serde_json::from_value(samples.last().unwrap()["pose"].clone()).unwrap();
+    assert!(last.iter().zip(&target).all(|(a, b)| (a - b).abs() < 1e-9), "{last:?}");
+}

@@ -1,0 +1,92 @@
+//! Where glyphs come from: the embedded set or a hanzi-writer-data folder, fonts, or images,
+//! with stroke templates for the glyphs that have no stroke data of their own.
+
+use std::path::{Path, PathBuf};
+
+use trajectory::Method;
+use trajectory::glyph::{self, FontSet, Glyph, GlyphError, GlyphSource};
+
+use crate::{Error, Prepared, Result, prepare_with_template};
+
+/// A glyph source, opened once and asked for one character at a time.
+#[derive(Debug)]
+pub enum GlyphInput {
+    /// The embedded set (`None`), or a hanzi-writer-data folder.
+    Hanzi(Option<PathBuf>),
+    /// Fonts, with hanzi stroke data (embedded, or the folder) as templates.
+    Fonts(FontSet, Option<PathBuf>),
+    /// Images, one per character, with hanzi stroke data as templates.
+    Images(Vec<(char, PathBuf)>, Option<PathBuf>),
+}
+
+impl GlyphInput {
+    /// Opens fonts (files or folders; nothing decoded yet); `face_index` picks a face of a
+    /// collection; `hanzi` is the folder stroke templates come from (`None`: embedded).
+    ///
+    /// # Errors
+    /// [`Error::Glyph`] when a path is unreadable or holds no font.
+    pub fn fonts(paths: &[PathBuf], face_index: Option<u32>, hanzi: Option<PathBuf>) -> Result<Self> {
+        Ok(GlyphInput::Fonts(FontSet::open(paths, face_index)?, hanzi))
+    }
+
+    /// The glyph of `ch` and, for a font or image glyph, the character's stroke template when
+    /// there is one (`None` when neither the embedded set nor the folder has the character).
+    ///
+    /// # Errors
+    /// [`Error::Glyph`] when the source does not cover `ch` or cannot be read;
+    /// [`Error::NoImage`] when an image source has no image for `ch`; [`Error::Template`] when
+    /// the template exists but cannot be read.
+    pub fn load(&self, ch: char) -> Result<(Glyph, Option<Glyph>)> {
+        let template = |dir: &Option<PathBuf>| -> Result<Option<Glyph>> {
+            let found = match dir {
+                Some(d) => glyph::from_hanzi_dir(d, ch),
+                None => glyph::embedded(ch),
+            };
+            match found {
+                Ok(g) => Ok(Some(g)),
+                Err(GlyphError::Unknown { .. }) => Ok(None),
+                Err(source) => Err(Error::Template { ch, source }),
+            }
+        };
+        Ok(match self {
+            GlyphInput::Hanzi(Some(dir)) => (glyph::from_hanzi_dir(dir, ch)?, None),
+            GlyphInput::Hanzi(None) => (glyph::embedded(ch)?, None),
+            GlyphInput::Fonts(set, dir) => (set.glyph(ch)?, template(dir)?),
+            GlyphInput::Images(files, dir) => {
+                let path: &Path = files.iter().find(|(c, _)| *c == ch).map(|(_, p)| p).ok_or(Error::NoImage(ch))?;
+                (glyph::from_image(path, ch)?, template(dir)?)
+            }
+        })
+    }
+
+    /// [`GlyphInput::load`] then [`prepare_loaded`].
+    ///
+    /// # Errors
+    /// As both.
+    pub fn prepare(&self, ch: char, method: Option<Method>) -> Result<Prepared> {
+        prepare_loaded(self.load(ch)?, method)
+    }
+}
+
+/// Finds the centre lines of a loaded glyph and its template (see [`prepare_with_template`]),
+/// refusing a glyph that gave no strokes and a registration where most template strokes found
+/// no ink (the glyph is then not this character, or not legible: writing the template where
+/// it landed would be a guess). Strokes that found no ink are listed in the result's
+/// [`Prepared::template`].
+///
+/// # Errors
+/// [`Error::NoStrokes`], and the errors of [`prepare_with_template`].
+pub fn prepare_loaded(loaded: (Glyph, Option<Glyph>), method: Option<Method>) -> Result<Prepared> {
+    let (g, template) = loaded;
+    let p = prepare_with_template(g, method, template.as_ref())?;
+    let missing = p.template.as_ref().map(|t| (t.missing.len(), t.strokes));
+    let mostly_missing = missing.is_some_and(|(m, n)| m * 2 > n);
+    if p.paths.is_empty() || mostly_missing {
+        let image = match &p.glyph.source {
+            GlyphSource::Image(path) => Some(PathBuf::from(path)),
+            _ => None,
+        };
+        return Err(Error::NoStrokes { ch: p.glyph.ch, image, missing: missing.filter(|_| mostly_missing) });
+    }
+    Ok(p)
+}

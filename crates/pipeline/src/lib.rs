@@ -1,0 +1,55 @@
+//! maobi's character pipeline: a character's glyph → its centre lines → a char box and corner
+//! splits → a brush track → the robot program, checked and run as the controller would →
+//! renders of the plan and of what the robot writes → CSIM, SSIM and IoU against the glyph;
+//! and several characters laid out on a sheet.
+//!
+//! The pipeline is a library: it knows no command line, prints nothing and writes no file.
+//! `maobi write` and `maobi evaluate`, `cargo xtask`'s gates and style tables, and the benches
+//! all call it.
+//!
+//! # Examples
+//! ```
+//! use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
+//!
+//! let pen1 = brush_model::BrushProfile::builtin("pen1")?;
+//! let glyph = trajectory::glyph::embedded('永')?;
+//! let prepared = prepare(glyph, None)?;
+//! let opts = WriteOptions { size: 128, ..WriteOptions::default() };
+//! let written = write_placed(&prepared, &pen1, &opts, BoxRule::Auto)?;
+//! let executed = written.report.executed.expect("executed by default");
+//! assert!(executed.csim > 0.8, "executed CSIM {}", executed.csim);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod error;
+mod glyphs;
+mod placement;
+mod prepare;
+mod sheet;
+mod text;
+mod write;
+
+pub use error::{Error, Result};
+pub use glyphs::{GlyphInput, prepare_loaded};
+pub use placement::{
+    BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
+    write_placed,
+};
+pub use prepare::{ANALYSIS_PX, Prepared, TemplateReport, prepare, prepare_with_template};
+pub use sheet::{
+    BRUSH_FIT_CLAMPED_SHARE, BRUSH_FIT_SIZE_FACTOR, BrushFit, BrushMiss, Flow, GAP_FRACTION, Grid, Layout,
+    MAX_SHEET_MM, Sheet, SheetChar, SheetError, SheetTrack, auto_layout, layout_on_sheet, parse_sheet, sheet_image,
+};
+pub use text::{TextOptions, WrittenText, write_text};
+pub use track_refine::RefineOptions;
+#[cfg(feature = "generator")]
+pub use write::rerender_with_generator;
+pub use write::{
+    CharReport, CharResult, RefineReport, Similarity, WriteOptions, execute_track, gray, level_frame_for,
+    refine_target, render_char, render_states, side_by_side, similarity, write_char,
+};
+
+// The README's example runs as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -1,0 +1,109 @@
+//! Several characters written together: one box size, laid out on a sheet or automatically.
+
+use brush_model::BrushProfile;
+use rayon::prelude::*;
+use trajectory::Method;
+
+use crate::sheet::{Flow, Layout, auto_layout};
+use crate::{CharResult, Prepared, Result, WriteOptions, searched_placement, searched_splits, write_char};
+
+/// How [`write_text`] sizes and lays out its characters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextOptions {
+    /// The layout on a sheet, planned beforehand ([`crate::layout_on_sheet`]); `None`: an
+    /// automatic layout ([`auto_layout`]) at `char_mm`.
+    pub layout: Option<Layout>,
+    /// The char box side without a sheet layout, mm; `None`: the size that suits the brush for
+    /// all the glyphs together ([`trajectory::auto_char_mm`]), or the searched size for a
+    /// single template character.
+    pub char_mm: Option<f64>,
+    /// Characters per column (or row) of the automatic layout.
+    pub per_line: usize,
+    /// Columns right to left, or rows left to right.
+    pub flow: Flow,
+    /// Whether template tracks ([`Method::Template`]) are placed by search: a single character
+    /// without a given size searches its box size and corner splits ([`searched_placement`]),
+    /// characters sharing a box size search their splits ([`searched_splits`]). Other methods
+    /// are not affected.
+    pub search_templates: bool,
+}
+
+impl Default for TextOptions {
+    fn default() -> Self {
+        Self { layout: None, char_mm: None, per_line: 4, flow: Flow::Columns, search_templates: true }
+    }
+}
+
+/// What [`write_text`] wrote.
+pub struct WrittenText {
+    /// Where the characters sit.
+    pub layout: Layout,
+    /// One result per character, in writing order.
+    pub results: Vec<CharResult>,
+    /// The char box side that suits the brush for all the glyphs together, mm (for
+    /// [`crate::BrushFit`]).
+    pub brush_char_mm: f64,
+}
+
+/// Writes prepared characters in one box size ([`write_char`] each, in parallel), laid out by
+/// `text`; `on_char` is called as each character is done (for progress).
+///
+/// # Errors
+/// The first character's error, as [`write_char`] and [`searched_placement`] give it.
+///
+/// # Examples
+/// ```
+/// use pipeline::{TextOptions, WriteOptions, prepare, write_text};
+/// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
+/// let chars = ['十', '口'].map(|c| prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap());
+/// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
+/// let w = write_text(chars.to_vec(), &pen1, &opts, &TextOptions::default(), &|| {})?;
+/// assert_eq!(w.results.len(), 2);
+/// assert_eq!(w.layout.boxes[0].size_mm, w.layout.boxes[1].size_mm);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_text(
+    prepared: Vec<Prepared>,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    text: &TextOptions,
+    on_char: &(dyn Fn() + Sync),
+) -> Result<WrittenText> {
+    let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
+    let brush_char_mm = trajectory::auto_char_mm(&all, profile, opts.alpha_rad);
+    let search = |p: &Prepared| text.search_templates && p.method == Method::Template;
+    // One template character on its own: its box size is searched too.
+    let single_searched = match (&prepared[..], &text.layout, text.char_mm) {
+        ([p], None, None) if search(p) => Some(searched_placement(p, profile, opts)?),
+        _ => None,
+    };
+    let layout = match &text.layout {
+        Some(l) => l.clone(),
+        None => auto_layout(
+            prepared.len(),
+            text.char_mm.or(single_searched.as_ref().map(|pl| pl.size_mm)).unwrap_or(brush_char_mm),
+            text.per_line,
+            text.flow,
+        ),
+    };
+    let char_mm = layout.char_mm;
+    // Template characters sharing the box size: their corner splits are searched.
+    let prepared: Vec<Prepared> = prepared
+        .into_par_iter()
+        .map(|p| match &single_searched {
+            Some(pl) => Ok(p.placed(pl)),
+            None if search(&p) => Ok(p.placed(&searched_splits(&p, profile, opts, char_mm)?)),
+            None => Ok(p),
+        })
+        .collect::<Result<_>>()?;
+    let results: Vec<CharResult> = prepared
+        .par_iter()
+        .zip(layout.boxes.par_iter())
+        .map(|(p, b)| {
+            let r = write_char(p, profile, *b, opts);
+            on_char();
+            r
+        })
+        .collect::<Result<_>>()?;
+    Ok(WrittenText { layout, results, brush_char_mm })
+}

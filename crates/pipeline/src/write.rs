@@ -1,0 +1,500 @@
+//! One character written: the track built from its centre lines in a char box, its render,
+//! the robot program run as the controller would, and the scores of both against the glyph.
+
+use std::time::Instant;
+
+use bezier_raster::{Coverage, ModelKind, render_stamps, render_track, sweep_stamps};
+use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
+use robot_io::frame::PaperFrame;
+use robot_io::program::{RobotConfig, build_program};
+use serde::Serialize;
+use stroke_metrics::GrayRef;
+use track_refine::{LossTerms, RefineOptions, Target};
+use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, raster::render_glyph};
+
+use crate::{Error, Prepared, Result, TemplateReport};
+
+/// Options of [`write_char`].
+#[derive(Clone)]
+pub struct WriteOptions {
+    /// Centre-line method; `None` picks medians when the source has them.
+    pub method: Option<Method>,
+    /// Stroke model for rendering.
+    pub model: ModelKind,
+    /// Side of the render and reference images, px.
+    pub size: u32,
+    /// Constant tilt, radians.
+    pub alpha_rad: f64,
+    /// Track point spacing, mm.
+    pub spacing_mm: f64,
+    /// Also score the plan with footprints sized freely from the glyph ([`CharReport::free_widths`]).
+    pub free_widths: bool,
+    /// Also run the track as a robot program (default paper frame and `robot.json`, the
+    /// simulator's motion) and score what it writes.
+    pub execute: bool,
+    /// Refine the built track by gradient descent against the glyph (`track_refine`); `None`
+    /// leaves the track as built.
+    pub refine: Option<RefineOptions>,
+    /// The generator refinement takes its gradients from when [`WriteOptions::refine`] asks for
+    /// [`track_refine::Gradients::Generator`] (the caller loads it once and shares it).
+    #[cfg(feature = "generator")]
+    pub generator: Option<std::sync::Arc<track_refine::generator::GenModel>>,
+}
+
+impl std::fmt::Debug for WriteOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut d = f.debug_struct("WriteOptions");
+        d.field("method", &self.method)
+            .field("model", &self.model)
+            .field("size", &self.size)
+            .field("alpha_rad", &self.alpha_rad)
+            .field("spacing_mm", &self.spacing_mm)
+            .field("free_widths", &self.free_widths)
+            .field("execute", &self.execute)
+            .field("refine", &self.refine);
+        #[cfg(feature = "generator")]
+        d.field("generator", &self.generator.as_ref().map(|_| "a generator"));
+        d.finish()
+    }
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        Self {
+            method: None,
+            model: ModelKind::Bsm,
+            size: 512,
+            alpha_rad: 0.0,
+            spacing_mm: trajectory::DEFAULT_SPACING_MM,
+            free_widths: true,
+            execute: true,
+            refine: None,
+            #[cfg(feature = "generator")]
+            generator: None,
+        }
+    }
+}
+
+/// CSIM, SSIM and IoU of a render against its reference.
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+pub struct Similarity {
+    /// Cosine similarity.
+    pub csim: f64,
+    /// Structural similarity.
+    pub ssim: f64,
+    /// Intersection over union at 0.5.
+    pub iou: f64,
+}
+
+/// Scores `render` against `reference` (same size).
+pub fn similarity(reference: &Coverage, render: &Coverage) -> Result<Similarity> {
+    let g = gray;
+    Ok(Similarity {
+        csim: stroke_metrics::csim(g(reference), g(render))?,
+        ssim: stroke_metrics::ssim(g(reference), g(render))?,
+        iou: stroke_metrics::iou(g(reference), g(render))?,
+    })
+}
+
+/// Wraps a coverage image for the metrics crate.
+pub fn gray(c: &Coverage) -> GrayRef<'_> {
+    GrayRef::new(c.data(), c.width() as usize, c.height() as usize)
+        .expect("coverage buffers have width × height values")
+}
+
+/// Everything `maobi write` reports for one character.
+#[derive(Clone, Debug, Serialize)]
+pub struct CharReport {
+    /// The character.
+    pub char: String,
+    /// Glyph source kind.
+    pub source: &'static str,
+    /// `medians`, `skeleton` or `template`.
+    pub method: &'static str,
+    /// Stroke model.
+    pub model: &'static str,
+    /// Render vs reference.
+    pub csim: f64,
+    /// Render vs reference.
+    pub ssim: f64,
+    /// Render vs reference.
+    pub iou: f64,
+    /// Symmetric chamfer distance of the track to the medians, % of the em box (null without
+    /// medians).
+    pub chamfer_pct: Option<f64>,
+    /// Strokes in the source (null without medians).
+    pub strokes_expected: Option<usize>,
+    /// Strokes in the track.
+    pub strokes_found: usize,
+    /// Track points.
+    pub points: usize,
+    /// Wall time of track building, rendering and scoring, ms.
+    pub millis: f64,
+    /// Char box side, mm.
+    pub char_mm: f64,
+    /// Points whose glyph width was below / above what the brush can make (h clamped).
+    pub clamped_low: usize,
+    /// See `clamped_low`.
+    pub clamped_high: usize,
+    /// The plan's scores with every footprint sized freely from the glyph's width (h unclamped,
+    /// extrapolating beyond the brush's calibrated range). Not a bound: clamping can score higher
+    /// on some characters (an overshooting free width costs more than a clamped one).
+    pub free_widths: Option<Similarity>,
+    /// What the robot would write (the program executed as the simulator moves, through the
+    /// forward model) against the glyph: the headline figure.
+    pub executed: Option<Similarity>,
+    /// The plan's render against the executed render (how far the plan can be trusted).
+    pub agreement: Option<Similarity>,
+    /// Before/after figures of the refinement (when [`WriteOptions::refine`] is set); the
+    /// figures above are then those of the refined track (or of the built one if the refined
+    /// track was rejected).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refine: Option<RefineReport>,
+    /// What template registration found (`--from template` on a font or image glyph).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub template: Option<TemplateReport>,
+}
+
+/// What refinement did to one character.
+#[derive(Clone, Debug, Serialize)]
+pub struct RefineReport {
+    /// The options used.
+    pub options: RefineOptions,
+    /// The built track's render vs the glyph.
+    pub planned_before: Similarity,
+    /// The refined track's render vs the glyph.
+    pub planned_after: Similarity,
+    /// What the built track's program writes vs the glyph (when executing).
+    pub executed_before: Option<Similarity>,
+    /// What the refined track's program writes vs the glyph (when executing).
+    pub executed_after: Option<Similarity>,
+    /// The loss before each step and after the last.
+    pub curve: Vec<LossTerms>,
+    /// Variables refined.
+    pub variables: usize,
+    /// Footprints in the image term.
+    pub footprints: usize,
+    /// Wall time of the refinement itself, ms.
+    pub millis: f64,
+    /// Why the refined track was not used (it failed `robot check`), if it was not.
+    pub rejected: Option<String>,
+}
+
+/// One written character.
+pub struct CharResult {
+    /// The report.
+    pub report: CharReport,
+    /// The track on the paper.
+    pub track: Track,
+    /// Where the character sits.
+    pub char_box: CharBox,
+    /// The render, `size²`, em box on the whole image.
+    pub render: Coverage,
+    /// The reference glyph at the same scale.
+    pub reference: Coverage,
+    /// What the executed program writes, same framing (when [`WriteOptions::execute`]).
+    pub executed: Option<Coverage>,
+    /// The executed brush states on the paper (when [`WriteOptions::execute`]).
+    pub executed_states: Option<Vec<TrackPoint>>,
+}
+
+/// The paper frame `maobi write` runs its program on: a level sheet
+/// ([`robot_io::exec::level_frame_in_front`]) with the char box's centre in front of the AUBO-i5
+/// at base (0.45, 0.05, 0.05) m, usable one box size around the box.
+pub fn level_frame_for(b: &CharBox) -> PaperFrame {
+    robot_io::exec::level_frame_in_front(
+        [b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0],
+        [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm],
+    )
+}
+
+/// Builds the robot program of a track (checked like `maobi robot check`) and executes it as the
+/// simulator does; returns the executed brush states on the paper.
+///
+/// # Errors
+/// The check's error when the program fails it.
+pub fn execute_track(
+    track: &Track,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+) -> Result<Vec<TrackPoint>, robot_io::RobotError> {
+    let (program, _) = build_program(track, profile, frame, cfg)?;
+    let trace = robot_io::exec::execute_program(&program);
+    Ok(robot_io::exec::trace_to_states(&trace, frame))
+}
+
+/// Renders brush states (an executed path) through the forward model over a char box onto a
+/// `size²` image of the box.
+pub fn render_states(
+    states: &[TrackPoint],
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Coverage {
+    let stamps = sweep_stamps(states, profile, ex);
+    render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
+}
+
+/// Renders a track over a char box onto a `size²` image of the box.
+///
+/// # Errors
+/// When the profile refuses a point.
+pub fn render_char(
+    track: &Track,
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Result<Coverage> {
+    Ok(render_track(
+        track,
+        profile,
+        model.model(),
+        ex,
+        PointMm::new(b.x0_mm, b.y0_mm),
+        size as f64 / b.size_mm,
+        size,
+        size,
+    )?)
+}
+
+/// Builds, renders and scores one prepared character placed at `char_box`.
+///
+/// # Errors
+/// When the profile refuses the track or the images cannot be scored.
+pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts: &WriteOptions) -> Result<CharResult> {
+    let t0 = Instant::now();
+    let topts =
+        TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
+    let built = build_track(&p.paths, profile, &topts)?;
+    let render = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
+    let reference = render_glyph(&p.glyph, opts.size);
+    let sim = similarity(&reference, &render)?;
+    let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
+    let millis = t0.elapsed().as_secs_f64() * 1e3;
+    let free_widths = if opts.free_widths {
+        let free = build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
+        let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+        Some(similarity(&reference, &img)?)
+    } else {
+        None
+    };
+    let (executed, agreement, executed_img, executed_states) = if opts.execute {
+        let (states, img) = execute_and_render(&built.track, profile, opts, &char_box)
+            .map_err(|source| Error::Check { ch: p.glyph.ch.to_string(), source })?;
+        (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
+    } else {
+        (None, None, None, None)
+    };
+    let report = CharReport {
+        char: p.glyph.ch.to_string(),
+        source: p.glyph.source.kind(),
+        method: p.method.name(),
+        model: opts.model.name(),
+        csim: sim.csim,
+        ssim: sim.ssim,
+        iou: sim.iou,
+        chamfer_pct: chamfer,
+        strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.template.as_ref().map(|t| t.strokes)),
+        strokes_found: built.track.strokes.len(),
+        points: built.track.point_count(),
+        millis,
+        char_mm: char_box.size_mm,
+        clamped_low: built.clamped_low,
+        clamped_high: built.clamped_high,
+        free_widths,
+        executed,
+        agreement,
+        refine: None,
+        template: p.template.clone(),
+    };
+    let mut result =
+        CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };
+    if let Some(ro) = &opts.refine {
+        refine_result(&mut result, p, profile, opts, ro)?;
+    }
+    Ok(result)
+}
+
+/// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
+/// char box with the default `robot.json` ([`execute_track`]), rendered like the plan
+/// ([`render_states`]). Returns the executed states and their render.
+fn execute_and_render(
+    track: &Track,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    char_box: &CharBox,
+) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
+    let states = execute_track(track, profile, &level_frame_for(char_box), &RobotConfig::default())?;
+    let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, char_box, opts.size);
+    Ok((states, img))
+}
+
+/// The glyph raster a track is refined against: the em box (the char box on the paper) at
+/// `px²`.
+///
+/// # Errors
+/// [`Error::Refine`] when `px` or the box make no usable target.
+pub fn refine_target(glyph: &Glyph, char_box: &CharBox, px: u32) -> Result<Target> {
+    let img = render_glyph(glyph, px);
+    Target::new(px, px, img.data().to_vec(), PointMm::new(char_box.x0_mm, char_box.y0_mm), char_box.size_mm / px as f64)
+        .map_err(|source| Error::Refine { ch: glyph.ch, source })
+}
+
+/// Refines a written character's track against its glyph and replaces the result's track,
+/// renders and figures by the refined ones, keeping the built track's figures as "before".
+/// A refined track that fails the robot check is not used (the report says why).
+fn refine_result(
+    r: &mut CharResult,
+    p: &Prepared,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    ro: &RefineOptions,
+) -> Result<()> {
+    let target = refine_target(&p.glyph, &r.char_box, ro.analysis_px)?;
+    let refined = match ro.gradients {
+        track_refine::Gradients::Analytic => track_refine::refine(&r.track, profile, &target, ro),
+        #[cfg(feature = "generator")]
+        track_refine::Gradients::Generator => {
+            let g = opts.generator.clone().ok_or(Error::NoGenerator)?;
+            track_refine::refine_with_generator(&r.track, profile, &target, ro, g)
+        }
+        #[cfg(not(feature = "generator"))]
+        track_refine::Gradients::Generator => return Err(Error::NoGenerator),
+    }
+    .map_err(|source| Error::Refine { ch: p.glyph.ch, source })?;
+    let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
+    let planned_after = similarity(&r.reference, &render)?;
+    let planned_before = Similarity { csim: r.report.csim, ssim: r.report.ssim, iou: r.report.iou };
+    let mut rejected = None;
+    let mut executed_after = None;
+    let mut executed = None;
+    if opts.execute {
+        match execute_and_render(&refined.track, profile, opts, &r.char_box) {
+            Ok((states, img)) => {
+                executed_after = Some(similarity(&r.reference, &img)?);
+                executed = Some((img, states));
+            }
+            Err(e) => rejected = Some(format!("the refined track fails `robot check`: {e}")),
+        }
+    } else if let Err(e) =
+        build_program(&refined.track, profile, &level_frame_for(&r.char_box), &RobotConfig::default())
+    {
+        rejected = Some(format!("the refined track fails `robot check`: {e}"));
+    }
+    let report = RefineReport {
+        options: *ro,
+        planned_before,
+        planned_after,
+        executed_before: r.report.executed,
+        executed_after,
+        curve: refined.curve,
+        variables: refined.variables,
+        footprints: refined.footprints,
+        millis: refined.millis,
+        rejected: rejected.clone(),
+    };
+    if rejected.is_none() {
+        (r.report.csim, r.report.ssim, r.report.iou) = (planned_after.csim, planned_after.ssim, planned_after.iou);
+        r.report.points = refined.track.point_count();
+        if let Some((img, states)) = executed {
+            r.report.executed = executed_after;
+            r.report.agreement = Some(similarity(&render, &img)?);
+            r.executed = Some(img);
+            r.executed_states = Some(states);
+        }
+        if let Some(m) = p.glyph.medians.as_ref() {
+            r.report.chamfer_pct = Some(chamfer_pct(&refined.track, &r.char_box, m));
+        }
+        r.track = refined.track;
+        r.render = render;
+    }
+    r.report.refine = Some(report);
+    Ok(())
+}
+
+/// Images of one height side by side, left to right, with a 4 px white gap between them (for
+/// reference | plan | executed).
+pub fn side_by_side(images: &[&Coverage]) -> Coverage {
+    let gap = 4u32;
+    let h = images.iter().map(|c| c.height()).max().unwrap_or(0);
+    let w = images.iter().map(|c| c.width()).sum::<u32>() + gap * images.len().saturating_sub(1) as u32;
+    let mut out = Coverage::new(w, h);
+    let mut x0 = 0usize;
+    let ow = w as usize;
+    for c in images {
+        let cw = c.width() as usize;
+        for y in 0..c.height() as usize {
+            out.data_mut()[y * ow + x0..y * ow + x0 + cw].copy_from_slice(&c.data()[y * cw..(y + 1) * cw]);
+        }
+        x0 += cw + gap as usize;
+    }
+    out
+}
+
+impl CharResult {
+    /// The character's `track.json`: its brush, its strokes on the paper, its box and, when it
+    /// was laid out on a sheet, the sheet's size (`[width, height]` mm).
+    pub fn track_file(&self, profile: &BrushProfile, sheet_mm: Option<[f64; 2]>) -> robot_io::TrackFile {
+        let b = self.char_box;
+        robot_io::TrackFile {
+            char: Some(self.report.char.clone()),
+            char_box_mm: Some([b.x0_mm, b.y0_mm, b.size_mm]),
+            sheet_mm,
+            brush: profile.clone(),
+            strokes: self.track.strokes.clone(),
+            stroke_chars: None,
+        }
+    }
+}
+
+/// Renders every result again through a B-BSMG generator trained for `profile` and scores
+/// those images instead (the plan, and the executed path when there is one); `size_px` is the
+/// side of each character's images.
+///
+/// # Errors
+/// [`Error::GeneratorBrush`] when the generator was trained for another brush;
+/// [`Error::Generator`] or [`Error::Metrics`] when rendering or scoring fails.
+#[cfg(feature = "generator")]
+pub fn rerender_with_generator(
+    results: &mut [CharResult],
+    g: &neural_gen::Generator,
+    profile: &BrushProfile,
+    size_px: u32,
+) -> Result<()> {
+    if g.config.profile.model != profile.model || g.config.profile.ranges != profile.ranges {
+        return Err(Error::GeneratorBrush { trained: g.config.profile.name.clone(), brush: profile.name.clone() });
+    }
+    for r in results.iter_mut() {
+        let b = r.char_box;
+        let neural = |t: &Track| {
+            neural_gen::compose::render_track(
+                g,
+                t,
+                PointMm::new(b.x0_mm, b.y0_mm),
+                size_px as f64 / b.size_mm,
+                size_px,
+                size_px,
+                64,
+            )
+        };
+        let img = neural(&r.track)?;
+        let sim = similarity(&r.reference, &img)?;
+        (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+        if let Some(states) = &r.executed_states {
+            // The executed path through the same generator.
+            let executed = Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };
+            let ex = neural(&executed)?;
+            r.report.executed = Some(similarity(&r.reference, &ex)?);
+            r.report.agreement = Some(similarity(&img, &ex)?);
+            r.executed = Some(ex);
+        }
+        r.report.model = "b-bsmg";
+        r.render = img;
+    }
+    Ok(())
+}
