@@ -560,12 +560,12 @@ pub fn refine_target(glyph: &Glyph, char_box: &CharBox, px: u32) -> Result<Targe
 }
 
 /// The committed pen1 generator prepared for refinement (`--gradients generator`), loaded once.
-fn committed_gen_model() -> Result<std::sync::Arc<track_refine::generator::GenModel>> {
-    static CELL: std::sync::OnceLock<Result<std::sync::Arc<track_refine::generator::GenModel>, String>> =
+fn committed_gen_model() -> Result<std::sync::Arc<track_refine::GenModel>> {
+    static CELL: std::sync::OnceLock<Result<std::sync::Arc<track_refine::GenModel>, String>> =
         std::sync::OnceLock::new();
     CELL.get_or_init(|| {
         let g = crate::generator::load_generator(None).map_err(|e| format!("{e:#}"))?;
-        track_refine::generator::GenModel::new(&g).map(std::sync::Arc::new).map_err(|e| e.to_string())
+        track_refine::GenModel::new(&g).map(std::sync::Arc::new).map_err(|e| e.to_string())
     })
     .clone()
     .map_err(|e| anyhow::anyhow!("the committed generator: {e}"))

@@ -20,8 +20,7 @@ use std::time::Instant;
 use bezier_raster::{Coverage, ModelKind, render_stamps, sweep_stamps};
 use brush_model::{BrushProfile, Extrapolation, PointMm, Track};
 use robot_io::{PaperFrame, RobotConfig, build_program};
-use track_refine::generator::GenModel;
-use track_refine::{Gradients, RefineOptions, refine, refine_with_generator};
+use track_refine::{GenModel, Gradients, RefineOptions, refine, refine_with_generator};
 use trajectory::{CharBox, Method, centre_lines, glyph, raster::render_glyph};
 
 const JUDGE_PX: u32 = 256;
