@@ -69,7 +69,6 @@ impl Analytic {
     /// order, so that pass neither scans the footprint's box again nor solves for `t*` again.
     fn union_edges(&self, r: &Raster<'_>, fps: &[Fp], want_edges: bool) -> (UnionSums, Vec<Vec<EdgePx>>) {
         let n = r.width * r.height;
-        let e = self.edge_mm;
         type Part = (Vec<f64>, Vec<u32>, Vec<Vec<EdgePx>>);
         let parts: Vec<Part> = fps
             .par_chunks(CHUNK)
@@ -78,50 +77,7 @@ impl Analytic {
                 let mut sat = vec![0u32; n];
                 let mut edges = Vec::with_capacity(if want_edges { chunk.len() } else { 0 });
                 for f in chunk {
-                    let wb = f.shape.width_bounds(WIDTH_BINS);
-                    let l = f.shape.length();
-                    let (sb, cb) = f.beta.sin_cos();
-                    let mut list = Vec::new();
-                    visit(r, e, f, (sb, cb), |k, u, v| {
-                        if u > 0.0 && u < l {
-                            match wb.classify(u, v.abs(), e) {
-                                Some(true) => {
-                                    sat[k] += 1;
-                                    return;
-                                }
-                                Some(false) => return,
-                                None => {}
-                            }
-                        }
-                        let c = if want_edges {
-                            let m = f.shape.measure_grad_with(u, v, &wb);
-                            let (c, dc) = edge(m.d, e);
-                            if c > 0.0 && c < 1.0 && dc != 0.0 {
-                                let [gu, gv, glt, glh, glr] = m.grad;
-                                list.push(EdgePx {
-                                    k: k as u32,
-                                    one_minus_c: 1.0 - c,
-                                    dc,
-                                    a: [
-                                        -cb * gu + sb * gv,
-                                        -sb * gu - cb * gv,
-                                        glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
-                                        glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
-                                        // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
-                                        gu * v - gv * u,
-                                    ],
-                                });
-                            }
-                            c
-                        } else {
-                            edge(f.shape.measure(u, v), e).0
-                        };
-                        if c >= 1.0 {
-                            sat[k] += 1;
-                        } else if c > 0.0 {
-                            s[k] += (1.0 - c).ln();
-                        }
-                    });
+                    let list = self.add_footprint(r, f, want_edges, &mut s, &mut sat);
                     if want_edges {
                         edges.push(list);
                     }
@@ -140,6 +96,57 @@ impl Analytic {
             edges.extend(pe);
         }
         (UnionSums { log_keep: s, saturated: Some(sat) }, edges)
+    }
+
+    /// Adds footprint `f`'s coverage to the union's sums `s` (`Σ ln(1 − c)`) and `sat`
+    /// (saturated coverages) and, when `want_edges`, returns its soft edge's pixels.
+    fn add_footprint(&self, r: &Raster<'_>, f: &Fp, want_edges: bool, s: &mut [f64], sat: &mut [u32]) -> Vec<EdgePx> {
+        let e = self.edge_mm;
+        let wb = f.shape.width_bounds(WIDTH_BINS);
+        let l = f.shape.length();
+        let (sb, cb) = f.beta.sin_cos();
+        let mut list = Vec::new();
+        visit(r, e, f, (sb, cb), |k, u, v| {
+            if u > 0.0 && u < l {
+                match wb.classify(u, v.abs(), e) {
+                    Some(true) => {
+                        sat[k] += 1;
+                        return;
+                    }
+                    Some(false) => return,
+                    None => {}
+                }
+            }
+            let c = if want_edges {
+                let m = f.shape.measure_grad_with(u, v, &wb);
+                let (c, dc) = edge(m.d, e);
+                if c > 0.0 && c < 1.0 && dc != 0.0 {
+                    let [gu, gv, glt, glh, glr] = m.grad;
+                    list.push(EdgePx {
+                        k: k as u32,
+                        one_minus_c: 1.0 - c,
+                        dc,
+                        a: [
+                            -cb * gu + sb * gv,
+                            -sb * gu - cb * gv,
+                            glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
+                            glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
+                            // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
+                            gu * v - gv * u,
+                        ],
+                    });
+                }
+                c
+            } else {
+                edge(f.shape.measure(u, v), e).0
+            };
+            if c >= 1.0 {
+                sat[k] += 1;
+            } else if c > 0.0 {
+                s[k] += (1.0 - c).ln();
+            }
+        });
+        list
     }
 }
 

@@ -84,12 +84,12 @@ impl UnionSums {
         let n = self.log_keep.len();
         let mut image = 0.0;
         let mut q = vec![0.0f64; n];
-        for k in 0..n {
+        for (k, qk) in q.iter_mut().enumerate() {
             let prod = self.keep(k);
             let u = 1.0 - prod;
             let res = u - r.ink[k] as f64;
             image += res * res;
-            q[k] = 2.0 * res / r.ink_sum * prod;
+            *qk = 2.0 * res / r.ink_sum * prod;
         }
         image /= r.ink_sum;
         (image, q)

@@ -3,6 +3,7 @@
 //! that takes the image term's per-footprint partials back to the variables.
 
 use super::{Directions, Problem};
+use crate::Target;
 use crate::image::Fp;
 use crate::soft::Shape;
 
@@ -37,42 +38,9 @@ impl Problem<'_> {
                 let [lt, lh, lr] = terms.map(|t| t.eval(h, alpha, bs).max(1e-6));
                 let dh = terms.map(|t| t.h_mm.unwrap_or(0.0));
                 let da = terms.map(|t| t.alpha_rad.unwrap_or(0.0));
-                let (sb, cb) = beta.sin_cos();
                 let shape = Shape { lt, lh, lr };
-                // Local box u ∈ [−e, L + e], |v| ≤ lr + e, rotated onto the paper.
-                let (ul, uh, vh) = (-e, shape.length() + e, lr + e);
-                let (mut xmin, mut xmax, mut ymin, mut ymax) =
-                    (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
-                for (u, v) in [(ul, -vh), (ul, vh), (uh, -vh), (uh, vh)] {
-                    let (px, py) = (x + u * cb - v * sb, y + u * sb + v * cb);
-                    xmin = xmin.min(px);
-                    xmax = xmax.max(px);
-                    ymin = ymin.min(py);
-                    ymax = ymax.max(py);
-                }
-                let col = |v: f64, up: bool| {
-                    let f = (v - t.origin_mm.x_mm) / t.mm_per_px - 0.5;
-                    if up { f.floor() as i64 } else { f.ceil() as i64 }
-                };
-                let row = |v: f64, up: bool| {
-                    let f = (v - t.origin_mm.y_mm) / t.mm_per_px - 0.5;
-                    if up { f.floor() as i64 } else { f.ceil() as i64 }
-                };
-                let (w, hgt) = (t.width as i64, t.height as i64);
-                Fp {
-                    x,
-                    y,
-                    h,
-                    alpha,
-                    beta,
-                    shape,
-                    dh,
-                    da,
-                    i0: col(xmin, false).max(0),
-                    i1: col(xmax, true).min(w - 1),
-                    j0: row(ymin, false).max(0),
-                    j1: row(ymax, true).min(hgt - 1),
-                }
+                let [i0, i1, j0, j1] = pixel_box(t, e, (x, y), beta, &shape);
+                Fp { x, y, h, alpha, beta, shape, dh, da, i0, i1, j0, j1 }
             })
             .collect()
     }
@@ -118,4 +86,31 @@ impl Problem<'_> {
             }
         }
     }
+}
+
+/// The inclusive pixel box `[i0, i1, j0, j1]` on `t` (clipped to it; empty when `i0 > i1`) of
+/// a footprint's band `u ∈ [−e, L + e]`, `|v| ≤ lr + e` (`e` the edge half-width, mm), the
+/// footprint at `(x, y)` mm pointing along `beta` rad.
+fn pixel_box(t: &Target, e: f64, (x, y): (f64, f64), beta: f64, shape: &Shape) -> [i64; 4] {
+    let (sb, cb) = beta.sin_cos();
+    // Local box u ∈ [−e, L + e], |v| ≤ lr + e, rotated onto the paper.
+    let (ul, uh, vh) = (-e, shape.length() + e, shape.lr + e);
+    let (mut xmin, mut xmax, mut ymin, mut ymax) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for (u, v) in [(ul, -vh), (ul, vh), (uh, -vh), (uh, vh)] {
+        let (px, py) = (x + u * cb - v * sb, y + u * sb + v * cb);
+        xmin = xmin.min(px);
+        xmax = xmax.max(px);
+        ymin = ymin.min(py);
+        ymax = ymax.max(py);
+    }
+    let col = |v: f64, up: bool| {
+        let f = (v - t.origin_mm.x_mm) / t.mm_per_px - 0.5;
+        if up { f.floor() as i64 } else { f.ceil() as i64 }
+    };
+    let row = |v: f64, up: bool| {
+        let f = (v - t.origin_mm.y_mm) / t.mm_per_px - 0.5;
+        if up { f.floor() as i64 } else { f.ceil() as i64 }
+    };
+    let (w, hgt) = (t.width as i64, t.height as i64);
+    [col(xmin, false).max(0), col(xmax, true).min(w - 1), row(ymin, false).max(0), row(ymax, true).min(hgt - 1)]
 }
