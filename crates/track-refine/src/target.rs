@@ -27,6 +27,21 @@ impl Target {
     /// # Errors
     /// [`RefineError::Target`] when the sizes disagree, a value is outside [0, 1] or not
     /// finite, or the pixel size is not a positive length.
+    ///
+    /// # Examples
+    /// ```
+    /// use track_refine::Target;
+    /// use track_refine::brush_model::PointMm;
+    ///
+    /// // 4 × 2 px at 0.5 mm per pixel, its top-left corner at (10, 20) mm; the left half inked.
+    /// let ink = vec![1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0];
+    /// let target = Target::new(4, 2, ink.clone(), PointMm::new(10.0, 20.0), 0.5)?;
+    /// assert_eq!(target.ink, ink);
+    /// // Seven values for eight pixels, or coverage above 1, are refused.
+    /// assert!(Target::new(4, 2, vec![0.0; 7], PointMm::new(0.0, 0.0), 0.5).is_err());
+    /// assert!(Target::new(1, 1, vec![1.5], PointMm::new(0.0, 0.0), 0.5).is_err());
+    /// # Ok::<(), track_refine::RefineError>(())
+    /// ```
     pub fn new(
         width: u32,
         height: u32,
