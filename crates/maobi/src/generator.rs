@@ -24,12 +24,12 @@ pub fn load_generator(path: Option<&Path>) -> Result<Generator> {
 ///
 /// # Errors
 /// When the embedded files do not load (a broken build).
-pub fn committed_gen_model() -> Result<std::sync::Arc<track_refine::generator::GenModel>> {
-    static CELL: std::sync::OnceLock<std::sync::Arc<track_refine::generator::GenModel>> = std::sync::OnceLock::new();
+pub fn committed_gen_model() -> Result<std::sync::Arc<track_refine::GenModel>> {
+    static CELL: std::sync::OnceLock<std::sync::Arc<track_refine::GenModel>> = std::sync::OnceLock::new();
     if let Some(m) = CELL.get() {
         return Ok(m.clone());
     }
     let g = load_generator(None)?;
-    let m = track_refine::generator::GenModel::new(&g).context("the committed generator")?;
+    let m = track_refine::GenModel::new(&g).context("the committed generator")?;
     Ok(CELL.get_or_init(|| std::sync::Arc::new(m)).clone())
 }

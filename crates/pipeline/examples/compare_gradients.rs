@@ -13,7 +13,7 @@ use std::sync::Arc;
 use brush_model::BrushProfile;
 use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
 use track_refine::Gradients;
-use track_refine::generator::GenModel;
+use track_refine::GenModel;
 use trajectory::{Method, glyph};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

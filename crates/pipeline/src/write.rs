@@ -38,7 +38,7 @@ pub struct WriteOptions {
     /// The generator refinement takes its gradients from when [`WriteOptions::refine`] asks for
     /// [`track_refine::Gradients::Generator`] (the caller loads it once and shares it).
     #[cfg(feature = "generator")]
-    pub generator: Option<std::sync::Arc<track_refine::generator::GenModel>>,
+    pub generator: Option<std::sync::Arc<track_refine::GenModel>>,
 }
 
 impl std::fmt::Debug for WriteOptions {

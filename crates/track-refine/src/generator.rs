@@ -1,11 +1,12 @@
-//! The generator path ([`crate::Gradients::Generator`], cargo feature `generator`): every
+//! The generator path ([`crate::Gradients::Generator`], cargo feature `generator`): an image
+//! model (`crate::image::ImageModel`) in which every
 //! footprint's image comes from the B-BSMG generator (neural-gen), placed and rotated onto the
 //! target raster by bilinear resampling (as `neural_gen::compose::render_track` places them),
 //! and the image term's gradient comes from the network and the image:
 //!
 //! * with respect to `(h, α)` (and β where the generator's β input is not clamped): the network's
 //!   vector–Jacobian product (`neural_gen::InputVjp`, one forward and one backward pass per
-//!   batch of [`BATCH`] footprints), plus the move of the footprint inside the generator's
+//!   batch of `BATCH` footprints), plus the move of the footprint inside the generator's
 //!   canvas (the canvas centres each footprint's bounds, so the anchor moves with the press;
 //!   its derivative by central differences of the exact bounds);
 //! * with respect to position and direction: the image's spatial gradient (the derivative of
@@ -17,32 +18,49 @@
 //! reaches 0 or 1, so no coverage saturates). The judge is never the generator: callers score
 //! the refined track with the analytic renderer and the executed simulation.
 
+use std::sync::Arc;
+
 use brush_model::{BrushProfile, Extrapolation, PointMm, Press, Range};
 use neural_gen::{Generator, InputVjp, Tape};
 use rayon::prelude::*;
 
-use crate::RefineError;
-use crate::problem::{CHUNK, Fp};
+use crate::image::{CHUNK, Fp, ImageModel, Raster, UnionSums};
+use crate::{Gradients, Problem, RefineError};
 
 /// Footprints per generator batch (one forward and one backward pass each).
-pub const BATCH: usize = 128;
+pub(crate) const BATCH: usize = 128;
 
-/// A generator prepared for refinement.
+/// A B-BSMG generator prepared for refinement: the image model of the generator path
+/// ([`crate::refine_with_generator`], [`Problem::with_generator`]).
+///
+/// # Examples
+/// ```
+/// use neural_gen::{Arch, Generator, GeneratorConfig};
+/// use track_refine::brush_model::BrushProfile;
+/// use track_refine::{GenMode, GenModel};
+///
+/// let pen1 = BrushProfile::builtin("pen1")?;
+/// // An untrained tiny generator (a real one comes from `Generator::load`).
+/// let generator = Generator::new(GeneratorConfig::new(pen1, Arch::tiny_32()), 5)?;
+/// let model = GenModel::new(&generator)?.with_mode(GenMode::Vjp);
+/// assert_eq!(model.profile_name(), "pen1");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct GenModel {
     net: InputVjp,
     size: usize,
     px_per_mm: f64,
     beta: Range,
     profile: BrushProfile,
-    mode: Mode,
+    mode: GenMode,
 }
 
-/// How the network's derivatives with respect to the press are taken.
+/// How the generator's derivatives with respect to the press are taken.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Mode {
+pub enum GenMode {
     /// One image per footprint and one reverse-mode VJP per footprint (each footprint's
     /// upstream image holds its own pixels' `∂L/∂c`): one forward and one backward pass per
-    /// batch of [`BATCH`] footprints. Exact, and slow: a character has thousands of footprints.
+    /// batch of 128 footprints. Exact, and slow: a character has thousands of footprints.
     Vjp,
     /// Presses rounded to multiples of `quantum` (h in mm, α and β in rad; 0 keeps a value
     /// exact); footprints whose presses round alike share one image and its Jacobian
@@ -57,29 +75,39 @@ pub enum Mode {
     },
 }
 
-/// The default mode: [`Mode::Shared`] at 0.05 mm in h and 0.05° in α and β (pen1's lengths
-/// move by under 0.05 mm per step, well under a pixel of the default 256² analysis raster).
-pub const DEFAULT_MODE: Mode =
-    Mode::Shared { quantum: [0.05, 0.05 * std::f64::consts::PI / 180.0, 0.05 * std::f64::consts::PI / 180.0] };
+impl GenMode {
+    /// The default mode: [`GenMode::Shared`] at 0.05 mm in h and 0.05° in α and β (why:
+    /// docs/trajectory.md, "Refinement").
+    pub const DEFAULT: GenMode =
+        GenMode::Shared { quantum: [0.05, 0.05 * std::f64::consts::PI / 180.0, 0.05 * std::f64::consts::PI / 180.0] };
+}
+
+impl Default for GenMode {
+    /// [`GenMode::DEFAULT`].
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
 
 impl GenModel {
-    /// Prepares a generator (copies its weights).
+    /// Prepares a generator (copies its weights), in [`GenMode::DEFAULT`].
     ///
     /// # Errors
-    /// [`RefineError::Generator`] when the weights cannot be read.
+    /// [`RefineError::Generator`] (with neural-gen's error as its source) when the weights
+    /// cannot be read.
     pub fn new(g: &Generator) -> Result<Self, RefineError> {
         Ok(Self {
-            net: InputVjp::new(g).map_err(|e| RefineError::Generator(e.to_string()))?,
+            net: InputVjp::new(g)?,
             size: g.config.size as usize,
             px_per_mm: g.config.px_per_mm,
             beta: g.config.ranges.beta_rad,
             profile: g.config.profile.clone(),
-            mode: DEFAULT_MODE,
+            mode: GenMode::DEFAULT,
         })
     }
 
-    /// The same generator with another [`Mode`].
-    pub fn with_mode(mut self, mode: Mode) -> Self {
+    /// The same generator with another [`GenMode`].
+    pub fn with_mode(mut self, mode: GenMode) -> Self {
         self.mode = mode;
         self
     }
@@ -88,11 +116,11 @@ impl GenModel {
     /// footprint, the index of its press.
     fn sources(&self, fps: &[Fp], places: &[Place]) -> (Vec<Press>, Vec<usize>) {
         match self.mode {
-            Mode::Vjp => (
+            GenMode::Vjp => (
                 fps.iter().zip(places).map(|(f, p)| Press::new(f.h, f.alpha, p.beta_gen)).collect(),
                 (0..fps.len()).collect(),
             ),
-            Mode::Shared { quantum } => {
+            GenMode::Shared { quantum } => {
                 let mut uniq: std::collections::BTreeMap<[i64; 3], (Press, Vec<usize>)> =
                     std::collections::BTreeMap::new();
                 for (k, (f, p)) in fps.iter().zip(places).enumerate() {
@@ -157,24 +185,6 @@ struct Place {
 
 fn wrap(b: f64) -> f64 {
     (b + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-}
-
-/// The image term on the generator: its value (`Σ (U − G)² / Σ G`), per footprint
-/// `∂/∂(x, y, h, α, β)` when `want_grad`, and the soft union image.
-pub(crate) struct ImageTerm {
-    pub image: f64,
-    pub per_fp: Vec<[f64; 5]>,
-    pub union: Vec<f64>,
-}
-
-/// Target geometry the sums need.
-pub(crate) struct Raster<'t> {
-    pub width: usize,
-    pub height: usize,
-    pub origin: [f64; 2],
-    pub mm_per_px: f64,
-    pub ink: &'t [f32],
-    pub ink_sum: f64,
 }
 
 impl GenModel {
@@ -247,12 +257,12 @@ impl GenModel {
         w
     }
 
-    /// The image term (see [`ImageTerm`]).
-    pub(crate) fn image_term(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> ImageTerm {
+    /// The footprints' placements, images and soft union (the first half of the image term).
+    fn render(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> (Pass, UnionSums) {
         let places = self.places(fps, want_grad);
         let (presses, which) = self.sources(fps, &places);
         let tapes: Vec<Tape> = presses.chunks(BATCH).map(|c| self.net.forward(c)).collect();
-        let img = |k: usize| tapes[which[k] / BATCH].image(which[k] % BATCH);
+        let pass = Pass { places, which, tapes };
         let s = self.size;
         let n = r.width * r.height;
         // Σ ln(1 − c) per pixel, over fixed chunks summed in order.
@@ -263,8 +273,8 @@ impl GenModel {
                 let mut acc = vec![0.0f64; n];
                 for (m, f) in chunk.iter().enumerate() {
                     let k = ci * CHUNK + m;
-                    let src = img(k);
-                    self.visit(r, f, &places[k], |p, o, tx, ty, _, _| {
+                    let src = pass.image(k);
+                    self.visit(r, f, &pass.places[k], |p, o, tx, ty, _, _| {
                         let c = bilerp(src, o, s, tx, ty);
                         acc[p] += (1.0 - c.min(1.0 - 1e-7)).ln();
                     });
@@ -276,99 +286,155 @@ impl GenModel {
         for part in parts {
             lsum.iter_mut().zip(&part).for_each(|(a, b)| *a += b);
         }
-        let mut image = 0.0;
-        let mut q = vec![0.0f64; n];
-        let mut union = vec![0.0f64; n];
-        for k in 0..n {
-            let prod = lsum[k].exp();
-            let u = 1.0 - prod;
-            union[k] = u;
-            let res = u - r.ink[k] as f64;
-            image += res * res;
-            q[k] = 2.0 * res / r.ink_sum * prod;
+        // The generator's sigmoid never reaches 0 or 1: no coverage saturates.
+        (pass, UnionSums { log_keep: lsum, saturated: None })
+    }
+
+    /// Each footprint's `∂/∂(x, y, h, α, β)` given the residual weights `q` (per pixel,
+    /// [`UnionSums::residuals`]).
+    fn partials(&self, r: &Raster<'_>, fps: &[Fp], pass: &Pass, q: &[f64]) -> Vec<[f64; 5]> {
+        match self.mode {
+            GenMode::Shared { .. } => self.partials_shared(r, fps, pass, q),
+            GenMode::Vjp => self.partials_vjp(r, fps, pass, q),
         }
-        image /= r.ink_sum;
-        let mut per_fp = Vec::new();
-        if want_grad && matches!(self.mode, Mode::Shared { .. }) {
-            // Tangents only for what varies: α where a footprint is tilted, β where the
-            // generator's β input follows the direction.
-            let need = [true, fps.iter().any(|f| f.alpha > 0.0), places.iter().any(|p| p.follows > 0.0)];
-            let jac: Vec<Vec<f32>> = tapes.iter().map(|t| self.net.jacobian_of(t, need)).collect();
-            let ss = s * s;
-            per_fp = fps
-                .par_iter()
+    }
+
+    /// [`GenModel::partials`] in [`GenMode::Shared`]: each footprint's pixels read the
+    /// forward-mode Jacobian images of its press.
+    fn partials_shared(&self, r: &Raster<'_>, fps: &[Fp], pass: &Pass, q: &[f64]) -> Vec<[f64; 5]> {
+        let (places, tapes) = (&pass.places, &pass.tapes);
+        let s = self.size;
+        // Tangents only for what varies: α where a footprint is tilted, β where the
+        // generator's β input follows the direction.
+        let need = [true, fps.iter().any(|f| f.alpha > 0.0), places.iter().any(|p| p.follows > 0.0)];
+        let jac: Vec<Vec<f32>> = tapes.iter().map(|t| self.net.jacobian_of(t, need)).collect();
+        let ss = s * s;
+        fps.par_iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let (u, pl) = (pass.which[k], &places[k]);
+                let src = pass.image(k);
+                let j = &jac[u / BATCH][(u % BATCH) * 3 * ss..(u % BATCH + 1) * 3 * ss];
+                // x, y, θ, ∂L/∂a (2), ∂L/∂(h, α, βg) through the image (3).
+                let mut g = [0.0f64; 8];
+                self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
+                    let qk = q[p];
+                    if qk == 0.0 {
+                        return;
+                    }
+                    let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
+                    for i in 0..3 {
+                        g[5 + i] += w * bilerp(&j[i * ss..(i + 1) * ss], o, s, tx, ty);
+                    }
+                });
+                let an = |d: [f64; 2]| g[3] * d[0] + g[4] * d[1];
+                [
+                    g[0],
+                    g[1],
+                    g[5] + an(pl.da[0]),
+                    g[6] + an(pl.da[1]),
+                    g[2] * (1.0 - pl.follows) + pl.follows * (g[7] + an(pl.da[2])),
+                ]
+            })
+            .collect()
+    }
+
+    /// [`GenModel::partials`] in [`GenMode::Vjp`]: per batch, each footprint's upstream image
+    /// and one reverse pass.
+    fn partials_vjp(&self, r: &Raster<'_>, fps: &[Fp], pass: &Pass, q: &[f64]) -> Vec<[f64; 5]> {
+        let (places, tapes) = (&pass.places, &pass.tapes);
+        let s = self.size;
+        let mut per_fp = Vec::with_capacity(fps.len());
+        for (bi, tape) in tapes.iter().enumerate() {
+            let lo = bi * BATCH;
+            let cnt = tape.len();
+            let mut up = vec![0f32; cnt * s * s];
+            // Per footprint: spatial parts (x, y, θ) and Σ ∂L/∂a.
+            let spatial: Vec<[f64; 5]> = up
+                .par_chunks_mut(s * s)
                 .enumerate()
-                .map(|(k, f)| {
-                    let (u, pl) = (which[k], &places[k]);
-                    let src = img(k);
-                    let j = &jac[u / BATCH][(u % BATCH) * 3 * ss..(u % BATCH + 1) * 3 * ss];
-                    // x, y, θ, ∂L/∂a (2), ∂L/∂(h, α, βg) through the image (3).
-                    let mut g = [0.0f64; 8];
+                .map(|(m, upk)| {
+                    let k = lo + m;
+                    let (f, pl, src) = (&fps[k], &places[k], tape.image(m));
+                    let mut g = [0.0f64; 5];
                     self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
                         let qk = q[p];
                         if qk == 0.0 {
                             return;
                         }
                         let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
-                        for i in 0..3 {
-                            g[5 + i] += w * bilerp(&j[i * ss..(i + 1) * ss], o, s, tx, ty);
-                        }
+                        let wf = w as f32;
+                        let (txf, tyf) = (tx as f32, ty as f32);
+                        upk[o] += wf * (1.0 - txf) * (1.0 - tyf);
+                        upk[o + 1] += wf * txf * (1.0 - tyf);
+                        upk[o + s] += wf * (1.0 - txf) * tyf;
+                        upk[o + s + 1] += wf * txf * tyf;
                     });
-                    let an = |d: [f64; 2]| g[3] * d[0] + g[4] * d[1];
-                    [
-                        g[0],
-                        g[1],
-                        g[5] + an(pl.da[0]),
-                        g[6] + an(pl.da[1]),
-                        g[2] * (1.0 - pl.follows) + pl.follows * (g[7] + an(pl.da[2])),
-                    ]
+                    g
                 })
                 .collect();
-        } else if want_grad {
-            per_fp.reserve(fps.len());
-            for (bi, tape) in tapes.iter().enumerate() {
-                let lo = bi * BATCH;
-                let cnt = tape.len();
-                let mut up = vec![0f32; cnt * s * s];
-                // Per footprint: spatial parts (x, y, θ) and Σ ∂L/∂a.
-                let spatial: Vec<[f64; 5]> = up
-                    .par_chunks_mut(s * s)
-                    .enumerate()
-                    .map(|(m, upk)| {
-                        let k = lo + m;
-                        let (f, pl, src) = (&fps[k], &places[k], tape.image(m));
-                        let mut g = [0.0f64; 5];
-                        self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
-                            let qk = q[p];
-                            if qk == 0.0 {
-                                return;
-                            }
-                            let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
-                            let wf = w as f32;
-                            let (txf, tyf) = (tx as f32, ty as f32);
-                            upk[o] += wf * (1.0 - txf) * (1.0 - tyf);
-                            upk[o + 1] += wf * txf * (1.0 - tyf);
-                            upk[o + s] += wf * (1.0 - txf) * tyf;
-                            upk[o + s + 1] += wf * txf * tyf;
-                        });
-                        g
-                    })
-                    .collect();
-                let v = self.net.vjp(tape, &up).expect("upstream sized by the tape");
-                for (m, (sp, vj)) in spatial.iter().zip(&v).enumerate() {
-                    let pl = &places[lo + m];
-                    let an = |d: [f64; 2]| sp[3] * d[0] + sp[4] * d[1];
-                    per_fp.push([
-                        sp[0],
-                        sp[1],
-                        vj[0] + an(pl.da[0]),
-                        vj[1] + an(pl.da[1]),
-                        sp[2] * (1.0 - pl.follows) + pl.follows * (vj[2] + an(pl.da[2])),
-                    ]);
-                }
+            let v = self.net.vjp(tape, &up).expect("upstream sized by the tape");
+            for (m, (sp, vj)) in spatial.iter().zip(&v).enumerate() {
+                let pl = &places[lo + m];
+                let an = |d: [f64; 2]| sp[3] * d[0] + sp[4] * d[1];
+                per_fp.push([
+                    sp[0],
+                    sp[1],
+                    vj[0] + an(pl.da[0]),
+                    vj[1] + an(pl.da[1]),
+                    sp[2] * (1.0 - pl.follows) + pl.follows * (vj[2] + an(pl.da[2])),
+                ]);
             }
         }
-        ImageTerm { image, per_fp, union }
+        per_fp
+    }
+}
+
+/// One rendering of the footprints: placements, the network's forward passes (tapes) and
+/// which press (image) each footprint uses.
+struct Pass {
+    places: Vec<Place>,
+    which: Vec<usize>,
+    tapes: Vec<Tape>,
+}
+
+impl Pass {
+    /// Footprint `k`'s image.
+    fn image(&self, k: usize) -> &[f32] {
+        self.tapes[self.which[k] / BATCH].image(self.which[k] % BATCH)
+    }
+}
+
+impl ImageModel for GenModel {
+    fn union(&self, r: &Raster<'_>, fps: &[Fp]) -> UnionSums {
+        self.render(r, fps, false).1
+    }
+
+    fn image_term(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> (f64, Vec<[f64; 5]>) {
+        let (pass, sums) = self.render(r, fps, want_grad);
+        let (image, q) = sums.residuals(r);
+        let per_fp = if want_grad { self.partials(r, fps, &pass, &q) } else { Vec::new() };
+        (image, per_fp)
+    }
+}
+
+impl Problem<'_> {
+    /// The same problem with the image term on `generator` (the generator path): footprint
+    /// images from the network, gradients from its VJP and the images' spatial gradients.
+    ///
+    /// # Errors
+    /// [`RefineError::GeneratorProfile`] when the generator was trained for another brush
+    /// profile.
+    pub fn with_generator(mut self, generator: Arc<GenModel>) -> Result<Self, RefineError> {
+        if generator.profile_name() != self.profile.name {
+            return Err(RefineError::GeneratorProfile {
+                generator: generator.profile_name().to_owned(),
+                track: self.profile.name.clone(),
+            });
+        }
+        self.image = generator;
+        self.opts.gradients = Gradients::Generator;
+        Ok(self)
     }
 }
 

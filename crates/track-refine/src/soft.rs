@@ -20,46 +20,46 @@
 
 /// The three lengths of a footprint, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Shape {
+pub(crate) struct Shape {
     /// Tip length (belly to tip), mm.
-    pub lt: f64,
+    pub(crate) lt: f64,
     /// Root length (root end to belly), mm.
-    pub lh: f64,
+    pub(crate) lh: f64,
     /// Belly half-width, mm.
-    pub lr: f64,
+    pub(crate) lr: f64,
 }
 
 /// The signed measure `d` at one point and its derivatives with respect to
 /// `(u, v, lt, lh, lr)` (each mm per mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Measure {
+pub(crate) struct Measure {
     /// Signed vertical distance to the edge, mm (positive inside).
-    pub d: f64,
+    pub(crate) d: f64,
     /// `∂d/∂(u, v, lt, lh, lr)`.
-    pub grad: [f64; 5],
+    pub(crate) grad: [f64; 5],
 }
 
 impl Shape {
     /// Footprint length `lh + lt`, mm.
-    pub fn length(&self) -> f64 {
+    pub(crate) fn length(&self) -> f64 {
         self.lh + self.lt
     }
 
     /// `x(t)` of the upper curve, mm.
-    pub fn x(&self, t: f64) -> f64 {
+    pub(crate) fn x(&self, t: f64) -> f64 {
         let s = 1.0 - t;
         (4.0 * self.lh - self.lt) * t * s * s + 3.0 * self.lh * t * t * s + (self.lh + self.lt) * t * t * t
     }
 
     /// `x'(t)`, mm per unit t.
-    pub fn dx(&self, t: f64) -> f64 {
+    pub(crate) fn dx(&self, t: f64) -> f64 {
         let s = 1.0 - t;
         let a1 = 4.0 * self.lh - self.lt;
         a1 * (s * s - 2.0 * t * s) + 3.0 * self.lh * (2.0 * t * s - t * t) + 3.0 * (self.lh + self.lt) * t * t
     }
 
     /// The curve parameter where `x(t) = u`, for `0 < u < L` (safeguarded Newton on `[0, 1]`).
-    pub fn solve_t(&self, u: f64) -> f64 {
+    pub(crate) fn solve_t(&self, u: f64) -> f64 {
         self.solve_t_in(u, 0.0, 1.0, (u / self.length()).clamp(0.0, 1.0))
     }
 
@@ -87,7 +87,7 @@ impl Shape {
     }
 
     /// The signed measure at `(u, v)` (footprint frame, mm), without derivatives.
-    pub fn measure(&self, u: f64, v: f64) -> f64 {
+    pub(crate) fn measure(&self, u: f64, v: f64) -> f64 {
         let l = self.length();
         if u <= 0.0 {
             -u.hypot(v)
@@ -99,15 +99,17 @@ impl Shape {
         }
     }
 
-    /// The signed measure at `(u, v)` with its derivatives.
-    pub fn measure_grad(&self, u: f64, v: f64) -> Measure {
+    /// The signed measure at `(u, v)` with its derivatives (the tests' reference for
+    /// [`Shape::measure_grad_with`]).
+    #[cfg(test)]
+    pub(crate) fn measure_grad(&self, u: f64, v: f64) -> Measure {
         self.measure_grad_t(u, v, |u| self.solve_t(u))
     }
 
     /// As [`Shape::measure_grad`], the Newton solve for `t*` bracketed and started by this
     /// shape's width bounds (`bounds` from [`Shape::width_bounds`] of the same shape): the same
     /// value to rounding, in two or three iterations instead of five or six.
-    pub fn measure_grad_with(&self, u: f64, v: f64, bounds: &WidthBounds) -> Measure {
+    pub(crate) fn measure_grad_with(&self, u: f64, v: f64, bounds: &WidthBounds) -> Measure {
         self.measure_grad_t(u, v, |u| {
             let x = u * bounds.inv_du;
             let k = (x as usize).min(bounds.lo.len() - 1);
@@ -153,7 +155,7 @@ impl Shape {
 /// (exactly: the half-width `4·lr·t(1 − t)` is unimodal in `t` and `t*(u)` is monotone, so its
 /// extremes over a bin are at the bin's ends or, where `t = ½` falls in the bin, `lr`).
 #[derive(Clone, Debug)]
-pub struct WidthBounds {
+pub(crate) struct WidthBounds {
     inv_du: f64,
     lo: Vec<f64>,
     hi: Vec<f64>,
@@ -165,7 +167,7 @@ impl WidthBounds {
     /// For `0 < u < L` and `|v|`: `Some(true)` when the coverage is surely 1 (`d ≥ e`),
     /// `Some(false)` when surely 0 (`d ≤ −e`), `None` when the pixel is in the soft edge.
     #[inline]
-    pub fn classify(&self, u: f64, abs_v: f64, e: f64) -> Option<bool> {
+    pub(crate) fn classify(&self, u: f64, abs_v: f64, e: f64) -> Option<bool> {
         let k = ((u * self.inv_du) as usize).min(self.lo.len() - 1);
         if abs_v <= self.lo[k] - e {
             Some(true)
@@ -179,7 +181,7 @@ impl WidthBounds {
 
 impl Shape {
     /// The half-width's bounds over `bins` equal bins of `(0, L)` (at least 1).
-    pub fn width_bounds(&self, bins: usize) -> WidthBounds {
+    pub(crate) fn width_bounds(&self, bins: usize) -> WidthBounds {
         let n = bins.max(1);
         let l = self.length();
         let t: Vec<f64> = (0..=n)
@@ -202,7 +204,7 @@ impl Shape {
 
 /// Coverage of a signed measure `d` with an edge half-width `e` (mm): a smoothstep from 0 at
 /// `d = −e` to 1 at `d = e`. Returns the coverage and `∂c/∂d`.
-pub fn edge(d: f64, e: f64) -> (f64, f64) {
+pub(crate) fn edge(d: f64, e: f64) -> (f64, f64) {
     let s = (d + e) / (2.0 * e);
     if s <= 0.0 {
         (0.0, 0.0)

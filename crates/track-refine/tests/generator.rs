@@ -9,11 +9,10 @@ mod common;
 use brush_model::BrushProfile;
 use common::{bar_target, line_track, pen1};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
-use track_refine::generator::{GenModel, Mode};
-use track_refine::{Gradients, Problem, RefineOptions, refine_with_generator};
+use track_refine::{GenMode, GenModel, Gradients, Problem, RefineError, RefineOptions, refine_with_generator};
 
 /// A tiny 32² generator after a few training steps (so that its images look like footprints).
-fn tiny(mode: Mode) -> Arc<GenModel> {
+fn tiny(mode: GenMode) -> Arc<GenModel> {
     let mut g = Generator::new(GeneratorConfig::new(pen1(), Arch::tiny_32()), 5).unwrap();
     let opts = TrainOptions { steps: 30, batch: 16, lr: 3e-3, val_every: 1_000_000, ..Default::default() };
     neural_gen::train(&mut g, &opts, |_| {}).unwrap();
@@ -25,9 +24,11 @@ fn generator_gradients_match_finite_differences() {
     let profile = pen1();
     let target = bar_target(64);
     // Reverse mode per footprint, and shared exact presses with the forward-mode Jacobian.
-    for (mode, alpha) in
-        [(Mode::Vjp, 0.0), (Mode::Vjp, 5f64.to_radians()), (Mode::Shared { quantum: [0.0; 3] }, 5f64.to_radians())]
-    {
+    for (mode, alpha) in [
+        (GenMode::Vjp, 0.0),
+        (GenMode::Vjp, 5f64.to_radians()),
+        (GenMode::Shared { quantum: [0.0; 3] }, 5f64.to_radians()),
+    ] {
         let net = tiny(mode);
         let track = line_track(12.0, alpha, 40);
         let p = Problem::new(&track, &profile, &target, &RefineOptions::default())
@@ -70,14 +71,8 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     let profile = pen1();
     let target = bar_target(64);
     let opts = RefineOptions { iterations: 1, ..RefineOptions::default() };
-    let out = refine_with_generator(
-        &line_track(11.5, 0.0, 40),
-        &profile,
-        &target,
-        &opts,
-        tiny(track_refine::generator::DEFAULT_MODE),
-    )
-    .unwrap();
+    let out =
+        refine_with_generator(&line_track(11.5, 0.0, 40), &profile, &target, &opts, tiny(GenMode::default())).unwrap();
     assert_eq!(out.curve.len(), 2);
     assert!(out.curve[1].image < out.curve[0].image, "{:?}", out.curve);
     assert!(out.curve[1].total < out.curve[0].total, "{:?}", out.curve);
@@ -87,14 +82,22 @@ fn one_generator_step_lowers_the_loss_on_a_synthetic_target() {
     assert!(e.to_string().contains("refine_with_generator"), "{e}");
     // A generator trained for another profile is refused.
     let pen2 = BrushProfile::builtin("pen2").unwrap();
-    let e = refine_with_generator(
-        &line_track(12.0, 0.0, 40),
-        &pen2,
-        &target,
-        &opts,
-        tiny(track_refine::generator::DEFAULT_MODE),
-    )
-    .err()
-    .unwrap();
-    assert!(e.to_string().contains("pen1"), "{e}");
+    let e = refine_with_generator(&line_track(12.0, 0.0, 40), &pen2, &target, &opts, tiny(GenMode::default()))
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("pen1") && e.to_string().contains("pen2"), "{e}");
+    assert!(matches!(&e, RefineError::GeneratorProfile { generator, track } if generator == "pen1" && track == "pen2"));
+}
+
+/// A generator whose weights cannot be read is an error that keeps neural-gen's error as its
+/// source (naming the missing tensor), not a flattened message.
+#[test]
+fn a_generator_that_cannot_be_prepared_keeps_its_cause() {
+    let g = Generator::new(GeneratorConfig::new(pen1(), Arch::tiny_32()), 5).unwrap();
+    g.varmap.data().lock().unwrap().remove("fc0.weight").expect("the tiny generator has fc0");
+    let e = GenModel::new(&g).err().expect("a missing tensor is refused");
+    let RefineError::Generator(source) = &e else { panic!("{e:?}") };
+    assert!(source.to_string().contains("fc0.weight"), "{source}");
+    let chained = std::error::Error::source(&e).expect("the cause is kept");
+    assert_eq!(chained.to_string(), source.to_string());
 }
