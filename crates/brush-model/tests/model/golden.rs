@@ -30,7 +30,7 @@ fn check_output(ours: &OutputFit, theirs: &Value, what: &str) {
 }
 
 fn golden() -> (Value, Vec<brush_model::Measurement>) {
-    let g: Value = serde_json::from_str(include_str!("golden/regression.json")).unwrap();
+    let g: Value = serde_json::from_str(include_str!("../golden/regression.json")).unwrap();
     let mut csv = format!("{}\n", g["header"].as_str().unwrap());
     for r in g["rows"].as_array().unwrap() {
         let cells: Vec<String> = r.as_array().unwrap().iter().map(|v| v.to_string()).collect();
