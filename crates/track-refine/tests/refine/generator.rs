@@ -4,10 +4,8 @@
 
 use std::sync::Arc;
 
-mod common;
-
 use brush_model::BrushProfile;
-use common::{bar_target, line_track, pen1};
+use crate::common::{bar_target, line_track, pen1};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 use track_refine::{GenMode, GenModel, Gradients, Problem, RefineError, RefineOptions, refine_with_generator};
 
