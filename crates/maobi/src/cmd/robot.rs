@@ -195,10 +195,15 @@ fn title(t: &TrackFile) -> String {
 
 fn check(a: CheckArgs) -> Result<()> {
     let l = load(&a.program)?;
-    let (_, report) =
+    let (program, report) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
+    // Timed with the nominal AUBO-i5 (the simulator's arm); `send` times again with the
+    // controller's own parameters before anything moves.
+    let timing = robot_io::time_program(&program, &robot_io::kinematics::DhParams::AUBO_I5, &l.cfg)?;
     if a.json {
-        print_json(&report)?;
+        let mut v = serde_json::to_value(&report)?;
+        v["timing"] = serde_json::to_value(&timing)?;
+        print_json(&v)?;
     } else {
         println!(
             "safe: {} strokes, {} points, {} moves, {} ink dips; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
@@ -210,6 +215,25 @@ fn check(a: CheckArgs) -> Result<()> {
             l.track.brush.ranges.h_mm.max,
             report.frame_residual_mm,
             report.estimated_seconds
+        );
+        for t in &timing.strokes {
+            let qd = t.peak_joint_speed_rad_s.map(|v| format!("{v:.3}")).join(", ");
+            println!(
+                "stroke {}: {:.2} s ({} waypoints every {} s), peak {:.1} mm/s, {:.3} m/s², joints [{qd}] rad/s, {:.2} rad/s², {:.1} rad/s³",
+                t.stroke + 1,
+                t.duration_s,
+                t.joints.len(),
+                t.interval_s,
+                t.peak_speed_m_s * 1000.0,
+                t.peak_acc_m_s2,
+                t.peak_joint_acc_rad_s2,
+                t.peak_joint_jerk_rad_s3,
+            );
+        }
+        let qd = timing.peak_joint_speed_rad_s.map(|v| format!("{v:.3}")).join(", ");
+        println!(
+            "writing time {:.2} s (time-optimal without the jerk limit: {:.2} s); peak joint speeds [{qd}] rad/s",
+            timing.writing_s, timing.reference_s
         );
     }
     Ok(())
