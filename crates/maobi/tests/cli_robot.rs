@@ -40,13 +40,13 @@ fn check_and_export_a_written_character() {
     assert!((timing["writing_s"].as_f64().unwrap() - total).abs() < 1e-9, "{timing}");
     let text = ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper())]));
     assert!(text.contains("stroke 2: ") && text.contains("writing time "), "{text}");
-    // A jerk limit the strokes cannot keep: refused, naming the stroke and the limit.
+    // A jerk limit so low the strokes would take hours: refused, naming the stroke.
     let tight = dir.path().join("tight.json");
     std::fs::write(&tight, r#"{"timing": {"joint_jerk_rad_s3": 0.01}, "limits": {"max_joint_jerk_rad_s3": 0.01}}"#)
         .unwrap();
     fails(
         &maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--robot", s(&tight)]),
-        "limits.max_joint_jerk_rad_s3",
+        "refused at stroke 1: the timed stroke would take",
     );
     for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
         let out = dir.path().join(format!("prog.{fmt}"));
@@ -103,6 +103,7 @@ fn refusals_name_the_problem_and_write_nothing() {
 
 #[test]
 fn send_runs_on_the_simulator_and_survives_a_drop() {
+    // A move per point (`--motion moves`), the link dropped at the 40th move, inside a stroke.
     let dir = tempfile::tempdir().unwrap();
     let track = written(dir.path());
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
@@ -135,6 +136,8 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
         &port.to_string(),
         "--timeout-ms",
         "1000",
+        "--motion",
+        "moves",
     ]);
     let out = ok(&o);
     assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");

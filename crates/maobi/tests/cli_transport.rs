@@ -57,10 +57,13 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     let check: serde_json::Value =
         serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
     let (strokes, moves) = (check["strokes"].as_u64().unwrap(), check["moves"].as_u64().unwrap());
-    // Drop the link at the middle move: inside a stroke, not at its boundary.
+    // Each stroke through the path buffer is four motion requests (travel, descent,
+    // movePathBuffer, lift) after the start move: drop the link at the third stroke's
+    // movePathBuffer, inside the stroke with the brush on the paper.
+    let _ = moves;
     let (port, lines, http) = (free_port(), free_port(), free_port());
     let trace = dir.path().join("trace.jsonl");
-    let drop = format!("drop-after={}", moves / 2);
+    let drop = format!("drop-after={}", 1 + 4 * 2 + 3);
     let (lines_s, http_s) = (lines.to_string(), http.to_string());
     let _sim =
         Sim::start(port, &["--lines-port", &lines_s, "--http-port", &http_s, "--fault", &drop, "--trace", s(&trace)]);
@@ -77,11 +80,20 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
         framed.contains(&format!("{strokes} of {strokes} strokes completed; 1 reconnect(s), 1 stroke(s) resumed")),
         "{framed}"
     );
-    // The drop fires once: the other transports run straight through on their own ports.
-    for (t, port) in [("lines", &lines_s), ("http", &http_s)] {
-        let o = ok(&send(&["--transport", t, "--port", port]));
+    assert!(framed.contains(&format!("{strokes} path buffer(s)")), "{framed}");
+    // A few controller calls per stroke (3,300 points).
+    let calls = number_before(&framed, "controller calls");
+    assert!(calls < 40 * strokes, "{framed}");
+    // The drop fires once: the other transports run straight through on their own ports,
+    // lines with a move per point of the compacted track.
+    for (t, port, motion) in [("lines", &lines_s, "moves"), ("http", &http_s, "path-buffer")] {
+        let o = ok(&send(&["--transport", t, "--port", port, "--motion", motion]));
         assert!(o.contains(&format!("{strokes} of {strokes} strokes completed; 0 reconnect(s)")), "{t}: {o}");
     }
+    // --motion moves: at least 5× fewer moves than points, every blend valid (checked by send).
+    let dry = ok(&send(&["--port", &p, "--motion", "moves", "--dry-run"]));
+    let compact = number_before(&dry, "moves would be sent");
+    assert!(compact * 5 <= moves, "{compact} moves of {moves}: {dry}");
     // The executed path renders back to the planned image.
     std::thread::sleep(Duration::from_millis(300));
     let img = dir.path().join("trace.png");
@@ -109,6 +121,12 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     // The simulator's help says which transports have no login.
     let help = ok(&maobi(&["robot", "sim", "--help"]));
     assert!(help.contains("UNAUTHENTICATED"), "{help}");
+}
+
+/// The number just before `words` in `text`.
+fn number_before(text: &str, words: &str) -> u64 {
+    let at = text.find(words).unwrap_or_else(|| panic!("no `{words}` in {text}"));
+    text[..at].split_whitespace().last().and_then(|n| n.parse().ok()).unwrap_or_else(|| panic!("{text}"))
 }
 
 /// A one-stroke track (一, 60 mm, points 4 mm apart) with the built-in pen1 brush.

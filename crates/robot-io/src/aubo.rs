@@ -658,6 +658,11 @@ impl AuboClient {
         Err(RobotError::Timeout(format!("{method}: the motion queue stayed full")))
     }
 
+    /// The JSON-RPC calls this client has made (the login frame aside).
+    pub fn calls(&self) -> u64 {
+        self.next_id - 1
+    }
+
     /// `<robot>.RobotConfig.getKinematicsParam(real)`: the arm's modified-DH parameters as
     /// the controller reports them (`real`: the calibrated ones), validated.
     ///
@@ -876,7 +881,8 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
 }
 
 pub use crate::run::{
-    MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M, RunOptions, RunReport, run_program,
+    CONTROLLER_FK_TOLERANCE_M, CONTROLLER_FK_TOLERANCE_RAD, MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD,
+    PATH_VALID_WAIT, POSE_TOLERANCE_M, RunOptions, RunReport, run_program,
 };
 
 /// Refuses a script the script port would not take as one script: one containing the

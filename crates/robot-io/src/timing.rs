@@ -148,9 +148,23 @@ pub fn pressed_path(st: &StrokeProgram) -> Vec<Pose> {
 /// `max_joint_jerk_rad_s3`), or the waypoints leave the path by more than
 /// [`PATH_TOLERANCE_M`] / [`PATH_TOLERANCE_RAD`].
 pub fn time_program(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Result<ProgramTiming, RobotError> {
+    time_program_from(program, kin, cfg, None)
+}
+
+/// [`time_program`] with the first stroke's inverse kinematics seeded by `seed` (rad: the
+/// joints the arm reaches the start pose with, so the waypoints keep its branch).
+///
+/// # Errors
+/// As [`time_program`].
+pub fn time_program_from(
+    program: &Program,
+    kin: &DhParams,
+    cfg: &RobotConfig,
+    seed: Option<&[f64; 6]>,
+) -> Result<ProgramTiming, RobotError> {
     let tcp = program.tcp();
     let mut strokes = Vec::new();
-    let mut seed: Option<[f64; 6]> = None;
+    let mut seed: Option<[f64; 6]> = seed.copied();
     for st in &program.strokes {
         let path = pressed_path(st);
         let depths: Vec<f64> = path.iter().map(|p| program.depth_mm(p.position())).collect();

@@ -127,3 +127,76 @@ fn a_buffer_runs_on_its_timing_and_invalid_use_is_refused() {
     let e = other.call(&format!("{MC}movePathBuffer"), json!({"name": "s2"})).unwrap_err();
     assert!(matches!(e, RobotError::Rpc { code: -32001, .. }), "{e}");
 }
+
+/// A two-stroke track, points 0.2 mm apart, with the built-in pen1 brush.
+fn two_strokes() -> robot_io::brush_model::Track {
+    use robot_io::brush_model::{Stroke, Track, TrackPoint};
+    let pt = |x: f64, y: f64| TrackPoint { x_mm: x, y_mm: y, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    Track {
+        strokes: vec![
+            Stroke { points: (0..=150).map(|i| pt(40.0 + 0.2 * f64::from(i), 50.0)).collect() },
+            Stroke { points: (0..=150).map(|i| pt(55.0, 40.0 + 0.2 * f64::from(i))).collect() },
+        ],
+    }
+}
+
+fn distance_to_polyline(p: [f64; 3], line: &[[f64; 3]]) -> f64 {
+    let v = |a: [f64; 3]| nalgebra::Vector3::from(a);
+    line.windows(2)
+        .map(|w| {
+            let (a, b, p) = (v(w[0]), v(w[1]), v(p));
+            let ab = b - a;
+            let f = if ab.norm_squared() > 0.0 { ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            (a + ab * f - p).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn send_writes_each_stroke_as_one_path_buffer_on_the_controllers_own_kinematics() {
+    use robot_io::kinematics::DhParams;
+    use robot_io::program::{RobotConfig, build_program};
+    use std::sync::atomic::AtomicBool;
+    let profile = robot_io::brush_model::BrushProfile::builtin("pen1").unwrap();
+    let frame = robot_io::exec::level_frame_in_front([55.0, 55.0], [0.0, 0.0, 210.0, 297.0]);
+    let cfg = RobotConfig::default();
+    let (program, _) = build_program(&two_strokes(), &profile, &frame, &cfg).unwrap();
+    // A controller whose arm is not the nominal one (its upper arm 20 mm longer): the runner
+    // must time on the parameters it reports, or the brush would leave the path.
+    let mut arm = DhParams::AUBO_I5;
+    arm.a_m[2] += 0.02;
+    let nominal = robot_io::time_program(&program, &DhParams::AUBO_I5, &cfg).unwrap();
+    let q = nominal.strokes[0].joints[0];
+    let off = (arm.forward(&q, &program.tcp()).translation.vector
+        - DhParams::AUBO_I5.forward(&q, &program.tcp()).translation.vector)
+        .norm();
+    assert!(off > 0.005, "the two arms differ by {off} m");
+    let options = SimOptions { kinematics: arm, ..SimOptions::default() };
+    let sim =
+        Simulator::start_with(&[Listen { bind: "127.0.0.1:0".into(), transports: vec![Transport::Framed] }], options)
+            .unwrap();
+    let stop = AtomicBool::new(false);
+    let opts = robot_io::RunOptions { path_buffer: Some(cfg.clone()), ..robot_io::RunOptions::new(&stop) };
+    let report = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts, |_| {}).unwrap();
+    assert_eq!(report.strokes_completed, vec![0, 1]);
+    assert_eq!(report.path_buffers, 2);
+    // A few calls per stroke, not one per point (302 points).
+    assert!(report.calls < 60, "{} calls", report.calls);
+    // Every executed path-buffer sample lies on its stroke's commanded path.
+    let trace = sim.trace();
+    let path_samples: Vec<_> = trace.iter().filter(|t| t.kind == TraceKind::PathBuffer).collect();
+    assert!(path_samples.len() > 200, "{}", path_samples.len());
+    let lines: Vec<Vec<[f64; 3]>> = program
+        .strokes
+        .iter()
+        .map(|st| robot_io::timing::pressed_path(st).iter().map(|p| p.position()).collect())
+        .collect();
+    for t in &path_samples {
+        let d = lines.iter().map(|l| distance_to_polyline(t.pose.position(), l)).fold(f64::INFINITY, f64::min);
+        assert!(d < 1e-4, "a sample {:.4} mm off the path", d * 1e3);
+    }
+    // Our nominal arm's waypoints on that controller would have written elsewhere.
+    let wrong = arm.forward(&nominal.strokes[0].joints[10], &program.tcp()).translation.vector;
+    let d = lines.iter().map(|l| distance_to_polyline([wrong.x, wrong.y, wrong.z], l)).fold(f64::INFINITY, f64::min);
+    assert!(d > 1e-3, "{d}");
+}

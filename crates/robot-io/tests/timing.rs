@@ -117,3 +117,40 @@ fn a_stroke_beyond_a_limit_is_refused_naming_the_stroke_and_the_limit() {
     assert!(t.strokes[0].path_error_m < 1e-6);
     assert!((t.strokes[0].joints[0][1] - nominal.strokes[0].joints[0][1]).abs() > 1e-3);
 }
+
+#[test]
+fn a_compacted_stroke_keeps_its_path_with_valid_blends_and_no_zero_length_move() {
+    use robot_io::program::{COMPACT_TOLERANCE_M, check_blends, compact_program};
+    let cfg = RobotConfig::default();
+    // A quarter circle of radius 20 mm, points 0.15 mm apart, a repeated point, a deepening press.
+    let mut pts: Vec<TrackPoint> = (0..=209)
+        .map(|i| {
+            let a = f64::from(i) * 0.15 / 20.0;
+            pt(40.0 + 20.0 * a.cos(), 60.0 + 20.0 * a.sin(), 2.0 + 0.01 * f64::from(i))
+        })
+        .collect();
+    pts.insert(50, pts[50]);
+    let prog = program(pts, &cfg);
+    let compact = compact_program(&prog, &cfg);
+    check_blends(&compact).unwrap();
+    let (before, after) = (prog.strokes[0].press.len(), compact.strokes[0].press.len());
+    assert!(after * 5 <= before, "{after} moves of {before}");
+    // Every original pressed point lies within the tolerance of the compacted polyline.
+    let line: Vec<[f64; 3]> =
+        robot_io::timing::pressed_path(&compact.strokes[0]).iter().map(|p| p.position()).collect();
+    for p in robot_io::timing::pressed_path(&prog.strokes[0]) {
+        let q = nalgebra::Vector3::from(p.position());
+        let d = line
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (nalgebra::Vector3::from(w[0]), nalgebra::Vector3::from(w[1]));
+                let f = ((q - a).dot(&(b - a)) / (b - a).norm_squared()).clamp(0.0, 1.0);
+                (a + (b - a) * f - q).norm()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(d <= COMPACT_TOLERANCE_M + 1e-12, "{d}");
+    }
+    // The blend of the uncompacted program (0.5 mm over 0.15 mm moves) is what it refuses.
+    let e = check_blends(&prog).unwrap_err();
+    assert!(e.to_string().contains("more than half the shorter of its moves"), "{e}");
+}
