@@ -21,6 +21,22 @@ fn main() {
         let t =
             time_stroke(st.index, &path, &d, &DhParams::AUBO_I5, &program.tcp(), seed.as_ref(), &cfg).unwrap().unwrap();
         seed = t.joints.last().copied();
+        if std::env::var("TIMING_JUMPS").is_ok() {
+            for (k, w) in t.poses.windows(2).enumerate() {
+                let (a, b) = (w[0].position(), w[1].position());
+                let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+                if d > 2e-4 {
+                    println!("jump {k}: {d} {a:?} {b:?}");
+                }
+            }
+            let pa: Vec<[f64; 3]> = path.iter().map(|p| p.position()).collect();
+            for (k, w) in pa.windows(2).enumerate() {
+                let d = ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2) + (w[0][2] - w[1][2]).powi(2)).sqrt();
+                if d > 5e-4 {
+                    println!("path step {k}: {d} {:?} {:?}", w[0], w[1]);
+                }
+            }
+        }
         println!(
             "stroke {} pts {} wp {} dur {:.3} ref {:.3} v {:.4} a {:.3} h {:.2} qd {:?} qdd {:.3} qddd {:.1} sv {:.3} err {:.2e} {:.2e}",
             st.index,
