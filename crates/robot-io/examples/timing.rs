@@ -31,7 +31,8 @@ fn main() {
             }
             let pa: Vec<[f64; 3]> = path.iter().map(|p| p.position()).collect();
             for (k, w) in pa.windows(2).enumerate() {
-                let d = ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2) + (w[0][2] - w[1][2]).powi(2)).sqrt();
+                let d =
+                    ((w[0][0] - w[1][0]).powi(2) + (w[0][1] - w[1][1]).powi(2) + (w[0][2] - w[1][2]).powi(2)).sqrt();
                 if d > 5e-4 {
                     println!("path step {k}: {d} {:?} {:?}", w[0], w[1]);
                 }
