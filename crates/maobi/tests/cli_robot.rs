@@ -103,13 +103,15 @@ fn refusals_name_the_problem_and_write_nothing() {
 
 #[test]
 fn send_runs_on_the_simulator_and_survives_a_drop() {
-    // A move per point (`--motion moves`), the link dropped at the 40th move, inside a stroke.
+    // Through the path buffer (the default): the link dropped at the fourth motion request, the
+    // first stroke's movePathBuffer (after the start move, the travel and the descent), with
+    // the brush on the paper.
     let dir = tempfile::tempdir().unwrap();
     let track = written(dir.path());
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let trace = dir.path().join("trace.json");
     let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=40", "--trace", s(&trace)])
+        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=4", "--trace", s(&trace)])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -136,11 +138,10 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
         &port.to_string(),
         "--timeout-ms",
         "1000",
-        "--motion",
-        "moves",
     ]);
     let out = ok(&o);
     assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");
+    assert!(out.contains("2 path buffer(s)"), "{out}");
     std::thread::sleep(std::time::Duration::from_millis(300));
     let _ = sim.kill();
     let _ = sim.wait();

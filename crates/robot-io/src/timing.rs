@@ -14,7 +14,8 @@
 //!   `joint_acc_rad_s2`;
 //!
 //! found by a forward and a backward pass over the discretised path (time-optimal for these
-//! constraints on that discretisation: the numerical-integration form of TOPP). The joints are
+//! constraints on that discretisation: the numerical-integration form of TOPP), the brush
+//! stopping where the path turns back (more than 90°), so a waypoint lies on the turning point. The joints are
 //! interpolated linearly between the points, so a change of direction at a point is crossed
 //! within one waypoint interval `dt`: the speed there is also bounded so that the waypoints'
 //! acceleration (`v·Δ/dt`) and joint jerk (`v·Δq′/dt²`) stay within `write_acc_m_s2`,
@@ -475,6 +476,69 @@ fn s_at(at: f64, t: &[f64], v: &[f64], s: &[f64]) -> f64 {
     (s[i] + v[i] * tau + 0.5 * u * tau * tau).min(s[i + 1])
 }
 
+/// A turn of the path's direction at a point beyond which the brush stops there (the change
+/// of the unit direction: √2 is 90°).
+const STOP_TURN: f64 = std::f64::consts::SQRT_2;
+
+/// One piece of a stroke's path between stops, timed from rest to rest.
+struct Piece<'a> {
+    vlim: &'a [f64],
+    ds: &'a [f64],
+    qs: &'a [[f64; 6]],
+    qss: &'a [[f64; 6]],
+    /// Path length at its points, m (absolute).
+    s: &'a [f64],
+}
+
+impl Piece<'_> {
+    /// The path length at each waypoint (`dt` apart; the first and last at the ends, at rest)
+    /// and the reference duration (time-optimal without the jerk limit), s.
+    fn time(&self, lim: &Limits1, dt: f64, window: usize) -> (Vec<f64>, f64) {
+        let n = self.vlim.len();
+        let v_ref = passes(self.vlim, self.ds, self.qs, self.qss, lim);
+        let reference = times(&v_ref, self.ds)[n - 1];
+        // The jerk limit: a limit at one point holds, growing by 1 / (2 T) per metre of path,
+        // around it; the path is timed within those, then the speed averaged over T.
+        let slope = 0.5 / (window as f64 * dt);
+        let mut eroded = self.vlim.to_vec();
+        for i in 1..n {
+            eroded[i] = eroded[i].min(eroded[i - 1] + self.ds[i - 1] * slope);
+        }
+        for i in (0..n - 1).rev() {
+            eroded[i] = eroded[i].min(eroded[i + 1] + self.ds[i] * slope);
+        }
+        let v = passes(&eroded, self.ds, self.qs, self.qss, lim);
+        let t = times(&v, self.ds);
+        let total = t[n - 1];
+        let (s0, s_end) = (self.s[0], self.s[n - 1]);
+        // A piece too slow to sample is refused by the caller (its waypoint count).
+        let steps = if total.is_finite() { (total / dt).ceil().clamp(1.0, MAX_STROKE_WAYPOINTS as f64) } else { 1.0 };
+        let steps = steps as usize;
+        let at: Vec<f64> = (0..=steps).map(|k| s_at(k as f64 * dt, &t, &v, self.s)).collect();
+        if !total.is_finite() || total > MAX_STROKE_WAYPOINTS as f64 * dt {
+            return (vec![s0; MAX_STROKE_WAYPOINTS + 2], reference);
+        }
+        // Mean speed over each interval, averaged over the window (zeros before and after).
+        let mean: Vec<f64> = at.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        let len = mean.len() + window - 1;
+        let mut out = Vec::with_capacity(len + 1);
+        out.push(s0);
+        let (mut acc, mut run) = (0.0, s0);
+        for k in 0..len {
+            if k < mean.len() {
+                acc += mean[k];
+            }
+            if k >= window {
+                acc -= mean[k - window];
+            }
+            run += acc / window as f64 * dt;
+            out.push(run.min(s_end));
+        }
+        *out.last_mut().expect("samples") = s_end;
+        (out, reference)
+    }
+}
+
 /// Times one stroke's pressed path (`poses`, with the press depth at each, mm); `None` when it
 /// has fewer than two distinct points.
 ///
@@ -570,59 +634,36 @@ pub fn time_stroke(
             }
         }
     }
-    // The reference: time-optimal on this discretisation, without the jerk limit.
-    let v_ref = passes(&vlim, &ds, &qs, &qss, &lim);
-    let t_ref = times(&v_ref, &ds);
-    // The jerk limit: narrow the limits by their minimum over the path one averaging window
-    // spans, time the path, then average the speed over the window.
+    // The brush stops where the path turns back (more than 90°): each piece between stops is
+    // timed from rest to rest, so the waypoints reach the turning point itself.
+    let mut bounds = vec![0];
+    for i in 1..n - 1 {
+        if (xs[i] - xs[i - 1]).norm() > STOP_TURN && *bounds.last().expect("one bound") < i {
+            bounds.push(i);
+        }
+    }
+    bounds.push(n - 1);
     let window = ((lim.a_write / cfg.timing.write_jerk_m_s3) / dt).round().max(1.0) as usize;
-    // Narrowed: a limit at one point holds, growing by 1 / (2 T) per metre of path, around it.
-    let slope = 0.5 / (window as f64 * dt);
-    let mut eroded = vlim.clone();
-    for i in 1..n {
-        eroded[i] = eroded[i].min(eroded[i - 1] + ds[i - 1] * slope);
-    }
-    for i in (0..n - 1).rev() {
-        eroded[i] = eroded[i].min(eroded[i + 1] + ds[i] * slope);
-    }
-    let v = passes(&eroded, &ds, &qs, &qss, &lim);
-    let t = times(&v, &ds);
-    let total = t[n - 1];
-    let most = MAX_STROKE_WAYPOINTS as f64 * dt;
-    if !(total.is_finite() && total + window as f64 * dt <= most) {
-        return Err(unsafe_at(
-            stroke,
-            None,
-            format!(
-                "the timed stroke would take {total:.1} s, more than {MAX_STROKE_WAYPOINTS} waypoints ({most:.0} s at timing.interval_s = {dt} s): the limits slow it too much"
-            ),
-        ));
-    }
-    let steps = (total / dt).ceil().max(1.0) as usize;
-    let at: Vec<f64> = (0..=steps).map(|k| s_at(k as f64 * dt, &t, &v, &path.s)).collect();
-    // Mean speed over each interval, averaged over the window (zeros before and after).
-    let mean: Vec<f64> = at.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
-    let len = mean.len() + window - 1;
-    let mut smooth = vec![0.0; len];
-    let mut acc = 0.0;
-    for (k, out) in smooth.iter_mut().enumerate() {
-        if k < mean.len() {
-            acc += mean[k];
+    let mut s_samples: Vec<f64> = vec![0.0];
+    let mut reference_s = 0.0;
+    for w in bounds.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let piece = Piece { vlim: &vlim[a..=b], ds: &ds[a..b], qs: &qs[a..b], qss: &qss[a..=b], s: &path.s[a..=b] };
+        let (samples, reference) = piece.time(&lim, dt, window);
+        reference_s += reference;
+        s_samples.extend(&samples[1..]);
+        let total = (s_samples.len() - 1) as f64 * dt;
+        let most = MAX_STROKE_WAYPOINTS as f64 * dt;
+        if !(total.is_finite() && total <= most) {
+            return Err(unsafe_at(
+                stroke,
+                None,
+                format!(
+                    "the timed stroke would take more than {MAX_STROKE_WAYPOINTS} waypoints ({most:.0} s at timing.interval_s = {dt} s): the limits slow it too much"
+                ),
+            ));
         }
-        if k >= window {
-            acc -= mean[k - window];
-        }
-        *out = acc / window as f64;
     }
-    let s_end = path.s[n - 1];
-    let mut s_samples = Vec::with_capacity(len + 1);
-    let mut s_run = 0.0;
-    s_samples.push(0.0);
-    for w in &smooth {
-        s_run += w * dt;
-        s_samples.push(s_run.min(s_end));
-    }
-    *s_samples.last_mut().expect("samples") = s_end;
     // Waypoints: joints interpolated along s, and the commanded pose there.
     let mut joints = Vec::with_capacity(s_samples.len());
     let mut poses_out = Vec::with_capacity(s_samples.len());
@@ -671,7 +712,7 @@ pub fn time_stroke(
         stroke,
         interval_s: dt,
         duration_s: (m - 1) as f64 * dt,
-        reference_s: t_ref[n - 1],
+        reference_s,
         joints,
         poses: poses_out,
         peak_speed_m_s: peak_v,

@@ -154,3 +154,22 @@ fn a_compacted_stroke_keeps_its_path_with_valid_blends_and_no_zero_length_move()
     let e = check_blends(&prog).unwrap_err();
     assert!(e.to_string().contains("more than half the shorter of its moves"), "{e}");
 }
+
+#[test]
+fn the_brush_stops_exactly_where_the_path_turns_back() {
+    let cfg = RobotConfig::default();
+    // Out 10 mm and back along the same line, pressing 2 mm deeper at the far end.
+    let mut pts: Vec<TrackPoint> =
+        (0..=50).map(|i| pt(40.0 + 0.2 * f64::from(i), 60.0, 3.0 + 0.04 * f64::from(i))).collect();
+    pts.extend((1..=50).map(|i| pt(50.0 - 0.2 * f64::from(i), 60.0, 5.0 - 0.04 * f64::from(i))));
+    let prog = program(pts, &cfg);
+    let far = robot_io::timing::pressed_path(&prog.strokes[0])[50].position();
+    let t = time_program(&prog, &DhParams::AUBO_I5, &cfg).unwrap().strokes.remove(0);
+    // A waypoint at the turning point itself (the deepest press is reached, not cut short).
+    let closest = t
+        .poses
+        .iter()
+        .map(|p| (0..3).map(|k| (p.position()[k] - far[k]).powi(2)).sum::<f64>().sqrt())
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest < 1e-12, "{closest}");
+}
