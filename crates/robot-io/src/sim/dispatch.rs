@@ -285,6 +285,8 @@ struct MoveArgs {
     target: [f64; 6],
     /// Speed, m/s or rad/s.
     v: f64,
+    /// Acceleration, m/s² or rad/s².
+    a: f64,
 }
 
 impl MoveArgs {
@@ -306,7 +308,7 @@ impl MoveArgs {
             return None;
         }
         let target = arg(params, target, 0).and_then(numbers::<6>)?;
-        Some(Self { joint, target, v })
+        Some(Self { joint, target, v, a })
     }
 }
 
@@ -352,12 +354,12 @@ fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
         if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
             return UNREACHABLE;
         }
-        let samples = joint_motion_dh(dh, &joints, &q, v, &tcp, t0);
+        let samples = ramped_joint_motion(dh, &joints, &q, v, m.a, &tcp, t0);
         (q, Pose::from_iso(&dh.forward(&q, &tcp)), samples)
     } else {
         let to = Pose(m.target);
         let Some(q) = dh.inverse(&to, &tcp, Some(&joints)) else { return UNREACHABLE };
-        (q, to, line_motion(&pose, &to, v, t0))
+        (q, to, ramped_line_motion(&pose, &to, v, m.a, t0))
     };
     {
         let mut st = shared.lock();
@@ -366,6 +368,106 @@ fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
     }
     shared.record(&samples);
     0
+}
+
+/// The trapezoidal time law of a move of length `len` (m or rad) at speed `v` and
+/// acceleration `a` from rest to rest: its duration, and the distance covered at time `t`.
+fn trapezoid(len: f64, v: f64, a: f64) -> (f64, impl Fn(f64) -> f64) {
+    let (v, a) = (v.max(1e-12), a.max(1e-12));
+    let (ta, cruise_v) = if v * v / a >= len { ((len / a).sqrt(), (a * len).sqrt()) } else { (v / a, v) };
+    let da = 0.5 * a * ta * ta;
+    let total = 2.0 * ta + (len - 2.0 * da).max(0.0) / cruise_v;
+    let at = move |t: f64| {
+        if t <= ta {
+            0.5 * a * t * t
+        } else if t >= total - ta {
+            len - 0.5 * a * (total - t).powi(2)
+        } else {
+            da + cruise_v * (t - ta)
+        }
+        .clamp(0.0, len)
+    };
+    (total, at)
+}
+
+/// How many samples, evenly in time over `total` s, keep the steps within the trace's limits:
+/// at most [`crate::exec::TRACE_STEP_S`] apart, and at the top speed `v` along a path of
+/// length `len` (m, or rad for joints) that moves the TCP `d` and turns it (or the joints)
+/// `turn`, within [`crate::exec::TRACE_STEP_M`] and [`crate::exec::TRACE_STEP_RAD`].
+fn timed_count(total: f64, v: f64, len: f64, d: f64, turn: f64) -> usize {
+    use crate::exec::{MAX_SAMPLES_PER_MOVE, TRACE_STEP_M, TRACE_STEP_RAD, TRACE_STEP_S};
+    let per = total * v / len;
+    let steps = (total / TRACE_STEP_S).max(per * d / TRACE_STEP_M).max(per * turn / TRACE_STEP_RAD);
+    if steps.is_nan() { 1 } else { steps.ceil().clamp(1.0, MAX_SAMPLES_PER_MOVE as f64) as usize }
+}
+
+/// A `moveLine` as the simulator executes it: the path of [`line_motion`] (a straight line,
+/// the orientation by slerp; a turn in place counts 0.1 m per radian), on a trapezoidal time
+/// law (from rest, at acceleration `a_m_s2` up to `v_m_s`, and down to rest), sampled evenly
+/// in time (at most [`crate::exec::TRACE_STEP_S`] apart, and at the top speed at most
+/// [`crate::exec::TRACE_STEP_M`] and [`crate::exec::TRACE_STEP_RAD`]; at most
+/// [`crate::exec::MAX_SAMPLES_PER_MOVE`] samples). The plan's executed figure
+/// ([`crate::exec::execute_program`]) keeps constant speed.
+pub fn ramped_line_motion(from: &Pose, to: &Pose, v_m_s: f64, a_m_s2: f64, t0_s: f64) -> Vec<TraceEntry> {
+    let (a, b) = (from.to_iso(), to.to_iso());
+    let d = (b.translation.vector - a.translation.vector).norm();
+    let turn = a.rotation.angle_to(&b.rotation);
+    let len = d.max(turn * 0.1);
+    if len <= 0.0 {
+        return line_motion(from, to, v_m_s, t0_s);
+    }
+    let (total, at) = trapezoid(len, v_m_s, a_m_s2);
+    let n = timed_count(total, v_m_s, len, d, turn);
+    (1..=n)
+        .map(|k| {
+            let t = total * k as f64 / n as f64;
+            let f = at(t) / len;
+            let pose = if k == n {
+                *to
+            } else {
+                let p = a.translation.vector.lerp(&b.translation.vector, f);
+                let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 {
+                    a.rotation
+                } else {
+                    b.rotation
+                });
+                Pose::from_iso(&Isometry3::from_parts(nalgebra::Translation3::from(p), r))
+            };
+            TraceEntry { t_s: t0_s + t, kind: crate::exec::TraceKind::Line, pose }
+        })
+        .collect()
+}
+
+/// A `moveJoint` as the simulator executes it: the joints interpolated linearly (the TCP by
+/// forward kinematics with `dh`) on a trapezoidal time law at `v_rad_s` and `a_rad_s2` over the
+/// largest joint travel, sampled as [`ramped_line_motion`].
+pub fn ramped_joint_motion(
+    dh: &kinematics::DhParams,
+    from: &[f64; 6],
+    to: &[f64; 6],
+    v_rad_s: f64,
+    a_rad_s2: f64,
+    tcp: &Isometry3<f64>,
+    t0_s: f64,
+) -> Vec<TraceEntry> {
+    let dq = from.iter().zip(to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
+    if dq <= 0.0 {
+        return joint_motion_dh(dh, from, to, v_rad_s, tcp, t0_s);
+    }
+    let (total, at) = trapezoid(dq, v_rad_s, a_rad_s2);
+    let n = timed_count(total, v_rad_s, dq, 0.0, dq);
+    (1..=n)
+        .map(|k| {
+            let t = total * k as f64 / n as f64;
+            let f = if k == n { 1.0 } else { at(t) / dq };
+            let q: [f64; 6] = std::array::from_fn(|j| from[j] + f * (to[j] - from[j]));
+            TraceEntry {
+                t_s: t0_s + t,
+                kind: crate::exec::TraceKind::Joint,
+                pose: Pose::from_iso(&dh.forward(&q, tcp)),
+            }
+        })
+        .collect()
 }
 
 /// Answers one JSON-RPC request from `session`.

@@ -13,7 +13,7 @@ mod dispatch;
 
 pub use dispatch::{
     MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
-    PATH_START_TOLERANCE_RAD,
+    PATH_START_TOLERANCE_RAD, ramped_joint_motion, ramped_line_motion,
 };
 mod server;
 mod session;
