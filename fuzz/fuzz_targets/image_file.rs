@@ -7,7 +7,7 @@ use libfuzzer_sys::fuzz_target;
 fuzz_target!(|data: &[u8]| {
     let path = std::env::temp_dir().join(format!("maobi-fuzz-image-{}.png", std::process::id()));
     std::fs::write(&path, data).unwrap();
-    if let Ok((w, h)) = bezier_raster::coverage::probe_image(&path) {
+    if let Ok((w, h)) = bezier_raster::coverage::image_header(&path) {
         assert!(w as u64 * h as u64 <= bezier_raster::coverage::MAX_LOAD_PIXELS);
     }
     if let Ok(c) = bezier_raster::Coverage::load(&path) {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use brush_model::{BrushProfile, Extrapolation, Press};
 
-use crate::rng::SplitMix;
+use numerics::SplitMix64 as SplitMix;
 
 /// Inputs a generator may need.
 pub struct Inputs {

@@ -13,7 +13,7 @@ use brush_model::BrushProfile;
 use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
+use stroke_metrics::{SsimWorkspace, Summary};
 use trajectory::{Method, glyph};
 
 use crate::fixtures::root;
@@ -97,10 +97,6 @@ fn fig(value: f64, tolerance: f64, better: Better) -> Figure {
     Figure { value, tolerance, better }
 }
 
-fn gray(c: &Coverage) -> GrayRef<'_> {
-    GrayRef::new(c.data(), c.width() as usize, c.height() as usize).expect("sized")
-}
-
 /// Stroke-model figures: each of `models` against `reference` over `n` presses of pen1 at 128²
 /// (CSIM and SSIM best, worst, mean), plus the reference's mean relative error of rendered ink
 /// against the analytic B-BSM area.
@@ -120,8 +116,8 @@ pub fn model_figures(reference: &dyn StrokeModel, models: &[(&str, &dyn StrokeMo
                     .map(|(_, m)| {
                         spec.render(&s, *m, r, img);
                         (
-                            stroke_metrics::csim(gray(truth), gray(img)).expect("same size"),
-                            ws.ssim(gray(truth), gray(img)).expect("same size"),
+                            stroke_metrics::csim(truth.as_gray(), img.as_gray()).expect("same size"),
+                            ws.ssim(truth.as_gray(), img.as_gray()).expect("same size"),
                         )
                     })
                     .collect();

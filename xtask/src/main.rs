@@ -7,7 +7,6 @@ mod fixtures;
 mod gates;
 mod io;
 mod refine_gate;
-mod rng;
 mod skeleton_counts;
 mod skeleton_train;
 mod styles;

@@ -14,7 +14,7 @@ use trajectory::{
 };
 
 use crate::io::{char_bar, write_atomic};
-use crate::rng::SplitMix;
+use numerics::SplitMix64 as SplitMix;
 
 const HELP: &str = "\
 cargo xtask skeleton-train --hanzi-data DIR [--out FILE] [--hidden H] [--epochs E] [--every K]

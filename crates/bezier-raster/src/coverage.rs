@@ -61,17 +61,6 @@ pub enum ImageFileError {
     },
 }
 
-impl ImageFileError {
-    /// The error as one line, with the decoder's own message after a decode failure (what
-    /// [`open_image`] and [`probe_image`] return).
-    pub fn message(&self) -> String {
-        match self {
-            ImageFileError::Decode(e) => format!("{self}: {e}"),
-            other => other.to_string(),
-        }
-    }
-}
-
 /// Opens and decodes an image file with [`image_limits`], refusing more than
 /// [`MAX_LOAD_PIXELS`] from the header's dimensions before decoding ([`image_header`] first).
 ///
@@ -108,24 +97,6 @@ pub fn image_header(path: &Path) -> Result<(u32, u32), ImageFileError> {
         return Err(ImageFileError::TooLarge { width, height });
     }
     Ok((width, height))
-}
-
-/// [`decode_image`] with the error as one line ([`ImageFileError::message`]), for callers that
-/// keep a message; new code uses [`decode_image`] and keeps the error as a source.
-///
-/// # Errors
-/// A one-line reason (without the path; callers add it).
-pub fn open_image(path: &Path) -> Result<image::DynamicImage, String> {
-    decode_image(path).map_err(|e| e.message())
-}
-
-/// [`image_header`] with the error as one line ([`ImageFileError::message`]), for callers
-/// that keep a message; new code uses [`image_header`].
-///
-/// # Errors
-/// A one-line reason (without the path; callers add it).
-pub fn probe_image(path: &Path) -> Result<(u32, u32), String> {
-    image_header(path).map_err(|e| e.message())
 }
 
 /// Errors from image I/O.
@@ -224,6 +195,21 @@ impl Coverage {
         for (a, b) in self.data.iter_mut().zip(&other.data) {
             *a = a.max(*b);
         }
+    }
+
+    /// The image as a [`GrayRef`](stroke_metrics::GrayRef) (same values, ink = 1), for scoring
+    /// with stroke-metrics.
+    ///
+    /// # Examples
+    /// ```
+    /// use bezier_raster::Coverage;
+    /// let mut a = Coverage::new(16, 16);
+    /// a.data_mut()[..64].fill(1.0);
+    /// assert_eq!(bezier_raster::stroke_metrics::iou(a.as_gray(), a.as_gray()).unwrap(), 1.0);
+    /// ```
+    pub fn as_gray(&self) -> stroke_metrics::GrayRef<'_> {
+        stroke_metrics::GrayRef::new(&self.data, self.width as usize, self.height as usize)
+            .expect("a Coverage holds width × height values")
     }
 
     /// 8-bit gray pixels as written to disk: black ink on white (`255 − round(255·v)`).

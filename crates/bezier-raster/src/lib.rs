@@ -41,6 +41,7 @@
 pub use brush_model;
 pub use image;
 pub use kurbo;
+pub use stroke_metrics;
 
 // The README's examples run as doctests (`cargo test --doc`).
 #[cfg(doctest)]

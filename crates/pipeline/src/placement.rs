@@ -6,7 +6,7 @@ use brush_model::{BrushProfile, Extrapolation, Track};
 use robot_io::program::{RobotConfig, build_program};
 use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track, raster::render_glyph};
 
-use crate::write::{gray, level_frame_for, render_char};
+use crate::write::{level_frame_for, render_char};
 use crate::{CharResult, Prepared, Result, WriteOptions, write_char};
 
 /// How [`write_placed`] sizes a character's box.
@@ -178,7 +178,7 @@ fn plan_score(
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let built = build_track(&with_splits(&p.paths, split), profile, &topts)?;
     let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
-    Ok((stroke_metrics::csim(gray(reference), gray(&img))?, built.track))
+    Ok((stroke_metrics::csim(reference.as_gray(), img.as_gray())?, built.track))
 }
 
 impl Prepared {

@@ -8,7 +8,6 @@ use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
-use stroke_metrics::GrayRef;
 use track_refine::{LossTerms, RefineOptions, Target};
 use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, raster::render_glyph};
 
@@ -88,18 +87,12 @@ pub struct Similarity {
 
 /// Scores `render` against `reference` (same size).
 pub fn similarity(reference: &Coverage, render: &Coverage) -> Result<Similarity> {
-    let g = gray;
+    let (a, b) = (reference.as_gray(), render.as_gray());
     Ok(Similarity {
-        csim: stroke_metrics::csim(g(reference), g(render))?,
-        ssim: stroke_metrics::ssim(g(reference), g(render))?,
-        iou: stroke_metrics::iou(g(reference), g(render))?,
+        csim: stroke_metrics::csim(a, b)?,
+        ssim: stroke_metrics::ssim(a, b)?,
+        iou: stroke_metrics::iou(a, b)?,
     })
-}
-
-/// Wraps a coverage image for the metrics crate.
-pub fn gray(c: &Coverage) -> GrayRef<'_> {
-    GrayRef::new(c.data(), c.width() as usize, c.height() as usize)
-        .expect("coverage buffers have width × height values")
 }
 
 /// Everything `maobi write` reports for one character.

@@ -79,6 +79,9 @@ pub const MAX_ROBOT_NAME_LEN: usize = 64;
 /// Result code the controller returns when its motion queue is full.
 pub const QUEUE_FULL: i64 = 2;
 
+/// Most waypoints one `pathBufferAppend` carries (about 100 KB of JSON, well within a frame).
+pub const PATH_APPEND_WAYPOINTS: usize = 1000;
+
 /// Distinguishes the ids of clients made by one process.
 static CLIENTS: AtomicU64 = AtomicU64::new(0);
 
@@ -655,6 +658,116 @@ impl AuboClient {
         Err(RobotError::Timeout(format!("{method}: the motion queue stayed full")))
     }
 
+    /// The JSON-RPC calls this client has made (the login frame aside).
+    pub fn calls(&self) -> u64 {
+        self.next_id - 1
+    }
+
+    /// `<robot>.RobotConfig.getKinematicsParam(real)`: the arm's modified-DH parameters as
+    /// the controller reports them (`real`: the calibrated ones), validated.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Protocol`] for an answer that is not four arrays
+    /// `a`, `alpha`, `d`, `theta` of six finite numbers within ±2 m / ±2π.
+    pub fn kinematics_params(&mut self, robot: &str, real: bool) -> Result<crate::kinematics::DhParams, RobotError> {
+        let m = robot_method(robot, "RobotConfig.getKinematicsParam")?;
+        let p = self.params(json!({"real": real}), json!([real]));
+        let r = self.call(&m, p)?;
+        let row = |k: &str| -> Result<[f64; 6], RobotError> {
+            let v: Vec<f64> = serde_json::from_value(r.get(k).cloned().unwrap_or(Value::Null))
+                .map_err(|e| bad_json(&m, &format!("expected `{k}`: six numbers"), e))?;
+            v.try_into().map_err(|_| RobotError::Protocol(format!("{m}: `{k}` is not six numbers")))
+        };
+        let k = crate::kinematics::DhParams {
+            a_m: row("a")?,
+            alpha_rad: row("alpha")?,
+            d_m: row("d")?,
+            theta_rad: row("theta")?,
+        };
+        k.validate().map_err(|why| RobotError::Protocol(format!("{m}: {why}")))?;
+        Ok(k)
+    }
+
+    /// `<robot>.RobotAlgorithm.forwardKinematics(q)`: the TCP pose the controller computes for
+    /// joints `q` (rad) with the tool offset set.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Controller`] for a non-zero status.
+    pub fn forward_kinematics(&mut self, robot: &str, q: &[f64; 6]) -> Result<Pose, RobotError> {
+        let m = robot_method(robot, "RobotAlgorithm.forwardKinematics")?;
+        let p = self.params(json!({"q": q}), json!([q]));
+        Ok(Pose(six_with_status(&m, self.call(&m, p)?)?))
+    }
+
+    /// Runs joint waypoints `waypoints` (rad, `interval_s` apart) as one path buffer named
+    /// `name` of type 2 (a cubic spline through the waypoints at a fixed interval), as the SDK
+    /// does it: `pathBufferAlloc(name, 2, n)`, `pathBufferAppend` in pieces of at most
+    /// [`PATH_APPEND_WAYPOINTS`], `pathBufferEval(name, a, v, interval_s)` with the joint
+    /// limits `acc_rad_s2` and `speed_rad_s`, then `pathBufferValid` polled (every 10 ms, at
+    /// most `valid_wait`), then `movePathBuffer(name)` (retried while the queue is full). The
+    /// buffer is not freed: [`AuboClient::path_buffer_free`] once the motion is done.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call_status`]; [`RobotError::UnexpectedState`] when the buffer does not
+    /// become valid in time.
+    #[allow(clippy::too_many_arguments, reason = "the SDK's calls' arguments, each named")]
+    pub fn run_path_buffer(
+        &mut self,
+        robot: &str,
+        name: &str,
+        waypoints: &[[f64; 6]],
+        interval_s: f64,
+        speed_rad_s: f64,
+        acc_rad_s2: f64,
+        valid_wait: Duration,
+    ) -> Result<(), RobotError> {
+        let mc = |rest: &str| robot_method(robot, &format!("MotionControl.{rest}"));
+        let n = waypoints.len();
+        let p = self.params(json!({"name": name, "type": 2, "size": n}), json!([name, 2, n]));
+        self.call_status(&mc("pathBufferAlloc")?, p)?;
+        for chunk in waypoints.chunks(PATH_APPEND_WAYPOINTS) {
+            let p = self.params(json!({"name": name, "waypoints": chunk}), json!([name, chunk]));
+            self.call_status(&mc("pathBufferAppend")?, p)?;
+        }
+        let (a, v) = ([acc_rad_s2; 6], [speed_rad_s; 6]);
+        let p = self.params(json!({"name": name, "a": a, "v": v, "t": interval_s}), json!([name, a, v, interval_s]));
+        self.call_status(&mc("pathBufferEval")?, p)?;
+        let valid = mc("pathBufferValid")?;
+        let t0 = Instant::now();
+        loop {
+            let p = self.params(json!({"name": name}), json!([name]));
+            match self.call(&valid, p)? {
+                Value::Bool(true) => break,
+                Value::Bool(false) if t0.elapsed() < valid_wait => std::thread::sleep(Duration::from_millis(10)),
+                Value::Bool(false) => {
+                    return Err(RobotError::UnexpectedState(format!(
+                        "{valid}: path buffer `{name}` did not become valid within {:.1} s",
+                        valid_wait.as_secs_f64()
+                    )));
+                }
+                r => return Err(RobotError::Protocol(format!("{valid}: expected a bool, got {r}"))),
+            }
+        }
+        let mv = mc("movePathBuffer")?;
+        for attempt in 0..200 {
+            let p = self.params(json!({"name": name}), json!([name]));
+            match self.call_status(&mv, p)? {
+                QUEUE_FULL => std::thread::sleep(Duration::from_millis(5 + attempt.min(20) * 5)),
+                _ => return Ok(()),
+            }
+        }
+        Err(RobotError::Timeout(format!("{mv}: the motion queue stayed full")))
+    }
+
+    /// `<robot>.MotionControl.pathBufferFree(name)`.
+    ///
+    /// # Errors
+    /// As [`AuboClient::call_status`].
+    pub fn path_buffer_free(&mut self, robot: &str, name: &str) -> Result<i64, RobotError> {
+        let p = self.params(json!({"name": name}), json!([name]));
+        self.call_status(&robot_method(robot, "MotionControl.pathBufferFree")?, p)
+    }
+
     /// Waits until the controller is idle (`getExecId` = −1), polling every 10 ms; returns how
     /// long it waited.
     ///
@@ -768,7 +881,8 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
 }
 
 pub use crate::run::{
-    MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M, RunOptions, RunReport, run_program,
+    CONTROLLER_FK_TOLERANCE_M, CONTROLLER_FK_TOLERANCE_RAD, MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD,
+    PATH_VALID_WAIT, POSE_TOLERANCE_M, RunOptions, RunReport, run_program,
 };
 
 /// Refuses a script the script port would not take as one script: one containing the

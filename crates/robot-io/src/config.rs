@@ -164,6 +164,11 @@ pub struct Limits {
     /// longer step with the brush down is a corrupt or hand-edited track. Glides at the surface
     /// (h = 0) are not bounded.
     pub max_step_mm: f64,
+    /// Largest joint jerk of a timed stroke (its waypoints' third differences), rad/s³.
+    pub max_joint_jerk_rad_s3: f64,
+    /// Smallest distance from a singularity along a timed stroke: the smallest singular value
+    /// of the arm's Jacobian (position rows in m/rad, orientation rows in rad/rad).
+    pub min_singular_value: f64,
 }
 
 impl Default for Limits {
@@ -181,6 +186,8 @@ impl Default for Limits {
             max_wrist_rate_rad_s: 20.0,
             max_depth_change_per_mm: 40.0,
             max_step_mm: 5.0,
+            max_joint_jerk_rad_s3: 50.0,
+            min_singular_value: 0.02,
         }
     }
 }
@@ -217,7 +224,37 @@ pub struct RobotConfig {
     pub approach: Approach,
     /// Limits.
     pub limits: Limits,
+    /// How pressed strokes are timed (docs/robot.md, "Motion: timing and the path buffer").
+    pub timing: Timing,
 }
+
+/// How pressed strokes are timed (`robot.json` → `timing`; every field optional): the write
+/// speed and acceleration and the joint speed and acceleration of [`RobotConfig`] bound the
+/// motion, these add the rest.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Timing {
+    /// The fixed interval between the joint waypoints of a timed stroke (the path buffer's), s.
+    pub interval_s: f64,
+    /// Largest jerk along the path while writing, m/s³.
+    pub write_jerk_m_s3: f64,
+    /// Largest rate at which the press depth changes while writing, mm/s.
+    pub max_depth_rate_mm_s: f64,
+    /// Largest joint jerk the timing plans for, rad/s³ (at most `limits.max_joint_jerk_rad_s3`).
+    pub joint_jerk_rad_s3: f64,
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Self { interval_s: 0.01, write_jerk_m_s3: 3.0, max_depth_rate_mm_s: 20.0, joint_jerk_rad_s3: 20.0 }
+    }
+}
+
+/// The shortest waypoint interval a timed stroke may use, s (the controller's cycle is assumed
+/// no shorter than 1 ms).
+pub const MIN_INTERVAL_S: f64 = 1e-3;
+/// The longest waypoint interval a timed stroke may use, s.
+pub const MAX_INTERVAL_S: f64 = 0.1;
 
 impl Default for RobotConfig {
     fn default() -> Self {
@@ -236,6 +273,7 @@ impl Default for RobotConfig {
             ink: None,
             approach: Approach::default(),
             limits: Limits::default(),
+            timing: Timing::default(),
         }
     }
 }
@@ -297,6 +335,12 @@ impl RobotConfig {
             ("limits.max_wrist_rate_rad_s", l.max_wrist_rate_rad_s, f64::MIN_POSITIVE, 100.0, "rad/s"),
             ("limits.max_depth_change_per_mm", l.max_depth_change_per_mm, f64::MIN_POSITIVE, 1000.0, "mm/mm"),
             ("limits.max_step_mm", l.max_step_mm, f64::MIN_POSITIVE, MAX_STEP_LIMIT_MM, "mm"),
+            ("limits.max_joint_jerk_rad_s3", l.max_joint_jerk_rad_s3, MIN_ACC, 10_000.0, "rad/s³"),
+            ("limits.min_singular_value", l.min_singular_value, f64::MIN_POSITIVE, 1.0, ""),
+            ("timing.interval_s", self.timing.interval_s, MIN_INTERVAL_S, MAX_INTERVAL_S, "s"),
+            ("timing.write_jerk_m_s3", self.timing.write_jerk_m_s3, MIN_ACC, 1000.0, "m/s³"),
+            ("timing.max_depth_rate_mm_s", self.timing.max_depth_rate_mm_s, 0.1, 1000.0, "mm/s"),
+            ("timing.joint_jerk_rad_s3", self.timing.joint_jerk_rad_s3, MIN_ACC, 10_000.0, "rad/s³"),
         ];
         for (f, v, min, max, unit) in ranged {
             let (v_s, unit) = (number(v), if unit.is_empty() { String::new() } else { format!(" {unit}") });
@@ -338,6 +382,12 @@ impl RobotConfig {
             ("joint_speed_rad_s", self.joint_speed_rad_s, l.max_joint_speed_rad_s, "max_joint_speed_rad_s"),
             ("joint_acc_rad_s2", self.joint_acc_rad_s2, l.max_joint_acc_rad_s2, "max_joint_acc_rad_s2"),
             ("blend_mm", self.blend_mm, l.max_blend_mm, "max_blend_mm"),
+            (
+                "timing.joint_jerk_rad_s3",
+                self.timing.joint_jerk_rad_s3,
+                l.max_joint_jerk_rad_s3,
+                "max_joint_jerk_rad_s3",
+            ),
         ] {
             if v > max {
                 return Err(format!("{f} = {v} exceeds the limit {max} (limits.{limit})"));

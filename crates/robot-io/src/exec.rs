@@ -31,6 +31,8 @@ pub enum TraceKind {
     Joint,
     /// A linear move.
     Line,
+    /// A path buffer's joint waypoints (`movePathBuffer`).
+    PathBuffer,
 }
 
 /// One sample of a program executed by [`execute_program_tagged`], with the part of the program

@@ -51,6 +51,7 @@ pub mod pose;
 pub mod program;
 mod run;
 pub mod sim;
+pub mod timing;
 pub mod wire;
 
 pub use aubo::{AuboClient, Link, RunOptions, RunReport, run_program, send_script};
@@ -65,6 +66,7 @@ pub use program::{
     build_program, build_program_chars,
 };
 pub use sim::{Faults, Listen, SimOptions, Simulator};
+pub use timing::{ProgramTiming, TimedStroke, time_program};
 pub use wire::Transport;
 
 use std::path::{Path, PathBuf};

@@ -9,9 +9,9 @@ use serde::{Deserialize, Serialize};
 use crate::RobotError;
 pub use crate::config::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
-    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_LIFT_MM,
-    MAX_STEP_LIMIT_MM, MIN_ACC, MIN_JOINT_SPEED_RAD_S, MIN_LINEAR_SPEED_M_S, MIN_SPEED_FRACTION, Reload, RobotConfig,
-    dip_plan, pressed_mm,
+    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_INTERVAL_S,
+    MAX_LIFT_MM, MAX_STEP_LIMIT_MM, MIN_ACC, MIN_INTERVAL_S, MIN_JOINT_SPEED_RAD_S, MIN_LINEAR_SPEED_M_S,
+    MIN_SPEED_FRACTION, Reload, RobotConfig, Timing, dip_plan, pressed_mm,
 };
 use crate::frame::PaperFrame;
 use crate::kinematics;
@@ -692,4 +692,150 @@ impl<'a> Builder<'a> {
 fn dist(a: &Pose, b: &Pose) -> f64 {
     let (p, q) = (a.position(), b.position());
     ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+}
+
+/// How far the moves of a compacted stroke may pass from a point they leave out, m (the TCP
+/// position; the press depth lies along the paper normal, so it is bounded by the same
+/// distance).
+pub const COMPACT_TOLERANCE_M: f64 = 5e-5;
+/// How far the tool orientation of a compacted stroke may turn from a point it leaves out, rad.
+pub const COMPACT_TOLERANCE_RAD: f64 = 2e-3;
+/// Most points one compacted move may stand for.
+const COMPACT_MAX_SPAN: usize = 2000;
+
+/// A move-per-point program made valid for a controller that blends: each stroke's pressed
+/// points merged where the straight move between the points kept passes within
+/// [`COMPACT_TOLERANCE_M`] and [`COMPACT_TOLERANCE_RAD`] of every point left out (no move
+/// shorter than [`IN_PLACE_MM`] that does not turn, no zero-length move), and every blend
+/// radius at most half the shorter of the two moves it joins (and at most `cfg.blend_mm`).
+/// The dips, approaches and lifts are unchanged.
+///
+/// # Examples
+/// ```
+/// # use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+/// # use robot_io::{exec::level_frame_in_front, program::{RobotConfig, build_program, check_blends, compact_program}};
+/// let profile = BrushProfile::builtin("pen1").unwrap();
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..200).map(|i| pt(30.0 + 0.15 * f64::from(i))).collect() }] };
+/// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+/// let cfg = RobotConfig::default();
+/// let (program, _) = build_program(&track, &profile, &frame, &cfg).unwrap();
+/// let compact = compact_program(&program, &cfg);
+/// assert_eq!(compact.strokes[0].press.len(), 1); // a straight stroke is one move
+/// check_blends(&compact).unwrap();
+/// ```
+pub fn compact_program(program: &Program, cfg: &RobotConfig) -> Program {
+    let mut out = program.clone();
+    for st in &mut out.strokes {
+        let Some(Move::Line { pose: first, .. }) = st.approach.last().copied() else { continue };
+        let mut poses = vec![first];
+        let mut spec = Vec::new();
+        for m in &st.press {
+            if let Move::Line { pose, a, v, .. } = *m {
+                poses.push(pose);
+                spec.push((a, v));
+            }
+        }
+        if poses.len() < 2 {
+            continue;
+        }
+        let keep = compact_indices(&poses);
+        let lens: Vec<f64> = keep.windows(2).map(|w| dist(&poses[w[0]], &poses[w[1]])).collect();
+        let mut press = Vec::with_capacity(keep.len());
+        for (k, &i) in keep.iter().enumerate().skip(1) {
+            let blend_m =
+                if k + 1 < keep.len() { (cfg.blend_mm / 1000.0).min(0.5 * lens[k - 1].min(lens[k])) } else { 0.0 };
+            let (a, v) = spec[i - 1];
+            press.push(Move::Line { pose: poses[i], a, v, blend_m });
+        }
+        st.press = press;
+    }
+    out
+}
+
+/// The points kept (indices into `poses`, the first and the last always).
+fn compact_indices(poses: &[Pose]) -> Vec<usize> {
+    let iso: Vec<Isometry3<f64>> = poses.iter().map(Pose::to_iso).collect();
+    let same = |a: usize, b: usize| {
+        (iso[a].translation.vector - iso[b].translation.vector).norm() < IN_PLACE_MM / 1000.0
+            && iso[a].rotation.angle_to(&iso[b].rotation) < 1e-6
+    };
+    // Whether every point strictly between a and b lies within the tolerance of the move a → b.
+    let covers = |a: usize, b: usize| {
+        let (pa, pb) = (iso[a].translation.vector, iso[b].translation.vector);
+        let ab = pb - pa;
+        let len2 = ab.norm_squared();
+        (a + 1..b).all(|i| {
+            let p = iso[i].translation.vector;
+            let f = if len2 > 0.0 { ((p - pa).dot(&ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+            let off = (pa + ab * f - p).norm();
+            let r = iso[a].rotation.try_slerp(&iso[b].rotation, f, 1e-12).unwrap_or(iso[a].rotation);
+            off <= COMPACT_TOLERANCE_M && r.angle_to(&iso[i].rotation) <= COMPACT_TOLERANCE_RAD
+        })
+    };
+    let n = poses.len();
+    let mut keep = vec![0];
+    let mut a = 0;
+    while a < n - 1 {
+        let mut b = a + 1;
+        while b + 1 < n && b + 1 - a <= COMPACT_MAX_SPAN && covers(a, b + 1) {
+            b += 1;
+        }
+        if !same(a, b) || b == n - 1 {
+            if same(a, b) {
+                // The last point coincides with the one kept before it: end there.
+                keep.pop();
+            }
+            keep.push(b);
+        }
+        a = b;
+    }
+    if keep.len() < 2 {
+        keep = vec![0, n - 1];
+    }
+    keep
+}
+
+/// Checks what a blending controller needs of a program's pressed moves: no zero-length move
+/// (shorter than [`IN_PLACE_MM`] without turning), and every blend radius at most half the
+/// shorter of the two moves it joins.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] naming the stroke and move, the radius and the moves' lengths.
+pub fn check_blends(program: &Program) -> Result<(), RobotError> {
+    for st in &program.strokes {
+        let Some(Move::Line { pose: first, .. }) = st.approach.last().copied() else { continue };
+        let mut prev = first;
+        let mut prev_len: Option<f64> = None;
+        let mut prev_blend = 0.0;
+        for (k, m) in st.press.iter().enumerate() {
+            let Move::Line { pose, blend_m, .. } = *m else { continue };
+            let len = dist(&prev, &pose);
+            let turn = prev.to_iso().rotation.angle_to(&pose.to_iso().rotation);
+            if len * 1000.0 < IN_PLACE_MM && turn < 1e-6 {
+                return Err(unsafe_at(st.index, Some(k + 1), "a zero-length move".into()));
+            }
+            if let Some(pl) = prev_len
+                && prev_blend > 0.5 * pl.min(len) + 1e-12
+            {
+                return Err(unsafe_at(
+                    st.index,
+                    Some(k),
+                    format!(
+                        "blend radius {:.4} mm is more than half the shorter of its moves ({:.4} mm, {:.4} mm)",
+                        prev_blend * 1000.0,
+                        pl * 1000.0,
+                        len * 1000.0
+                    ),
+                ));
+            }
+            prev = pose;
+            prev_len = Some(len);
+            prev_blend = blend_m;
+        }
+        if prev_blend > 0.0 {
+            return Err(unsafe_at(st.index, Some(st.press.len()), "the last pressed move blends into the lift".into()));
+        }
+    }
+    Ok(())
 }

@@ -16,6 +16,15 @@ use crate::RobotError;
 use crate::aubo::{AuboClient, Link, io_at};
 use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
+use crate::timing::{PATH_TOLERANCE_M, PATH_TOLERANCE_RAD, TimedStroke};
+
+/// How far the controller's forward kinematics of a waypoint may lie from ours with the
+/// parameters it reported, m and rad.
+pub const CONTROLLER_FK_TOLERANCE_M: f64 = 1e-4;
+/// See [`CONTROLLER_FK_TOLERANCE_M`].
+pub const CONTROLLER_FK_TOLERANCE_RAD: f64 = 1e-3;
+/// How long the runner waits for a path buffer to become valid after `pathBufferEval`.
+pub const PATH_VALID_WAIT: Duration = Duration::from_secs(5);
 
 /// How far a reported TCP position may lie from the commanded one (or from the commanded path
 /// after a fault, widened by the moves' blend radius), m: 5 mm. Far above a controller's
@@ -60,6 +69,10 @@ pub struct RunOptions<'a> {
     pub lift_m: f64,
     /// The transport and credentials.
     pub link: Link,
+    /// `Some(cfg)`: every pressed stroke goes to the controller as one path buffer of joint
+    /// waypoints, timed with `cfg` ([`crate::timing`]) on the controller's own kinematics
+    /// (`getKinematicsParam`), checked before anything moves; `None`: a `moveLine` per point.
+    pub path_buffer: Option<crate::program::RobotConfig>,
     /// Set (for example by Ctrl-C) to stop: the runner sends no further stroke, waits for the
     /// controller to finish what it queued, lifts the brush and returns
     /// [`RobotError::Interrupted`] inside [`RobotError::RunStopped`].
@@ -83,6 +96,7 @@ impl<'a> RunOptions<'a> {
             max_wait_per_stroke: Duration::from_secs(120),
             lift_m: 0.02,
             link: Link::default(),
+            path_buffer: None,
             stop,
         }
     }
@@ -101,6 +115,10 @@ pub struct RunReport {
     pub strokes_resumed: usize,
     /// Faults met (dropped connections, timeouts).
     pub faults: usize,
+    /// JSON-RPC calls made over every connection (the login frames aside).
+    pub calls: u64,
+    /// Strokes sent as path buffers.
+    pub path_buffers: usize,
 }
 
 struct Session {
@@ -155,17 +173,21 @@ struct Sent {
     a: f64,
     /// Blend radius, m.
     blend_m: f64,
+    /// The move's own duration, s, where it is known (a path buffer's timing).
+    fixed_s: Option<f64>,
 }
 
 impl Sent {
     fn of(m: &Move) -> Sent {
         match *m {
-            Move::Joint { a, v, .. } => Sent { target: None, joint: true, joint_travel_rad: None, v, a, blend_m: 0.0 },
+            Move::Joint { a, v, .. } => {
+                Sent { target: None, joint: true, joint_travel_rad: None, v, a, blend_m: 0.0, fixed_s: None }
+            }
             Move::JointPose { pose, a, v } => {
-                Sent { target: Some(pose), joint: true, joint_travel_rad: None, v, a, blend_m: 0.0 }
+                Sent { target: Some(pose), joint: true, joint_travel_rad: None, v, a, blend_m: 0.0, fixed_s: None }
             }
             Move::Line { pose, a, v, blend_m } => {
-                Sent { target: Some(pose), joint: false, joint_travel_rad: None, v, a, blend_m }
+                Sent { target: Some(pose), joint: false, joint_travel_rad: None, v, a, blend_m, fixed_s: None }
             }
         }
     }
@@ -197,6 +219,11 @@ impl Commanded {
         let mut at = self.from;
         let mut total = 0.0;
         for s in &self.sent {
+            if let Some(d) = s.fixed_s {
+                total += d;
+                at = s.target;
+                continue;
+            }
             let v = (s.v * speed_fraction).max(1e-9);
             let path = if s.joint {
                 s.joint_travel_rad.unwrap_or(std::f64::consts::TAU)
@@ -432,10 +459,15 @@ pub fn run_program(
         started: false,
         near: program_box(program),
         wait_left: Duration::ZERO,
+        timing: Vec::new(),
+        confirmed: 0,
     };
     run.wait_left = run.wait_budget();
     match run.drive(&mut progress) {
-        Ok(()) => Ok(run.report),
+        Ok(()) => {
+            run.drop_session();
+            Ok(run.report)
+        }
         Err(cause) if !run.moved => Err(cause),
         Err(cause) => Err(run.retreat(cause)),
     }
@@ -460,6 +492,11 @@ struct Runner<'a, 'o> {
     near: ([f64; 3], [f64; 3]),
     /// What is left of the run's budget for waiting on motion.
     wait_left: Duration,
+    /// The timed strokes sent as path buffers (empty: every stroke as moves).
+    timing: Vec<TimedStroke>,
+    /// Moves of the stroke being written already seen done (a path buffer's stroke is settled
+    /// after its approach): with the moves commanded since, the stroke's whole count.
+    confirmed: usize,
 }
 
 /// The fault budget of the stroke being written.
@@ -473,6 +510,60 @@ struct StrokeFaults {
 impl Runner<'_, '_> {
     fn session(&mut self) -> &mut Session {
         self.session.as_mut().expect("connected")
+    }
+
+    /// Closes the session (if any), counting its calls.
+    fn drop_session(&mut self) {
+        if let Some(s) = self.session.take() {
+            self.report.calls += s.client.calls();
+        }
+    }
+
+    /// Times the pressed strokes on the controller's kinematics for path buffers (when asked):
+    /// its parameters read (`getKinematicsParam`), every stroke timed and checked from `seed`
+    /// (the joints the start move goes to), and its own forward kinematics of the first,
+    /// middle and last waypoints compared with ours and with the path, before anything moves.
+    fn plan_path_buffers(&mut self, seed: Option<&[f64; 6]>) -> Result<(), RobotError> {
+        let Some(cfg) = &self.opts.path_buffer else { return Ok(()) };
+        let program = self.program;
+        let s = self.session.as_mut().expect("connected");
+        let kin = s.client.kinematics_params(&s.robot, true)?;
+        let timing = crate::timing::time_program_from(program, &kin, cfg, seed)?;
+        let tcp = program.tcp();
+        let mut probes = Vec::new();
+        if let (Some(first), Some(last)) = (timing.strokes.first(), timing.strokes.last()) {
+            probes = vec![(first, 0), (first, first.joints.len() / 2), (last, last.joints.len() - 1)];
+        }
+        for (t, k) in probes {
+            let q = t.joints[k];
+            let theirs = s.client.forward_kinematics(&s.robot, &q)?.to_iso();
+            let ours = kin.forward(&q, &tcp);
+            let want = t.poses[k].to_iso();
+            let d = |a: &nalgebra::Isometry3<f64>, b: &nalgebra::Isometry3<f64>| {
+                ((a.translation.vector - b.translation.vector).norm(), a.rotation.angle_to(&b.rotation))
+            };
+            let (dm, dr) = d(&theirs, &ours);
+            let (pm, pr) = d(&ours, &want);
+            if dm > CONTROLLER_FK_TOLERANCE_M
+                || dr > CONTROLLER_FK_TOLERANCE_RAD
+                || pm > PATH_TOLERANCE_M
+                || pr > PATH_TOLERANCE_RAD
+            {
+                return Err(RobotError::Unsafe {
+                    stroke: Some(t.stroke),
+                    point: None,
+                    reason: format!(
+                        "waypoint {k} of the path buffer: the controller's forward kinematics put the TCP {:.4} mm and {dr:.5} rad from ours (at most {} mm, {CONTROLLER_FK_TOLERANCE_RAD} rad), ours {:.4} mm and {pr:.5} rad from the path (at most {} mm, {PATH_TOLERANCE_RAD} rad); nothing was moved",
+                        dm * 1e3,
+                        CONTROLLER_FK_TOLERANCE_M * 1e3,
+                        pm * 1e3,
+                        PATH_TOLERANCE_M * 1e3
+                    ),
+                });
+            }
+        }
+        self.timing = timing.strokes;
+        Ok(())
     }
 
     /// The wait limit for `expected_s` seconds of queued motion ([`wait_limit`]).
@@ -599,11 +690,23 @@ impl Runner<'_, '_> {
                         ),
                     },
                 })?;
+                self.plan_path_buffers(Some(&q))?;
                 let travel = q0.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-                let sent = Sent { target: Some(pose), joint: true, joint_travel_rad: Some(travel), v, a, blend_m: 0.0 };
+                let sent = Sent {
+                    target: Some(pose),
+                    joint: true,
+                    joint_travel_rad: Some(travel),
+                    v,
+                    a,
+                    blend_m: 0.0,
+                    fixed_s: None,
+                };
                 self.send_recorded(&Move::Joint { q, a, v }, sent)?;
             }
-            m => self.send(&m)?,
+            m => {
+                self.plan_path_buffers(None)?;
+                self.send(&m)?;
+            }
         }
         self.settle("the move to the start pose")?;
         self.started = true;
@@ -655,6 +758,10 @@ impl Runner<'_, '_> {
             let here = self.read_pose(Expect::At(at), &before)?;
             self.commanded = Commanded { from: Some(here), sent: Vec::new() };
         }
+        self.confirmed = 0;
+        if let Some(t) = self.timing.iter().find(|t| t.stroke == st.index).cloned() {
+            return self.run_path_buffer_stroke(st, &t, &what);
+        }
         for m in st.moves() {
             if self.opts.stop.load(Ordering::SeqCst) {
                 return Err(RobotError::Interrupted);
@@ -665,6 +772,61 @@ impl Runner<'_, '_> {
         Ok(())
     }
 
+    /// A stroke through the path buffer: the dip and approach moves, the arm seen at the first
+    /// point and at the buffer's first waypoint, the pressed path as one path buffer on its
+    /// timing, the lift, the arm seen at its end; then the buffer freed.
+    fn run_path_buffer_stroke(&mut self, st: &StrokeProgram, t: &TimedStroke, what: &str) -> Result<(), RobotError> {
+        for m in st.dip.iter().chain(&st.approach) {
+            if self.opts.stop.load(Ordering::SeqCst) {
+                return Err(RobotError::Interrupted);
+            }
+            self.send(m)?;
+        }
+        self.settle(&format!("the approach of {what}"))?;
+        self.confirmed = st.dip.len() + st.approach.len();
+        if self.opts.stop.load(Ordering::SeqCst) {
+            return Err(RobotError::Interrupted);
+        }
+        let s = self.session();
+        let q = s.client.joint_positions(&s.robot)?;
+        let off = q.iter().zip(&t.joints[0]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if !(off <= crate::sim::PATH_START_TOLERANCE_RAD) {
+            return Err(RobotError::UnexpectedState(format!(
+                "before the path buffer of {what}: the controller reports joints {q:?} rad, {off:.4} rad from the buffer's first waypoint (at most {} rad): another branch of the inverse kinematics",
+                crate::sim::PATH_START_TOLERANCE_RAD
+            )));
+        }
+        let n = st.press.len();
+        for (i, m) in st.press.iter().enumerate() {
+            let mut sent = Sent::of(m);
+            sent.fixed_s = Some(if i + 1 == n { t.duration_s } else { 0.0 });
+            self.commanded.sent.push(sent);
+        }
+        self.moved = true;
+        let lim = match &self.opts.path_buffer {
+            Some(cfg) => cfg.limits,
+            None => crate::program::Limits::default(),
+        };
+        let name = format!("maobi_stroke_{}", st.index + 1);
+        let s = self.session();
+        s.client.run_path_buffer(
+            &s.robot,
+            &name,
+            &t.joints,
+            t.interval_s,
+            lim.max_joint_speed_rad_s,
+            lim.max_joint_acc_rad_s2,
+            PATH_VALID_WAIT,
+        )?;
+        self.send(&st.lift)?;
+        self.settle(what)?;
+        self.report.path_buffers += 1;
+        let s = self.session();
+        // The stroke is done; a buffer left behind is replaced by the next of its name.
+        let _ = s.client.path_buffer_free(&s.robot, &name);
+        Ok(())
+    }
+
     /// After fault `e` on stroke `st`: counts it against the budgets, reconnects, waits for the
     /// controller to finish what it was sent and checks where the arm is. `Ok(true)`: the
     /// stroke had finished (its lift was sent and the TCP is at its end); `Ok(false)`: the
@@ -672,7 +834,7 @@ impl Runner<'_, '_> {
     fn recover(&mut self, st: &StrokeProgram, faults: &mut StrokeFaults, e: RobotError) -> Result<bool, RobotError> {
         self.report.faults += 1;
         faults.count += 1;
-        self.session = None;
+        self.drop_session();
         let over_budget =
             faults.count > self.opts.max_retries_per_stroke || self.report.faults > self.opts.max_retries_total;
         if over_budget {
@@ -686,8 +848,9 @@ impl Runner<'_, '_> {
         let commanded = self.commanded.clone();
         let here = self.read_pose(Expect::Along(&commanded), &format!("after reconnecting on {what}"))?;
         let Move::Line { pose: end, .. } = st.lift else { unreachable!("a stroke's lift is a line move") };
-        let lift_sent = commanded.sent.len() == st.moves().count()
+        let lift_sent = commanded.sent.len() + self.confirmed == st.moves().count()
             && commanded.sent.last().and_then(|s| s.target).is_some_and(|t| t == end);
+        self.confirmed = 0;
         if lift_sent && distance_m(&here, &end) < DONE_M {
             self.commanded = Commanded { from: Some(here), sent: Vec::new() };
             return Ok(true);
@@ -898,7 +1061,7 @@ mod tests {
     }
 
     fn line(pose: [f64; 6], v: f64, blend_m: f64) -> Sent {
-        Sent { target: Some(Pose(pose)), joint: false, joint_travel_rad: None, v, a: 1.0, blend_m }
+        Sent { target: Some(Pose(pose)), joint: false, joint_travel_rad: None, v, a: 1.0, blend_m, fixed_s: None }
     }
 
     #[test]

@@ -83,8 +83,24 @@ fn a_second_session_cannot_move_while_the_first_owns_motion() {
     // A goes on: the trace is A's two moves, one after the other, nothing between.
     assert_eq!(line_to(&mut a, p2, 0.1).unwrap(), 0);
     let trace = sim.trace();
-    let want = line_motion(&robot_io::pose::Pose(p1), &robot_io::pose::Pose(p2), 0.1, trace[after_a1 - 1].t_s);
+    let t0 = trace[after_a1 - 1].t_s;
+    let want = robot_io::sim::ramped_line_motion(&robot_io::pose::Pose(p1), &robot_io::pose::Pose(p2), 0.1, 0.5, t0);
     assert_eq!(&trace[after_a1..], &want[..]);
+    // On a trapezoidal time law: 20 mm at 0.1 m/s with 0.5 m/s² ramps takes 0.2 + 0.2 s; the
+    // path is line_motion's (same start, end and line), starting and ending slowly.
+    let a2 = &trace[after_a1..];
+    assert!((a2.last().unwrap().t_s - t0 - 0.4).abs() < 1e-9, "{}", a2.last().unwrap().t_s - t0);
+    let speed = |w: &[robot_io::exec::TraceEntry]| (w[1].pose.0[0] - w[0].pose.0[0]) / (w[1].t_s - w[0].t_s);
+    let speeds: Vec<f64> = a2.windows(2).map(speed).collect();
+    assert!(speeds[0] < 0.01 && *speeds.last().unwrap() < 0.01, "{} {}", speeds[0], speeds.last().unwrap());
+    // (v²/a = 20 mm: the move just reaches 0.1 m/s at its middle.)
+    let top = speeds.iter().copied().fold(0.0, f64::max);
+    assert!(top <= 0.1 + 1e-9 && top > 0.098, "{top}");
+    assert!(a2.windows(2).all(|w| w[1].t_s - w[0].t_s <= robot_io::exec::TRACE_STEP_S + 1e-12));
+    assert_eq!(
+        a2.last().unwrap().pose,
+        line_motion(&robot_io::pose::Pose(p1), &robot_io::pose::Pose(p2), 0.1, 0.0).last().unwrap().pose
+    );
     // Once A's connection closes, motion is free and B moves.
     drop(a);
     assert_eq!(line_to(&mut b, p1, 0.1).unwrap(), 0);

@@ -9,6 +9,7 @@
 
 use bezier_raster::{Bsm, Coverage, Rasterizer};
 use brush_model::{Footprint, PointMm, wrap_angle_rad};
+use numerics::{NelderMead, nelder_mead};
 use serde::Serialize;
 
 use crate::photo::InkMask;
@@ -91,67 +92,6 @@ impl Problem<'_> {
         }
         if u > 0 { i as f64 / u as f64 } else { 0.0 }
     }
-}
-
-/// Nelder–Mead minimisation of `f` from `start` with initial steps `step`.
-fn nelder_mead(f: &mut impl FnMut(&[f64; 6]) -> f64, start: [f64; 6], step: [f64; 6], iters: usize) -> ([f64; 6], f64) {
-    let mut pts: Vec<([f64; 6], f64)> = Vec::with_capacity(7);
-    pts.push((start, f(&start)));
-    for k in 0..6 {
-        let mut p = start;
-        p[k] += step[k];
-        pts.push((p, f(&p)));
-    }
-    for _ in 0..iters {
-        pts.sort_by(|a, b| a.1.total_cmp(&b.1));
-        if (pts[6].1 - pts[0].1).abs() < 1e-9 {
-            break;
-        }
-        let mut c = [0.0; 6];
-        for (p, _) in &pts[..6] {
-            for k in 0..6 {
-                c[k] += p[k] / 6.0;
-            }
-        }
-        let worst = pts[6].0;
-        let along = |t: f64| {
-            let mut q = [0.0; 6];
-            for k in 0..6 {
-                q[k] = c[k] + t * (worst[k] - c[k]);
-            }
-            q
-        };
-        let r = along(-1.0);
-        let fr = f(&r);
-        if fr < pts[0].1 {
-            let e = along(-2.0);
-            let fe = f(&e);
-            pts[6] = if fe < fr { (e, fe) } else { (r, fr) };
-        } else if fr < pts[5].1 {
-            pts[6] = (r, fr);
-        } else {
-            let (cp, fc) = if fr < pts[6].1 {
-                let q = along(-0.5);
-                (q, f(&q))
-            } else {
-                let q = along(0.5);
-                (q, f(&q))
-            };
-            if fc < pts[6].1.min(fr) {
-                pts[6] = (cp, fc);
-            } else {
-                let best = pts[0].0;
-                for p in pts.iter_mut().skip(1) {
-                    for (x, b) in p.0.iter_mut().zip(best) {
-                        *x = b + 0.5 * (*x - b);
-                    }
-                    p.1 = f(&p.0);
-                }
-            }
-        }
-    }
-    pts.sort_by(|a, b| a.1.total_cmp(&b.1));
-    pts[0]
 }
 
 /// Bins along the principal axis for finding the belly (the widest place).
@@ -257,10 +197,11 @@ pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     for root_at_min in [true, false] {
         let (start, step) = moments.simplex(root_at_min);
         let mut f = |p: &[f64; 6]| 1.0 - prob.soft_iou(p);
-        let (mut p, mut v) = nelder_mead(&mut f, start, step, 400);
+        let (mut p, mut v) =
+            nelder_mead(&mut f, start, &NelderMead { min_spread: Some(1e-9), ..NelderMead::new(step, 400) });
         // Restart once from the optimum with smaller steps (Nelder–Mead can stall).
         let small = step.map(|s| s * 0.2);
-        let (p2, v2) = nelder_mead(&mut f, p, small, 300);
+        let (p2, v2) = nelder_mead(&mut f, p, &NelderMead { min_spread: Some(1e-9), ..NelderMead::new(small, 300) });
         if v2 < v {
             (p, v) = (p2, v2);
         }

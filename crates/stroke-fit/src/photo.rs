@@ -19,16 +19,6 @@ pub enum PhotoError {
         #[source]
         source: ImageFileError,
     },
-    /// The file cannot be read or decoded, with the reason as text only: for callers that
-    /// check a file themselves ([`bezier_raster::coverage::probe_image`]); the library returns
-    /// [`PhotoError::Image`].
-    #[error("{path}: cannot read image: {message}")]
-    Unreadable {
-        /// The file.
-        path: String,
-        /// Why.
-        message: String,
-    },
     /// The image shows no ink.
     #[error("{}: no ink found (the image has no dark stroke on light paper)", path.display())]
     NoInk {

@@ -3,6 +3,7 @@
 
 use bezier_raster::{Bsm, Coverage, Rasterizer};
 use brush_model::{Footprint, PointMm};
+use numerics::{Edge, Normalise, SplitMix64, gaussian_blur};
 
 /// How to spoil a clean footprint image.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,20 +28,12 @@ impl Default for Degradation {
     }
 }
 
-/// A deterministic generator (splitmix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.next().max(1e-12), self.next());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
+/// A standard normal draw from `rng` (Box–Muller on half-open uniforms, the first floored at
+/// 1e-12): the synthetic photos' noise, a stream of its own that fixtures record (numerics'
+/// [`SplitMix64::normal`] uses open uniforms instead).
+fn normal(rng: &mut SplitMix64) -> f64 {
+    let (u, v) = (rng.next_f64().max(1e-12), rng.next_f64());
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }
 
 /// A grey photo (`width × height`, 0 black … 1 white) of `fp` with its root at `anchor_mm`
@@ -79,9 +72,9 @@ pub fn photo(
     );
     let (w, h) = (width as usize, height as usize);
     let mut ink: Vec<f64> = cov.data().iter().map(|&v| v as f64).collect();
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64(seed);
     for _ in 0..d.specks {
-        let (x, y) = ((rng.next() * w as f64) as usize, (rng.next() * h as f64) as usize);
+        let (x, y) = ((rng.next_f64() * w as f64) as usize, (rng.next_f64() * h as f64) as usize);
         for (dx, dy) in [(0, 0), (1, 0), (0, 1)] {
             if x + dx < w && y + dy < h {
                 ink[(y + dy) * w + x + dx] = 1.0;
@@ -89,13 +82,13 @@ pub fn photo(
         }
     }
     if d.blur_px > 0.0 {
-        ink = blur(&ink, w, h, d.blur_px);
+        ink = gaussian_blur(&ink, w, h, d.blur_px, Edge::Clamp, Normalise::Kernel);
     }
     let mut out = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
             let paper = 0.95 - d.gradient * (x as f64 / w as f64 * 0.7 + y as f64 / h as f64 * 0.3);
-            let v = paper * (1.0 - 0.9 * ink[y * w + x]) + d.noise * rng.normal();
+            let v = paper * (1.0 - 0.9 * ink[y * w + x]) + d.noise * normal(&mut rng);
             out.push(v.clamp(0.0, 1.0) as f32);
         }
     }
@@ -107,34 +100,6 @@ pub fn photo(
             .expect("encodes");
         let back = image::load_from_memory(&jpg).expect("decodes").to_luma8();
         out = back.pixels().map(|p| p.0[0] as f32 / 255.0).collect();
-    }
-    out
-}
-
-fn blur(v: &[f64], w: usize, h: usize, sigma: f64) -> Vec<f64> {
-    let r = (3.0 * sigma).ceil() as isize;
-    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
-    let s: f64 = k.iter().sum();
-    let k: Vec<f64> = k.iter().map(|x| x / s).collect();
-    let rows = blur_pass(v, w, h, &k, true);
-    blur_pass(&rows, w, h, &k, false)
-}
-
-/// One pass of the kernel `k` along rows (`horizontal`) or columns, edges clamped.
-fn blur_pass(v: &[f64], w: usize, h: usize, k: &[f64], horizontal: bool) -> Vec<f64> {
-    let r = (k.len() / 2) as isize;
-    let mut out = vec![0.0; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let (pos, len) = if horizontal { (x as isize, w as isize) } else { (y as isize, h as isize) };
-            let mut a = 0.0;
-            for (j, kk) in k.iter().enumerate() {
-                let q = (pos + j as isize - r).clamp(0, len - 1);
-                let idx = if horizontal { y * w + q as usize } else { q as usize * w + x };
-                a += kk * v[idx];
-            }
-            out[y * w + x] = a;
-        }
     }
     out
 }

@@ -1,7 +1,7 @@
 //! Glyphs to pixels: coverage images of the em box, and binary masks for analysis.
 
 use bezier_raster::{Coverage, Rasterizer};
-use kurbo::BezPath;
+use kurbo::{BezPath, Point, Vec2};
 
 use crate::glyph::{EM, Glyph, Shape};
 
@@ -59,46 +59,37 @@ pub fn mask_of(c: &Coverage) -> Vec<bool> {
     c.data().iter().map(|&v| v >= 0.5).collect()
 }
 
-/// What [`gaussian_blur`] reads outside the raster.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Edge {
-    /// Nothing (zero): a raster that is all ink fades towards its border.
-    Zero,
-    /// The nearest border pixel.
-    Clamp,
+/// Ink pixel centres (coverage ≥ 0.5) of an `n × n` em-box raster, em units, at most `cap` of
+/// them (every k-th in raster order). `None` if there is no ink.
+pub(crate) fn ink_points(cov: &[f32], n: usize, cap: usize) -> Option<Vec<Point>> {
+    let s = EM / n as f64;
+    let all: Vec<Point> = (0..n * n)
+        .filter(|&i| cov[i] >= 0.5)
+        .map(|i| Point::new(((i % n) as f64 + 0.5) * s, ((i / n) as f64 + 0.5) * s))
+        .collect();
+    if all.is_empty() {
+        return None;
+    }
+    let k = all.len().div_ceil(cap);
+    Some(all.into_iter().step_by(k).collect())
 }
 
-/// Separable Gaussian blur (σ in px, kernel ±3σ, normalised to sum 1) of an `n × n` raster;
-/// `edge` says what lies outside it. σ ≤ 0 returns the raster unchanged.
-pub(crate) fn gaussian_blur(src: &[f32], n: usize, sigma: f64, edge: Edge) -> Vec<f32> {
-    if sigma <= 0.0 {
-        return src.to_vec();
+/// Ink centroid and per-axis standard deviation of a raster, em units.
+pub(crate) fn moments(cov: &[f32], n: usize) -> (Point, Vec2) {
+    let s = EM / n as f64;
+    let (mut m0, mut mx, mut my) = (0.0, 0.0, 0.0);
+    for (i, &v) in cov.iter().enumerate() {
+        let v = v as f64;
+        m0 += v;
+        mx += v * ((i % n) as f64 + 0.5) * s;
+        my += v * ((i / n) as f64 + 0.5) * s;
     }
-    let r = (3.0 * sigma).ceil() as i64;
-    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
-    let norm: f64 = k.iter().sum();
-    let at = |i: i64| -> Option<usize> {
-        match edge {
-            Edge::Zero => (0..n as i64).contains(&i).then_some(i as usize),
-            Edge::Clamp => Some(i.clamp(0, n as i64 - 1) as usize),
-        }
-    };
-    // One pass along rows (`horizontal`) or columns.
-    let pass = |from: &[f32], horizontal: bool| -> Vec<f32> {
-        let mut to = vec![0.0f32; n * n];
-        for y in 0..n {
-            for x in 0..n {
-                let mut acc = 0.0;
-                for (j, w) in k.iter().enumerate() {
-                    let (along, other) = if horizontal { (x, y) } else { (y, x) };
-                    if let Some(i) = at(along as i64 + j as i64 - r) {
-                        acc += w * from[if horizontal { other * n + i } else { i * n + other }] as f64;
-                    }
-                }
-                to[y * n + x] = (acc / norm) as f32;
-            }
-        }
-        to
-    };
-    pass(&pass(src, true), false)
+    let c = Point::new(mx / m0.max(1e-9), my / m0.max(1e-9));
+    let (mut vx, mut vy) = (0.0, 0.0);
+    for (i, &v) in cov.iter().enumerate() {
+        let v = v as f64;
+        vx += v * (((i % n) as f64 + 0.5) * s - c.x).powi(2);
+        vy += v * (((i / n) as f64 + 0.5) * s - c.y).powi(2);
+    }
+    (c, Vec2::new((vx / m0.max(1e-9)).sqrt(), (vy / m0.max(1e-9)).sqrt()))
 }

@@ -3,6 +3,7 @@
 //! measurements of `--image`. Deterministic for a seed.
 
 use image::GrayImage;
+use numerics::{Edge, Normalise, SplitMix64, gaussian_blur};
 use thiserror::Error;
 
 use crate::glyph::Glyph;
@@ -20,8 +21,8 @@ pub enum ScanError {
         message: String,
     },
     /// JPEG encoding or decoding failed.
-    #[error("JPEG: {0}")]
-    Jpeg(String),
+    #[error("cannot encode or decode the scan image")]
+    Jpeg(#[source] image::ImageError),
 }
 
 /// How a synthetic scan is degraded.
@@ -73,9 +74,9 @@ impl ScanOptions {
     /// The default degradations with a rotation drawn uniformly from ±3° and a light direction
     /// drawn uniformly from the circle, both from `seed`.
     pub fn seeded(seed: u64) -> Self {
-        let mut r = SplitMix(seed ^ 0x5CA7_5CA7);
-        let rotation_rad = (r.unit() * 2.0 - 1.0) * 3f64.to_radians();
-        let light_angle_rad = r.unit() * std::f64::consts::TAU;
+        let mut r = SplitMix64(seed ^ 0x5CA7_5CA7);
+        let rotation_rad = (r.next_f64() * 2.0 - 1.0) * 3f64.to_radians();
+        let light_angle_rad = r.next_f64() * std::f64::consts::TAU;
         Self { rotation_rad, light_angle_rad, seed, ..Self::default() }
     }
 
@@ -108,28 +109,11 @@ impl ScanOptions {
     }
 }
 
-/// SplitMix64: a small, fast, seedable generator (deterministic across platforms).
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// Smooth value noise in [-1, 1] on an `n × n` image: random values on a grid every `cell` px,
 /// interpolated bilinearly.
-fn value_noise(n: usize, cell: usize, r: &mut SplitMix) -> Vec<f32> {
+fn value_noise(n: usize, cell: usize, r: &mut SplitMix64) -> Vec<f32> {
     let g = n / cell + 2;
-    let grid: Vec<f64> = (0..g * g).map(|_| r.unit() * 2.0 - 1.0).collect();
+    let grid: Vec<f64> = (0..g * g).map(|_| r.next_f64() * 2.0 - 1.0).collect();
     let mut out = vec![0.0f32; n * n];
     for y in 0..n {
         for x in 0..n {
@@ -172,8 +156,8 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
             ink[y * n + x] = distance::sample(cov.data(), m, m, u, v) as f32;
         }
     }
-    let ink = raster::gaussian_blur(&ink, n, o.blur_px, raster::Edge::Clamp);
-    let mut r = SplitMix(o.seed);
+    let ink = gaussian_blur(&ink, n, n, o.blur_px, Edge::Clamp, Normalise::Sum);
+    let mut r = SplitMix64(o.seed);
     let fibres = value_noise(n, (n / 24).max(2), &mut r);
     let fine = value_noise(n, 3, &mut r);
     let (ls, lc) = o.light_angle_rad.sin_cos();
@@ -184,7 +168,7 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
             let light = 1.0
                 - o.light_gradient * (0.5 + 0.5 * (px * lc + py * ls).clamp(-1.0, 1.0))
                 - o.vignette * (px * px + py * py) / 2.0;
-            let grain = r.unit() * 2.0 - 1.0;
+            let grain = r.next_f64() * 2.0 - 1.0;
             let tex = 1.0 + o.texture * (0.6 * fibres[y * n + x] as f64 + 0.3 * fine[y * n + x] as f64 + 0.3 * grain);
             let paper = 0.93 * light * tex;
             let v = paper * (1.0 - (1.0 - o.ink_level) * ink[y * n + x] as f64);
@@ -194,7 +178,7 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
     let mut out = Vec::new();
     image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, o.jpeg_quality)
         .encode(&gray, n as u32, n as u32, image::ExtendedColorType::L8)
-        .map_err(|e| ScanError::Jpeg(e.to_string()))?;
+        .map_err(ScanError::Jpeg)?;
     Ok(out)
 }
 
@@ -203,5 +187,5 @@ pub fn synth_scan(g: &Glyph, o: &ScanOptions) -> Result<Vec<u8>, ScanError> {
 /// # Errors
 /// [`ScanError::Jpeg`] when the bytes are no image.
 pub fn decode_gray(bytes: &[u8]) -> Result<GrayImage, ScanError> {
-    Ok(image::load_from_memory(bytes).map_err(|e| ScanError::Jpeg(e.to_string()))?.to_luma8())
+    Ok(image::load_from_memory(bytes).map_err(ScanError::Jpeg)?.to_luma8())
 }

@@ -1,4 +1,7 @@
-//! Zhang–Suen thinning of a binary image to a one-pixel-wide skeleton.
+//! Zhang–Suen thinning of a binary image to a one-pixel-wide skeleton, and an even sampling of
+//! its pixels.
+
+use kurbo::Point;
 
 /// The 8 neighbours of `(x, y)` clockwise from north (P2..P9); outside the image is paper.
 fn ring(m: &[bool], w: usize, h: usize, x: isize, y: isize) -> [bool; 8] {
@@ -105,6 +108,17 @@ fn neighbours_connected(p: &[bool; 8]) -> bool {
         k += 1;
     }
     seen.len() == set.len()
+}
+
+/// Keeps the first pixel of each `cell × cell` block (an even sampling along lines of any
+/// direction, where every k-th pixel in raster order would alias); returns the kept pixel
+/// centres in em units (`px_em` em units per pixel).
+pub(crate) fn grid_thin(px: &[(usize, usize)], cell: usize, px_em: f64) -> Vec<Point> {
+    let mut seen = std::collections::HashSet::new();
+    px.iter()
+        .filter(|&&(x, y)| seen.insert((x / cell, y / cell)))
+        .map(|&(x, y)| Point::new((x as f64 + 0.5) * px_em, (y as f64 + 0.5) * px_em))
+        .collect()
 }
 
 #[cfg(test)]

@@ -56,11 +56,7 @@ fn a_bar_is_written_at_its_own_width() {
     let ink: f64 = (0..512).map(|y| img.get(256, y) as f64).sum();
     assert!((ink - 50.0).abs() < 3.0, "column ink {ink}");
     let reference = raster::render_glyph(&g, 512);
-    let iou = stroke_metrics::iou(
-        stroke_metrics::GrayRef::new(reference.data(), 512, 512).unwrap(),
-        stroke_metrics::GrayRef::new(img.data(), 512, 512).unwrap(),
-    )
-    .unwrap();
+    let iou = stroke_metrics::iou(reference.as_gray(), img.as_gray()).unwrap();
     // The ends are square in the glyph and rounded by the footprints: IoU stays below 1.
     assert!(iou > 0.8, "IoU {iou}");
 }
@@ -105,11 +101,7 @@ fn halving_the_spacing_changes_the_render_by_under_half_a_percent() {
             .unwrap()
         };
         let (a, b2) = (render(trajectory::DEFAULT_SPACING_MM), render(trajectory::DEFAULT_SPACING_MM / 2.0));
-        let iou = stroke_metrics::iou(
-            stroke_metrics::GrayRef::new(a.data(), 512, 512).unwrap(),
-            stroke_metrics::GrayRef::new(b2.data(), 512, 512).unwrap(),
-        )
-        .unwrap();
+        let iou = stroke_metrics::iou(a.as_gray(), b2.as_gray()).unwrap();
         assert!(iou > 0.995, "{ch}: IoU between spacings {iou}");
     }
 }

@@ -2,25 +2,9 @@
 
 use brush_model::{BrushProfile, Extrapolation, FitError, Footprint, Measurement, Press, fit_general, fit_paper};
 
-/// A small deterministic generator (splitmix64 → Box–Muller) so the test needs no RNG crate.
-struct Noise(u64);
-impl Noise {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
-
+/// Measurements from known coefficients with Gaussian noise of `sigma` mm (a `SplitMix64` stream).
 fn synthetic(n_per_cell: usize, sigma: f64, beta_values: &[f64], seed: u64) -> Vec<Measurement> {
-    let mut noise = Noise(seed);
+    let mut noise = numerics::SplitMix64(seed);
     let mut rows = Vec::new();
     for h in [11.0, 13.0, 15.0, 17.0, 20.0] {
         for a in [0.0, 5.0, 10.0] {

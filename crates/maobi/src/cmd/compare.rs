@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 
-use crate::common::{gray, load_image, print_json};
+use crate::common::{load_image, print_json};
 
 /// Arguments of `maobi compare`.
 #[derive(clap::Args, Debug)]
@@ -33,7 +33,7 @@ pub fn run(args: Args) -> Result<()> {
             b.height()
         );
     }
-    let s = stroke_metrics::compare(gray(&a), gray(&b))?;
+    let s = stroke_metrics::compare(a.as_gray(), b.as_gray())?;
     if args.json {
         print_json(&s)?;
     } else {

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde_json::json;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{check_range, gray, print_json, print_model_table};
+use crate::common::{check_range, print_json, print_model_table};
 
 /// Arguments of `maobi eval-generator`.
 #[derive(clap::Args, Debug)]
@@ -52,8 +52,8 @@ pub fn run(args: Args) -> Result<()> {
                     .map(|m| {
                         spec.render(&smp, m.model(), r, img);
                         (
-                            csim(gray(truth), gray(img)).expect("same size"),
-                            ws.ssim(gray(truth), gray(img)).expect("same size"),
+                            csim(truth.as_gray(), img.as_gray()).expect("same size"),
+                            ws.ssim(truth.as_gray(), img.as_gray()).expect("same size"),
                         )
                     })
                     .collect()

@@ -12,7 +12,7 @@ use serde::Serialize;
 use stroke_metrics::{SsimWorkspace, Summary, csim};
 
 use crate::common::{
-    BrushArg, check_range, gray, load_brush, load_image, print_json, print_model_table, progress, read_stroke_labels,
+    BrushArg, check_range, load_brush, load_image, print_json, print_model_table, progress, read_stroke_labels,
 };
 
 /// Arguments of `maobi models`.
@@ -120,7 +120,7 @@ pub fn run(args: Args) -> Result<()> {
                 let mut out = Vec::with_capacity(models.len());
                 for m in &models {
                     raster.render(m.model(), &fp, anchor, t.press.beta_rad, t.px_per_mm, img);
-                    out.push((csim(gray(truth), gray(img))?, ws.ssim(gray(truth), gray(img))?));
+                    out.push((csim(truth.as_gray(), img.as_gray())?, ws.ssim(truth.as_gray(), img.as_gray())?));
                 }
                 pb.inc(1);
                 Ok(out)

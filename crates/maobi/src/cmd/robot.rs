@@ -118,6 +118,11 @@ pub struct SendArgs {
     /// Timeout per call, ms.
     #[arg(long, default_value_t = 2000)]
     timeout_ms: u64,
+    /// How pressed strokes are sent: path-buffer (each stroke one path buffer of joint
+    /// waypoints on its timing, on the controller's own kinematics) or moves (a moveLine per
+    /// point of the compacted track, blends at most half the shorter neighbouring move).
+    #[arg(long, default_value = "path-buffer", value_parser = ["path-buffer", "moves"])]
+    motion: String,
 }
 
 /// Arguments of `maobi robot sim`.
@@ -195,10 +200,15 @@ fn title(t: &TrackFile) -> String {
 
 fn check(a: CheckArgs) -> Result<()> {
     let l = load(&a.program)?;
-    let (_, report) =
+    let (program, report) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
+    // Timed with the nominal AUBO-i5 (the simulator's arm); `send` times again with the
+    // controller's own parameters before anything moves.
+    let timing = robot_io::time_program(&program, &robot_io::kinematics::DhParams::AUBO_I5, &l.cfg)?;
     if a.json {
-        print_json(&report)?;
+        let mut v = serde_json::to_value(&report)?;
+        v["timing"] = serde_json::to_value(&timing)?;
+        print_json(&v)?;
     } else {
         println!(
             "safe: {} strokes, {} points, {} moves, {} ink dips; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
@@ -210,6 +220,25 @@ fn check(a: CheckArgs) -> Result<()> {
             l.track.brush.ranges.h_mm.max,
             report.frame_residual_mm,
             report.estimated_seconds
+        );
+        for t in &timing.strokes {
+            let qd = t.peak_joint_speed_rad_s.map(|v| format!("{v:.3}")).join(", ");
+            println!(
+                "stroke {}: {:.2} s ({} waypoints every {} s), peak {:.1} mm/s, {:.3} m/s², joints [{qd}] rad/s, {:.2} rad/s², {:.1} rad/s³",
+                t.stroke + 1,
+                t.duration_s,
+                t.joints.len(),
+                t.interval_s,
+                t.peak_speed_m_s * 1000.0,
+                t.peak_acc_m_s2,
+                t.peak_joint_acc_rad_s2,
+                t.peak_joint_jerk_rad_s3,
+            );
+        }
+        let qd = timing.peak_joint_speed_rad_s.map(|v| format!("{v:.3}")).join(", ");
+        println!(
+            "writing time {:.2} s (time-optimal without the jerk limit: {:.2} s); peak joint speeds [{qd}] rad/s",
+            timing.writing_s, timing.reference_s
         );
     }
     Ok(())
@@ -255,10 +284,24 @@ fn send(a: SendArgs) -> Result<()> {
     let l = load(&a.program)?;
     let (program, report) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
+    let by_moves = a.motion == "moves";
+    let program = if by_moves { robot_io::program::compact_program(&program, &l.cfg) } else { program };
+    if by_moves {
+        robot_io::program::check_blends(&program)?;
+    }
+    // Checked here on the nominal arm (the simulator's); the runner times again on the
+    // controller's own kinematics before anything moves.
+    if !by_moves {
+        robot_io::time_program(&program, &robot_io::kinematics::DhParams::AUBO_I5, &l.cfg)?;
+    }
     if a.dry_run {
         println!(
-            "dry run: {} strokes, {} moves would be sent to {}:{port} ({}); nothing connected",
-            report.strokes, report.moves, a.host, a.transport
+            "dry run: {} strokes, {} moves would be sent to {}:{port} ({}, {}); nothing connected",
+            report.strokes,
+            if by_moves { program.move_count() } else { report.moves },
+            a.host,
+            a.transport,
+            a.motion
         );
         return Ok(());
     }
@@ -270,6 +313,7 @@ fn send(a: SendArgs) -> Result<()> {
         timeout: Duration::from_millis(a.timeout_ms),
         lift_m: l.cfg.lift_mm / 1000.0,
         link: Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() },
+        path_buffer: (!by_moves).then(|| l.cfg.clone()),
         ..RunOptions::new(&stop)
     };
     let addr = format!("{}:{port}", a.host);
@@ -288,11 +332,13 @@ fn send(a: SendArgs) -> Result<()> {
         Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", a.transport)),
     };
     println!(
-        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed",
+        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed; {} controller calls, {} path buffer(s)",
         r.strokes_completed.len(),
         r.strokes_total,
         r.reconnects,
         r.strokes_resumed,
+        r.calls,
+        r.path_buffers,
     );
     Ok(())
 }

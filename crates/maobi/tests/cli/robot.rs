@@ -22,6 +22,30 @@ fn check_and_export_a_written_character() {
         serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
     assert_eq!(j["strokes"], 2);
     assert!(j["max_press_mm"].as_f64().unwrap() <= 20.0);
+    // Timed strokes: each with its duration and peaks within the default limits.
+    let timing = &j["timing"];
+    let strokes = timing["strokes"].as_array().unwrap();
+    assert_eq!(strokes.len(), 2, "{timing}");
+    let mut total = 0.0;
+    for t in strokes {
+        total += t["duration_s"].as_f64().unwrap();
+        assert!(t["duration_s"].as_f64().unwrap() > 0.5, "{t}");
+        assert!(t["peak_speed_m_s"].as_f64().unwrap() <= 0.02 + 1e-9, "{t}");
+        assert!(t["peak_joint_acc_rad_s2"].as_f64().unwrap() <= 3.0, "{t}");
+        let qd: Vec<f64> = serde_json::from_value(t["peak_joint_speed_rad_s"].clone()).unwrap();
+        assert!(qd.len() == 6 && qd.iter().all(|v| *v <= 1.5), "{t}");
+    }
+    assert!((timing["writing_s"].as_f64().unwrap() - total).abs() < 1e-9, "{timing}");
+    let text = ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper())]));
+    assert!(text.contains("stroke 2: ") && text.contains("writing time "), "{text}");
+    // A jerk limit so low the strokes would take hours: refused, naming the stroke.
+    let tight = dir.path().join("tight.json");
+    std::fs::write(&tight, r#"{"timing": {"joint_jerk_rad_s3": 0.01}, "limits": {"max_joint_jerk_rad_s3": 0.01}}"#)
+        .unwrap();
+    fails(
+        &maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--robot", s(&tight)]),
+        "refused at stroke 1: the timed stroke would take",
+    );
     for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
         let out = dir.path().join(format!("prog.{fmt}"));
         let o = maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&out)]);
@@ -77,12 +101,15 @@ fn refusals_name_the_problem_and_write_nothing() {
 
 #[test]
 fn send_runs_on_the_simulator_and_survives_a_drop() {
+    // Through the path buffer (the default): the link dropped at the fourth motion request, the
+    // first stroke's movePathBuffer (after the start move, the travel and the descent), with
+    // the brush on the paper.
     let dir = tempfile::tempdir().unwrap();
     let track = written(dir.path());
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let trace = dir.path().join("trace.json");
     let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=40", "--trace", s(&trace)])
+        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=4", "--trace", s(&trace)])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -112,6 +139,7 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     ]);
     let out = ok(&o);
     assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");
+    assert!(out.contains("2 path buffer(s)"), "{out}");
     std::thread::sleep(std::time::Duration::from_millis(300));
     let _ = sim.kill();
     let _ = sim.wait();

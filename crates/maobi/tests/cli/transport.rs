@@ -55,10 +55,13 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     let check: serde_json::Value =
         serde_json::from_str(&ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper()), "--json"]))).unwrap();
     let (strokes, moves) = (check["strokes"].as_u64().unwrap(), check["moves"].as_u64().unwrap());
-    // Drop the link at the middle move: inside a stroke, not at its boundary.
+    // Each stroke through the path buffer is four motion requests (travel, descent,
+    // movePathBuffer, lift) after the start move: drop the link at the third stroke's
+    // movePathBuffer, inside the stroke with the brush on the paper.
+    let _ = moves;
     let (port, lines, http) = (free_port(), free_port(), free_port());
     let trace = dir.path().join("trace.jsonl");
-    let drop = format!("drop-after={}", moves / 2);
+    let drop = format!("drop-after={}", 1 + 4 * 2 + 3);
     let (lines_s, http_s) = (lines.to_string(), http.to_string());
     let _sim =
         Sim::start(port, &["--lines-port", &lines_s, "--http-port", &http_s, "--fault", &drop, "--trace", s(&trace)]);
@@ -75,11 +78,20 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
         framed.contains(&format!("{strokes} of {strokes} strokes completed; 1 reconnect(s), 1 stroke(s) resumed")),
         "{framed}"
     );
-    // The drop fires once: the other transports run straight through on their own ports.
-    for (t, port) in [("lines", &lines_s), ("http", &http_s)] {
-        let o = ok(&send(&["--transport", t, "--port", port]));
+    assert!(framed.contains(&format!("{strokes} path buffer(s)")), "{framed}");
+    // A few controller calls per stroke (3,300 points).
+    let calls = number_before(&framed, "controller calls");
+    assert!(calls < 40 * strokes, "{framed}");
+    // The drop fires once: the other transports run straight through on their own ports,
+    // lines with a move per point of the compacted track.
+    for (t, port, motion) in [("lines", &lines_s, "moves"), ("http", &http_s, "path-buffer")] {
+        let o = ok(&send(&["--transport", t, "--port", port, "--motion", motion]));
         assert!(o.contains(&format!("{strokes} of {strokes} strokes completed; 0 reconnect(s)")), "{t}: {o}");
     }
+    // --motion moves: at least 5× fewer moves than points, every blend valid (checked by send).
+    let dry = ok(&send(&["--port", &p, "--motion", "moves", "--dry-run"]));
+    let compact = number_before(&dry, "moves would be sent");
+    assert!(compact * 5 <= moves, "{compact} moves of {moves}: {dry}");
     // The executed path renders back to the planned image.
     std::thread::sleep(Duration::from_millis(300));
     let img = dir.path().join("trace.png");
@@ -107,6 +119,12 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     // The simulator's help says which transports have no login.
     let help = ok(&maobi(&["robot", "sim", "--help"]));
     assert!(help.contains("UNAUTHENTICATED"), "{help}");
+}
+
+/// The number just before `words` in `text`.
+fn number_before(text: &str, words: &str) -> u64 {
+    let at = text.find(words).unwrap_or_else(|| panic!("no `{words}` in {text}"));
+    text[..at].split_whitespace().last().and_then(|n| n.parse().ok()).unwrap_or_else(|| panic!("{text}"))
 }
 
 /// A one-stroke track (一, 60 mm, points 4 mm apart) with the built-in pen1 brush.
@@ -350,4 +368,103 @@ fn the_official_sdk_client_drives_the_simulator() {
     assert!(samples.iter().any(|t| t["kind"] == "joint") && samples.iter().any(|t| t["kind"] == "line"));
     let last: Vec<f64> = serde_json::from_value(samples.last().unwrap()["pose"].clone()).unwrap();
     assert!(last.iter().zip(&target).all(|(a, b)| (a - b).abs() < 1e-9), "{last:?}");
+}
+
+/// Runs a path buffer stroke with the official SDK: its calls in its argument order.
+const SDK_PATH_BUFFER: &str = r#"
+import json, math, sys, pyaubo_sdk
+port = int(sys.argv[1])
+c = pyaubo_sdk.RpcClient()
+c.setRequestTimeout(3000)
+c.connect("127.0.0.1", port)
+c.login("aubo", "123456")
+r = c.getRobotInterface(c.getRobotNames()[0])
+mc, rs = r.getMotionControl(), r.getRobotState()
+q0 = rs.getJointPositions()
+n, dt = 101, 0.01
+w = []
+for k in range(n):
+    q = list(q0)
+    q[0] += 0.1 * (0.5 - 0.5 * math.cos(math.pi * k / (n - 1)))
+    w.append(q)
+out = {}
+out["alloc"] = mc.pathBufferAlloc("stroke1", 2, n)
+out["move_early"] = mc.movePathBuffer("stroke1")
+out["append"] = [mc.pathBufferAppend("stroke1", w[:50]), mc.pathBufferAppend("stroke1", w[50:])]
+out["eval_too_slow"] = mc.pathBufferEval("stroke1", [2.0] * 6, [0.05] * 6, dt)
+out["valid_after_refusal"] = mc.pathBufferValid("stroke1")
+out["eval"] = mc.pathBufferEval("stroke1", [2.0] * 6, [0.5] * 6, dt)
+out["valid"] = mc.pathBufferValid("stroke1")
+out["list"] = mc.pathBufferList()
+out["move"] = mc.movePathBuffer("stroke1")
+out["joints"] = rs.getJointPositions()
+out["last"] = w[-1]
+out["free"] = mc.pathBufferFree("stroke1")
+out["free_again"] = mc.pathBufferFree("stroke1")
+out["move_unknown"] = mc.movePathBuffer("stroke1")
+out["type1"] = mc.pathBufferAlloc("other", 1, 10)
+c.disconnect()
+print(json.dumps(out))
+"#;
+
+#[test]
+fn the_official_sdk_client_runs_a_path_buffer_on_the_simulator() {
+    let have = Command::new("python3").args(["-c", "import pyaubo_sdk"]).output().is_ok_and(|o| o.status.success());
+    if !have {
+        let _ = writeln!(
+            std::io::stderr(),
+            "SKIPPED the_official_sdk_client_runs_a_path_buffer_on_the_simulator: python3 cannot import pyaubo_sdk"
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace.jsonl");
+    let port = free_port();
+    let sim = Sim::start(port, &["--trace", s(&trace)]);
+    let mut py = Command::new("python3")
+        .args(["-c", SDK_PATH_BUFFER, &port.to_string()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut done = false;
+    for _ in 0..300 {
+        if py.try_wait().unwrap().is_some() {
+            done = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    if !done {
+        let _ = py.kill();
+    }
+    let o = py.wait_with_output().unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "the SDK script failed:\n{stdout}\n{stderr}");
+    let j: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(j["alloc"], 0, "{j}");
+    assert_eq!(j["move_early"], -5, "moving before an evaluation is refused: {j}");
+    assert_eq!(j["append"], serde_json::json!([0, 0]));
+    assert_eq!(j["eval_too_slow"], -5, "{j}");
+    assert_eq!(j["valid_after_refusal"], false);
+    assert_eq!(j["eval"], 0);
+    assert_eq!(j["valid"], true);
+    assert_eq!(j["list"], serde_json::json!(["stroke1"]));
+    assert_eq!(j["move"], 0);
+    let (q, last): (Vec<f64>, Vec<f64>) =
+        (serde_json::from_value(j["joints"].clone()).unwrap(), serde_json::from_value(j["last"].clone()).unwrap());
+    assert!(q.iter().zip(&last).all(|(a, b)| (a - b).abs() < 1e-12), "{q:?} vs {last:?}");
+    assert_eq!(j["free"], 0);
+    assert_eq!(j["free_again"], -5);
+    assert_eq!(j["move_unknown"], -5);
+    assert_eq!(j["type1"], -5, "the simulator executes type 2 only");
+    // The trace has the buffer's samples, by time: 1 s of motion, every 5 ms.
+    std::thread::sleep(Duration::from_millis(300));
+    drop(sim);
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let samples: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let path: Vec<f64> =
+        samples.iter().filter(|t| t["kind"] == "path_buffer").map(|t| t["t_s"].as_f64().unwrap()).collect();
+    assert_eq!(path.len(), 201);
+    assert!((path[200] - path[0] - 1.0).abs() < 1e-9, "{} .. {}", path[0], path[200]);
 }

@@ -37,6 +37,19 @@ struct State {
     window: VecDeque<TraceEntry>,
     recorded: u64,
     trace_error: Option<String>,
+    /// The path buffers by name.
+    buffers: std::collections::BTreeMap<String, PathBuffer>,
+}
+
+/// A path buffer (`pathBufferAlloc`): joint waypoints, and once evaluated the interval and
+/// the limits they were checked against.
+#[derive(Debug)]
+struct PathBuffer {
+    /// The waypoints the allocation allows.
+    size: usize,
+    waypoints: Vec<[f64; 6]>,
+    /// The interval, s, once `pathBufferEval` accepted the buffer.
+    valid_interval_s: Option<f64>,
 }
 
 /// The trace file while it is written.
@@ -92,6 +105,7 @@ impl Shared {
                 window: VecDeque::new(),
                 recorded: 0,
                 trace_error: None,
+                buffers: std::collections::BTreeMap::new(),
             }),
             owner_changed: Condvar::new(),
             trace_file: Mutex::new(trace_file),
@@ -271,6 +285,8 @@ struct MoveArgs {
     target: [f64; 6],
     /// Speed, m/s or rad/s.
     v: f64,
+    /// Acceleration, m/s² or rad/s².
+    a: f64,
 }
 
 impl MoveArgs {
@@ -292,7 +308,7 @@ impl MoveArgs {
             return None;
         }
         let target = arg(params, target, 0).and_then(numbers::<6>)?;
-        Some(Self { joint, target, v })
+        Some(Self { joint, target, v, a })
     }
 }
 
@@ -338,12 +354,12 @@ fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
         if q.iter().any(|x| x.abs() > kinematics::JOINT_LIMIT_RAD) {
             return UNREACHABLE;
         }
-        let samples = joint_motion_dh(dh, &joints, &q, v, &tcp, t0);
+        let samples = ramped_joint_motion(dh, &joints, &q, v, m.a, &tcp, t0);
         (q, Pose::from_iso(&dh.forward(&q, &tcp)), samples)
     } else {
         let to = Pose(m.target);
         let Some(q) = dh.inverse(&to, &tcp, Some(&joints)) else { return UNREACHABLE };
-        (q, to, line_motion(&pose, &to, v, t0))
+        (q, to, ramped_line_motion(&pose, &to, v, m.a, t0))
     };
     {
         let mut st = shared.lock();
@@ -352,6 +368,106 @@ fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
     }
     shared.record(&samples);
     0
+}
+
+/// The trapezoidal time law of a move of length `len` (m or rad) at speed `v` and
+/// acceleration `a` from rest to rest: its duration, and the distance covered at time `t`.
+fn trapezoid(len: f64, v: f64, a: f64) -> (f64, impl Fn(f64) -> f64) {
+    let (v, a) = (v.max(1e-12), a.max(1e-12));
+    let (ta, cruise_v) = if v * v / a >= len { ((len / a).sqrt(), (a * len).sqrt()) } else { (v / a, v) };
+    let da = 0.5 * a * ta * ta;
+    let total = 2.0 * ta + (len - 2.0 * da).max(0.0) / cruise_v;
+    let at = move |t: f64| {
+        if t <= ta {
+            0.5 * a * t * t
+        } else if t >= total - ta {
+            len - 0.5 * a * (total - t).powi(2)
+        } else {
+            da + cruise_v * (t - ta)
+        }
+        .clamp(0.0, len)
+    };
+    (total, at)
+}
+
+/// How many samples, evenly in time over `total` s, keep the steps within the trace's limits:
+/// at most [`crate::exec::TRACE_STEP_S`] apart, and at the top speed `v` along a path of
+/// length `len` (m, or rad for joints) that moves the TCP `d` and turns it (or the joints)
+/// `turn`, within [`crate::exec::TRACE_STEP_M`] and [`crate::exec::TRACE_STEP_RAD`].
+fn timed_count(total: f64, v: f64, len: f64, d: f64, turn: f64) -> usize {
+    use crate::exec::{MAX_SAMPLES_PER_MOVE, TRACE_STEP_M, TRACE_STEP_RAD, TRACE_STEP_S};
+    let per = total * v / len;
+    let steps = (total / TRACE_STEP_S).max(per * d / TRACE_STEP_M).max(per * turn / TRACE_STEP_RAD);
+    if steps.is_nan() { 1 } else { steps.ceil().clamp(1.0, MAX_SAMPLES_PER_MOVE as f64) as usize }
+}
+
+/// A `moveLine` as the simulator executes it: the path of [`line_motion`] (a straight line,
+/// the orientation by slerp; a turn in place counts 0.1 m per radian), on a trapezoidal time
+/// law (from rest, at acceleration `a_m_s2` up to `v_m_s`, and down to rest), sampled evenly
+/// in time (at most [`crate::exec::TRACE_STEP_S`] apart, and at the top speed at most
+/// [`crate::exec::TRACE_STEP_M`] and [`crate::exec::TRACE_STEP_RAD`]; at most
+/// [`crate::exec::MAX_SAMPLES_PER_MOVE`] samples). The plan's executed figure
+/// ([`crate::exec::execute_program`]) keeps constant speed.
+pub fn ramped_line_motion(from: &Pose, to: &Pose, v_m_s: f64, a_m_s2: f64, t0_s: f64) -> Vec<TraceEntry> {
+    let (a, b) = (from.to_iso(), to.to_iso());
+    let d = (b.translation.vector - a.translation.vector).norm();
+    let turn = a.rotation.angle_to(&b.rotation);
+    let len = d.max(turn * 0.1);
+    if len <= 0.0 {
+        return line_motion(from, to, v_m_s, t0_s);
+    }
+    let (total, at) = trapezoid(len, v_m_s, a_m_s2);
+    let n = timed_count(total, v_m_s, len, d, turn);
+    (1..=n)
+        .map(|k| {
+            let t = total * k as f64 / n as f64;
+            let f = at(t) / len;
+            let pose = if k == n {
+                *to
+            } else {
+                let p = a.translation.vector.lerp(&b.translation.vector, f);
+                let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 {
+                    a.rotation
+                } else {
+                    b.rotation
+                });
+                Pose::from_iso(&Isometry3::from_parts(nalgebra::Translation3::from(p), r))
+            };
+            TraceEntry { t_s: t0_s + t, kind: crate::exec::TraceKind::Line, pose }
+        })
+        .collect()
+}
+
+/// A `moveJoint` as the simulator executes it: the joints interpolated linearly (the TCP by
+/// forward kinematics with `dh`) on a trapezoidal time law at `v_rad_s` and `a_rad_s2` over the
+/// largest joint travel, sampled as [`ramped_line_motion`].
+pub fn ramped_joint_motion(
+    dh: &kinematics::DhParams,
+    from: &[f64; 6],
+    to: &[f64; 6],
+    v_rad_s: f64,
+    a_rad_s2: f64,
+    tcp: &Isometry3<f64>,
+    t0_s: f64,
+) -> Vec<TraceEntry> {
+    let dq = from.iter().zip(to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
+    if dq <= 0.0 {
+        return joint_motion_dh(dh, from, to, v_rad_s, tcp, t0_s);
+    }
+    let (total, at) = trapezoid(dq, v_rad_s, a_rad_s2);
+    let n = timed_count(total, v_rad_s, dq, 0.0, dq);
+    (1..=n)
+        .map(|k| {
+            let t = total * k as f64 / n as f64;
+            let f = if k == n { 1.0 } else { at(t) / dq };
+            let q: [f64; 6] = std::array::from_fn(|j| from[j] + f * (to[j] - from[j]));
+            TraceEntry {
+                t_s: t0_s + t,
+                kind: crate::exec::TraceKind::Joint,
+                pose: Pose::from_iso(&dh.forward(&q, tcp)),
+            }
+        })
+        .collect()
 }
 
 /// Answers one JSON-RPC request from `session`.
@@ -475,6 +591,194 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
             drop(st);
             ok(&id, json!(execute(shared, &m, v)))
         }
+        "MotionControl.pathBufferAlloc"
+        | "MotionControl.pathBufferAppend"
+        | "MotionControl.pathBufferEval"
+        | "MotionControl.pathBufferFree"
+        | "MotionControl.pathBufferList"
+        | "MotionControl.pathBufferValid" => path_buffer(shared, rest, params, &id),
+        "MotionControl.movePathBuffer" => {
+            let mut st = match shared.claim(shared.lock(), session, &id) {
+                Ok(st) => st,
+                Err(refused) => return refused,
+            };
+            if let Some(fault) = st.move_fault(&shared.options.faults) {
+                return match fault {
+                    MoveFault::Drop => Reply::Drop,
+                    MoveFault::QueueFull => ok(&id, json!(crate::aubo::QUEUE_FULL)),
+                };
+            }
+            let name = match arg(params, "name", 0).and_then(Value::as_str) {
+                Some(n) if arity(params, &["name"], &[]) => n,
+                _ => return ok(&id, json!(INVALID_ARGUMENT)),
+            };
+            let Some(b) = st.buffers.get(name) else { return ok(&id, json!(INVALID_ARGUMENT)) };
+            let Some(interval) = b.valid_interval_s else { return ok(&id, json!(INVALID_ARGUMENT)) };
+            // The buffer starts where the arm is: a controller does not jump to its first waypoint.
+            let from = st.joints;
+            if b.waypoints[0].iter().zip(&from).any(|(a, b)| (a - b).abs() > PATH_START_TOLERANCE_RAD) {
+                return ok(&id, json!(INVALID_ARGUMENT));
+            }
+            let waypoints = b.waypoints.clone();
+            let (tcp, t0) = (st.tcp, st.time_s);
+            drop(st);
+            let dh = &shared.options.kinematics;
+            let samples = path_motion(dh, &waypoints, interval, &tcp, t0);
+            let last = *waypoints.last().expect("a valid buffer has waypoints");
+            {
+                let mut st = shared.lock();
+                st.joints = last;
+                st.pose = Pose::from_iso(&dh.forward(&last, &tcp));
+            }
+            shared.record(&samples);
+            ok(&id, json!(0))
+        }
         _ => err(&id, -32601, &format!("method not found: {method}")),
     }
+}
+
+/// Most path buffers the simulator holds at once.
+pub const MAX_PATH_BUFFERS: usize = 16;
+/// Most waypoints one path buffer holds (about 5 MB).
+pub const MAX_BUFFER_WAYPOINTS: usize = 100_000;
+/// Most waypoints all path buffers hold together (about 19 MB).
+pub const MAX_TOTAL_WAYPOINTS: usize = 400_000;
+/// Longest path buffer name, bytes.
+pub const MAX_BUFFER_NAME: usize = 64;
+/// The only path buffer type the simulator executes: 2, a cubic spline through joint
+/// waypoints at a fixed interval.
+pub const PATH_BUFFER_SPLINE: i64 = 2;
+/// How far a path buffer's first waypoint may lie from the arm's joints when it is moved, rad.
+pub const PATH_START_TOLERANCE_RAD: f64 = 5e-3;
+
+/// The path buffer services: the SDK's names and params (`pyaubo_sdk` 0.24.1: `pathBufferAlloc`
+/// `{name, size, type}`, `pathBufferAppend` `{name, waypoints}`, `pathBufferEval`
+/// `{name, a, v, t}`, `pathBufferValid`/`pathBufferFree` `{name}`, `pathBufferList` none).
+/// Buffers are shared by every session, like a controller's; their count and sizes are capped.
+fn path_buffer(shared: &Shared, rest: &str, params: &Value, id: &Value) -> Reply {
+    let name = arg(params, "name", 0).and_then(Value::as_str);
+    let mut st = shared.lock();
+    let status = |s: i64| ok(id, json!(s));
+    match rest {
+        "MotionControl.pathBufferList" => {
+            if !arity(params, &[], &[]) {
+                return err(id, -32602, "pathBufferList takes no arguments");
+            }
+            ok(id, json!(st.buffers.keys().collect::<Vec<_>>()))
+        }
+        "MotionControl.pathBufferValid" => {
+            let valid = arity(params, &["name"], &[])
+                && name.and_then(|n| st.buffers.get(n)).is_some_and(|b| b.valid_interval_s.is_some());
+            ok(id, json!(valid))
+        }
+        "MotionControl.pathBufferFree" => match name {
+            Some(n) if arity(params, &["name"], &[]) && st.buffers.remove(n).is_some() => status(0),
+            _ => status(INVALID_ARGUMENT),
+        },
+        "MotionControl.pathBufferAlloc" => {
+            if !arity(params, &["name", "type", "size"], &[]) {
+                return status(INVALID_ARGUMENT);
+            }
+            let kind = arg(params, "type", 1).and_then(Value::as_i64);
+            let size = arg(params, "size", 2).and_then(Value::as_u64);
+            let (Some(n), Some(PATH_BUFFER_SPLINE), Some(size)) = (name, kind, size) else {
+                return status(INVALID_ARGUMENT);
+            };
+            let size = usize::try_from(size).unwrap_or(usize::MAX);
+            let name_ok = !n.is_empty() && n.len() <= MAX_BUFFER_NAME && n.chars().all(|c| !c.is_control());
+            let held: usize = st.buffers.iter().filter(|(k, _)| k.as_str() != n).map(|(_, b)| b.size).sum();
+            let others = st.buffers.len() - usize::from(st.buffers.contains_key(n));
+            if !name_ok
+                || !(2..=MAX_BUFFER_WAYPOINTS).contains(&size)
+                || held + size > MAX_TOTAL_WAYPOINTS
+                || others >= MAX_PATH_BUFFERS
+            {
+                return status(INVALID_ARGUMENT);
+            }
+            // Allocating a name again replaces that buffer.
+            st.buffers.insert(n.to_string(), PathBuffer { size, waypoints: Vec::new(), valid_interval_s: None });
+            status(0)
+        }
+        "MotionControl.pathBufferAppend" => {
+            let Some(b) =
+                name.filter(|_| arity(params, &["name", "waypoints"], &[])).and_then(|n| st.buffers.get_mut(n))
+            else {
+                return status(INVALID_ARGUMENT);
+            };
+            let Some(list) = arg(params, "waypoints", 1).and_then(Value::as_array) else {
+                return status(INVALID_ARGUMENT);
+            };
+            if b.waypoints.len() + list.len() > b.size {
+                return status(INVALID_ARGUMENT);
+            }
+            let mut add = Vec::with_capacity(list.len());
+            for w in list {
+                match numbers::<6>(w) {
+                    Some(q) if q.iter().all(|x| x.abs() <= kinematics::JOINT_LIMIT_RAD) => add.push(q),
+                    _ => return status(INVALID_ARGUMENT),
+                }
+            }
+            b.waypoints.extend(add);
+            // Appending after an evaluation needs a new one.
+            b.valid_interval_s = None;
+            status(0)
+        }
+        "MotionControl.pathBufferEval" => {
+            let Some(b) =
+                name.filter(|_| arity(params, &["name", "a", "v", "t"], &[])).and_then(|n| st.buffers.get_mut(n))
+            else {
+                return status(INVALID_ARGUMENT);
+            };
+            let a = arg(params, "a", 1).and_then(numbers::<6>);
+            let v = arg(params, "v", 2).and_then(numbers::<6>);
+            let t = arg(params, "t", 3).and_then(Value::as_f64);
+            let (Some(a), Some(v), Some(t)) = (a, v, t) else { return status(INVALID_ARGUMENT) };
+            let in_range = |x: &f64| *x > 0.0 && *x <= CONTROLLER_MAX_SPEED;
+            let limits_ok = v.iter().all(in_range) && a.iter().all(|x| *x > 0.0 && *x <= CONTROLLER_MAX_ACC);
+            if !limits_ok || !(1e-3..=0.1).contains(&t) || b.waypoints.len() < 2 {
+                b.valid_interval_s = None;
+                return status(INVALID_ARGUMENT);
+            }
+            b.valid_interval_s = path_within(&b.waypoints, &v, &a, t).then_some(t);
+            status(if b.valid_interval_s.is_some() { 0 } else { INVALID_ARGUMENT })
+        }
+        _ => err(id, -32601, "method not found"),
+    }
+}
+
+/// Whether the waypoints at interval `t` keep every joint within its speed `v` and
+/// acceleration `a` (first and second differences; 1e-9 relative slack for rounding).
+fn path_within(w: &[[f64; 6]], v: &[f64; 6], a: &[f64; 6], t: f64) -> bool {
+    let slack = 1.0 + 1e-9;
+    let speeds = w.windows(2).all(|p| (0..6).all(|j| (p[1][j] - p[0][j]).abs() <= v[j] * t * slack));
+    // The path starts and ends at rest: the first and last steps count as accelerations too.
+    let ends = [[w[0], w[0], w[1]], [w[w.len() - 2], w[w.len() - 1], w[w.len() - 1]]];
+    let accs = w
+        .windows(3)
+        .map(|p| [p[0], p[1], p[2]])
+        .chain(ends)
+        .all(|p| (0..6).all(|j| (p[2][j] - 2.0 * p[1][j] + p[0][j]).abs() <= a[j] * t * t * slack));
+    speeds && accs
+}
+
+/// The executed motion of a path buffer: the waypoints at their times (one sample each, `t`
+/// apart), and one more halfway between each pair on the cubic (Catmull-Rom) spline through
+/// them, so the trace is sampled by time at `t / 2`.
+fn path_motion(dh: &kinematics::DhParams, w: &[[f64; 6]], t: f64, tcp: &Isometry3<f64>, t0: f64) -> Vec<TraceEntry> {
+    let at = |q: &[f64; 6], time: f64| TraceEntry {
+        t_s: time,
+        kind: crate::exec::TraceKind::PathBuffer,
+        pose: Pose::from_iso(&dh.forward(q, tcp)),
+    };
+    let mut out = Vec::with_capacity(2 * w.len());
+    out.push(at(&w[0], t0));
+    for k in 1..w.len() {
+        let p0 = w[k.saturating_sub(2)];
+        let (p1, p2) = (w[k - 1], w[k]);
+        let p3 = w[(k + 1).min(w.len() - 1)];
+        let mid: [f64; 6] = std::array::from_fn(|j| (-p0[j] + 9.0 * p1[j] + 9.0 * p2[j] - p3[j]) / 16.0);
+        out.push(at(&mid, t0 + (k as f64 - 0.5) * t));
+        out.push(at(&p2, t0 + k as f64 * t));
+    }
+    out
 }

@@ -10,6 +10,11 @@
 //! to the trace file, and no lock is held while a move is computed.
 
 mod dispatch;
+
+pub use dispatch::{
+    MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
+    PATH_START_TOLERANCE_RAD, ramped_joint_motion, ramped_line_motion,
+};
 mod server;
 mod session;
 

@@ -30,7 +30,5 @@ pub fn csim(paths: &[StrokePath], g: &Glyph) -> f64 {
     )
     .unwrap();
     let reference = raster::render_glyph(g, PX);
-    let n = PX as usize;
-    let (r, i) = (stroke_metrics::GrayRef::new(reference.data(), n, n), stroke_metrics::GrayRef::new(img.data(), n, n));
-    stroke_metrics::csim(r.unwrap(), i.unwrap()).unwrap()
+    stroke_metrics::csim(reference.as_gray(), img.as_gray()).unwrap()
 }
