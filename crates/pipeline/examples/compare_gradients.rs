@@ -12,8 +12,8 @@ use std::sync::Arc;
 
 use brush_model::BrushProfile;
 use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
-use track_refine::Gradients;
 use track_refine::GenModel;
+use track_refine::Gradients;
 use trajectory::{Method, glyph};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -45,8 +45,8 @@ pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;
 pub use write::{
-    CharReport, CharResult, RefineReport, Similarity, WriteOptions, execute_track, level_frame_for,
-    refine_target, render_char, render_states, side_by_side, similarity, write_char,
+    CharReport, CharResult, RefineReport, Similarity, WriteOptions, execute_track, level_frame_for, refine_target,
+    render_char, render_states, side_by_side, similarity, write_char,
 };
 
 // The README's example runs as a doctest.

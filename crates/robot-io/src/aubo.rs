@@ -91,12 +91,7 @@ const ID_ALPHABET: &[u8; 62] = b"0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijk
 /// a–z, so a frame is as long as the SDK's), made from the process, the client and the call
 /// number: different for every call in practice (answers are matched to calls by it).
 fn string_id(client: u64, n: u64) -> String {
-    let mix = |mut z: u64| {
-        // splitmix64's finaliser.
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    };
+    let mix = numerics::SplitMix64::mix;
     let mut x = mix((u64::from(std::process::id()) << 44) ^ (client << 28) ^ n);
     let mut s = String::with_capacity(18);
     for i in 0..16 {

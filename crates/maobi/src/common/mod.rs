@@ -104,7 +104,6 @@ pub fn load_image(path: &Path) -> Result<bezier_raster::Coverage> {
     Ok(bezier_raster::Coverage::load(path)?)
 }
 
-
 /// The table `models` and `eval-generator` print: per model, CSIM and SSIM best, worst and mean,
 /// in %.
 pub fn print_model_table<'a>(

@@ -4,8 +4,8 @@
 
 use std::sync::Arc;
 
-use brush_model::BrushProfile;
 use crate::common::{bar_target, line_track, pen1};
+use brush_model::BrushProfile;
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 use track_refine::{GenMode, GenModel, Gradients, Problem, RefineError, RefineOptions, refine_with_generator};
 

@@ -1,8 +1,8 @@
 //! Refinement on synthetic targets: gradients against finite differences, one step lowers the
 //! loss, a refined track stays in the ranges and passes the robot check.
 
-use brush_model::{PointMm, Track};
 use crate::common::{bar_target, line_track, pen1};
+use brush_model::{PointMm, Track};
 use track_refine::{Problem, RefineOptions, Target, refine};
 
 #[test]
