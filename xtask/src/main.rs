@@ -1,5 +1,8 @@
 //! `cargo xtask`: project automation for maobi (see `cargo xtask help`).
 
+// A binary's items are reachable only inside it: `pub` here means "used by other modules".
+#![allow(unreachable_pub)]
+
 use std::process::ExitCode;
 
 mod bench;

@@ -3,6 +3,9 @@
 //! Each subcommand is a thin layer over one library crate; see `docs/ARCHITECTURE.md`.
 //! Every error is printed as one line and exits with status 2.
 
+// A binary's items are reachable only inside it: `pub` here means "used by other modules".
+#![allow(unreachable_pub)]
+
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};

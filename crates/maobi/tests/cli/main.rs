@@ -1,6 +1,9 @@
 //! The `maobi` binary's tests, run against the real binary: one test binary for the package
 //! (a `tests/*.rs` file each would link its own copy of everything), one module per area.
 
+// Test helpers are `pub` for the modules of this test crate, which nothing outside can name.
+#![allow(unreachable_pub)]
+
 mod common;
 
 mod brush;

@@ -7,9 +7,7 @@ use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
 use trajectory::template::{TemplateOptions, register};
 use trajectory::{Shape, glyph, glyph_from_gray, raster};
 
-mod common;
-
-use common::{PX, csim};
+use crate::common::{PX, csim};
 
 fn ukai() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf")

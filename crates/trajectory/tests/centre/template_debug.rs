@@ -1,5 +1,5 @@
 //! Overlays for looking at registrations by eye (ignored; `cargo test -p trajectory --test
-//! template_debug -- --ignored`, images in `$TMPDIR/template-debug/`, fonts from
+//! centre -- --ignored template_debug`, images in `$TMPDIR/template-debug/`, fonts from
 //! `TEMPLATE_DEBUG_FONT` or the UKai fixture, characters from `TEMPLATE_DEBUG_CHARS`; with
 //! `TEMPLATE_DEBUG_SELF` set, the template onto its own outline). Grey: the target; yellow: the
 //! template before any fit; coloured dots: the registered centre lines, a square at each start.

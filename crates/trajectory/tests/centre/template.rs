@@ -8,9 +8,7 @@ use kurbo::Point;
 use trajectory::template::{TemplateOptions, register, shape_only};
 use trajectory::{Glyph, Method, Shape, centre_lines, glyph};
 
-mod common;
-
-use common::{PX, csim};
+use crate::common::{PX, csim};
 const CHARS: &str = "永字八法十口人丁山水";
 
 fn opts() -> TemplateOptions {
