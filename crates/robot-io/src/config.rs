@@ -10,6 +10,23 @@ use serde::{Deserialize, Serialize};
 
 use crate::RobotError;
 
+/// A `robot.json` setting outside what it may be: which field, and what is wrong with it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct SettingError {
+    /// The setting's path in `robot.json` (`write_speed_m_s`, `limits.max_blend_mm`,
+    /// `ink.reload.every_mm`, …).
+    pub field: String,
+    /// What is wrong and what is expected, naming the field and the value.
+    pub message: String,
+}
+
+impl SettingError {
+    fn new(field: &str, message: String) -> Self {
+        Self { field: field.to_string(), message }
+    }
+}
+
 /// The largest acceleration the controller accepts in `moveLine`/`moveJoint`, m/s² (or rad/s²).
 pub const CONTROLLER_MAX_ACC: f64 = 20.0;
 /// The largest speed the controller accepts in `moveLine`/`moveJoint`, m/s (or rad/s).
@@ -282,11 +299,11 @@ impl RobotConfig {
     /// Loads and validates `robot.json` (missing fields take the defaults).
     ///
     /// # Errors
-    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Config`]
-    /// naming the file and field.
+    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Setting`]
+    /// naming the file, with the field as its source.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let c: RobotConfig = crate::load_json(path)?;
-        c.validate().map_err(|message| RobotError::Config { file: path.to_path_buf(), message })?;
+        c.validate().map_err(|source| RobotError::Setting { file: path.to_path_buf(), source })?;
         Ok(c)
     }
 
@@ -294,8 +311,8 @@ impl RobotConfig {
     /// constants) and against [`Limits`]; the message names the field, the value and the limit.
     ///
     /// # Errors
-    /// A one-line description of the first bad field.
-    pub fn validate(&self) -> Result<(), String> {
+    /// [`SettingError`] for the first bad field: its name and what is wrong.
+    pub fn validate(&self) -> Result<(), SettingError> {
         self.check_controller_ranges()?;
         self.check_limits()?;
         self.check_approach_settings()?;
@@ -304,7 +321,7 @@ impl RobotConfig {
 
     /// Every speed, acceleration and blend positive and within what the controller accepts;
     /// the heights and rates positive.
-    fn check_controller_ranges(&self) -> Result<(), String> {
+    fn check_controller_ranges(&self) -> Result<(), SettingError> {
         let l = &self.limits;
         // (field, value, the physical lower bound, the controller's upper bound, unit): every
         // setting has a range, so a unit mistake (mm/s for m/s, 1e-300) is refused rather than
@@ -345,34 +362,44 @@ impl RobotConfig {
         for (f, v, min, max, unit) in ranged {
             let (v_s, unit) = (number(v), if unit.is_empty() { String::new() } else { format!(" {unit}") });
             if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{f} must be a positive number, got {v_s}"));
+                return Err(SettingError::new(f, format!("{f} must be a positive number, got {v_s}")));
             }
             if v < min {
-                return Err(format!(
-                    "{f} = {v_s} is below the smallest accepted value {min}{unit} (is it in the wrong unit?)"
+                return Err(SettingError::new(
+                    f,
+                    format!("{f} = {v_s} is below the smallest accepted value {min}{unit} (is it in the wrong unit?)"),
                 ));
             }
             if v > max {
-                return Err(format!("{f} = {v_s} is beyond what the controller accepts (at most {max}{unit})"));
+                return Err(SettingError::new(
+                    f,
+                    format!("{f} = {v_s} is beyond what the controller accepts (at most {max}{unit})"),
+                ));
             }
         }
         Ok(())
     }
 
     /// The settings within [`Limits`], and the limits themselves sane.
-    fn check_limits(&self) -> Result<(), String> {
+    fn check_limits(&self) -> Result<(), SettingError> {
         let l = &self.limits;
         if !(l.alpha_tolerance_rad.is_finite() && l.alpha_tolerance_rad >= 0.0) {
-            return Err(format!("limits.alpha_tolerance_rad must be ≥ 0, got {}", l.alpha_tolerance_rad));
+            return Err(SettingError::new(
+                "limits.alpha_tolerance_rad",
+                format!("limits.alpha_tolerance_rad must be ≥ 0, got {}", l.alpha_tolerance_rad),
+            ));
         }
         if l.max_tilt_rad >= std::f64::consts::FRAC_PI_2 {
-            return Err(format!(
-                "limits.max_tilt_rad = {} must be below π/2 (the brush would lie flat on the paper)",
-                l.max_tilt_rad
+            return Err(SettingError::new(
+                "limits.max_tilt_rad",
+                format!(
+                    "limits.max_tilt_rad = {} must be below π/2 (the brush would lie flat on the paper)",
+                    l.max_tilt_rad
+                ),
             ));
         }
         if !(self.blend_mm.is_finite() && self.blend_mm >= 0.0) {
-            return Err(format!("blend_mm must be ≥ 0, got {}", self.blend_mm));
+            return Err(SettingError::new("blend_mm", format!("blend_mm must be ≥ 0, got {}", self.blend_mm)));
         }
         for (f, v, max, limit) in [
             ("write_speed_m_s", self.write_speed_m_s, l.max_linear_speed_m_s, "max_linear_speed_m_s"),
@@ -390,19 +417,25 @@ impl RobotConfig {
             ),
         ] {
             if v > max {
-                return Err(format!("{f} = {v} exceeds the limit {max} (limits.{limit})"));
+                return Err(SettingError::new(f, format!("{f} = {v} exceeds the limit {max} (limits.{limit})")));
             }
         }
         if self.lift_mm < l.min_lift_mm {
-            return Err(format!("lift_mm = {} is below the limit min_lift_mm = {}", self.lift_mm, l.min_lift_mm));
+            return Err(SettingError::new(
+                "lift_mm",
+                format!("lift_mm = {} is below the limit min_lift_mm = {}", self.lift_mm, l.min_lift_mm),
+            ));
         }
         Ok(())
     }
 
     /// The robot name, and the approach direction and angle.
-    fn check_approach_settings(&self) -> Result<(), String> {
+    fn check_approach_settings(&self) -> Result<(), SettingError> {
         if self.robot_name.as_deref().is_some_and(|n| n.trim().is_empty()) {
-            return Err("robot_name must not be empty (omit it to use the controller's first robot)".into());
+            return Err(SettingError::new(
+                "robot_name",
+                "robot_name must not be empty (omit it to use the controller's first robot)".to_string(),
+            ));
         }
         // The name goes into every method name sent to the controller (`NAME.MotionControl…`).
         if let Some(n) = self
@@ -410,56 +443,85 @@ impl RobotConfig {
             .as_deref()
             .filter(|n| n.len() > 64 || !n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
         {
-            return Err(format!(
-                "robot_name {n:?} must be 1 to 64 letters, digits or underscores (it becomes part of every method name)"
+            return Err(SettingError::new(
+                "robot_name",
+                format!(
+                    "robot_name {n:?} must be 1 to 64 letters, digits or underscores (it becomes part of every method name)"
+                ),
             ));
         }
         let a = &self.approach;
         let n = Vector3::from(a.into_paper_base);
         if !(n.iter().all(|v| v.is_finite()) && n.norm() > 1e-9) {
-            return Err(format!(
-                "approach.into_paper_base must be a non-zero finite vector, got {:?}",
-                a.into_paper_base
+            return Err(SettingError::new(
+                "approach.into_paper_base",
+                format!("approach.into_paper_base must be a non-zero finite vector, got {:?}", a.into_paper_base),
             ));
         }
         if !(a.max_angle_rad.is_finite() && a.max_angle_rad > 0.0 && a.max_angle_rad <= std::f64::consts::FRAC_PI_2) {
-            return Err(format!("approach.max_angle_rad must be in (0, π/2], got {}", a.max_angle_rad));
+            return Err(SettingError::new(
+                "approach.max_angle_rad",
+                format!("approach.max_angle_rad must be in (0, π/2], got {}", a.max_angle_rad),
+            ));
         }
         Ok(())
     }
 
     /// The ink station (`dip` or `ink`, not both) and its reload rule.
-    fn check_ink(&self) -> Result<(), String> {
+    fn check_ink(&self) -> Result<(), SettingError> {
         if let Some(d) = &self.dip {
             if d.every_strokes == 0
                 || !(d.depth_mm.is_finite() && d.depth_mm > 0.0)
                 || d.pose.iter().any(|v| !v.is_finite())
             {
-                return Err("dip: every_strokes ≥ 1, depth_mm > 0 and a finite pose are required".into());
+                return Err(SettingError::new(
+                    "dip",
+                    "dip: every_strokes ≥ 1, depth_mm > 0 and a finite pose are required".to_string(),
+                ));
             }
         }
         if let Some(i) = &self.ink {
             if self.dip.is_some() {
-                return Err("give either dip or ink, not both (ink replaces dip)".into());
+                return Err(SettingError::new(
+                    "ink",
+                    "give either dip or ink, not both (ink replaces dip)".to_string(),
+                ));
             }
             if !(i.depth_mm.is_finite() && i.depth_mm > 0.0) {
-                return Err(format!("ink.depth_mm must be > 0, got {}", i.depth_mm));
+                return Err(SettingError::new("ink.depth_mm", format!("ink.depth_mm must be > 0, got {}", i.depth_mm)));
             }
             if i.pose.iter().any(|v| !v.is_finite()) {
-                return Err("ink.pose must be six finite numbers [x, y, z, rx, ry, rz] (m, rad)".into());
+                return Err(SettingError::new(
+                    "ink.pose",
+                    "ink.pose must be six finite numbers [x, y, z, rx, ry, rz] (m, rad)".to_string(),
+                ));
             }
             if !(i.dwell_s.is_finite() && (0.0..=MAX_DWELL_S).contains(&i.dwell_s)) {
-                return Err(format!("ink.dwell_s must be within 0..={MAX_DWELL_S} s, got {}", i.dwell_s));
+                return Err(SettingError::new(
+                    "ink.dwell_s",
+                    format!("ink.dwell_s must be within 0..={MAX_DWELL_S} s, got {}", i.dwell_s),
+                ));
             }
             match i.reload {
-                Reload::EveryStrokes(0) => return Err("ink.reload.every_strokes must be ≥ 1".into()),
+                Reload::EveryStrokes(0) => {
+                    return Err(SettingError::new(
+                        "ink.reload.every_strokes",
+                        "ink.reload.every_strokes must be ≥ 1".to_string(),
+                    ));
+                }
                 Reload::EveryMm(mm) if !(mm.is_finite() && mm > 0.0) => {
-                    return Err(format!("ink.reload.every_mm must be > 0 mm, got {mm}"));
+                    return Err(SettingError::new(
+                        "ink.reload.every_mm",
+                        format!("ink.reload.every_mm must be > 0 mm, got {mm}"),
+                    ));
                 }
                 _ => {}
             }
             if i.paper_mm.is_some_and(|p| p.iter().any(|v| !v.is_finite())) {
-                return Err("ink.paper_mm must be two finite numbers (paper mm)".into());
+                return Err(SettingError::new(
+                    "ink.paper_mm",
+                    "ink.paper_mm must be two finite numbers (paper mm)".to_string(),
+                ));
             }
         }
         Ok(())

@@ -55,6 +55,7 @@ pub mod timing;
 pub mod wire;
 
 pub use aubo::{AuboClient, Link, RunOptions, RunReport, run_program, send_script};
+pub use config::SettingError;
 pub use exec::{
     TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
 };
@@ -105,6 +106,15 @@ pub enum RobotError {
         file: PathBuf,
         /// What is wrong.
         message: String,
+    },
+    /// A setting in `robot.json` is out of range (the source names the field and the value).
+    #[error("{}: a setting is out of range", file.display())]
+    Setting {
+        /// The file.
+        file: PathBuf,
+        /// Which setting, and why.
+        #[source]
+        source: config::SettingError,
     },
     /// The brush profile in a track file is invalid.
     #[error(transparent)]

@@ -178,19 +178,19 @@ fn exports_carry_the_dips() {
 #[test]
 fn ink_settings_are_validated_and_the_example_loads() {
     let mut c = cfg(Reload::EveryMm(0.0));
-    assert!(c.validate().unwrap_err().contains("every_mm"));
+    assert!(c.validate().unwrap_err().to_string().contains("every_mm"));
     c.ink.as_mut().unwrap().reload = Reload::EveryStrokes(0);
-    assert!(c.validate().unwrap_err().contains("every_strokes"));
+    assert!(c.validate().unwrap_err().to_string().contains("every_strokes"));
     c = cfg(Reload::EveryMm(100.0));
     c.ink.as_mut().unwrap().dwell_s = 1e9;
-    assert!(c.validate().unwrap_err().contains("dwell_s"));
+    assert!(c.validate().unwrap_err().to_string().contains("dwell_s"));
     c = cfg(Reload::EveryMm(100.0));
     c.dip = Some(robot_io::program::DipStation {
         pose: [0.63, 0.1, 0.07, 3.14, 0.0, 0.0],
         depth_mm: 5.0,
         every_strokes: 1,
     });
-    assert!(c.validate().unwrap_err().contains("not both"));
+    assert!(c.validate().unwrap_err().to_string().contains("not both"));
     let ex = RobotConfig::load(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/robot-ink.json"),
     )

@@ -177,7 +177,7 @@ fn the_kinematics_are_the_controllers() {
     assert!((again.translation.vector - saved.to_iso().translation.vector).norm() < 2e-5);
     assert!(real.validate().is_ok());
     let bad = DhParams { d_m: [0.122, f64::INFINITY, 0.0, 0.0, 0.1, 0.1], ..real };
-    assert!(bad.validate().unwrap_err().contains("d[1]"));
+    assert!(bad.validate().unwrap_err().to_string().contains("d[1]"));
 }
 
 fn same_rotation_loose(a: &Pose, b: &Pose) -> bool {
