@@ -196,7 +196,7 @@ pub fn character_figures() -> Result<Figures> {
 /// presses (CSIM and SSIM mean and worst).
 pub fn generator_figures() -> Result<Figures> {
     let g = maobi::generator::load_generator(None)?;
-    let (c, s) = neural_gen::eval::evaluate(&g, 200)?;
+    let (c, s) = neural_gen::evaluate(&g, 200)?;
     Ok(Figures::from([
         ("generator/csim_mean".to_string(), fig(c.mean, 0.003, Better::Higher)),
         ("generator/csim_worst".to_string(), fig(c.worst, 0.01, Better::Higher)),

@@ -472,11 +472,6 @@ impl Conv2d {
         self.relu = true;
         self
     }
-
-    /// The weight `[O, C, k, k]`.
-    pub fn weight(&self) -> &Tensor {
-        &self.weight
-    }
 }
 
 impl Module for Conv2d {

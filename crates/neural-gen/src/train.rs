@@ -12,8 +12,8 @@ use crate::adam::FusedAdamW;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::NeuralGenError;
 use crate::model::Generator;
+use crate::{ConfigError, NeuralGenError};
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e)
@@ -77,7 +77,7 @@ pub struct TrainReport {
 }
 
 /// The fixed validation grid: h at 6 levels, α at 4, β at 2 (48 presses), inside the ranges.
-pub fn validation_presses(g: &Generator) -> Vec<Press> {
+pub(crate) fn validation_presses(g: &Generator) -> Vec<Press> {
     let r = &g.config.ranges;
     let mut v = Vec::new();
     for i in 0..6 {
@@ -99,7 +99,7 @@ pub fn validation_presses(g: &Generator) -> Vec<Press> {
 ///
 /// # Errors
 /// [`NeuralGenError`] if the profile refuses a press.
-pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenError> {
+pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenError> {
     let s = g.config.size;
     let canvas = StrokeCanvas::with_scale(s, g.config.px_per_mm);
     let profile = &g.config.profile;
@@ -108,9 +108,10 @@ pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenErro
         .map_init(
             || (Rasterizer::new(), Coverage::new(s, s)),
             |(r, img), p| -> Result<Vec<f32>, NeuralGenError> {
-                let fp = profile
-                    .predict(p, brush_model::Extrapolation::Allow)
-                    .map_err(|e| NeuralGenError::Config { source_name: "profile".into(), message: e.to_string() })?;
+                let fp = profile.predict(p, brush_model::Extrapolation::Allow).map_err(|e| NeuralGenError::Config {
+                    source_name: "profile".into(),
+                    problem: ConfigError::Profile(e),
+                })?;
                 r.render(&Bsm, &fp, canvas.anchor_mm(&fp, p.beta_rad), p.beta_rad, canvas.px_per_mm, img);
                 Ok(img.data().to_vec())
             },
@@ -118,6 +119,40 @@ pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenErro
         .collect::<Result<_, _>>()?;
     let flat: Vec<f32> = imgs.into_iter().flatten().collect();
     Tensor::from_vec(flat, (presses.len(), 1, s as usize, s as usize), g.device()).map_err(cerr)
+}
+
+/// One optimiser step of the network alone (forward, MSE, backward, fused AdamW with weight
+/// decay 0), what [`train()`] runs per step after rendering the targets; public for the
+/// benchmarks.
+#[doc(hidden)]
+pub struct NetworkStep {
+    opt: FusedAdamW,
+}
+
+impl NetworkStep {
+    /// The optimiser over `g`'s weights at learning rate `lr`.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`].
+    pub fn new(g: &Generator, lr: f64) -> Result<Self, NeuralGenError> {
+        let opt = FusedAdamW::new(g.varmap.all_vars(), ParamsAdamW { lr, weight_decay: 0.0, ..Default::default() })
+            .map_err(cerr)?;
+        Ok(Self { opt })
+    }
+
+    /// One step on inputs `x` `[B, 3]` against targets `y` `[B, 1, S, S]` at learning rate
+    /// `lr`; returns the MSE before the step.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`] (shapes).
+    pub fn step(&mut self, g: &mut Generator, x: &Tensor, y: &Tensor, lr: f64) -> Result<f64, NeuralGenError> {
+        self.opt.set_learning_rate(lr);
+        let out = g.forward_autograd(x)?;
+        let loss = (out - y).and_then(|d| d.sqr()).and_then(|d| d.mean_all()).map_err(cerr)?;
+        self.opt.backward_step(&loss).map_err(cerr)?;
+        g.weights_changed();
+        Ok(loss.to_scalar::<f32>().map_err(cerr)? as f64)
+    }
 }
 
 fn lr_at(step: usize, total: usize, peak: f64) -> f64 {
@@ -144,13 +179,16 @@ pub fn train(
     if opts.steps == 0 || opts.batch == 0 || opts.val_every == 0 || !(opts.lr.is_finite() && opts.lr > 0.0) {
         return Err(NeuralGenError::Config {
             source_name: "training options".into(),
-            message: format!(
-                "steps {}, batch {}, val_every {} must be at least 1 and lr {} positive",
-                opts.steps, opts.batch, opts.val_every, opts.lr
-            ),
+            problem: ConfigError::TrainOptions {
+                steps: opts.steps,
+                batch: opts.batch,
+                val_every: opts.val_every,
+                lr: opts.lr,
+            },
         });
     }
     let t0 = Instant::now();
+    g.weights_changed();
     let spec = DatasetSpec {
         profile: g.config.profile.clone(),
         canvas: StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm),
@@ -158,9 +196,7 @@ pub fn train(
     };
     let val_p = validation_presses(g);
     let (val_x, val_y) = (g.inputs(&val_p)?, targets(g, &val_p)?);
-    let mut opt =
-        FusedAdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() })
-            .map_err(cerr)?;
+    let mut net = NetworkStep::new(g, opts.lr)?;
     let mut history = Vec::with_capacity(opts.steps);
     let (mut best, mut best_step, mut since) = (f64::INFINITY, 0, 0);
     let mut best_weights: Option<Vec<(String, Tensor)>> = None;
@@ -168,18 +204,14 @@ pub fn train(
     let mut stopped_early = false;
     for step in 0..opts.steps {
         let lr = lr_at(step, opts.steps, opts.lr);
-        opt.set_learning_rate(lr);
         let td = Instant::now();
         let presses: Vec<Press> = (0..opts.batch).map(|i| spec.press((step * opts.batch + i) as u64)).collect();
         let (x, y) = (g.inputs(&presses)?, targets(g, &presses)?);
         data_seconds += td.elapsed().as_secs_f64();
-        let out = g.forward(&x)?;
-        let loss = (out - &y).and_then(|d| d.sqr()).and_then(|d| d.mean_all()).map_err(cerr)?;
-        opt.backward_step(&loss).map_err(cerr)?;
-        let train_mse = loss.to_scalar::<f32>().map_err(cerr)? as f64;
+        let train_mse = net.step(g, &x, &y, lr)?;
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
-            let v = (g.forward(&val_x)? - &val_y)
+            let v = (g.forward_autograd(&val_x)? - &val_y)
                 .and_then(|d| d.sqr())
                 .and_then(|d| d.mean_all())
                 .and_then(|d| d.to_scalar::<f32>())
@@ -213,6 +245,7 @@ pub fn train(
             data[&k].set(&t).map_err(cerr)?;
         }
     }
+    g.weights_changed();
     Ok(TrainReport {
         steps_run: history.len(),
         history,

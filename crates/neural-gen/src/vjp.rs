@@ -189,7 +189,7 @@ impl InputVjp {
         let get = |name: String| -> Result<Vec<f32>, NeuralGenError> {
             let v = data.get(&name).ok_or_else(|| NeuralGenError::Config {
                 source_name: "generator".into(),
-                message: format!("tensor `{name}` missing"),
+                problem: crate::ConfigError::MissingTensor { name: name.clone() },
             })?;
             tensor_vec(v.as_tensor())
         };
@@ -263,18 +263,7 @@ impl InputVjp {
     pub fn forward(&self, presses: &[Press]) -> Tape {
         let b = presses.len();
         let x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
-        let mut hidden: Vec<Vec<f32>> = Vec::new();
-        let mut seed = Vec::new();
-        for (li, fc) in self.fcs.iter().enumerate() {
-            let input = if li == 0 { &x } else { &hidden[li - 1] };
-            let mut y = fc.fwd.apply(input, Some(&fc.b));
-            if li + 1 < self.fcs.len() {
-                y.iter_mut().for_each(|v| *v = v.max(0.0));
-                hidden.push(y);
-            } else {
-                seed = y;
-            }
-        }
+        let (hidden, seed) = self.dense_forward(&x);
         let ss = self.size * self.size;
         let mut masks = vec![0u8; b * self.masks_per_image];
         let mut images = vec![0f32; b * ss];
@@ -286,6 +275,51 @@ impl InputVjp {
             },
         );
         Tape { batch: b, hidden, masks, images }
+    }
+
+    /// The fully connected layers on the whole batch of normalised inputs `x` (`[batch, 3]`):
+    /// the outputs of every layer but the last (after the ReLU) and the seed maps.
+    fn dense_forward(&self, x: &[f32]) -> (Vec<Vec<f32>>, Vec<f32>) {
+        let mut hidden: Vec<Vec<f32>> = Vec::new();
+        let mut seed = Vec::new();
+        for (li, fc) in self.fcs.iter().enumerate() {
+            let input = if li == 0 { x } else { &hidden[li - 1] };
+            let mut y = fc.fwd.apply(input, Some(&fc.b));
+            if li + 1 < self.fcs.len() {
+                y.iter_mut().for_each(|v| *v = v.max(0.0));
+                hidden.push(y);
+            } else {
+                seed = y;
+            }
+        }
+        (hidden, seed)
+    }
+
+    /// Images for a batch of normalised inputs `x` (`[batch, 3]`, as
+    /// [`crate::GeneratorConfig::normalise`] makes them): `batch × size²` values in [0, 1],
+    /// image after image. Inference only: the same numbers as [`InputVjp::forward`]'s images,
+    /// without keeping a tape. The fully connected layers run on the whole batch, the
+    /// convolutions image by image in parallel; the bits do not depend on the batch or the
+    /// thread count.
+    ///
+    /// # Panics
+    /// When `x.len()` is not a multiple of 3.
+    pub(crate) fn images_normalised(&self, x: &[f32]) -> Vec<f32> {
+        assert_eq!(x.len() % 3, 0, "inputs come in threes");
+        let b = x.len() / 3;
+        let ss = self.size * self.size;
+        let mut images = vec![0f32; b * ss];
+        if b == 0 {
+            return images;
+        }
+        let (_, seed) = self.dense_forward(x);
+        images.par_chunks_mut(ss).zip(seed.par_chunks(self.seed_len())).for_each_init(
+            || (vec![0f32; self.per_image], Vec::new(), vec![0u8; self.masks_per_image]),
+            |(buf, acc, masks), (img, sd)| {
+                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks, buf, acc })
+            },
+        );
+        images
     }
 
     /// The convolution stages of one image, from its seed map: the image into `img`, the ReLU
@@ -671,7 +705,7 @@ impl Generator {
             return Ok((Vec::new(), Vec::new()));
         }
         let x = candle_core::Var::from_tensor(&self.inputs(presses)?).map_err(cerr)?;
-        let y = self.forward(x.as_tensor())?;
+        let y = self.forward_autograd(x.as_tensor())?;
         let w = Tensor::from_vec(upstream.to_vec(), (b, 1, s, s), self.device()).map_err(cerr)?;
         let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
         let grads = l.backward().map_err(cerr)?;

@@ -403,7 +403,7 @@ fn rerender_neural(args: &Args, profile: &BrushProfile, results: &mut [CharResul
     for r in results.iter_mut() {
         let b = r.char_box;
         let neural = |t: &brush_model::Track| {
-            neural_gen::compose::render_track(
+            neural_gen::render_track(
                 &g,
                 t,
                 brush_model::PointMm::new(b.x0_mm, b.y0_mm),
