@@ -20,8 +20,7 @@ use crate::conv;
 pub enum Kernels {
     /// Stock candle: `candle_nn::Conv2d` (and its backward) and `candle_nn::AdamW`.
     Candle,
-    /// maobi's: [`crate::conv::Conv2d`] (direct convolution in forward and backward) and
-    /// [`crate::adam::FusedAdamW`].
+    /// maobi's: the crate's direct convolution (forward and backward) and fused AdamW.
     Maobi,
 }
 
