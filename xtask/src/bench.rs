@@ -46,7 +46,11 @@ const ROWS: &[(&str, &str)] = &[
     ),
     ("generator_inference/analytic_64", "analytic B-BSM, 64 footprints (one thread)"),
     ("generator_training/step_batch_64", "generator training step, batch 64 (incl. validation setup)"),
-    ("generator_training/network_step_batch_64", "generator training step, batch 64, network alone"),
+    ("generator_training/network_step_batch_64", "generator training step, batch 64, network alone, direct kernels"),
+    (
+        "generator_training/network_step_batch_64_candle_graph",
+        "generator training step, batch 64, network alone, candle's graph (the old path)",
+    ),
     ("peak_fp32/fma_all_threads", "peak FP32: independent FMAs on every thread (fixed work)"),
     ("ltp_training/step_batch_64_maobi", "LearningToPaint-size net, Adam step, batch 64, maobi kernels"),
     ("ltp_training/step_batch_64_candle", "LearningToPaint-size net, Adam step, batch 64, stock candle"),
@@ -273,7 +277,7 @@ fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
         Pair {
             label: "pen1 training step (network), batch 64",
             bench: "generator",
-            filter: "generator_training/network_step_batch_64",
+            filter: "generator_training/network_step_batch_64$",
             id: "generator_training/network_step_batch_64",
             script: "gen_vjp_torch.py",
             args: &[],

@@ -1,5 +1,6 @@
-//! Generator speed: inference at batch 1 and 64 (direct kernels), one training step at batch 64
-//! (the whole `train` step, and the network alone), next to the analytic renderer; and the
+//! Generator speed: inference at batch 1 and 64 (direct kernels, and candle's graph for
+//! comparison), one training step at batch 64 (the whole `train` step, and the network alone on
+//! the direct kernels and through candle's graph), next to the analytic renderer; and the
 //! machine's peak FP32 rate (a loop of independent fused multiply–adds on every thread), the
 //! yardstick `cargo xtask bench` divides by (`cargo bench -p neural-gen --bench generator`).
 
@@ -7,7 +8,7 @@ use bezier_raster::{Bsm, Coverage, DatasetSpec, Rasterizer};
 use brush_model::{BrushProfile, Press};
 use candle_core::{Device, Tensor};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use neural_gen::{Arch, Generator, GeneratorConfig, NetworkStep, TrainOptions};
+use neural_gen::{Arch, DirectTrainer, Generator, GeneratorConfig, NetworkStep, TrainOptions};
 use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 use std::hint::black_box;
@@ -98,15 +99,24 @@ fn bench(c: &mut Criterion) {
         b.iter(|| neural_gen::train(&mut g, &opts, |_| {}).unwrap())
     });
     // The network alone (as benches/gen_vjp_torch.py's training step): fixed inputs and
-    // targets, forward, MSE, backward, AdamW.
+    // targets, forward, MSE, backward, AdamW; on the direct kernels (what `train` runs) and
+    // through candle's graph (what it ran before).
+    let target = Tensor::rand(0f32, 1f32, (64, 1, 128, 128), &Device::Cpu).unwrap();
     grp.bench_function("network_step_batch_64", |b| {
+        let g = Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1)
+            .unwrap();
+        let x: Vec<f32> = presses.iter().flat_map(|p| g.config.normalise(p)).collect();
+        let y: Vec<f32> = target.flatten_all().unwrap().to_vec1().unwrap();
+        let mut net = DirectTrainer::new(&g).unwrap();
+        b.iter(|| net.step(black_box(&x), &y, 1e-4).unwrap())
+    });
+    grp.bench_function("network_step_batch_64_candle_graph", |b| {
         let mut g =
             Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1)
                 .unwrap();
         let x = g.inputs(&presses).unwrap();
-        let y = Tensor::rand(0f32, 1f32, (64, 1, 128, 128), &Device::Cpu).unwrap();
         let mut net = NetworkStep::new(&g, 1e-4).unwrap();
-        b.iter(|| net.step(&mut g, black_box(&x), &y, 1e-4).unwrap())
+        b.iter(|| net.step(&mut g, black_box(&x), &target, 1e-4).unwrap())
     });
     grp.finish();
 }

@@ -35,6 +35,7 @@ mod config;
 mod conv;
 #[cfg(test)]
 mod conv_tests;
+mod direct;
 mod eval;
 mod kernels;
 mod ltp;
@@ -54,6 +55,8 @@ pub use vjp::{InputVjp, Tape};
 // The LearningToPaint-sized network, kept for the speed comparison with PyTorch
 // (benches/ltp.rs, examples/ltp_speed.rs) only: not part of the API a downstream crate should
 // use.
+#[doc(hidden)]
+pub use direct::DirectTrainer;
 #[doc(hidden)]
 pub use ltp::{Kernels as LtpKernels, Ltp};
 #[doc(hidden)]

@@ -9,6 +9,7 @@ use candle_core::Tensor;
 use candle_nn::{Optimizer, ParamsAdamW};
 
 use crate::adam::FusedAdamW;
+use crate::direct::DirectTrainer;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -95,11 +96,11 @@ pub(crate) fn validation_presses(g: &Generator) -> Vec<Press> {
 }
 
 /// Renders the analytic B-BSM targets of presses in the generator's canvas convention, in
-/// parallel, as `[B, 1, S, S]`.
+/// parallel: `B × S²` values, image after image.
 ///
 /// # Errors
 /// [`NeuralGenError`] if the profile refuses a press.
-pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenError> {
+pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Vec<f32>, NeuralGenError> {
     let s = g.config.size;
     let canvas = StrokeCanvas::with_scale(s, g.config.px_per_mm);
     let profile = &g.config.profile;
@@ -117,12 +118,12 @@ pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, Neural
             },
         )
         .collect::<Result<_, _>>()?;
-    let flat: Vec<f32> = imgs.into_iter().flatten().collect();
-    Tensor::from_vec(flat, (presses.len(), 1, s as usize, s as usize), g.device()).map_err(cerr)
+    Ok(imgs.into_iter().flatten().collect())
 }
 
-/// One optimiser step of the network alone (forward, MSE, backward, fused AdamW with weight
-/// decay 0), what [`train()`] runs per step after rendering the targets; public for the
+/// One optimiser step of the network alone through candle's graph (forward, MSE, backward,
+/// fused AdamW with weight decay 0): what [`train()`] ran before the direct kernels
+/// ([`crate::DirectTrainer`]), kept as their reference in tests and benchmarks; public for the
 /// benchmarks.
 #[doc(hidden)]
 pub struct NetworkStep {
@@ -195,37 +196,34 @@ pub fn train(
         seed: opts.seed,
     };
     let val_p = validation_presses(g);
-    let (val_x, val_y) = (g.inputs(&val_p)?, targets(g, &val_p)?);
-    let mut net = NetworkStep::new(g, opts.lr)?;
+    let cfg = g.config.clone();
+    let normalised = |ps: &[Press]| -> Vec<f32> { ps.iter().flat_map(|p| cfg.normalise(p)).collect() };
+    let (val_x, val_y) = (normalised(&val_p), targets(g, &val_p)?);
+    let mut net = DirectTrainer::new(g)?;
     let mut history = Vec::with_capacity(opts.steps);
     let (mut best, mut best_step, mut since) = (f64::INFINITY, 0, 0);
-    let mut best_weights: Option<Vec<(String, Tensor)>> = None;
+    let mut best_weights: Option<Vec<Vec<f32>>> = None;
     let mut data_seconds = 0.0;
     let mut stopped_early = false;
     for step in 0..opts.steps {
         let lr = lr_at(step, opts.steps, opts.lr);
         let td = Instant::now();
         let presses: Vec<Press> = (0..opts.batch).map(|i| spec.press((step * opts.batch + i) as u64)).collect();
-        let (x, y) = (g.inputs(&presses)?, targets(g, &presses)?);
+        let (x, y) = (normalised(&presses), targets(g, &presses)?);
         data_seconds += td.elapsed().as_secs_f64();
-        let train_mse = net.step(g, &x, &y, lr)?;
+        let train_mse = net.step(&x, &y, lr)?;
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
-            let v = (g.forward_autograd(&val_x)? - &val_y)
-                .and_then(|d| d.sqr())
-                .and_then(|d| d.mean_all())
-                .and_then(|d| d.to_scalar::<f32>())
-                .map_err(cerr)? as f64;
+            let imgs = net.kernels().images_normalised(&val_x);
+            let v = imgs.iter().zip(&val_y).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / val_y.len() as f64;
             point.val_mse = Some(v);
             if v < best * 0.999 {
                 best = v;
                 best_step = step + 1;
                 since = 0;
-                let data = g.varmap.data().lock().expect("varmap");
-                best_weights =
-                    Some(data.iter().map(|(k, var)| (k.clone(), var.as_tensor().copy().expect("copy"))).collect());
-                drop(data);
+                best_weights = Some(net.snapshot());
                 if let Some(p) = &opts.checkpoint {
+                    net.write_back(g)?;
                     g.save(p)?;
                 }
             } else {
@@ -240,12 +238,9 @@ pub fn train(
         }
     }
     if let Some(w) = best_weights {
-        let data = g.varmap.data().lock().expect("varmap");
-        for (k, t) in w {
-            data[&k].set(&t).map_err(cerr)?;
-        }
+        net.restore(w)?;
     }
-    g.weights_changed();
+    net.write_back(g)?;
     Ok(TrainReport {
         steps_run: history.len(),
         history,
