@@ -6,9 +6,10 @@
 //! * Configuration ([`GeneratorConfig`], [`Arch`]): architecture, normalisation (the
 //!   profile's calibrated ranges), canvas, recipe, metrics: the JSON saved beside the weights.
 //! * [`Generator`]: forward pass and batched rendering on the crate's direct kernels (the
-//!   `maobi stroke` canvas convention), the candle graph for training, the vector–Jacobian
+//!   `maobi stroke` canvas convention), the candle graph for autograd checks, the vector–Jacobian
 //!   product with respect to `(h, α, β)`, safetensors checkpoints with consistency checks.
-//! * [`train()`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
+//! * [`train()`]: AdamW on MSE on the direct kernels, warm-up + cosine schedule, validation
+//!   grid, early stopping.
 //! * [`render_track`]: a whole track rendered with the generator (batched along the track).
 //! * [`evaluate`]: CSIM/SSIM of the generator against the analytic footprints.
 //! * [`InputVjp`]: batched images, input VJPs and Jacobians without autograd, for track

@@ -19,8 +19,9 @@ use crate::{ConfigError, NeuralGenError};
 /// A generator: the network and its configuration.
 ///
 /// Inference ([`Generator::forward`], [`Generator::render`]) runs on the crate's direct
-/// kernels (the network of [`InputVjp`], built from the weights on first use); the candle graph
-/// ([`Generator::forward_autograd`]) is there for training and gradient checks.
+/// kernels (the network of [`InputVjp`], built from the weights on first use), and so does
+/// training ([`crate::train()`]); the candle graph ([`Generator::forward_autograd`]) is there
+/// for checks against candle's autograd.
 pub struct Generator {
     /// Configuration (architecture, normalisation, brush, canvas).
     pub config: GeneratorConfig,
@@ -134,7 +135,7 @@ impl Generator {
     }
 
     /// The same forward pass as [`Generator::forward`] as a candle graph (autograd through the
-    /// weights and the input): for training and for checking the direct kernels. Equal to
+    /// weights and the input): for checking the direct kernels against autograd. Equal to
     /// [`Generator::forward`] within floating-point rounding.
     ///
     /// # Errors

@@ -17,7 +17,7 @@
 //!
 //! Every image is computed independently of the others in its batch, every sum in a fixed
 //! order of fused multiply–adds, so the results do not depend on the batch size, the thread
-//! count or the vector width. The training path ([`crate::conv::Conv2d`]) keeps its own kernels.
+//! count or the vector width. Training ([`crate::DirectTrainer`]) runs on the same kernels.
 //! Tested against candle's autograd ([`crate::Generator::image_and_vjp`]) and against finite
 //! differences.
 
