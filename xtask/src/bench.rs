@@ -1,5 +1,9 @@
 //! `cargo xtask bench`: runs the criterion benchmarks (release) and the dataset throughput, and
-//! prints one summary table, also written to `target/bench-summary.md`.
+//! prints one summary table, also written to `target/bench-summary.md`; then the maobi/PyTorch
+//! pairs of the generator (inference, training step, the LearningToPaint-size training step),
+//! each pair run back to back (interleaved, `--rounds N` times, same thread count), with every
+//! figure as a fraction of the machine's peak FP32 rate (measured by `peak_fp32` in
+//! benches/generator.rs) and the load average at the time. `--pairs` runs the pairs only.
 
 use std::path::Path;
 use std::process::Command;
@@ -36,8 +40,18 @@ const ROWS: &[(&str, &str)] = &[
     ("write_yong_skeleton_512", "`write` 永 end to end, skeleton, 512²"),
     ("generator_inference/batch_1", "generator inference, batch 1 (per call)"),
     ("generator_inference/batch_64", "generator inference, batch 64 (per call of 64)"),
+    (
+        "generator_inference/batch_64_candle_graph",
+        "generator inference, batch 64, through candle's graph (the old path)",
+    ),
     ("generator_inference/analytic_64", "analytic B-BSM, 64 footprints (one thread)"),
     ("generator_training/step_batch_64", "generator training step, batch 64 (incl. validation setup)"),
+    ("generator_training/network_step_batch_64", "generator training step, batch 64, network alone, direct kernels"),
+    (
+        "generator_training/network_step_batch_64_candle_graph",
+        "generator training step, batch 64, network alone, candle's graph (the old path)",
+    ),
+    ("peak_fp32/fma_all_threads", "peak FP32: independent FMAs on every thread (fixed work)"),
     ("ltp_training/step_batch_64_maobi", "LearningToPaint-size net, Adam step, batch 64, maobi kernels"),
     ("ltp_training/step_batch_64_candle", "LearningToPaint-size net, Adam step, batch 64, stock candle"),
     ("ltp_inference/batch_1_maobi", "LearningToPaint-size net, inference batch 1, maobi kernels"),
@@ -74,6 +88,19 @@ fn human(ns: f64) -> String {
 pub fn run(args: &[String]) -> Result<()> {
     let quick = args.iter().any(|a| a == "--quick");
     let root = root();
+    let rounds = match args.iter().position(|a| a == "--rounds") {
+        Some(i) => args
+            .get(i + 1)
+            .and_then(|v| v.parse::<usize>().ok())
+            .filter(|&n| (1..=20).contains(&n))
+            .context("--rounds takes a count from 1 to 20")?,
+        None => 2,
+    };
+    if args.iter().any(|a| a == "--pairs") {
+        let table = pairs(&root, quick, rounds)?;
+        print!("{table}");
+        return Ok(());
+    }
     for (package, bench) in BENCHES {
         let mut cmd = Command::new(env!("CARGO"));
         cmd.current_dir(&root).args(["bench", "-p", package, "--bench", bench, "--"]);
@@ -116,6 +143,8 @@ pub fn run(args: &[String]) -> Result<()> {
     ));
     let _ = std::fs::remove_dir_all(&out);
     table.push_str(&torch_rows(&root));
+    table.push('\n');
+    table.push_str(&pairs(&root, quick, rounds)?);
     let path = root.join("target/bench-summary.md");
     std::fs::write(&path, format!("# maobi benchmarks\n\n{table}"))?;
     print!("{table}");
@@ -171,4 +200,141 @@ fn ltp_torch_row(root: &Path) -> String {
         num("inference_b1_img_per_s"),
         num("inference_b64_img_per_s"),
     )
+}
+
+/// Runs one criterion benchmark (`bench` of neural-gen, ids matching `filter`) and returns the
+/// mean of `id`, ns.
+fn criterion_ns(root: &Path, bench: &str, filter: &str, id: &str, quick: bool) -> Result<f64> {
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.current_dir(root).args(["bench", "-q", "-p", "neural-gen", "--bench", bench, "--", filter]);
+    if quick {
+        cmd.args(["--warm-up-time", "1", "--measurement-time", "2"]);
+    }
+    let st = cmd.status().with_context(|| format!("running the neural-gen {bench} benchmark"))?;
+    if !st.success() {
+        bail!("cargo bench -p neural-gen --bench {bench} -- {filter} failed");
+    }
+    estimate_ns(&root.join("target/criterion"), id).with_context(|| format!("no criterion estimate for {id}"))
+}
+
+/// Runs a PyTorch reference script with `--json` and the given arguments; `None` when the Python
+/// (`$MAOBI_PYTHON` or python3) has no torch or the script fails.
+fn torch_json(root: &Path, script: &str, args: &[String]) -> Option<serde_json::Value> {
+    let out = Command::new(python())
+        .arg(root.join("crates/neural-gen/benches").join(script))
+        .args(args)
+        .arg("--json")
+        .output()
+        .ok()
+        .filter(|o| o.status.success())?;
+    serde_json::from_slice(&out.stdout).ok()
+}
+
+/// The 1-minute load average (`/proc/loadavg`), or "?" where there is none.
+fn load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().map(str::to_string))
+        .unwrap_or_else(|| "?".to_string())
+}
+
+/// One maobi/PyTorch pair: a criterion benchmark and the key of a PyTorch script's JSON (s).
+struct Pair {
+    label: &'static str,
+    bench: &'static str,
+    filter: &'static str,
+    id: &'static str,
+    script: &'static str,
+    args: &'static [&'static str],
+    key: &'static str,
+    /// FLOPs of one measured call (2 per multiply–add).
+    flops: f64,
+}
+
+/// The generator pairs, interleaved: per round, each pair's maobi benchmark then its PyTorch
+/// script, at the same thread count; a table row per pair and round with the times, the
+/// maobi/PyTorch ratio, each as a fraction of the measured peak FP32 rate, and the load.
+fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
+    let threads = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let pen1 = 2.0 * neural_gen::Arch::default_128().macs_per_image() as f64 * 64.0;
+    let ltp = 2.0 * neural_gen::Ltp::MACS_PER_IMAGE as f64 * 64.0;
+    // A training step: the forward products, then those for the input and the weight gradients.
+    let list = [
+        Pair {
+            label: "pen1 inference, batch 64",
+            bench: "generator",
+            filter: "generator_inference/batch_64$",
+            id: "generator_inference/batch_64",
+            script: "gen_vjp_torch.py",
+            args: &[],
+            key: "forward_s",
+            flops: pen1,
+        },
+        Pair {
+            label: "pen1 training step (network), batch 64",
+            bench: "generator",
+            filter: "generator_training/network_step_batch_64$",
+            id: "generator_training/network_step_batch_64",
+            script: "gen_vjp_torch.py",
+            args: &[],
+            key: "train_step_s",
+            flops: 3.0 * pen1,
+        },
+        Pair {
+            label: "LearningToPaint-size training step, batch 64",
+            bench: "ltp",
+            filter: "ltp_training/step_batch_64_maobi",
+            id: "ltp_training/step_batch_64_maobi",
+            script: "ltp_torch.py",
+            args: &["--steps", "10"],
+            key: "step_s",
+            flops: 3.0 * ltp,
+        },
+    ];
+    let peak_id = "peak_fp32/fma_all_threads";
+    let peak_ns = criterion_ns(root, "generator", "peak_fp32", peak_id, quick)?;
+    // The benchmark's throughput is its FLOP count (lanes × accumulators × iterations × threads × 2).
+    let peak_work = std::fs::read_to_string(root.join("target/criterion").join(peak_id).join("new/benchmark.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["throughput"]["Elements"].as_f64())
+        .context("no FLOP count in the peak_fp32 benchmark's record")?;
+    let peak_flops = peak_work / (peak_ns * 1e-9);
+    let frac = |flops: f64, s: f64| format!("{:.1} %", 100.0 * flops / s / peak_flops);
+    let mut table = format!(
+        "Peak FP32 (FMA loop, {threads} threads): {:.0} GFLOP/s (load {})\n\n\
+         | pair | maobi | PyTorch | maobi / PyTorch time | maobi of peak | PyTorch of peak | load |\n\
+         |---|---|---|---|---|---|---|\n",
+        peak_flops / 1e9,
+        load()
+    );
+    let targs = |p: &Pair| -> Vec<String> {
+        let mut v: Vec<String> = vec!["--threads".into(), threads.to_string()];
+        v.extend(p.args.iter().map(|s| s.to_string()));
+        v
+    };
+    for _ in 0..rounds {
+        for p in &list {
+            let before = load();
+            let ns = criterion_ns(root, p.bench, p.filter, p.id, quick)?;
+            let torch_s = torch_json(root, p.script, &targs(p)).and_then(|v| v[p.key].as_f64());
+            let m = ns * 1e-9;
+            let (t_cell, ratio, tf) = match torch_s {
+                Some(t) => (human(t * 1e9), format!("{:.2}", m / t), frac(p.flops, t)),
+                None => ("not run (no Python with torch)".to_string(), "–".to_string(), "–".to_string()),
+            };
+            table.push_str(&format!(
+                "| {} | {} | {t_cell} | {ratio} | {} | {tf} | {before}–{} |\n",
+                p.label,
+                human(ns),
+                frac(p.flops, m),
+                load()
+            ));
+        }
+    }
+    Ok(table)
 }

@@ -196,7 +196,7 @@ fn committed_generator() -> Result<neural_gen::Generator> {
 /// presses (CSIM and SSIM mean and worst).
 pub fn generator_figures() -> Result<Figures> {
     let g = committed_generator()?;
-    let (c, s) = neural_gen::eval::evaluate(&g, 200)?;
+    let (c, s) = neural_gen::evaluate(&g, 200)?;
     Ok(Figures::from([
         ("generator/csim_mean".to_string(), fig(c.mean, 0.003, Better::Higher)),
         ("generator/csim_worst".to_string(), fig(c.worst, 0.01, Better::Higher)),

@@ -8,7 +8,10 @@ ReLU between; per stage a 3×3 convolution, padding 1, ReLU except after the las
 pixel shuffle; sigmoid) with random weights (timing only), and times what track refinement
 needs: a forward pass of a batch of presses and the vector–Jacobian product with respect to
 the inputs (torch.autograd.grad of Σ upstream·image, weights frozen so no weight gradients are
-computed). Prints the mean seconds per batch after warm-up, and the forward alone.
+computed). Prints the mean seconds per batch after warm-up, the forward alone (no_grad), and
+one training step of the network alone (forward, MSE against a fixed target batch, backward,
+Adam with weight decay 0: what benches/generator.rs's `generator_training/network_step_batch_64`
+times).
 """
 import argparse
 import json
@@ -81,12 +84,30 @@ def main():
         for _ in range(a.reps):
             net(x0)
         t_fwd = (time.perf_counter() - t0) / a.reps
+    for p in net.parameters():
+        p.requires_grad_(True)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-4)
+    target = torch.rand(a.batch, 1, size, size)
+
+    def step():
+        opt.zero_grad(set_to_none=True)
+        loss = F.mse_loss(net(x0), target)
+        loss.backward()
+        opt.step()
+
+    for _ in range(3):
+        step()
+    t0 = time.perf_counter()
+    for _ in range(a.reps):
+        step()
+    t_step = (time.perf_counter() - t0) / a.reps
     out = {
         "torch": torch.__version__,
         "threads": a.threads,
         "batch": a.batch,
         "forward_vjp_s": t_vjp,
         "forward_s": t_fwd,
+        "train_step_s": t_step,
     }
     if a.json:
         print(json.dumps(out))
@@ -94,6 +115,7 @@ def main():
         print(f"PyTorch {torch.__version__}, {a.threads} threads, batch {a.batch}:")
         print(f"  forward + input VJP: {t_vjp * 1e3:.1f} ms per batch ({t_vjp / a.batch * 1e3:.2f} ms per image)")
         print(f"  forward alone:       {t_fwd * 1e3:.1f} ms per batch")
+        print(f"  training step:       {t_step * 1e3:.1f} ms per batch (Adam, MSE)")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@
 
 use candle_core::{Device, Tensor};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use neural_gen::ltp::{Kernels, Ltp};
+use neural_gen::{Ltp, LtpKernels as Kernels};
 use std::hint::black_box;
 
 // As in the `maobi` binary: an allocator that reuses freed large buffers.

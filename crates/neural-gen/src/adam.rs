@@ -21,7 +21,7 @@ use candle_nn::{Optimizer, ParamsAdamW};
 use rayon::prelude::*;
 
 /// AdamW with the update fused into one pass per variable (CPU, f32).
-pub struct FusedAdamW {
+pub(crate) struct FusedAdamW {
     vars: Vec<(Var, Mutex<Moments>)>,
     params: ParamsAdamW,
     t: i32,
@@ -92,7 +92,7 @@ impl FusedAdamW {
     ///
     /// # Errors
     /// A candle error for a variable that is not f32 on the CPU.
-    pub fn new(vars: Vec<Var>, params: ParamsAdamW) -> Result<Self> {
+    pub(crate) fn new(vars: Vec<Var>, params: ParamsAdamW) -> Result<Self> {
         let vars = vars
             .into_iter()
             .map(|var| {

@@ -4,8 +4,8 @@
 use bezier_raster::{Coverage, StrokeCanvas};
 use brush_model::{ForwardModel, PointMm, Press, Track};
 
-use crate::NeuralGenError;
 use crate::model::Generator;
+use crate::{ConfigError, NeuralGenError};
 
 /// Renders `track` into a `width × height` image whose top-left corner is paper point
 /// `origin_mm`, at `px_per_mm`. The track goes through the forward model of the moving brush
@@ -42,11 +42,9 @@ pub fn render_track(
             .collect();
         let imgs = g.render(&shaped)?;
         for ((p, sp), img) in chunk.iter().zip(&shaped).zip(&imgs) {
-            let fp = g
-                .config
-                .profile
-                .predict(sp, brush_model::Extrapolation::Allow)
-                .map_err(|e| NeuralGenError::Config { source_name: "profile".into(), message: e.to_string() })?;
+            let fp = g.config.profile.predict(sp, brush_model::Extrapolation::Allow).map_err(|e| {
+                NeuralGenError::Config { source_name: "profile".into(), problem: ConfigError::Profile(e) }
+            })?;
             let a_gen = canvas.anchor_mm(&fp, sp.beta_rad);
             let b = fp.placed_bounds(p.anchor(), p.beta_rad);
             let k = px_per_mm;

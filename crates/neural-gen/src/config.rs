@@ -3,6 +3,7 @@
 
 use brush_model::{BrushProfile, Press, PressRanges};
 use serde::{Deserialize, Serialize};
+use thiserror::Error;
 
 /// The format version of the config file.
 pub const CONFIG_VERSION: u32 = 1;
@@ -49,44 +50,42 @@ impl Arch {
         self.seed_side.saturating_mul(1usize.checked_shl(self.stages.len() as u32).unwrap_or(usize::MAX))
     }
 
-    /// Checks that consecutive stages fit together and end in one channel.
+    /// Checks that consecutive stages fit together and end in one channel, and that the
+    /// network stays within the bounds (at most 8 stages, a 64² seed, a 1024² output, 16
+    /// hidden layers of at most 8192, 4096 channels per layer, 50 million parameters).
     ///
     /// # Errors
-    /// A description of the first inconsistency.
-    pub fn validate(&self) -> Result<(), String> {
+    /// The first inconsistency, as an [`ArchError`].
+    pub fn validate(&self) -> Result<(), ArchError> {
         if self.stages.is_empty() || self.seed_side == 0 || self.seed_channels == 0 {
-            return Err("need at least one stage and a non-empty seed map".into());
+            return Err(ArchError::Empty);
         }
         // Bounds before any size is computed or allocated: output side, widths and the
         // parameter count stay far above any useful generator and far below memory limits.
         if self.stages.len() > 8 || self.seed_side > 64 || self.output_side() > 1024 {
-            return Err(format!(
-                "{} stages from a {}² seed: at most 8 stages and a 1024² output",
-                self.stages.len(),
-                self.seed_side
-            ));
+            return Err(ArchError::TooLarge { stages: self.stages.len(), seed_side: self.seed_side });
         }
         if self.hidden.len() > 16 || self.hidden.iter().any(|&h| h == 0 || h > 8192) {
-            return Err("hidden layers: at most 16, each 1..=8192 wide".into());
+            return Err(ArchError::Hidden);
         }
         if self.seed_channels > 4096 || self.stages.iter().any(|&(a, b)| a > 4096 || b > 4096) {
-            return Err("channels: at most 4096 per layer".into());
+            return Err(ArchError::Channels);
         }
         if self.parameter_count() > 50_000_000 {
-            return Err(format!("{} parameters: at most 50 million", self.parameter_count()));
+            return Err(ArchError::Parameters { count: self.parameter_count() });
         }
         let mut c = self.seed_channels;
         for (i, &(cin, cout)) in self.stages.iter().enumerate() {
             if cin != c {
-                return Err(format!("stage {} takes {cin} channels but gets {c}", i + 1));
+                return Err(ArchError::StageInput { stage: i + 1, takes: cin, gets: c });
             }
             if cout % 4 != 0 {
-                return Err(format!("stage {}: {cout} output channels cannot be pixel-shuffled by 2", i + 1));
+                return Err(ArchError::NotShufflable { stage: i + 1, channels: cout });
             }
             c = cout / 4;
         }
         if c != 1 {
-            return Err(format!("the last stage must end in 1 channel, not {c}"));
+            return Err(ArchError::LastChannels { channels: c });
         }
         Ok(())
     }
@@ -123,6 +122,59 @@ impl Arch {
         }
         n
     }
+}
+
+/// What is wrong with an [`Arch`] ([`Arch::validate`]).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[non_exhaustive]
+pub enum ArchError {
+    /// No stage, or an empty seed map.
+    #[error("need at least one stage and a non-empty seed map")]
+    Empty,
+    /// Too many stages or too large an output.
+    #[error("{stages} stages from a {seed_side}² seed: at most 8 stages and a 1024² output")]
+    TooLarge {
+        /// Stages.
+        stages: usize,
+        /// Side of the seed map, px.
+        seed_side: usize,
+    },
+    /// Too many or too wide hidden layers.
+    #[error("hidden layers: at most 16, each 1..=8192 wide")]
+    Hidden,
+    /// Too many channels in a layer.
+    #[error("channels: at most 4096 per layer")]
+    Channels,
+    /// Too many parameters.
+    #[error("{count} parameters: at most 50 million")]
+    Parameters {
+        /// Trainable parameters.
+        count: usize,
+    },
+    /// A stage's input channels differ from what the previous layer gives.
+    #[error("stage {stage} takes {takes} channels but gets {gets}")]
+    StageInput {
+        /// Stage, 1-based.
+        stage: usize,
+        /// Channels it takes.
+        takes: usize,
+        /// Channels it gets.
+        gets: usize,
+    },
+    /// A stage's output channels are not a multiple of 4.
+    #[error("stage {stage}: {channels} output channels cannot be pixel-shuffled by 2")]
+    NotShufflable {
+        /// Stage, 1-based.
+        stage: usize,
+        /// Its output channels.
+        channels: usize,
+    },
+    /// The last stage does not end in one channel.
+    #[error("the last stage must end in 1 channel, not {channels}")]
+    LastChannels {
+        /// Channels after the last shuffle.
+        channels: usize,
+    },
 }
 
 /// How the checkpoint was trained.

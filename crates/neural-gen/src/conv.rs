@@ -416,7 +416,7 @@ impl CustomOp1 for PixelShuffle {
 ///
 /// # Errors
 /// A candle error for a non-4-D input or channels not divisible by `r²`.
-pub fn pixel_shuffle(x: &Tensor, r: usize) -> Result<Tensor> {
+pub(crate) fn pixel_shuffle(x: &Tensor, r: usize) -> Result<Tensor> {
     if x.device().is_cpu() && x.dtype() == DType::F32 && r > 0 {
         x.contiguous()?.apply_op1(PixelShuffle { r, inverse: false })
     } else {
@@ -428,7 +428,7 @@ pub fn pixel_shuffle(x: &Tensor, r: usize) -> Result<Tensor> {
 /// optional ReLU fused into one direct kernel, forward and backward. Holds the same tensors as
 /// `candle_nn::Conv2d`.
 #[derive(Debug, Clone)]
-pub struct Conv2d {
+pub(crate) struct Conv2d {
     weight: Tensor,
     bias: Tensor,
     padding: usize,
@@ -441,7 +441,7 @@ impl Conv2d {
     ///
     /// # Errors
     /// A candle error when the weight is not 4-D with a square kernel, or the bias is not `[O]`.
-    pub fn new(weight: Tensor, bias: Option<Tensor>, padding: usize) -> Result<Self> {
+    pub(crate) fn new(weight: Tensor, bias: Option<Tensor>, padding: usize) -> Result<Self> {
         let (o, _, kh, kw) = weight.dims4()?;
         if kh != kw {
             bail!("fast conv2d: the kernel must be square, got {kh}×{kw}");
@@ -459,7 +459,7 @@ impl Conv2d {
     ///
     /// # Errors
     /// A candle error for strided, dilated or grouped convolutions.
-    pub fn from_candle(conv: &candle_nn::Conv2d) -> Result<Self> {
+    pub(crate) fn from_candle(conv: &candle_nn::Conv2d) -> Result<Self> {
         let cfg = conv.config();
         if cfg.stride != 1 || cfg.dilation != 1 || cfg.groups != 1 {
             bail!("fast conv2d: only stride 1, dilation 1 and one group are supported");
@@ -468,14 +468,9 @@ impl Conv2d {
     }
 
     /// The same convolution followed by a ReLU, computed in the same pass.
-    pub fn with_relu(mut self) -> Self {
+    pub(crate) fn with_relu(mut self) -> Self {
         self.relu = true;
         self
-    }
-
-    /// The weight `[O, C, k, k]`.
-    pub fn weight(&self) -> &Tensor {
-        &self.weight
     }
 }
 

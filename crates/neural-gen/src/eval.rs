@@ -5,8 +5,8 @@ use brush_model::Press;
 use rayon::prelude::*;
 use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
 
-use crate::NeuralGenError;
 use crate::model::Generator;
+use crate::{ConfigError, NeuralGenError};
 
 /// Held-out presses: drawn with a seed training never uses.
 pub const HELD_OUT_SEED: u64 = 0x0048_454c_444f_5554;
@@ -19,10 +19,7 @@ pub const HELD_OUT_SEED: u64 = 0x0048_454c_444f_5554;
 /// inference, or when the generator's output is not finite.
 pub fn evaluate(g: &Generator, n: usize) -> Result<(Summary, Summary), NeuralGenError> {
     if n == 0 {
-        return Err(NeuralGenError::Config {
-            source_name: "evaluation".into(),
-            message: "no held-out presses (n = 0): nothing to measure".into(),
-        });
+        return Err(NeuralGenError::Config { source_name: "evaluation".into(), problem: ConfigError::NoPresses });
     }
     let s = g.config.size;
     let spec = DatasetSpec {

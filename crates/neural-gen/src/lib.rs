@@ -3,20 +3,20 @@
 //! The B-BSMG generator: a small differentiable network (candle) from a press `(h, α, β)` to
 //! its footprint image, trained on the analytic B-BSM rendered on the fly by bezier-raster.
 //!
-//! * [`config`]: architecture, normalisation (the profile's calibrated ranges), canvas, recipe,
-//!   metrics: the JSON saved beside the weights.
-//! * [`model`]: [`Generator`]: forward pass, batched rendering in the `maobi stroke` canvas
-//!   convention, the vector–Jacobian product with respect to `(h, α, β)`, safetensors
-//!   checkpoints with consistency checks.
-//! * [`mod@train`]: AdamW on MSE, warm-up + cosine schedule, validation grid, early stopping.
-//! * [`compose`]: a whole track rendered with the generator (batched along the track).
-//! * [`eval`]: CSIM/SSIM of the generator against the analytic footprints.
-//! * [`adam`]: a fused AdamW (one in-place pass per variable).
-//! * [`conv`]: a faster CPU convolution for candle (direct, with bias and ReLU fused in, forward
-//!   and backward) and a pixel shuffle with a direct backward.
-//! * [`vjp`]: batched images and input VJPs without autograd ([`InputVjp`],
-//!   [`Generator::images_and_vjps`]), for track refinement.
-//! * [`ltp`]: the LearningToPaint-sized renderer network, kept as a speed reference.
+//! * Configuration ([`GeneratorConfig`], [`Arch`]): architecture, normalisation (the
+//!   profile's calibrated ranges), canvas, recipe, metrics: the JSON saved beside the weights.
+//! * [`Generator`]: forward pass and batched rendering on the crate's direct kernels (the
+//!   `maobi stroke` canvas convention), the candle graph for autograd checks, the vector–Jacobian
+//!   product with respect to `(h, α, β)`, safetensors checkpoints with consistency checks.
+//! * [`train()`]: AdamW on MSE on the direct kernels, warm-up + cosine schedule, validation
+//!   grid, early stopping.
+//! * [`render_track`]: a whole track rendered with the generator (batched along the track).
+//! * [`evaluate`]: CSIM/SSIM of the generator against the analytic footprints.
+//! * [`InputVjp`]: batched images, input VJPs and Jacobians without autograd, for track
+//!   refinement (and what [`Generator::forward`] runs on).
+//!
+//! Errors are [`NeuralGenError`]; what is wrong with a config or checkpoint is a typed
+//! [`ConfigError`] (an inconsistent architecture an [`ArchError`]).
 
 // The crates whose types this crate's API takes or returns, so that a project depending on
 // this crate alone can name them (`neural_gen::brush_model::Press`).
@@ -30,26 +30,38 @@ pub use stroke_metrics;
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
-pub mod adam;
-pub mod compose;
-pub mod config;
-pub mod conv;
-pub mod eval;
-// Kept for the speed comparison with PyTorch (benches/ltp.rs, examples/ltp_speed.rs) only: not
-// part of the API a downstream crate should use.
+mod adam;
+mod compose;
+mod config;
+mod conv;
+#[cfg(test)]
+mod conv_tests;
+mod direct;
+mod eval;
 mod kernels;
-#[doc(hidden)]
-pub mod ltp;
-pub mod model;
-pub mod train;
-pub mod vjp;
+mod ltp;
+mod model;
+mod train;
+mod vjp;
 
 use thiserror::Error;
 
-pub use config::{Arch, GeneratorConfig, Metrics, Recipe};
-pub use model::Generator;
+pub use compose::render_track;
+pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
+pub use eval::{HELD_OUT_SEED, evaluate};
+pub use model::{Generator, config_path};
 pub use train::{TrainOptions, TrainPoint, TrainReport, train};
 pub use vjp::{InputVjp, Tape};
+
+// The LearningToPaint-sized network, kept for the speed comparison with PyTorch
+// (benches/ltp.rs, examples/ltp_speed.rs) only: not part of the API a downstream crate should
+// use.
+#[doc(hidden)]
+pub use direct::DirectTrainer;
+#[doc(hidden)]
+pub use ltp::{Kernels as LtpKernels, Ltp};
+#[doc(hidden)]
+pub use train::NetworkStep;
 
 /// Errors of neural-gen.
 #[derive(Debug, Error)]
@@ -74,13 +86,15 @@ pub enum NeuralGenError {
         #[source]
         source: candle_core::Error,
     },
-    /// A config or checkpoint is malformed or does not match.
-    #[error("{source_name}: {message}")]
+    /// A config or checkpoint is malformed or does not match, or the brush profile refuses a
+    /// press.
+    #[error("{source_name}")]
     Config {
         /// File or part.
         source_name: String,
         /// What is wrong.
-        message: String,
+        #[source]
+        problem: ConfigError,
     },
     /// A buffer has the wrong size.
     #[error("{0}")]
@@ -88,4 +102,90 @@ pub enum NeuralGenError {
     /// An error inside candle.
     #[error("candle")]
     Candle(#[from] candle_core::Error),
+}
+
+/// What is wrong with a generator's config, checkpoint, options or profile: the cause of
+/// [`NeuralGenError::Config`].
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ConfigError {
+    /// The config is not valid JSON for a [`GeneratorConfig`].
+    #[error("not a generator config")]
+    Json(#[source] serde_json::Error),
+    /// The config's format version is not the one this build reads.
+    #[error("version {found} (this build reads {supported})")]
+    Version {
+        /// The file's version.
+        found: u32,
+        /// [`CONFIG_VERSION`].
+        supported: u32,
+    },
+    /// The image size does not match the architecture.
+    #[error("size {size} does not match the architecture's output {output}")]
+    Size {
+        /// The config's size, px.
+        size: u32,
+        /// The architecture's output side, px.
+        output: usize,
+    },
+    /// The architecture is inconsistent or too large.
+    #[error("inconsistent architecture")]
+    Arch(#[source] ArchError),
+    /// The brush profile is invalid or refuses a press.
+    #[error("brush profile")]
+    Profile(#[source] brush_model::ProfileError),
+    /// The canvas scale is out of range.
+    #[error("px_per_mm {px_per_mm}: expected a scale above 0 and at most 10000 px/mm")]
+    Scale {
+        /// The config's scale, px/mm.
+        px_per_mm: f64,
+    },
+    /// The weights are not a safetensors file.
+    #[error("not a readable safetensors file")]
+    Safetensors(#[source] candle_core::Error),
+    /// The weights hold another number of tensors than the architecture.
+    #[error("{found} tensors, the architecture has {expected}")]
+    TensorCount {
+        /// Tensors in the file.
+        found: usize,
+        /// Tensors of the architecture.
+        expected: usize,
+    },
+    /// A tensor the architecture names is missing.
+    #[error("tensor `{name}` missing")]
+    MissingTensor {
+        /// The tensor's name.
+        name: String,
+    },
+    /// A tensor has the wrong shape.
+    #[error("tensor `{name}` has shape {found:?}, the architecture needs {expected:?}")]
+    TensorShape {
+        /// The tensor's name.
+        name: String,
+        /// Its shape in the file.
+        found: Vec<usize>,
+        /// The shape the architecture needs.
+        expected: Vec<usize>,
+    },
+    /// A tensor holds NaN or infinite values.
+    #[error("tensor `{name}` holds NaN or infinite weights")]
+    NonFinite {
+        /// The tensor's name.
+        name: String,
+    },
+    /// Training options out of range.
+    #[error("steps {steps}, batch {batch}, val_every {val_every} must be at least 1 and lr {lr} positive")]
+    TrainOptions {
+        /// Steps.
+        steps: usize,
+        /// Batch size.
+        batch: usize,
+        /// Validation period, steps.
+        val_every: usize,
+        /// Peak learning rate.
+        lr: f64,
+    },
+    /// An evaluation over no presses.
+    #[error("no held-out presses (n = 0): nothing to measure")]
+    NoPresses,
 }

@@ -20,8 +20,7 @@ use crate::conv;
 pub enum Kernels {
     /// Stock candle: `candle_nn::Conv2d` (and its backward) and `candle_nn::AdamW`.
     Candle,
-    /// maobi's: [`crate::conv::Conv2d`] (direct convolution in forward and backward) and
-    /// [`crate::adam::FusedAdamW`].
+    /// maobi's: the crate's direct convolution (forward and backward) and fused AdamW.
     Maobi,
 }
 
@@ -46,6 +45,16 @@ const CONVS: [(usize, usize, bool); 6] =
     [(16, 32, false), (32, 32, true), (8, 16, false), (16, 16, true), (4, 8, false), (8, 4, true)];
 
 impl Ltp {
+    /// Multiply–accumulates per image in a forward pass (fully connected layers and
+    /// convolutions).
+    pub const MACS_PER_IMAGE: usize = 3 * 512
+        + 512 * 1024
+        + 1024 * 2048
+        + 2048 * 4096
+        + 16 * 16 * (16 * 32 + 32 * 32) * 9
+        + 32 * 32 * (8 * 16 + 16 * 16) * 9
+        + 64 * 64 * (4 * 8 + 8 * 4) * 9;
+
     /// A network with candle's default (random) initialisation and Adam at learning rate `lr`
     /// (candle's AdamW with weight decay 0).
     ///

@@ -1,6 +1,8 @@
 //! The generator network, its checkpoints, inference and gradients.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use bezier_raster::Coverage;
 use brush_model::Press;
@@ -9,19 +11,28 @@ use candle_nn::{Conv2dConfig, Linear, VarBuilder, VarMap};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::NeuralGenError;
 use crate::config::{CONFIG_VERSION, GeneratorConfig};
 use crate::conv::{self, Conv2d};
+use crate::vjp::InputVjp;
+use crate::{ConfigError, NeuralGenError};
 
 /// A generator: the network and its configuration.
+///
+/// Inference ([`Generator::forward`], [`Generator::render`]) runs on the crate's direct
+/// kernels (the network of [`InputVjp`], built from the weights on first use), and so does
+/// training ([`crate::train()`]); the candle graph ([`Generator::forward_autograd`]) is there
+/// for checks against candle's autograd.
 pub struct Generator {
     /// Configuration (architecture, normalisation, brush, canvas).
     pub config: GeneratorConfig,
-    /// The trainable variables.
-    pub varmap: VarMap,
+    /// The trainable variables. Private: inference caches a copy of them ([`Generator::kernels`]),
+    /// so every change goes through this crate (training, loading), which drops the copy.
+    pub(crate) varmap: VarMap,
     fcs: Vec<Linear>,
     convs: Vec<Conv2d>,
     device: Device,
+    /// The weights on the direct kernels, built on first use, dropped when they change.
+    kernels: OnceLock<InputVjp>,
 }
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
@@ -35,15 +46,15 @@ impl Generator {
     /// # Errors
     /// [`NeuralGenError::Config`] for an inconsistent architecture.
     pub fn new(config: GeneratorConfig, seed: u64) -> Result<Self, NeuralGenError> {
-        config
-            .arch
-            .validate()
-            .map_err(|m| NeuralGenError::Config { source_name: "architecture".into(), message: m })?;
+        config.arch.validate().map_err(|e| NeuralGenError::Config {
+            source_name: "architecture".into(),
+            problem: ConfigError::Arch(e),
+        })?;
         let device = Device::Cpu;
         let varmap = VarMap::new();
         let vb = VarBuilder::from_varmap(&varmap, DType::F32, &device);
         let (fcs, convs) = build(&config, &vb).map_err(cerr)?;
-        let g = Generator { config, varmap, fcs, convs, device };
+        let g = Generator { config, varmap, fcs, convs, device, kernels: OnceLock::new() };
         g.init(seed)?;
         Ok(g)
     }
@@ -74,11 +85,62 @@ impl Generator {
         &self.device
     }
 
-    /// Forward pass on normalised inputs `[B, 3]` → images `[B, 1, S, S]` in [0, 1].
+    /// The trainable tensors by name (`fc0.weight`, `conv2.bias`, …), copies: for inspection
+    /// and comparison; changes go through [`crate::train()`] or [`Generator::load`].
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`].
+    pub fn weights(&self) -> Result<BTreeMap<String, Tensor>, NeuralGenError> {
+        let data = self.varmap.data().lock().expect("varmap");
+        data.iter().map(|(k, v)| Ok((k.clone(), v.as_tensor().copy().map_err(cerr)?))).collect()
+    }
+
+    /// The network on the direct kernels (weights copied on first use, kept until the weights
+    /// change): what [`Generator::forward`] and [`Generator::render`] run on.
+    ///
+    /// # Errors
+    /// As [`InputVjp::new`].
+    pub fn kernels(&self) -> Result<&InputVjp, NeuralGenError> {
+        if let Some(k) = self.kernels.get() {
+            return Ok(k);
+        }
+        let built = InputVjp::new(self)?;
+        // Another thread may have built it meanwhile: the same weights, either copy will do.
+        let _ = self.kernels.set(built);
+        Ok(self.kernels.get().expect("just set"))
+    }
+
+    /// Drops the kernels' copy of the weights (after the weights changed).
+    pub(crate) fn weights_changed(&mut self) {
+        self.kernels.take();
+    }
+
+    /// Forward pass on normalised inputs `[B, 3]` → images `[B, 1, S, S]` in [0, 1], on the
+    /// direct kernels ([`Generator::kernels`]): deterministic, the same bits for any batch
+    /// size and thread count, and no autograd graph (for gradients with respect to the
+    /// weights use [`Generator::forward_autograd`]).
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when `x` is not `[B, 3]`; [`NeuralGenError::Candle`].
+    pub fn forward(&self, x: &Tensor) -> Result<Tensor, NeuralGenError> {
+        let b = match x.dims() {
+            &[b, 3] => b,
+            d => return Err(NeuralGenError::Shape(format!("generator input of shape {d:?}, expected [batch, 3]"))),
+        };
+        let v: Vec<f32> =
+            x.flatten_all().and_then(|t| t.to_dtype(DType::F32)).and_then(|t| t.to_vec1()).map_err(cerr)?;
+        let s = self.config.size as usize;
+        let y = self.kernels()?.images_normalised(&v);
+        Tensor::from_vec(y, (b, 1, s, s), &self.device).map_err(cerr)
+    }
+
+    /// The same forward pass as [`Generator::forward`] as a candle graph (autograd through the
+    /// weights and the input): for checking the direct kernels against autograd. Equal to
+    /// [`Generator::forward`] within floating-point rounding.
     ///
     /// # Errors
     /// [`NeuralGenError::Candle`] on shape errors.
-    pub fn forward(&self, x: &Tensor) -> Result<Tensor, NeuralGenError> {
+    pub fn forward_autograd(&self, x: &Tensor) -> Result<Tensor, NeuralGenError> {
         self.forward_inner(x).map_err(cerr)
     }
 
@@ -110,7 +172,9 @@ impl Generator {
     }
 
     /// Footprint images for a batch of presses (the `maobi stroke` canvas convention: same scale,
-    /// footprint centred).
+    /// footprint centred), on the direct kernels as [`Generator::forward`]: the convolutions of
+    /// the images run in parallel (rayon), the bits do not depend on the batch or the thread
+    /// count.
     ///
     /// # Errors
     /// [`NeuralGenError::Candle`].
@@ -118,9 +182,9 @@ impl Generator {
         if presses.is_empty() {
             return Ok(Vec::new());
         }
-        let y = self.forward(&self.inputs(presses)?)?;
+        let x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
+        let flat = self.kernels()?.images_normalised(&x);
         let s = self.config.size;
-        let flat: Vec<f32> = y.flatten_all().and_then(|t| t.to_vec1()).map_err(cerr)?;
         Ok(flat.chunks((s * s) as usize).map(|c| Coverage::from_vec(s, s, c.to_vec()).expect("sized")).collect())
     }
 
@@ -141,7 +205,7 @@ impl Generator {
             )));
         }
         let x = Var::from_tensor(&self.inputs(std::slice::from_ref(press))?).map_err(cerr)?;
-        let y = self.forward(x.as_tensor())?;
+        let y = self.forward_autograd(x.as_tensor())?;
         let w = Tensor::from_vec(upstream.to_vec(), (1, 1, s, s), &self.device).map_err(cerr)?;
         let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
         let grads = l.backward().map_err(cerr)?;
@@ -222,64 +286,36 @@ impl Generator {
     ) -> Result<Self, NeuralGenError> {
         let name = config_name.to_string();
         let text = config_json;
-        let config: GeneratorConfig = serde_json::from_str(text)
-            .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
+        let bad = |problem| NeuralGenError::Config { source_name: name.clone(), problem };
+        let config: GeneratorConfig = serde_json::from_str(text).map_err(|e| bad(ConfigError::Json(e)))?;
         if config.version != CONFIG_VERSION {
-            return Err(NeuralGenError::Config {
-                source_name: name,
-                message: format!("version {} (this build reads {CONFIG_VERSION})", config.version),
-            });
+            return Err(bad(ConfigError::Version { found: config.version, supported: CONFIG_VERSION }));
         }
         if config.arch.output_side() as u32 != config.size {
-            return Err(NeuralGenError::Config {
-                source_name: name,
-                message: format!(
-                    "size {} does not match the architecture's output {}",
-                    config.size,
-                    config.arch.output_side()
-                ),
-            });
+            return Err(bad(ConfigError::Size { size: config.size, output: config.arch.output_side() }));
         }
-        config
-            .profile
-            .validate(&name)
-            .map_err(|e| NeuralGenError::Config { source_name: name.clone(), message: e.to_string() })?;
-        config.arch.validate().map_err(|m| NeuralGenError::Config { source_name: name.clone(), message: m })?;
+        config.profile.validate(&name).map_err(|e| bad(ConfigError::Profile(e)))?;
+        config.arch.validate().map_err(|e| bad(ConfigError::Arch(e)))?;
         if !(config.px_per_mm.is_finite() && config.px_per_mm > 0.0 && config.px_per_mm <= 1e4) {
-            return Err(NeuralGenError::Config {
-                source_name: name,
-                message: format!("px_per_mm {}: expected a scale above 0 and at most 10000 px/mm", config.px_per_mm),
-            });
+            return Err(bad(ConfigError::Scale { px_per_mm: config.px_per_mm }));
         }
         let g = Generator::new(config, 0)?;
-        let wname = weights_name.to_string();
+        let bad = |problem| NeuralGenError::Config { source_name: weights_name.to_string(), problem };
         let tensors =
-            candle_core::safetensors::load_buffer(weights, &g.device).map_err(|e| NeuralGenError::Config {
-                source_name: wname.clone(),
-                message: format!("not a readable safetensors file: {e}"),
-            })?;
+            candle_core::safetensors::load_buffer(weights, &g.device).map_err(|e| bad(ConfigError::Safetensors(e)))?;
         {
             let data = g.varmap.data().lock().expect("varmap");
             if tensors.len() != data.len() {
-                return Err(NeuralGenError::Config {
-                    source_name: wname,
-                    message: format!("{} tensors, the architecture has {}", tensors.len(), data.len()),
-                });
+                return Err(bad(ConfigError::TensorCount { found: tensors.len(), expected: data.len() }));
             }
             for (k, var) in data.iter() {
-                let t = tensors.get(k).ok_or_else(|| NeuralGenError::Config {
-                    source_name: wname.clone(),
-                    message: format!("tensor `{k}` missing"),
-                })?;
+                let t = tensors.get(k).ok_or_else(|| bad(ConfigError::MissingTensor { name: k.clone() }))?;
                 if t.shape() != var.shape() {
-                    return Err(NeuralGenError::Config {
-                        source_name: wname.clone(),
-                        message: format!(
-                            "tensor `{k}` has shape {:?}, the architecture needs {:?}",
-                            t.dims(),
-                            var.dims()
-                        ),
-                    });
+                    return Err(bad(ConfigError::TensorShape {
+                        name: k.clone(),
+                        found: t.dims().to_vec(),
+                        expected: var.dims().to_vec(),
+                    }));
                 }
                 // NaN or infinite weights draw blank images and SSIM of ±inf: refuse them.
                 let finite = t
@@ -290,10 +326,7 @@ impl Generator {
                     .iter()
                     .all(|v| v.is_finite());
                 if !finite {
-                    return Err(NeuralGenError::Config {
-                        source_name: wname.clone(),
-                        message: format!("tensor `{k}` holds NaN or infinite weights"),
-                    });
+                    return Err(bad(ConfigError::NonFinite { name: k.clone() }));
                 }
                 var.set(t).map_err(cerr)?;
             }

@@ -9,11 +9,12 @@ use candle_core::Tensor;
 use candle_nn::{Optimizer, ParamsAdamW};
 
 use crate::adam::FusedAdamW;
+use crate::direct::DirectTrainer;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::NeuralGenError;
 use crate::model::Generator;
+use crate::{ConfigError, NeuralGenError};
 
 fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e)
@@ -77,7 +78,7 @@ pub struct TrainReport {
 }
 
 /// The fixed validation grid: h at 6 levels, α at 4, β at 2 (48 presses), inside the ranges.
-pub fn validation_presses(g: &Generator) -> Vec<Press> {
+pub(crate) fn validation_presses(g: &Generator) -> Vec<Press> {
     let r = &g.config.ranges;
     let mut v = Vec::new();
     for i in 0..6 {
@@ -95,11 +96,11 @@ pub fn validation_presses(g: &Generator) -> Vec<Press> {
 }
 
 /// Renders the analytic B-BSM targets of presses in the generator's canvas convention, in
-/// parallel, as `[B, 1, S, S]`.
+/// parallel: `B × S²` values, image after image.
 ///
 /// # Errors
 /// [`NeuralGenError`] if the profile refuses a press.
-pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenError> {
+pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Vec<f32>, NeuralGenError> {
     let s = g.config.size;
     let canvas = StrokeCanvas::with_scale(s, g.config.px_per_mm);
     let profile = &g.config.profile;
@@ -108,16 +109,51 @@ pub fn targets(g: &Generator, presses: &[Press]) -> Result<Tensor, NeuralGenErro
         .map_init(
             || (Rasterizer::new(), Coverage::new(s, s)),
             |(r, img), p| -> Result<Vec<f32>, NeuralGenError> {
-                let fp = profile
-                    .predict(p, brush_model::Extrapolation::Allow)
-                    .map_err(|e| NeuralGenError::Config { source_name: "profile".into(), message: e.to_string() })?;
+                let fp = profile.predict(p, brush_model::Extrapolation::Allow).map_err(|e| NeuralGenError::Config {
+                    source_name: "profile".into(),
+                    problem: ConfigError::Profile(e),
+                })?;
                 r.render(&Bsm, &fp, canvas.anchor_mm(&fp, p.beta_rad), p.beta_rad, canvas.px_per_mm, img);
                 Ok(img.data().to_vec())
             },
         )
         .collect::<Result<_, _>>()?;
-    let flat: Vec<f32> = imgs.into_iter().flatten().collect();
-    Tensor::from_vec(flat, (presses.len(), 1, s as usize, s as usize), g.device()).map_err(cerr)
+    Ok(imgs.into_iter().flatten().collect())
+}
+
+/// One optimiser step of the network alone through candle's graph (forward, MSE, backward,
+/// fused AdamW with weight decay 0): what [`train()`] ran before the direct kernels
+/// ([`crate::DirectTrainer`]), kept as their reference in tests and benchmarks; public for the
+/// benchmarks.
+#[doc(hidden)]
+pub struct NetworkStep {
+    opt: FusedAdamW,
+}
+
+impl NetworkStep {
+    /// The optimiser over `g`'s weights at learning rate `lr`.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`].
+    pub fn new(g: &Generator, lr: f64) -> Result<Self, NeuralGenError> {
+        let opt = FusedAdamW::new(g.varmap.all_vars(), ParamsAdamW { lr, weight_decay: 0.0, ..Default::default() })
+            .map_err(cerr)?;
+        Ok(Self { opt })
+    }
+
+    /// One step on inputs `x` `[B, 3]` against targets `y` `[B, 1, S, S]` at learning rate
+    /// `lr`; returns the MSE before the step.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`] (shapes).
+    pub fn step(&mut self, g: &mut Generator, x: &Tensor, y: &Tensor, lr: f64) -> Result<f64, NeuralGenError> {
+        self.opt.set_learning_rate(lr);
+        let out = g.forward_autograd(x)?;
+        let loss = (out - y).and_then(|d| d.sqr()).and_then(|d| d.mean_all()).map_err(cerr)?;
+        self.opt.backward_step(&loss).map_err(cerr)?;
+        g.weights_changed();
+        Ok(loss.to_scalar::<f32>().map_err(cerr)? as f64)
+    }
 }
 
 fn lr_at(step: usize, total: usize, peak: f64) -> f64 {
@@ -144,56 +180,50 @@ pub fn train(
     if opts.steps == 0 || opts.batch == 0 || opts.val_every == 0 || !(opts.lr.is_finite() && opts.lr > 0.0) {
         return Err(NeuralGenError::Config {
             source_name: "training options".into(),
-            message: format!(
-                "steps {}, batch {}, val_every {} must be at least 1 and lr {} positive",
-                opts.steps, opts.batch, opts.val_every, opts.lr
-            ),
+            problem: ConfigError::TrainOptions {
+                steps: opts.steps,
+                batch: opts.batch,
+                val_every: opts.val_every,
+                lr: opts.lr,
+            },
         });
     }
     let t0 = Instant::now();
+    g.weights_changed();
     let spec = DatasetSpec {
         profile: g.config.profile.clone(),
         canvas: StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm),
         seed: opts.seed,
     };
     let val_p = validation_presses(g);
-    let (val_x, val_y) = (g.inputs(&val_p)?, targets(g, &val_p)?);
-    let mut opt =
-        FusedAdamW::new(g.varmap.all_vars(), ParamsAdamW { lr: opts.lr, weight_decay: 0.0, ..Default::default() })
-            .map_err(cerr)?;
+    let cfg = g.config.clone();
+    let normalised = |ps: &[Press]| -> Vec<f32> { ps.iter().flat_map(|p| cfg.normalise(p)).collect() };
+    let (val_x, val_y) = (normalised(&val_p), targets(g, &val_p)?);
+    let mut net = DirectTrainer::new(g)?;
     let mut history = Vec::with_capacity(opts.steps);
     let (mut best, mut best_step, mut since) = (f64::INFINITY, 0, 0);
-    let mut best_weights: Option<Vec<(String, Tensor)>> = None;
+    let mut best_weights: Option<Vec<Vec<f32>>> = None;
     let mut data_seconds = 0.0;
     let mut stopped_early = false;
     for step in 0..opts.steps {
         let lr = lr_at(step, opts.steps, opts.lr);
-        opt.set_learning_rate(lr);
         let td = Instant::now();
         let presses: Vec<Press> = (0..opts.batch).map(|i| spec.press((step * opts.batch + i) as u64)).collect();
-        let (x, y) = (g.inputs(&presses)?, targets(g, &presses)?);
+        let (x, y) = (normalised(&presses), targets(g, &presses)?);
         data_seconds += td.elapsed().as_secs_f64();
-        let out = g.forward(&x)?;
-        let loss = (out - &y).and_then(|d| d.sqr()).and_then(|d| d.mean_all()).map_err(cerr)?;
-        opt.backward_step(&loss).map_err(cerr)?;
-        let train_mse = loss.to_scalar::<f32>().map_err(cerr)? as f64;
+        let train_mse = net.step(&x, &y, lr)?;
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
-            let v = (g.forward(&val_x)? - &val_y)
-                .and_then(|d| d.sqr())
-                .and_then(|d| d.mean_all())
-                .and_then(|d| d.to_scalar::<f32>())
-                .map_err(cerr)? as f64;
+            let imgs = net.kernels().images_normalised(&val_x);
+            let v = imgs.iter().zip(&val_y).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / val_y.len() as f64;
             point.val_mse = Some(v);
             if v < best * 0.999 {
                 best = v;
                 best_step = step + 1;
                 since = 0;
-                let data = g.varmap.data().lock().expect("varmap");
-                best_weights =
-                    Some(data.iter().map(|(k, var)| (k.clone(), var.as_tensor().copy().expect("copy"))).collect());
-                drop(data);
+                best_weights = Some(net.snapshot());
                 if let Some(p) = &opts.checkpoint {
+                    net.write_back(g)?;
                     g.save(p)?;
                 }
             } else {
@@ -208,11 +238,9 @@ pub fn train(
         }
     }
     if let Some(w) = best_weights {
-        let data = g.varmap.data().lock().expect("varmap");
-        for (k, t) in w {
-            data[&k].set(&t).map_err(cerr)?;
-        }
+        net.restore(w)?;
     }
+    net.write_back(g)?;
     Ok(TrainReport {
         steps_run: history.len(),
         history,

@@ -17,7 +17,7 @@
 //!
 //! Every image is computed independently of the others in its batch, every sum in a fixed
 //! order of fused multiply–adds, so the results do not depend on the batch size, the thread
-//! count or the vector width. The training path ([`crate::conv::Conv2d`]) keeps its own kernels.
+//! count or the vector width. Training ([`crate::DirectTrainer`]) runs on the same kernels.
 //! Tested against candle's autograd ([`crate::Generator::image_and_vjp`]) and against finite
 //! differences.
 
@@ -32,25 +32,25 @@ use crate::kernels::{Conv3, Dense, Isa, padded_len};
 use crate::model::Generator;
 
 /// One fully connected layer `y = W·x + b`.
-struct Fc {
+pub(crate) struct Fc {
     /// `· Wᵀ`: the forward products (`x` `[batch, in]`).
-    fwd: Dense,
+    pub(crate) fwd: Dense,
     /// `· W`: the backward product (`g` `[batch, out]`).
-    bwd: Dense,
-    b: Vec<f32>,
-    out: usize,
+    pub(crate) bwd: Dense,
+    pub(crate) b: Vec<f32>,
+    pub(crate) out: usize,
 }
 
 /// One 3×3 convolution stage (padding 1), followed by a ×2 pixel shuffle.
-struct Stage {
+pub(crate) struct Stage {
     fwd: Conv3,
     /// The flipped, transposed kernel: the correlation that gives the input gradient.
     bwd: Conv3,
     b: Vec<f32>,
-    cin: usize,
-    cout: usize,
+    pub(crate) cin: usize,
+    pub(crate) cout: usize,
     /// Side of the stage's input (and of its convolution's output), px.
-    n: usize,
+    pub(crate) n: usize,
     /// Offset of the ReLU mask of the stage's input in an image's masks on a [`Tape`] (the
     /// first stage's input, the seed map, has none).
     moff: usize,
@@ -59,16 +59,16 @@ struct Stage {
 /// The generator's network on plain buffers, for batched images and input VJPs (see the
 /// module doc). Build it once per generator with [`InputVjp::new`].
 pub struct InputVjp {
-    fcs: Vec<Fc>,
-    stages: Vec<Stage>,
+    pub(crate) fcs: Vec<Fc>,
+    pub(crate) stages: Vec<Stage>,
     /// Values per image of the stages' padded inputs (forward scratch).
-    per_image: usize,
+    pub(crate) per_image: usize,
     /// Mask bytes per image on a [`Tape`].
-    masks_per_image: usize,
+    pub(crate) masks_per_image: usize,
     size: usize,
     slopes: [f64; 3],
     config: crate::GeneratorConfig,
-    isa: Isa,
+    pub(crate) isa: Isa,
 }
 
 /// What a forward pass keeps for its backward pass: the ReLU masks of every layer but the last
@@ -183,16 +183,24 @@ impl InputVjp {
     /// [`NeuralGenError::Config`] when a tensor the architecture names is missing;
     /// [`NeuralGenError::Candle`].
     pub fn new(g: &Generator) -> Result<Self, NeuralGenError> {
-        let a = &g.config.arch;
-        let isa = Isa::detect();
         let data = g.varmap.data().lock().expect("varmap");
-        let get = |name: String| -> Result<Vec<f32>, NeuralGenError> {
+        Self::from_weights(&g.config, |name: String| -> Result<Vec<f32>, NeuralGenError> {
             let v = data.get(&name).ok_or_else(|| NeuralGenError::Config {
                 source_name: "generator".into(),
-                message: format!("tensor `{name}` missing"),
+                problem: crate::ConfigError::MissingTensor { name: name.clone() },
             })?;
             tensor_vec(v.as_tensor())
-        };
+        })
+    }
+
+    /// The network of `config` with the weights `get(name)` returns (`fc0.weight`, …, as
+    /// candle names and lays them out).
+    pub(crate) fn from_weights(
+        config: &crate::GeneratorConfig,
+        get: impl Fn(String) -> Result<Vec<f32>, NeuralGenError>,
+    ) -> Result<Self, NeuralGenError> {
+        let a = &config.arch;
+        let isa = Isa::detect();
         let mut fcs = Vec::new();
         let mut inp = 3;
         let widths: Vec<usize> =
@@ -239,9 +247,9 @@ impl InputVjp {
             per_image,
             // At least one byte, so that the per-image chunks of a tape are never empty.
             masks_per_image: moff.max(1),
-            size: g.config.size as usize,
-            slopes: g.config.normalise_slopes(),
-            config: g.config.clone(),
+            size: config.size as usize,
+            slopes: config.normalise_slopes(),
+            config: config.clone(),
             isa,
         })
     }
@@ -252,7 +260,7 @@ impl InputVjp {
     }
 
     /// Values of the seed map (the last fully connected layer's output) per image.
-    fn seed_len(&self) -> usize {
+    pub(crate) fn seed_len(&self) -> usize {
         let s = &self.stages[0];
         s.cin * s.n * s.n
     }
@@ -263,18 +271,7 @@ impl InputVjp {
     pub fn forward(&self, presses: &[Press]) -> Tape {
         let b = presses.len();
         let x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
-        let mut hidden: Vec<Vec<f32>> = Vec::new();
-        let mut seed = Vec::new();
-        for (li, fc) in self.fcs.iter().enumerate() {
-            let input = if li == 0 { &x } else { &hidden[li - 1] };
-            let mut y = fc.fwd.apply(input, Some(&fc.b));
-            if li + 1 < self.fcs.len() {
-                y.iter_mut().for_each(|v| *v = v.max(0.0));
-                hidden.push(y);
-            } else {
-                seed = y;
-            }
-        }
+        let (hidden, seed) = self.dense_forward(&x);
         let ss = self.size * self.size;
         let mut masks = vec![0u8; b * self.masks_per_image];
         let mut images = vec![0f32; b * ss];
@@ -286,6 +283,51 @@ impl InputVjp {
             },
         );
         Tape { batch: b, hidden, masks, images }
+    }
+
+    /// The fully connected layers on the whole batch of normalised inputs `x` (`[batch, 3]`):
+    /// the outputs of every layer but the last (after the ReLU) and the seed maps.
+    pub(crate) fn dense_forward(&self, x: &[f32]) -> (Vec<Vec<f32>>, Vec<f32>) {
+        let mut hidden: Vec<Vec<f32>> = Vec::new();
+        let mut seed = Vec::new();
+        for (li, fc) in self.fcs.iter().enumerate() {
+            let input = if li == 0 { x } else { &hidden[li - 1] };
+            let mut y = fc.fwd.apply(input, Some(&fc.b));
+            if li + 1 < self.fcs.len() {
+                y.iter_mut().for_each(|v| *v = v.max(0.0));
+                hidden.push(y);
+            } else {
+                seed = y;
+            }
+        }
+        (hidden, seed)
+    }
+
+    /// Images for a batch of normalised inputs `x` (`[batch, 3]`, as
+    /// [`crate::GeneratorConfig::normalise`] makes them): `batch × size²` values in [0, 1],
+    /// image after image. Inference only: the same numbers as [`InputVjp::forward`]'s images,
+    /// without keeping a tape. The fully connected layers run on the whole batch, the
+    /// convolutions image by image in parallel; the bits do not depend on the batch or the
+    /// thread count.
+    ///
+    /// # Panics
+    /// When `x.len()` is not a multiple of 3.
+    pub(crate) fn images_normalised(&self, x: &[f32]) -> Vec<f32> {
+        assert_eq!(x.len() % 3, 0, "inputs come in threes");
+        let b = x.len() / 3;
+        let ss = self.size * self.size;
+        let mut images = vec![0f32; b * ss];
+        if b == 0 {
+            return images;
+        }
+        let (_, seed) = self.dense_forward(x);
+        images.par_chunks_mut(ss).zip(seed.par_chunks(self.seed_len())).for_each_init(
+            || (vec![0f32; self.per_image], Vec::new(), vec![0u8; self.masks_per_image]),
+            |(buf, acc, masks), (img, sd)| {
+                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks, buf, acc })
+            },
+        );
+        images
     }
 
     /// The convolution stages of one image, from its seed map: the image into `img`, the ReLU
@@ -555,13 +597,13 @@ impl InputVjp {
 
 /// [`InputVjp::forward_image`] on the detected vectors (a struct, not a closure, so that the
 /// method is inlined where the target features are enabled).
-struct ForwardImage<'a> {
-    net: &'a InputVjp,
-    seed: &'a [f32],
-    img: &'a mut [f32],
-    masks: &'a mut [u8],
-    buf: &'a mut [f32],
-    acc: &'a mut Vec<f32>,
+pub(crate) struct ForwardImage<'a> {
+    pub(crate) net: &'a InputVjp,
+    pub(crate) seed: &'a [f32],
+    pub(crate) img: &'a mut [f32],
+    pub(crate) masks: &'a mut [u8],
+    pub(crate) buf: &'a mut [f32],
+    pub(crate) acc: &'a mut Vec<f32>,
 }
 
 impl WithSimd for ForwardImage<'_> {
@@ -592,14 +634,14 @@ impl WithSimd for TangentImage<'_> {
 }
 
 /// [`InputVjp::backward_image`] on the detected vectors.
-struct BackwardImage<'a> {
-    net: &'a InputVjp,
-    gs: &'a mut [f32],
-    up: &'a [f32],
-    img: &'a [f32],
-    masks: &'a [u8],
-    bufs: &'a mut [Vec<f32>],
-    acc: &'a mut Vec<f32>,
+pub(crate) struct BackwardImage<'a> {
+    pub(crate) net: &'a InputVjp,
+    pub(crate) gs: &'a mut [f32],
+    pub(crate) up: &'a [f32],
+    pub(crate) img: &'a [f32],
+    pub(crate) masks: &'a [u8],
+    pub(crate) bufs: &'a mut [Vec<f32>],
+    pub(crate) acc: &'a mut Vec<f32>,
 }
 
 impl WithSimd for BackwardImage<'_> {
@@ -671,7 +713,7 @@ impl Generator {
             return Ok((Vec::new(), Vec::new()));
         }
         let x = candle_core::Var::from_tensor(&self.inputs(presses)?).map_err(cerr)?;
-        let y = self.forward(x.as_tensor())?;
+        let y = self.forward_autograd(x.as_tensor())?;
         let w = Tensor::from_vec(upstream.to_vec(), (b, 1, s, s), self.device()).map_err(cerr)?;
         let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
         let grads = l.backward().map_err(cerr)?;

@@ -465,7 +465,7 @@ pub fn rerender_with_generator(
     for r in results.iter_mut() {
         let b = r.char_box;
         let neural = |t: &Track| {
-            neural_gen::compose::render_track(
+            neural_gen::render_track(
                 g,
                 t,
                 PointMm::new(b.x0_mm, b.y0_mm),

@@ -1,7 +1,7 @@
 //! The generator path ([`crate::Gradients::Generator`], cargo feature `generator`): an image
 //! model (`crate::image::ImageModel`) in which every
 //! footprint's image comes from the B-BSMG generator (neural-gen), placed and rotated onto the
-//! target raster by bilinear resampling (as `neural_gen::compose::render_track` places them),
+//! target raster by bilinear resampling (as `neural_gen::render_track` places them),
 //! and the image term's gradient comes from the network and the image:
 //!
 //! * with respect to `(h, α)` (and β where the generator's β input is not clamped): the network's

@@ -32,13 +32,13 @@ pub fn run(args: Args) -> Result<()> {
     check_range("--n", args.n, 1, 100_000, "presses")?;
     let g = crate::generator::load_generator(args.generator.as_deref())?;
     let t0 = std::time::Instant::now();
-    let (gc, gs) = neural_gen::eval::evaluate(&g, args.n)?;
+    let (gc, gs) = neural_gen::evaluate(&g, args.n)?;
     let secs = t0.elapsed().as_secs_f64();
     let s = g.config.size;
     let spec = DatasetSpec {
         profile: g.config.profile.clone(),
         canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm),
-        seed: neural_gen::eval::HELD_OUT_SEED,
+        seed: neural_gen::HELD_OUT_SEED,
     };
     let rows: Vec<Vec<(f64, f64)>> = (0..args.n as u64)
         .into_par_iter()

@@ -54,7 +54,7 @@ pub fn run(args: Args) -> Result<()> {
     let checkpoint = checkpoint_path(&args.output);
     // The checkpoints are written to these and renamed (neural_gen::Generator::save).
     crate::common::remove_on_interrupt(&checkpoint.with_extension("safetensors.tmp"));
-    crate::common::remove_on_interrupt(&neural_gen::model::config_path(&checkpoint).with_extension("json.tmp"));
+    crate::common::remove_on_interrupt(&neural_gen::config_path(&checkpoint).with_extension("json.tmp"));
     let profile = load_brush(&args.brush.brush)?;
     let mut g = start_generator(&args, profile)?;
     let a = &g.config.arch;
@@ -84,10 +84,10 @@ pub fn run(args: Args) -> Result<()> {
         progress.step(p.step as u64, &format!("loss {:.6}  validation {val}", p.train_mse));
     })?;
     progress.finish();
-    let (csim, ssim) = neural_gen::eval::evaluate(&g, args.eval_n)?;
+    let (csim, ssim) = neural_gen::evaluate(&g, args.eval_n)?;
     record(&mut g, &args, &report, &csim, &ssim);
     let dir = install_outputs(&g, &args.output, &report)?;
-    for p in [checkpoint.clone(), neural_gen::model::config_path(&checkpoint)] {
+    for p in [checkpoint.clone(), neural_gen::config_path(&checkpoint)] {
         let _ = std::fs::remove_file(p);
     }
     crate::outln!(
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     crate::outln!(
         "wrote {} (config beside it: {}), {} and {}",
         args.output.display(),
-        neural_gen::model::config_path(&args.output).display(),
+        neural_gen::config_path(&args.output).display(),
         dir.join("loss.csv").display(),
         dir.join("loss.png").display()
     )?;
@@ -194,7 +194,7 @@ fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainRepor
     let pid = std::process::id();
     let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
     let staged = dir.join(format!(".{stem}.maobi-partial-{pid}.safetensors"));
-    let staged_cfg = neural_gen::model::config_path(&staged);
+    let staged_cfg = neural_gen::config_path(&staged);
     let staged_csv = dir.join(format!(".loss.csv.maobi-partial-{pid}"));
     let staged_png = dir.join(format!(".loss.png.maobi-partial-{pid}"));
     // Removed on Ctrl-C while they live; removed below on any error (a rename moves them away).
@@ -230,7 +230,7 @@ fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainRepor
         // Through symlinks; folders and special files refused before anything moves.
         let targets = [
             (&staged, output_target(output)?),
-            (&staged_cfg, output_target(&neural_gen::model::config_path(output))?),
+            (&staged_cfg, output_target(&neural_gen::config_path(output))?),
             (&staged_csv, output_target(&dir.join("loss.csv"))?),
             (&staged_png, output_target(&dir.join("loss.png"))?),
         ];

@@ -1,8 +1,8 @@
 //! The fast convolution and pixel shuffle agree with candle's own kernels in value and in every
 //! gradient; the fused AdamW follows candle's AdamW.
 
+use crate::conv::{Conv2d, pixel_shuffle};
 use candle_core::{D, DType, Device, Module, Tensor, Var};
-use neural_gen::conv::{Conv2d, pixel_shuffle};
 
 fn random(shape: &[usize], seed: u64) -> Tensor {
     // A small deterministic generator: values in [-1, 1).
@@ -105,8 +105,8 @@ fn bad_shapes_are_errors_not_panics() {
 
 #[test]
 fn fused_adamw_follows_candle_adamw() {
+    use crate::adam::FusedAdamW;
     use candle_nn::{AdamW, Optimizer, ParamsAdamW};
-    use neural_gen::adam::FusedAdamW;
     let params = ParamsAdamW { lr: 0.01, weight_decay: 0.1, ..Default::default() };
     let start = random(&[3, 40_000], 21);
     let (a, b) = (Var::from_tensor(&start).unwrap(), Var::from_tensor(&start).unwrap());

@@ -1,0 +1,462 @@
+//! Training on the direct kernels: the forward pass of [`InputVjp`] with every stage's input
+//! kept, the backward pass to the weights (the input-gradient correlations of [`InputVjp`],
+//! then a weight-gradient correlation per stage and products for the fully connected layers),
+//! and AdamW fused into one pass per tensor, on plain buffers allocated once.
+//!
+//! Every image's gradients are computed on their own and summed over the batch in image order,
+//! each sum a fixed chain of operations: the results do not depend on the thread count. The
+//! weights live here during training; [`DirectTrainer::write_back`] copies them into the
+//! generator's candle variables (checkpoints, the final weights).
+
+use pulp::{Simd, WithSimd};
+use rayon::prelude::*;
+
+use crate::kernels::padded_len;
+use crate::model::Generator;
+use crate::vjp::{BackwardImage, ForwardImage, InputVjp};
+use crate::{GeneratorConfig, NeuralGenError};
+
+/// One trainable tensor and its AdamW moments.
+struct Param {
+    name: String,
+    dims: Vec<usize>,
+    w: Vec<f32>,
+    g: Vec<f32>,
+    m: Vec<f32>,
+    v: Vec<f32>,
+}
+
+/// The generator's training step on the direct kernels (AdamW with weight decay 0 on MSE).
+/// Public for the benchmarks; [`crate::train()`] is the entry point.
+#[doc(hidden)]
+pub struct DirectTrainer {
+    config: GeneratorConfig,
+    /// `fc0.weight, fc0.bias, …, conv0.weight, conv0.bias, …`.
+    params: Vec<Param>,
+    net: InputVjp,
+    t: i32,
+    /// Per image: the stages' padded inputs (zero borders kept), masks, images, upstream.
+    acts: Vec<f32>,
+    masks: Vec<u8>,
+    images: Vec<f32>,
+    up: Vec<f32>,
+    /// Per image: the convolution stages' weight and bias gradients, then the seed-map gradient.
+    per_image: Vec<f32>,
+    batch: usize,
+}
+
+/// Convolution parameters (weights and biases of every stage) of an architecture.
+fn conv_len(net: &InputVjp) -> usize {
+    net.stages.iter().map(|s| s.cout * s.cin * 9 + s.cout).sum()
+}
+
+impl DirectTrainer {
+    /// Copies `g`'s weights.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`].
+    pub fn new(g: &Generator) -> Result<Self, NeuralGenError> {
+        let weights = g.weights()?;
+        let mut params = Vec::new();
+        let a = &g.config.arch;
+        let names =
+            (0..=a.hidden.len()).map(|i| format!("fc{i}")).chain((0..a.stages.len()).map(|i| format!("conv{i}")));
+        for layer in names {
+            for part in ["weight", "bias"] {
+                let name = format!("{layer}.{part}");
+                let t = weights.get(&name).ok_or_else(|| NeuralGenError::Config {
+                    source_name: "generator".into(),
+                    problem: crate::ConfigError::MissingTensor { name: name.clone() },
+                })?;
+                let w: Vec<f32> = t.flatten_all().and_then(|f| f.to_vec1()).map_err(NeuralGenError::Candle)?;
+                let n = w.len();
+                params.push(Param {
+                    name,
+                    dims: t.dims().to_vec(),
+                    w,
+                    g: vec![0.0; n],
+                    m: vec![0.0; n],
+                    v: vec![0.0; n],
+                });
+            }
+        }
+        let mut tr = DirectTrainer {
+            config: g.config.clone(),
+            net: InputVjp::new(g)?,
+            params,
+            t: 0,
+            acts: Vec::new(),
+            masks: Vec::new(),
+            images: Vec::new(),
+            up: Vec::new(),
+            per_image: Vec::new(),
+            batch: 0,
+        };
+        tr.rebuild()?;
+        Ok(tr)
+    }
+
+    /// Repacks the kernels' weights from the parameters.
+    fn rebuild(&mut self) -> Result<(), NeuralGenError> {
+        let params = &self.params;
+        self.net = InputVjp::from_weights(&self.config, |name| {
+            Ok(params.iter().find(|p| p.name == name).map(|p| p.w.clone()).unwrap_or_default())
+        })?;
+        Ok(())
+    }
+
+    /// Sizes the per-image buffers for `batch` images (only when the batch changes).
+    fn size_for(&mut self, batch: usize) {
+        if batch == self.batch {
+            return;
+        }
+        let ss = self.net.size() * self.net.size();
+        self.acts = vec![0.0; batch * self.net.per_image];
+        self.masks = vec![0; batch * self.net.masks_per_image];
+        self.images = vec![0.0; batch * ss];
+        self.up = vec![0.0; batch * ss];
+        self.per_image = vec![0.0; batch * (conv_len(&self.net) + self.net.seed_len())];
+        self.batch = batch;
+    }
+
+    /// The MSE of the network's images of normalised inputs `x` (`[B, 3]`) against `target`
+    /// (`B × size²`), and every parameter's gradient of it (kept for [`DirectTrainer::update`]).
+    ///
+    /// # Panics
+    /// When `target` is not `B × size²` long.
+    pub fn gradients(&mut self, x: &[f32], target: &[f32]) -> f64 {
+        let b = x.len() / 3;
+        let ss = self.net.size() * self.net.size();
+        assert_eq!(target.len(), b * ss, "targets");
+        self.size_for(b);
+        let net = &self.net;
+        let (hidden, seed) = net.dense_forward(x);
+        let (pi, mp, sl) = (net.per_image, net.masks_per_image, net.seed_len());
+        self.images
+            .par_chunks_mut(ss)
+            .zip(self.masks.par_chunks_mut(mp))
+            .zip(self.acts.par_chunks_mut(pi))
+            .zip(seed.par_chunks(sl))
+            .for_each_init(Vec::new, |acc, (((img, masks), buf), sd)| {
+                net.isa.dispatch(ForwardImage { net, seed: sd, img, masks, buf, acc })
+            });
+        // MSE and its gradient.
+        let k = 2.0 / (b * ss) as f32;
+        let mut loss = 0f64;
+        for ((u, &y), &t) in self.up.iter_mut().zip(&self.images).zip(target) {
+            let d = y - t;
+            loss += (d as f64) * (d as f64);
+            *u = k * d;
+        }
+        loss /= (b * ss) as f64;
+        // Per image: back through the stages, the weight gradients of each.
+        let cl = conv_len(net);
+        let bufs = || -> Vec<Vec<f32>> { net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect() };
+        self.per_image
+            .par_chunks_mut(cl + sl)
+            .zip(self.up.par_chunks(ss))
+            .zip(self.images.par_chunks(ss))
+            .zip(self.masks.par_chunks(mp))
+            .zip(self.acts.par_chunks(pi))
+            .for_each_init(
+                || (bufs(), Vec::new()),
+                |(bufs, acc), ((((out, up), img), masks), acts)| {
+                    let (grads, gs) = out.split_at_mut(cl);
+                    net.isa.dispatch(BackwardImage { net, gs, up, img, masks, bufs, acc });
+                    net.isa.dispatch(WeightGrads { net, bufs, acts, grads });
+                },
+            );
+        // The convolution gradients summed over the images, in image order.
+        let nfc = net.fcs.len();
+        let mut off = 0;
+        for p in &mut self.params[2 * nfc..] {
+            let len = p.g.len();
+            let per = &self.per_image;
+            p.g.par_chunks_mut(1024).enumerate().for_each(|(ci, gch)| {
+                let base = off + ci * 1024;
+                gch.fill(0.0);
+                for i in 0..b {
+                    let src = &per[i * (cl + sl) + base..i * (cl + sl) + base + gch.len()];
+                    gch.iter_mut().zip(src).for_each(|(a, v)| *a += v);
+                }
+            });
+            off += len;
+        }
+        // Back through the fully connected layers, on the whole batch.
+        let mut g: Vec<f32> =
+            (0..b).flat_map(|i| self.per_image[i * (cl + sl) + cl..(i + 1) * (cl + sl)].to_vec()).collect();
+        for li in (0..nfc).rev() {
+            let fc = &net.fcs[li];
+            let input: &[f32] = if li == 0 { x } else { &hidden[li - 1] };
+            let inp = input.len() / b.max(1);
+            let (wp, rest) = self.params[2 * li..].split_at_mut(1);
+            let (gw, gb) = (&mut wp[0].g, &mut rest[0].g);
+            // dW[o, k] = Σ_b g[b, o] · input[b, k]; db[o] = Σ_b g[b, o].
+            gw.par_chunks_mut(inp).zip(gb.par_iter_mut()).enumerate().for_each(|(o, (row, bo))| {
+                row.fill(0.0);
+                *bo = 0.0;
+                for i in 0..b {
+                    let gv = g[i * fc.out + o];
+                    *bo += gv;
+                    if gv != 0.0 {
+                        row.iter_mut().zip(&input[i * inp..(i + 1) * inp]).for_each(|(r, &xv)| *r += gv * xv);
+                    }
+                }
+            });
+            if li > 0 {
+                let mut gi = fc.bwd.apply(&g, None);
+                gi.iter_mut().zip(&hidden[li - 1]).for_each(|(v, &a)| {
+                    if a <= 0.0 {
+                        *v = 0.0;
+                    }
+                });
+                g = gi;
+            }
+        }
+        loss
+    }
+
+    /// One AdamW step (candle's `AdamW` rule, weight decay 0) on the gradients of the last
+    /// [`DirectTrainer::gradients`], at learning rate `lr`; the kernels then run on the new
+    /// weights.
+    ///
+    /// # Errors
+    /// As [`InputVjp::new`].
+    pub fn update(&mut self, lr: f64) -> Result<(), NeuralGenError> {
+        self.t += 1;
+        let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8f64);
+        let (sm, sv) = ((1.0 / (1.0 - b1.powi(self.t))) as f32, (1.0 / (1.0 - b2.powi(self.t))) as f32);
+        let (lr, b1, b2, eps) = (lr as f32, b1 as f32, b2 as f32, eps as f32);
+        for p in &mut self.params {
+            p.w.par_chunks_mut(1 << 14)
+                .zip(p.m.par_chunks_mut(1 << 14))
+                .zip(p.v.par_chunks_mut(1 << 14))
+                .zip(p.g.par_chunks(1 << 14))
+                .for_each(|(((th, m), v), g)| {
+                    for i in 0..th.len() {
+                        let gi = g[i];
+                        m[i] = b1 * m[i] + (1.0 - b1) * gi;
+                        v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
+                        let step = (m[i] * sm) / ((v[i] * sv).sqrt() + eps);
+                        th[i] -= lr * step;
+                    }
+                });
+        }
+        self.rebuild()
+    }
+
+    /// [`DirectTrainer::gradients`] then [`DirectTrainer::update`]: one training step; returns
+    /// the MSE before it.
+    ///
+    /// # Errors
+    /// As [`DirectTrainer::update`].
+    pub fn step(&mut self, x: &[f32], target: &[f32], lr: f64) -> Result<f64, NeuralGenError> {
+        let loss = self.gradients(x, target);
+        self.update(lr)?;
+        Ok(loss)
+    }
+
+    /// The gradient of the last [`DirectTrainer::gradients`] for the tensor `name`.
+    pub fn gradient(&self, name: &str) -> Option<&[f32]> {
+        self.params.iter().find(|p| p.name == name).map(|p| &p.g[..])
+    }
+
+    /// The network on the current weights.
+    pub fn kernels(&self) -> &InputVjp {
+        &self.net
+    }
+
+    /// The current weights, by name.
+    pub(crate) fn snapshot(&self) -> Vec<Vec<f32>> {
+        self.params.iter().map(|p| p.w.clone()).collect()
+    }
+
+    /// Restores weights from [`DirectTrainer::snapshot`].
+    pub(crate) fn restore(&mut self, w: Vec<Vec<f32>>) -> Result<(), NeuralGenError> {
+        for (p, w) in self.params.iter_mut().zip(w) {
+            p.w = w;
+        }
+        self.rebuild()
+    }
+
+    /// Copies the current weights into `g`'s candle variables.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Candle`].
+    pub fn write_back(&self, g: &mut Generator) -> Result<(), NeuralGenError> {
+        {
+            let data = g.varmap.data().lock().expect("varmap");
+            for p in &self.params {
+                let t = candle_core::Tensor::from_vec(p.w.clone(), p.dims.clone(), g.device())
+                    .map_err(NeuralGenError::Candle)?;
+                data[&p.name].set(&t).map_err(NeuralGenError::Candle)?;
+            }
+        }
+        g.weights_changed();
+        Ok(())
+    }
+}
+
+/// The weight and bias gradients of every stage of one image: `bufs[si]` the padded gradient
+/// at stage `si`'s output (from [`BackwardImage`]), `acts` the stages' padded inputs.
+struct WeightGrads<'a> {
+    net: &'a InputVjp,
+    bufs: &'a [Vec<f32>],
+    acts: &'a [f32],
+    grads: &'a mut [f32],
+}
+
+impl WithSimd for WeightGrads<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, simd: S) {
+        let l = S::F32_LANES;
+        let (mut aoff, mut goff) = (0, 0);
+        for (si, st) in self.net.stages.iter().enumerate() {
+            let (n, wp) = (st.n, st.n + 2);
+            let q2 = wp * wp;
+            let x = &self.acts[aoff..aoff + padded_len(st.cin, n)];
+            let gy = &self.bufs[si];
+            let (gw, rest) = self.grads[goff..].split_at_mut(st.cout * st.cin * 9);
+            let gb = &mut rest[..st.cout];
+            // Positions q of the padded plane whose 3×3 neighbourhood lies inside it; the
+            // gradient is zero on the border, so these are all that count.
+            let (q0, q1) = (wp + 1, q2 - wp - 1);
+            let len = q1 - q0;
+            let full = len / l * l;
+            for o in 0..st.cout {
+                let g = &gy[o * q2..(o + 1) * q2];
+                gb[o] = g.iter().sum();
+                for c in 0..st.cin {
+                    let xc = &x[c * q2..(c + 1) * q2];
+                    let mut acc = [simd.splat_f32s(0.0); 9];
+                    let mut q = q0;
+                    while q < q0 + full {
+                        let gv: S::f32s = pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&g[q..q + l]));
+                        for (tap, a) in acc.iter_mut().enumerate() {
+                            let s = q + (tap / 3) * wp + tap % 3 - wp - 1;
+                            let xv: S::f32s =
+                                pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&xc[s..s + l]));
+                            *a = simd.mul_add_f32s(gv, xv, *a);
+                        }
+                        q += l;
+                    }
+                    let w = &mut gw[(o * st.cin + c) * 9..(o * st.cin + c + 1) * 9];
+                    for (tap, a) in acc.iter().enumerate() {
+                        let lanes: &[f32] = pulp::bytemuck::cast_slice(std::slice::from_ref(a));
+                        let mut sum: f32 = lanes.iter().sum();
+                        let off = (tap / 3) * wp + tap % 3;
+                        for qq in q0 + full..q1 {
+                            sum += g[qq] * xc[qq + off - wp - 1];
+                        }
+                        w[tap] = sum;
+                    }
+                }
+            }
+            aoff += padded_len(st.cin, n);
+            goff += st.cout * st.cin * 9 + st.cout;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DirectTrainer;
+    use crate::{Arch, Generator, GeneratorConfig, NetworkStep};
+    use brush_model::{BrushProfile, Press};
+    use candle_core::Tensor;
+
+    fn presses(n: usize) -> Vec<Press> {
+        (0..n)
+            .map(|i| {
+                let f = i as f64 / n as f64;
+                Press::from_degrees(11.0 + 9.0 * f, 10.0 * ((7 * i) % n) as f64 / n as f64, 5.0 * f)
+            })
+            .collect()
+    }
+
+    /// Gradients of every tensor and one AdamW step against candle's autograd and the fused
+    /// AdamW on the candle graph (`NetworkStep`).
+    fn check(arch: Arch, batch: usize, what: &str) {
+        let profile = BrushProfile::builtin("pen1").unwrap();
+        let mut g = Generator::new(GeneratorConfig::new(profile.clone(), arch.clone()), 3).unwrap();
+        let ps = presses(batch);
+        let s = g.config.size as usize;
+        let x: Vec<f32> = ps.iter().flat_map(|p| g.config.normalise(p)).collect();
+        let t: Vec<f32> = (0..batch * s * s).map(|i| ((i * 7919) % 113) as f32 / 113.0).collect();
+        let mut tr = DirectTrainer::new(&g).unwrap();
+        let loss = tr.gradients(&x, &t);
+        // candle: the same loss through the graph.
+        let xs = g.inputs(&ps).unwrap();
+        let ts = Tensor::from_vec(t.clone(), (batch, 1, s, s), g.device()).unwrap();
+        let l = (g.forward_autograd(&xs).unwrap() - &ts).unwrap().sqr().unwrap().mean_all().unwrap();
+        let lc = l.to_scalar::<f32>().unwrap() as f64;
+        assert!((loss - lc).abs() < 1e-5 * lc.max(1e-3), "{what}: loss {loss} vs candle {lc}");
+        let grads = l.backward().unwrap();
+        let data = g.varmap.data().lock().unwrap();
+        for (name, var) in data.iter() {
+            let want: Vec<f32> = grads.get(var).unwrap().flatten_all().unwrap().to_vec1().unwrap();
+            let got = tr.gradient(name).unwrap();
+            assert_eq!(want.len(), got.len());
+            let scale = want.iter().fold(0f32, |m, v| m.max(v.abs())).max(1e-12);
+            let worst = want.iter().zip(got).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+            assert!(worst <= 1e-3 * scale, "{what} {name}: worst {worst} of {scale}");
+            assert!(scale > 1e-9 || name.ends_with("bias"), "{what} {name}: a zero gradient tests nothing");
+        }
+        drop(data);
+        // One AdamW step each way: the same weights.
+        let mut gc = Generator::new(GeneratorConfig::new(profile, arch), 3).unwrap();
+        let mut ns = NetworkStep::new(&gc, 1e-3).unwrap();
+        ns.step(&mut gc, &xs, &ts, 1e-3).unwrap();
+        tr.update(1e-3).unwrap();
+        tr.write_back(&mut g).unwrap();
+        let (a, b) = (g.weights().unwrap(), gc.weights().unwrap());
+        for (name, ta) in &a {
+            let va: Vec<f32> = ta.flatten_all().unwrap().to_vec1().unwrap();
+            let vb: Vec<f32> = b[name].flatten_all().unwrap().to_vec1().unwrap();
+            // Adam moves each weight by about lr; a gradient near zero may flip the sign of a
+            // step, so compare to a fraction of the step.
+            let worst = va.iter().zip(&vb).fold(0f32, |m, (p, q)| m.max((p - q).abs()));
+            assert!(worst < 2.1e-3, "{what} {name}: weights differ by {worst} after one step");
+            let moved = va.iter().zip(&vb).filter(|(p, q)| (*p - *q).abs() < 1e-5).count();
+            assert!(moved * 10 >= va.len() * 9, "{what} {name}: {moved} of {} weights agree", va.len());
+        }
+        // The generator renders with the written-back weights.
+        assert_eq!(g.render(&ps).unwrap().len(), batch);
+    }
+
+    #[test]
+    fn gradients_and_steps_match_candle_for_the_shipped_architecture() {
+        check(Arch::default_128(), 3, "pen1");
+    }
+
+    #[test]
+    fn gradients_and_steps_match_candle_for_odd_architectures() {
+        check(Arch::tiny_32(), 5, "tiny");
+        check(
+            Arch { hidden: vec![24, 40], seed_channels: 12, seed_side: 3, stages: vec![(12, 20), (5, 12), (3, 4)] },
+            4,
+            "odd",
+        );
+    }
+
+    /// The same gradients on one thread and on two.
+    #[test]
+    fn gradients_do_not_depend_on_the_thread_count() {
+        let g =
+            Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::tiny_32()), 5).unwrap();
+        let ps = presses(6);
+        let x: Vec<f32> = ps.iter().flat_map(|p| g.config.normalise(p)).collect();
+        let t = vec![0.25f32; 6 * 32 * 32];
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut tr = DirectTrainer::new(&g).unwrap();
+                tr.step(&x, &t, 1e-3).unwrap();
+                tr.gradients(&x, &t);
+                tr.params.iter().map(|p| (p.g.clone(), p.w.clone())).collect::<Vec<_>>()
+            })
+        };
+        assert_eq!(run(1), run(2));
+    }
+}
