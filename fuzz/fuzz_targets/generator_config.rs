@@ -4,7 +4,7 @@
 
 use libfuzzer_sys::fuzz_target;
 
-static WEIGHTS: &[u8] = include_bytes!("../../fixtures/generator/pen1.safetensors");
+static WEIGHTS: &[u8] = include_bytes!("../../crates/neural-gen/data/pen1.safetensors");
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };

@@ -261,7 +261,7 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     let root = root();
     println!(
-        "skipped  fixtures/generator/pen1.safetensors  (made by `cargo xtask train-fixture`, about 5 minutes; checked by the generator gates)"
+        "skipped  crates/neural-gen/data/pen1.safetensors  (made by `cargo xtask train-fixture`, about 5 minutes; checked by the generator gates)"
     );
     let mut differ = Vec::new();
     let python = python_ready();

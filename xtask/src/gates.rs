@@ -185,11 +185,10 @@ pub fn character_figures() -> Result<Figures> {
     Ok(f)
 }
 
-/// The committed pen1 generator (`fixtures/generator/pen1.*`, the one the `maobi` binary
+/// The committed pen1 generator (`crates/neural-gen/data/pen1.*`, the one the `maobi` binary
 /// compiles in).
 fn committed_generator() -> Result<neural_gen::Generator> {
-    let path = crate::fixtures::root().join("fixtures/generator/pen1.safetensors");
-    Ok(neural_gen::Generator::load(&path)?)
+    Ok(neural_gen::Generator::pen1()?)
 }
 
 /// Generator figures: the committed pen1 generator against the analytic B-BSM on 200 held-out

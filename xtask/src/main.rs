@@ -25,7 +25,7 @@ Tasks:
                        regenerate every generated file under fixtures/ (or, with --check,
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json
-  train-fixture        train the committed pen1 generator (fixtures/generator/; about 5 minutes)
+  train-fixture        train the committed pen1 generator (crates/neural-gen/data/; about 5 minutes)
   styles --font F [...] compare centre-line methods (skeleton, template) on a font's glyphs
                        and synthetic scans of them (`cargo xtask styles --help`)
   skeleton-counts [--hanzi-data DIR] [--set FILE] [...]

@@ -10,12 +10,12 @@
 //! method (whose count is the template's by construction) a character counts as right only when
 //! every stroke found ink under it and no two strokes landed on one.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{Context, Result, bail};
 use brush_model::BrushProfile;
-use pipeline::{BoxRule, WriteOptions, prepare_with_template, write_placed};
+use pipeline::{BoxRule, GlyphInput, WriteOptions, prepare_with_template, write_placed};
 use rayon::prelude::*;
 use serde::Serialize;
 use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
@@ -89,61 +89,6 @@ struct Summary {
     mean_missing_ink: f64,
     mean_extra_ink: f64,
     mean_free_csim: Option<f64>,
-}
-
-/// The font files to search, in order.
-fn font_files(specs: &[PathBuf]) -> Result<Vec<PathBuf>> {
-    let mut out = Vec::new();
-    for s in specs {
-        if s.is_dir() {
-            let mut v: Vec<PathBuf> = std::fs::read_dir(s)
-                .with_context(|| format!("{}", s.display()))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| {
-                    p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                        matches!(e.to_ascii_lowercase().as_str(), "ttf" | "otf" | "ttc" | "otc" | "woff" | "woff2")
-                    })
-                })
-                .collect();
-            v.sort();
-            out.extend(v);
-        } else {
-            out.push(s.clone());
-        }
-    }
-    if out.is_empty() {
-        bail!("--font: no font files found");
-    }
-    Ok(out)
-}
-
-/// The glyph of `c` from the first font that has it.
-fn font_glyph(files: &[PathBuf], c: char) -> Result<Option<Glyph>> {
-    for f in files {
-        match glyph::from_font(f, c) {
-            Ok(g) => return Ok(Some(g)),
-            Err(GlyphError::Unknown { .. }) => continue,
-            Err(GlyphError::Malformed { .. })
-                if f.extension().is_some_and(|e| e.to_string_lossy().starts_with("woff")) =>
-            {
-                continue;
-            }
-            Err(e) => return Err(e.into()),
-        }
-    }
-    Ok(None)
-}
-
-fn template_glyph(dir: Option<&Path>, c: char) -> Result<Option<Glyph>> {
-    let r = match dir {
-        Some(d) => glyph::from_hanzi_dir(d, c),
-        None => glyph::embedded(c),
-    };
-    match r {
-        Ok(g) => Ok(Some(g)),
-        Err(GlyphError::Unknown { .. }) => Ok(None),
-        Err(e) => Err(e.into()),
-    }
 }
 
 /// How `styles` sizes each character's box.
@@ -278,7 +223,9 @@ pub fn run(args: &[String]) -> Result<()> {
     if fonts.is_empty() {
         bail!("--font is required\n\n{HELP}");
     }
-    let files = font_files(&fonts)?;
+    // The fonts (files or folders, the first covering a character wins) and the stroke templates
+    // (embedded, or --hanzi-data), as `maobi evaluate --font` reads them.
+    let input = GlyphInput::fonts(&fonts, None, hanzi.clone())?;
     let font_name = fonts.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join("+");
     let list: Vec<char> = match &chars {
         Some(s) => s
@@ -295,10 +242,10 @@ pub fn run(args: &[String]) -> Result<()> {
     // The characters both sources have.
     let jobs: Vec<(char, Glyph, Glyph)> = list
         .iter()
-        .filter_map(|&c| match (template_glyph(hanzi.as_deref(), c), font_glyph(&files, c)) {
-            (Ok(Some(t)), Ok(Some(g))) => Some(Ok((c, t, g))),
-            (Err(e), _) | (_, Err(e)) => Some(Err(e)),
-            _ => None,
+        .filter_map(|&c| match input.load(c) {
+            Ok((g, Some(t))) => Some(Ok((c, t, g))),
+            Ok((_, None)) | Err(pipeline::Error::Glyph(GlyphError::Unknown { .. })) => None,
+            Err(e) => Some(Err(e.into())),
         })
         .collect::<Result<_>>()?;
     eprintln!(
@@ -413,7 +360,7 @@ mod tests {
     #[test]
     fn bad_input_names_the_argument_and_writes_nothing() {
         let json = std::env::temp_dir().join(format!("maobi-styles-{}.json", std::process::id()));
-        let font = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/fonts/ukai-subset.ttf");
+        let font = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/fonts/ukai-subset.ttf");
         let (j, f) = (json.to_str().unwrap(), font.to_str().unwrap());
         let err = |v: &[&str]| format!("{:#}", run(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>()).unwrap_err());
         assert!(err(&["--json", j]).contains("--font is required"));

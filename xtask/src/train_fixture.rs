@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 
 use crate::fixtures::root;
 
-/// The recipe of `fixtures/generator/pen1.safetensors`.
+/// The recipe of `crates/neural-gen/data/pen1.safetensors`.
 pub const RECIPE: &[&str] =
     &["--brush", "pen1", "--steps", "2500", "--batch", "64", "--lr", "2e-3", "--seed", "1", "--eval-n", "500"];
 
@@ -25,13 +25,13 @@ pub fn run(args: &[String]) -> Result<()> {
         .current_dir(&root)
         .arg("train")
         .args(RECIPE)
-        .args(["-o", "fixtures/generator/pen1.safetensors"])
+        .args(["-o", "crates/neural-gen/data/pen1.safetensors"])
         .status()?;
     if !st.success() {
         bail!("training failed");
     }
     println!(
-        "trained fixtures/generator/pen1.safetensors (+ .json, loss.csv, loss.png); rebuild maobi to embed it, then `cargo xtask gates --update` if its figures moved"
+        "trained crates/neural-gen/data/pen1.safetensors (+ .json, loss.csv, loss.png); rebuild maobi to embed it, then `cargo xtask gates --update` if its figures moved"
     );
     Ok(())
 }

@@ -5,9 +5,6 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use neural_gen::Generator;
 
-static WEIGHTS: &[u8] = include_bytes!("../../../fixtures/generator/pen1.safetensors");
-static CONFIG: &str = include_str!("../../../fixtures/generator/pen1.json");
-
 /// The generator at `path` (a `.safetensors` with its `.json` beside), or the committed pen1
 /// checkpoint when `None`.
 ///
@@ -16,7 +13,7 @@ static CONFIG: &str = include_str!("../../../fixtures/generator/pen1.json");
 pub fn load_generator(path: Option<&Path>) -> Result<Generator> {
     match path {
         Some(p) => Generator::load(p).with_context(|| format!("loading the generator {}", p.display())),
-        None => Ok(Generator::from_bytes(WEIGHTS, CONFIG, "embedded pen1.safetensors", "embedded pen1.json")?),
+        None => Ok(Generator::pen1()?),
     }
 }
 

@@ -1,5 +1,5 @@
 //! Batched forward + VJP with respect to the presses through the committed generator's
-//! architecture (`fixtures/generator/pen1.json`), batch 64: the direct, input-gradient-only path
+//! architecture (`data/pen1.json`), batch 64: the direct, input-gradient-only path
 //! ([`neural_gen::InputVjp`]) and candle's autograd; also the forward pass alone and the
 //! forward-mode Jacobian (three tangents per image) of a recorded forward pass. The PyTorch
 //! reference on the same network and batch is `benches/gen_vjp_torch.py`
@@ -16,7 +16,7 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 const BATCH: usize = 64;
 
 fn bench(c: &mut Criterion) {
-    let text = include_str!("../../../fixtures/generator/pen1.json");
+    let text = include_str!("../data/pen1.json");
     let cfg: GeneratorConfig = serde_json::from_str(text).unwrap();
     let g = Generator::new(cfg, 1).unwrap();
     let s = g.config.size as usize;

@@ -1,6 +1,6 @@
 """The B-BSMG generator in PyTorch (CPU): the reference for benches/gen_vjp.rs.
 
-    python3 crates/neural-gen/benches/gen_vjp_torch.py [--config fixtures/generator/pen1.json]
+    python3 crates/neural-gen/benches/gen_vjp_torch.py [--config crates/neural-gen/data/pen1.json]
         [--threads 2] [--batch 64] [--reps 20] [--json]
 
 Builds the architecture of the config JSON beside the committed weights (FC 3→hidden…→seed map,
@@ -48,7 +48,7 @@ class Gen(nn.Module):
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap = argparse.ArgumentParser()
-    ap.add_argument("--config", default=os.path.join(here, "../../../fixtures/generator/pen1.json"))
+    ap.add_argument("--config", default=os.path.join(here, "../data/pen1.json"))
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--batch", type=int, default=64)
     ap.add_argument("--reps", type=int, default=20)

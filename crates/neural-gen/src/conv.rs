@@ -21,7 +21,7 @@
 //! `candle_nn::Conv2d` (so checkpoints are shared); on other devices or dtypes, or with a
 //! padding of at least the kernel size, it falls back to candle's kernel. The module depends
 //! on nothing but candle, rayon and pulp so that it could move upstream. Tested against
-//! candle's own kernel in value and in every gradient (`tests/conv.rs`).
+//! candle's own kernel in value and in every gradient (`conv_tests.rs`).
 
 use candle_core::{CpuStorage, CustomOp1, CustomOp3, DType, Layout, Module, Result, Shape, Tensor, bail};
 use rayon::prelude::*;

@@ -273,6 +273,27 @@ impl Generator {
         Self::from_bytes(&bytes, &text, &path.display().to_string(), &name)
     }
 
+    /// The committed pen1 generator (`data/pen1.safetensors` with its `pen1.json`, trained by
+    /// `cargo xtask train-fixture`; docs/neural-gen.md), compiled in with the `pen1` feature.
+    ///
+    /// # Errors
+    /// As [`Generator::from_bytes`] (only for a broken build).
+    ///
+    /// # Examples
+    /// ```
+    /// # #[cfg(feature = "pen1")] {
+    /// let g = neural_gen::Generator::pen1()?;
+    /// assert_eq!(g.config.profile.name, "pen1");
+    /// # }
+    /// # Ok::<(), neural_gen::NeuralGenError>(())
+    /// ```
+    #[cfg(feature = "pen1")]
+    pub fn pen1() -> Result<Self, NeuralGenError> {
+        static WEIGHTS: &[u8] = include_bytes!("../data/pen1.safetensors");
+        static CONFIG: &str = include_str!("../data/pen1.json");
+        Self::from_bytes(WEIGHTS, CONFIG, "the committed pen1.safetensors", "the committed pen1.json")
+    }
+
     /// As [`Generator::load`], from the weights' bytes and the config's text (for checkpoints
     /// compiled into a binary); the names label errors.
     ///

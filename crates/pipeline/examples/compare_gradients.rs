@@ -21,9 +21,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let set = args.first().map_or("tuning", String::as_str).to_string();
     let n: usize = args.get(1).map_or(Ok(10), |s| s.parse())?;
     let embedded = glyph::embedded_chars();
-    // The committed pen1 generator (fixtures/generator/), as the `maobi` binary uses it.
-    let weights = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/generator/pen1.safetensors");
-    let gen_model = Arc::new(GenModel::new(&neural_gen::Generator::load(&weights)?)?);
+    // The committed pen1 generator, as the `maobi` binary uses it.
+    let gen_model = Arc::new(GenModel::new(&neural_gen::Generator::pen1()?)?);
     let (chars, dir): (Vec<char>, Option<std::path::PathBuf>) = match set.as_str() {
         "tuning" => (embedded.iter().copied().take(n).collect(), None),
         "heldout" => {

@@ -15,7 +15,7 @@ use crate::common::{
 pub struct Args {
     #[command(flatten)]
     brush: BrushArg,
-    /// Optimiser steps (2500 made the committed pen1 generator, fixtures/generator/pen1.json).
+    /// Optimiser steps (2500 made the committed pen1 generator, crates/neural-gen/data/pen1.json).
     #[arg(long, default_value_t = 2500)]
     steps: usize,
     /// Batch size.

@@ -185,7 +185,7 @@ fn assert_direct_matches_candle(g: &Generator, presses: &[Press], what: &str) {
 
 #[test]
 fn inference_on_the_direct_kernels_matches_candle_for_the_shipped_generator() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/generator/pen1.safetensors");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/pen1.safetensors");
     let g = Generator::load(std::path::Path::new(dir)).unwrap();
     assert_eq!(g.config.arch, Arch::default_128());
     assert_direct_matches_candle(&g, &spread(7), "pen1");
