@@ -63,8 +63,10 @@ pub struct Registration {
     pub edge_mm: f64,
     /// Photo px per paper mm at the sheet's centre.
     pub px_per_mm: f64,
-    /// How many quarter turns the sheet lies from upright in the photo (0–3).
-    pub quarter_turns: usize,
+    /// Which of the four ways round was kept: the corners of the largest quadrilateral (in hull
+    /// order from its leftmost blob) shifted by this many places onto top-left, top-right,
+    /// bottom-right, bottom-left.
+    pub corner_shift: usize,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -119,7 +121,7 @@ pub fn register(ink: &InkMap, marks: &[KnownMark]) -> Result<Registration, Obser
             fits.push((turn, h));
         }
     }
-    let (quarter_turns, mut h) = match fits.len() {
+    let (corner_shift, mut h) = match fits.len() {
         0 => return Err(ObserveError::MarkNotFound { role: missing.unwrap_or_else(|| marks[4].role.clone()) }),
         1 => fits[0],
         n => return Err(ObserveError::Ambiguous { ways: n }),
@@ -173,7 +175,7 @@ pub fn register(ink: &InkMap, marks: &[KnownMark]) -> Result<Registration, Obser
         residual_max_mm,
         edge_mm,
         px_per_mm: h.scale_at(mid),
-        quarter_turns,
+        corner_shift,
     })
 }
 

@@ -198,7 +198,7 @@ fn summary_json(
             "edge_mm": reg.edge_mm,
             "photo_px_per_mm": reg.px_per_mm,
             "photo_reduced_by": photo.reduced_by,
-            "quarter_turns": reg.quarter_turns,
+            "corner_shift": reg.corner_shift,
             "lens_distortion": "not modelled",
             "paper_to_photo": reg.paper_to_photo,
             "marks": reg.marks,
