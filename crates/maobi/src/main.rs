@@ -45,6 +45,8 @@ enum Command {
     Dataset(cmd::dataset::Args),
     /// Write characters: brush track, render, reference and scores.
     Write(cmd::write::Args),
+    /// A photo of a written sheet → each character's ink, its scores and what the brush did differently.
+    Observe(cmd::observe::Args),
     /// One self-contained HTML page that plays a track over its sheet (brush, footprints, plots, check, dips).
     Preview(cmd::preview::Args),
     /// Run the write pipeline over many characters and report mean scores.
@@ -106,6 +108,7 @@ fn main() -> ExitCode {
         Command::Write(a) => cmd::write::run(a),
         Command::Evaluate(a) => cmd::evaluate::run(a),
         Command::Preview(a) => cmd::preview::run(a),
+        Command::Observe(a) => cmd::observe::run(a),
         Command::Train(a) => cmd::train::run(a),
         Command::EvalGenerator(a) => cmd::eval_generator::run(a),
         Command::Robot(c) => cmd::robot::run(c),

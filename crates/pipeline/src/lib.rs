@@ -23,6 +23,7 @@
 
 mod error;
 mod glyphs;
+mod marks;
 mod placement;
 mod prepare;
 mod sheet;
@@ -31,6 +32,10 @@ mod write;
 
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
+pub use marks::{
+    MARK_CLEARANCE_MM, MARK_DEPTH_FRACTION, MARK_GAP_MM, MARK_MARGIN_MM, MARK_SPACING_MM, MARK_TRAVEL_MM, Mark,
+    MarkError, MarkRole, mark_strokes, registration_marks,
+};
 pub use placement::{
     BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
     write_placed,

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 use trajectory::CharBox;
 
-use crate::{CharReport, CharResult};
+use crate::{CharReport, CharResult, Mark};
 
 /// Why a sheet could not be understood or laid out. The messages never name a command-line
 /// flag: the caller adds the flag or field the value came from.
@@ -387,8 +387,15 @@ pub struct SheetTrack {
     pub stroke_chars: Vec<usize>,
     /// The brush profile.
     pub brush: BrushProfile,
-    /// Every stroke of the sheet in writing order.
+    /// Every stroke of the sheet in writing order: the registration marks' strokes first (see
+    /// `mark_strokes`), then the characters'.
     pub strokes: Vec<Stroke>,
+    /// The registration marks written first ([`crate::registration_marks`]); empty without.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub marks: Vec<Mark>,
+    /// How many of `strokes`, from the first, write the marks (two per mark).
+    #[serde(default)]
+    pub mark_strokes: usize,
 }
 
 impl SheetTrack {
@@ -428,7 +435,30 @@ impl SheetTrack {
             stroke_chars,
             brush: brush.clone(),
             strokes,
+            marks: Vec::new(),
+            mark_strokes: 0,
         }
+    }
+
+    /// The same sheet with `marks` written first: their strokes ([`crate::mark_strokes`]) go
+    /// before the characters' (counted as the first character's in `stroke_chars`, so a reload
+    /// rule per character treats them as part of it) and every character's stroke range moves
+    /// on by their count.
+    pub fn with_marks(mut self, marks: &[Mark], brush: &BrushProfile) -> Self {
+        let strokes = crate::mark_strokes(marks, brush);
+        let n = strokes.len();
+        for c in &mut self.chars {
+            c.strokes = [c.strokes[0] + n, c.strokes[1] + n];
+        }
+        let mut sc = vec![0; n];
+        sc.append(&mut self.stroke_chars);
+        self.stroke_chars = sc;
+        let mut all = strokes;
+        all.append(&mut self.strokes);
+        self.strokes = all;
+        self.marks.extend_from_slice(marks);
+        self.mark_strokes += n;
+        self
     }
 }
 
@@ -463,6 +493,21 @@ pub fn auto_layout(n: usize, char_mm: f64, per_line: usize, flow: Flow) -> Layou
 }
 
 impl Layout {
+    /// The same layout with at least `margin_mm` free around its boxes: the sheet grows and the
+    /// boxes move in by the difference (room for registration marks on an automatic layout).
+    pub fn widened(&self, margin_mm: f64) -> Layout {
+        let d = (margin_mm - self.margin_mm).max(0.0);
+        let mut l = self.clone();
+        for b in &mut l.boxes {
+            b.x0_mm += d;
+            b.y0_mm += d;
+        }
+        l.sheet.width_mm += 2.0 * d;
+        l.sheet.height_mm += 2.0 * d;
+        l.margin_mm += d;
+        l
+    }
+
     /// The sheet image's size in px when each character's image is `size_px` wide.
     pub fn image_px(&self, size_px: u32) -> (f64, f64) {
         let ppm = size_px as f64 / self.char_mm;

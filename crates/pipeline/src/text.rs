@@ -26,11 +26,21 @@ pub struct TextOptions {
     /// characters sharing a box size search their splits ([`searched_splits`]). Other methods
     /// are not affected.
     pub search_templates: bool,
+    /// With an automatic layout (no `layout`), the margin it is widened to
+    /// ([`Layout::widened`]), mm: room for registration marks ([`crate::MARK_MARGIN_MM`]).
+    pub mark_margin_mm: Option<f64>,
 }
 
 impl Default for TextOptions {
     fn default() -> Self {
-        Self { layout: None, char_mm: None, per_line: 4, flow: Flow::Columns, search_templates: true }
+        Self {
+            layout: None,
+            char_mm: None,
+            per_line: 4,
+            flow: Flow::Columns,
+            search_templates: true,
+            mark_margin_mm: None,
+        }
     }
 }
 
@@ -85,6 +95,10 @@ pub fn write_text(
             text.per_line,
             text.flow,
         ),
+    };
+    let layout = match (&text.layout, text.mark_margin_mm) {
+        (None, Some(m)) => layout.widened(m),
+        _ => layout,
     };
     let char_mm = layout.char_mm;
     // Template characters sharing the box size: their corner splits are searched.

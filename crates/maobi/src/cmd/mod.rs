@@ -9,6 +9,7 @@ pub mod evaluate;
 pub mod fit_stroke;
 pub mod footprint;
 pub mod models;
+pub mod observe;
 pub mod preview;
 pub mod robot;
 pub mod stroke;

@@ -77,6 +77,14 @@ pub struct Args {
     /// Margin kept free on every side of --sheet, mm.
     #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
     margin_mm: f64,
+    /// Leave out the registration marks that --sheet writes in the margin before the characters
+    /// (they let `maobi observe` map a photo of the sheet onto the paper; docs/closed-loop.md).
+    #[arg(long, conflicts_with = "marks")]
+    no_marks: bool,
+    /// Write registration marks without --sheet too (the automatic layout gets the margin they
+    /// need); with --sheet, refuse a sheet too small for them (by default it is written without).
+    #[arg(long)]
+    marks: bool,
     /// Grid drawn under each character in the preview (never written): none, mi (米字格), tian (田字格).
     #[arg(long, default_value = "none")]
     grid: Grid,
@@ -237,6 +245,7 @@ pub fn run(args: Args) -> Result<()> {
         per_line: args.per_line.unwrap_or(4),
         flow,
         search_templates: args.placement.search(),
+        mark_margin_mm: (args.marks && sheet.is_none()).then_some(pipeline::MARK_MARGIN_MM),
     };
     let pb = progress(chars.len() as u64, "write");
     let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
@@ -261,13 +270,35 @@ pub fn run(args: Args) -> Result<()> {
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
     let summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
-    let sheet_track = SheetTrack::new(
+    let mut sheet_track = SheetTrack::new(
         &lay,
         flow,
         args.grid,
         &results.iter().map(|r| (r.report.char.clone(), r.char_box, r.track.strokes.as_slice())).collect::<Vec<_>>(),
         &profile,
     );
+    // Marks by default with --sheet; a sheet too small for them is written without (and says
+    // so) unless --marks asked for them.
+    let mut marks_on = if sheet.is_some() { !args.no_marks } else { args.marks };
+    if marks_on {
+        match pipeline::registration_marks(&lay, &profile) {
+            Ok(marks) => sheet_track = sheet_track.with_marks(&marks, &profile),
+            Err(e) if !args.marks => {
+                eprintln!("written without registration marks (`maobi observe` needs them): {e}");
+                marks_on = false;
+            }
+            Err(e) => {
+                return Err(anyhow::Error::new(e).context(match sheet {
+                    Some(_) => format!("--marks with --margin-mm {}", lay.margin_mm),
+                    None => "--marks (give a larger --sheet)".to_string(),
+                }));
+            }
+        }
+    }
+    if single && marks_on {
+        // The marks make one character a sheet of one: its track.json is the sheet's.
+        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+    }
     if !single {
         let img = pipeline::sheet_image(&results, &profile, args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;

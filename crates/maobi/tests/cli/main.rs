@@ -8,6 +8,7 @@ mod common;
 
 mod brush;
 mod neural;
+mod observe;
 mod photos;
 mod preview;
 mod prop_parsers;

@@ -35,7 +35,7 @@ fn body_attr(dom: &str, name: &str) -> Option<f64> {
 fn the_page_is_self_contained_and_offline() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("w");
-    ok(&maobi(&["write", "十口", "--size", "64", "--sheet", "A5", "--grid", "tian", "--out", s(&out)]));
+    ok(&maobi(&["write", "十口", "--size", "64", "--sheet", "A5", "--grid", "tian", "--no-marks", "--out", s(&out)]));
     let html = std::fs::read_to_string(out.join("preview.html")).unwrap();
     // No network: no external scripts, styles, images or fetches.
     for needle in ["http://", "https://", "src=", "fetch(", "<link", "import "] {
