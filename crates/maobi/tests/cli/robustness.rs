@@ -209,7 +209,7 @@ fn constant_calibration_data_has_an_undefined_r2_and_a_warning() {
 #[test]
 fn nan_generator_weights_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let src = fixtures().join("generator");
+    let src = fixtures().join("../crates/neural-gen/data");
     let mut bytes = std::fs::read(src.join("pen1.safetensors")).unwrap();
     // The header says where each tensor lies; poison the first tensor's data with NaN.
     let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;

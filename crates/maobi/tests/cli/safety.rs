@@ -78,7 +78,7 @@ fn ctrl_c_during_send_lifts_the_brush_and_exits_non_zero() {
     let trace = dir.path().join("trace.json");
     // Every answer delayed 3 ms: 永's 2000-odd moves take several seconds.
     let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "delay-ms=3", "--trace", s(&trace)])
+        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "delay-ms=40", "--trace", s(&trace)])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
