@@ -119,7 +119,6 @@ fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> 
 pub fn run(args: Args) -> Result<()> {
     let (track, marks, chars) = load_sheet(&args.sheet)?;
     let img = bezier_raster::coverage::decode_image(&args.photo)
-        .map_err(|e| anyhow::anyhow!("{}", e.message()))
         .with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let photo = Photo::from_image(&img).with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let ink = ink_map(&photo).with_context(|| format!("PHOTO {}", args.photo.display()))?;

@@ -353,7 +353,7 @@ fn a_photo_of_a_sheet_written_by_another_brush_is_observed_in_the_paper_frame() 
             assert_eq!((obs.width(), obs.height()), (reference.width(), reference.height()));
             let b: Vec<f64> = c["char_box_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
             let truth = world_ink(&stamps, [b[0], b[1], b[2]], obs.width());
-            let iou = stroke_metrics::iou(pipeline::gray(&obs), pipeline::gray(&truth)).unwrap();
+            let iou = stroke_metrics::iou(obs.as_gray(), truth.as_gray()).unwrap();
             let d = &summary["chars"][i];
             eprintln!(
                 "photo {k} (tilt {:.1}° about x, {:.1}° about y, yaw {:.1}°) {name}: IoU vs world ink {iou:.4}; vs glyph CSIM {:.4}; vs plan CSIM {:.4}; width ratio {:.3}; ends beyond {:.2} mm; verdict: {}",
