@@ -58,10 +58,8 @@ pub struct ForwardModel {
 /// Default tilt threshold: 2° (below it a tilt hardly bends the bundle, so the drag decides).
 pub const TILT_THRESHOLD_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
-/// Default trailing reach, as a fraction of the footprint length. Swept with the physical track
-/// (reverse entry, turn over, trailing) on the first 200 embedded characters at 256², executed
-/// CSIM: 0.3 → 0.897, 0.4 → 0.914, 0.45 → 0.916, 0.5 → 0.917, 0.55 → 0.916, 0.6 → 0.915,
-/// 0.75 → 0.907 (recorded in docs/trajectory.md); 0.5 kept.
+/// Default trailing reach, as a fraction of the footprint length. Chosen on the tuning set
+/// (docs/trajectory.md, Track building).
 pub const TRAIL_REACH: f64 = 0.5;
 
 impl Default for ForwardModel {

@@ -71,9 +71,8 @@ pub use skeleton::{
 pub use template::{Registration, StrokeFit, TemplateOptions};
 pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track};
 
-/// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons: 256²
-/// scored CSIM 0.896 / 0.877 (medians / skeleton), 512² 0.898 / 0.885, 768² no better (see
-/// docs/trajectory.md).
+/// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 pub const DEFAULT_ANALYSIS_PX: u32 = 512;
 
 /// How centre lines are found.

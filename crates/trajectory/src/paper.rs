@@ -41,15 +41,13 @@ impl CharBox {
 }
 
 /// The char box side (mm) [`auto_char_mm`] falls back to when the paths have no width or the
-/// profile gives no belly width: a middle size for the built-in brushes (pen1's automatic boxes
-/// run from 121 to 169 mm over the first 300 embedded characters), not tuned.
+/// profile gives no belly width: a middle size for the built-in brushes, not tuned
+/// (docs/trajectory.md, Tuned constants).
 const FALLBACK_CHAR_MM: f64 = 60.0;
 
 /// The lower percentile of the glyphs' half-widths [`auto_char_mm`] matches to the brush's
-/// range (with [`CHAR_BOX_HIGH_PERCENTILE`]). Scaling the resulting box by 0.9 or 1.1 lowered
-/// the mean CSIM over the first 200 embedded characters, and fixed sizes on ten test characters
-/// scored below it (docs/trajectory.md, "The char box"); the percentiles themselves were not
-/// swept.
+/// range (with [`CHAR_BOX_HIGH_PERCENTILE`]). Chosen on the tuning set (docs/trajectory.md,
+/// Tuned constants).
 const CHAR_BOX_LOW_PERCENTILE: f64 = 0.2;
 /// The upper percentile ([`CHAR_BOX_LOW_PERCENTILE`]).
 const CHAR_BOX_HIGH_PERCENTILE: f64 = 0.8;

@@ -40,9 +40,9 @@ pub struct TrackOptions {
     pub sizing: Sizing,
 }
 
-/// Default spacing between track points, mm. Halving it changes a 512 px render of the test
-/// characters by less than 0.5 % IoU (a test checks it; on 46 common characters the mean change
-/// is 0.26 % and the worst 0.7 %, at 0.25 mm it was 0.44 % and 1.2 %).
+/// Default spacing between track points, mm: fine enough that halving it hardly changes the
+/// rendered character (a test checks it). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 pub const DEFAULT_SPACING_MM: f64 = 0.15;
 
 /// What track building measured.
