@@ -129,6 +129,25 @@ pub const GLIDE_H_MM: f64 = 0.01;
 /// the model's tilt threshold the brush leans the way the upright model would point each
 /// footprint (the wrist turns while the brush glides at h = 0).
 ///
+/// # Examples
+/// ```
+/// use trajectory::brush_model::BrushProfile;
+/// use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, glyph};
+/// let paths = centre_lines(&glyph::embedded('一').unwrap(), Method::Medians, 256).unwrap();
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// let opts = TrackOptions {
+///     char_box: CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 80.0 },
+///     spacing_mm: DEFAULT_SPACING_MM,
+///     alpha_rad: 0.0,
+///     sizing: Sizing::Brush,
+/// };
+/// let built = build_track(&paths, &pen1, &opts).unwrap();
+/// assert_eq!(built.track.strokes.len(), 1);
+/// // The stroke lies in its box and presses within the brush's calibrated depths.
+/// let h = &pen1.ranges.h_mm;
+/// assert!(built.track.strokes[0].points.iter().all(|p| (10.0..=90.0).contains(&p.x_mm) && p.h_mm <= h.max));
+/// ```
+///
 /// # Errors
 /// [`ProfileError`] if the profile cannot be inverted or predicts degenerate footprints.
 pub fn build_track(
