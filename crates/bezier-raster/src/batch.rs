@@ -138,6 +138,21 @@ pub fn render_stamps(
 /// Renders a track into a `width × height` image whose top-left corner is paper point
 /// `origin_mm`, at `px_per_mm`, composing footprints by per-pixel max.
 ///
+/// # Examples
+/// ```
+/// use bezier_raster::brush_model::{BrushProfile, Extrapolation, PointMm, Stroke, Track, TrackPoint};
+/// use bezier_raster::{Bsm, render_track};
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// // A 20 mm stroke along y = 15 mm, pressed 15 mm.
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 15.0, h_mm: 15.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=100).map(|i| pt(20.0 + 0.2 * f64::from(i))).collect() }] };
+/// // The paper window [0, 60] × [0, 30] mm at 4 px/mm.
+/// let img = render_track(&track, &pen1, &Bsm, Extrapolation::Refuse, PointMm::new(0.0, 0.0), 4.0, 240, 120).unwrap();
+/// assert!(img.get(120, 60) > 0.99); // (30, 15) mm: inside the stroke
+/// assert_eq!(img.get(120, 115), 0.0); // (30, 28.75) mm: paper
+/// assert!(img.data().iter().all(|v| (0.0..=1.0).contains(v)));
+/// ```
+///
 /// # Errors
 /// [`ProfileError`] for the first point the profile refuses.
 #[allow(clippy::too_many_arguments)]

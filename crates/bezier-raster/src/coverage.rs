@@ -120,6 +120,22 @@ pub enum RasterError {
 }
 
 /// A grayscale coverage image: `width × height` values in `[0, 1]`, row-major, ink = 1.
+///
+/// # Examples
+/// ```
+/// use bezier_raster::Coverage;
+/// let mut a = Coverage::new(4, 2);
+/// a.data_mut()[0] = 1.0;
+/// let b = Coverage::from_vec(4, 2, vec![0.5; 8]).unwrap();
+/// // Stamps compose by per-pixel max.
+/// a.max_with(&b);
+/// assert_eq!((a.get(0, 0), a.get(3, 1)), (1.0, 0.5));
+/// assert!((a.ink() - 4.5).abs() < 1e-9);
+/// // On disk ink is black on white: full ink is grey level 0.
+/// assert_eq!(a.to_gray8()[0], 0);
+/// // A buffer of the wrong length is refused.
+/// assert!(Coverage::from_vec(4, 2, vec![0.0; 7]).is_err());
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Coverage {
     width: u32,

@@ -38,6 +38,24 @@ use crate::units::{Press, Stroke, Track, TrackPoint, wrap_angle_rad};
 
 /// The forward model's constants. [`ForwardModel::default`] holds the values documented in
 /// docs/brush-model.md.
+///
+/// # Examples
+/// ```
+/// use brush_model::{BrushProfile, Extrapolation, ForwardModel, TrackPoint};
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// // An upright brush pressed 15 mm and pulled 20 mm along −x.
+/// let states: Vec<TrackPoint> =
+///     (0..=20).map(|i| TrackPoint { x_mm: f64::from(20 - i), y_mm: 0.0, h_mm: 15.0, alpha_rad: 0.0, beta_rad: 0.0 }).collect();
+/// let sweep = ForwardModel::default().sweep(&pen1, &states, Extrapolation::Refuse);
+/// assert!(!sweep.stamps.is_empty());
+/// // Dragged hairs trail the motion: the last footprint points back, along +x.
+/// let last = sweep.directions.last().unwrap().unwrap();
+/// assert!(last.abs() < 1e-9);
+/// // Tilted past the threshold, every footprint points the way the brush leans.
+/// let tilted: Vec<TrackPoint> = states.iter().map(|p| TrackPoint { alpha_rad: 0.08, beta_rad: 0.05, ..*p }).collect();
+/// let sweep = ForwardModel::default().sweep(&pen1, &tilted, Extrapolation::Refuse);
+/// assert!(sweep.directions.iter().all(|d| (d.unwrap() - 0.05).abs() < 1e-9));
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ForwardModel {
     /// Tilt at and above which the footprint points along the lean direction β, rad.
@@ -58,10 +76,8 @@ pub struct ForwardModel {
 /// Default tilt threshold: 2° (below it a tilt hardly bends the bundle, so the drag decides).
 pub const TILT_THRESHOLD_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
-/// Default trailing reach, as a fraction of the footprint length. Swept with the physical track
-/// (reverse entry, turn over, trailing) on the first 200 embedded characters at 256², executed
-/// CSIM: 0.3 → 0.897, 0.4 → 0.914, 0.45 → 0.916, 0.5 → 0.917, 0.55 → 0.916, 0.6 → 0.915,
-/// 0.75 → 0.907 (recorded in docs/trajectory.md); 0.5 kept.
+/// Default trailing reach, as a fraction of the footprint length. Chosen on the tuning set
+/// (docs/trajectory.md, Track building).
 pub const TRAIL_REACH: f64 = 0.5;
 
 impl Default for ForwardModel {

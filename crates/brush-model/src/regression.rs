@@ -374,6 +374,29 @@ impl Design {
 
 /// Fits the general form (Eq. 6): `lt`, `lh`, `lr` each on `(1, h, α, β)`.
 ///
+/// # Examples
+/// ```
+/// use brush_model::{FitError, Footprint, Measurement, Press, fit_general};
+/// // Footprints that follow a known law in (h, α, β).
+/// let mut rows = Vec::new();
+/// for h_mm in [2.0, 4.0, 6.0, 8.0] {
+///     for alpha_rad in [0.0, 0.05, 0.1] {
+///         for beta_rad in [-0.1, 0.0, 0.1] {
+///             let press = Press { h_mm, alpha_rad, beta_rad };
+///             let footprint =
+///                 Footprint { lt_mm: 4.0 + 0.5 * h_mm + 2.0 * alpha_rad, lh_mm: 1.0 + 0.2 * h_mm, lr_mm: 0.5 + 0.1 * h_mm };
+///             rows.push(Measurement { press, footprint });
+///         }
+///     }
+/// }
+/// let report = fit_general(&rows).unwrap();
+/// let lt = &report.outputs["lt_mm"].coef;
+/// assert!((lt.intercept - 4.0).abs() < 1e-9 && (lt.h_mm.unwrap() - 0.5).abs() < 1e-9);
+/// assert!((lt.alpha_rad.unwrap() - 2.0).abs() < 1e-9 && lt.beta_rad.unwrap().abs() < 1e-9);
+/// // One press cannot fit even a constant and its error.
+/// assert!(matches!(fit_general(&rows[..1]), Err(FitError::TooFewRows { .. })));
+/// ```
+///
 /// # Errors
 /// [`FitError`] when there are too few rows, a non-finite value, or collinear regressors.
 pub fn fit_general(rows: &[Measurement]) -> Result<FitReport, FitError> {

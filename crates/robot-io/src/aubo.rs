@@ -112,6 +112,16 @@ impl AuboClient {
     /// form), with `timeout` for the connection and every later call. [`AuboClient::open`]
     /// speaks the controller's own protocol.
     ///
+    /// # Examples
+    /// ```no_run
+    /// use std::time::Duration;
+    /// use robot_io::AuboClient;
+    /// // A controller on the local network (the line-delimited transport).
+    /// let client = AuboClient::connect("192.168.1.10:8899", Duration::from_secs(5))?;
+    /// # drop(client);
+    /// # Ok::<(), robot_io::RobotError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`RobotError::Io`] if the address does not resolve or the connection fails.
     pub fn connect(addr: &str, timeout: Duration) -> Result<Self, RobotError> {

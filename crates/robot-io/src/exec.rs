@@ -63,6 +63,16 @@ pub const IN_FRONT_M: [f64; 3] = [0.45, 0.05, 0.05];
 /// A level sheet (as [`PaperFrame::level`]) placed so that the paper point `center_mm`
 /// (x, y, mm) lies at [`IN_FRONT_M`], with the usable area `bounds_mm` (`[x0, y0, x1, y1]`, mm).
 /// The frame `maobi write` and `maobi preview` run a program on when no `paper.json` is given.
+///
+/// # Examples
+/// ```
+/// use robot_io::{exec::IN_FRONT_M, level_frame_in_front};
+/// // An A4 sheet (210 × 297 mm) whose middle lies in front of the arm.
+/// let frame = level_frame_in_front([105.0, 148.5], [0.0, 0.0, 210.0, 297.0]);
+/// let [x_mm, y_mm, depth_mm] = frame.to_paper(IN_FRONT_M);
+/// assert!((x_mm - 105.0).abs() < 1e-9 && (y_mm - 148.5).abs() < 1e-9 && depth_mm.abs() < 1e-9);
+/// assert!(frame.contains(200.0, 290.0) && !frame.contains(220.0, 100.0));
+/// ```
 pub fn level_frame_in_front(center_mm: [f64; 2], bounds_mm: [f64; 4]) -> PaperFrame {
     let [x_m, y_m, z_m] = IN_FRONT_M;
     let mut f = PaperFrame::level([x_m - center_mm[0] / 1000.0, y_m + center_mm[1] / 1000.0, z_m], [0.0, 0.0]);
@@ -152,6 +162,23 @@ pub(crate) fn joint_motion_dh(
 /// Executes a whole program without a connection, as the simulator would if it were sent: the
 /// first joint move from the simulator's home position ([`HOME_JOINTS`]), then every move in
 /// order. Returns the executed path ([`line_motion`], [`joint_motion`]).
+///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, build_program, execute_program, level_frame_in_front};
+/// let profile = BrushProfile::builtin("pen1").unwrap();
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=100).map(|i| pt(30.0 + 0.2 * f64::from(i))).collect() }] };
+/// // A level sheet whose surface is at z = 0.05 m in the base frame.
+/// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+/// let (program, _) = build_program(&track, &profile, &frame, &RobotConfig::default()).unwrap();
+/// let trace = execute_program(&program);
+/// assert!(trace.windows(2).all(|w| w[0].t_s <= w[1].t_s));
+/// // The brush tip goes 3 mm into the paper and no deeper.
+/// let lowest_m = trace.iter().map(|e| e.pose.0[2]).fold(f64::INFINITY, f64::min);
+/// assert!((lowest_m - (0.05 - 0.003)).abs() < 1e-6);
+/// ```
 pub fn execute_program(program: &Program) -> Vec<TraceEntry> {
     let mut out = Vec::new();
     execute_with(program, |samples, _, _| out.extend_from_slice(samples));

@@ -56,6 +56,26 @@ pub struct PaperFrame {
 impl PaperFrame {
     /// Loads `paper.json` and fits the frame.
     ///
+    /// # Examples
+    /// ```
+    /// use robot_io::PaperFrame;
+    /// // Three corners of a 300 mm sheet touched with the brush tip.
+    /// let json = r#"{"touch_points": [
+    ///     {"paper_mm": [0, 0], "robot_m": [0.3, 0.25, 0.05]},
+    ///     {"paper_mm": [300, 0], "robot_m": [0.6, 0.25, 0.05]},
+    ///     {"paper_mm": [0, 300], "robot_m": [0.3, -0.05, 0.05]}
+    /// ], "size_mm": [300, 300]}"#;
+    /// let path = std::env::temp_dir().join(format!("maobi-doc-paper-{}.json", std::process::id()));
+    /// std::fs::write(&path, json).unwrap();
+    /// let frame = PaperFrame::load(&path);
+    /// std::fs::remove_file(&path).unwrap();
+    /// let frame = frame.unwrap();
+    /// assert!(frame.residual_mm < 1e-6);
+    /// // The paper point (150, 150) mm, 2 mm deep, in the base frame and back.
+    /// let [x_mm, y_mm, depth_mm] = frame.to_paper([0.45, 0.1, 0.048]);
+    /// assert!((x_mm - 150.0).abs() < 1e-6 && (y_mm - 150.0).abs() < 1e-6 && (depth_mm - 2.0).abs() < 1e-6);
+    /// ```
+    ///
     /// # Errors
     /// [`RobotError::Read`] or [`RobotError::Json`] naming the file for an unreadable file or
     /// invalid JSON; [`RobotError::Config`] naming it for too few or collinear points, or a

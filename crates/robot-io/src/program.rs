@@ -333,6 +333,23 @@ fn check_segment(
 /// deeper than the track asks there (travel, approach, lift and dip above the paper); and every
 /// pose reachable by the AUBO-i5 with the brush orientation asked for.
 ///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, build_program, level_frame_in_front};
+/// let profile = BrushProfile::builtin("pen1").unwrap();
+/// // One straight stroke, 30 mm long, pressed 3 mm deep.
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=200).map(|i| pt(30.0 + 0.15 * f64::from(i))).collect() }] };
+/// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+/// let cfg = RobotConfig::default();
+/// let (program, _report) = build_program(&track, &profile, &frame, &cfg).unwrap();
+/// assert_eq!(program.strokes.len(), 1);
+/// // A press deeper than the profile's range is refused before anything moves.
+/// let deep = Track { strokes: vec![Stroke { points: vec![TrackPoint { h_mm: 50.0, ..pt(40.0) }; 2] }] };
+/// assert!(build_program(&deep, &profile, &frame, &cfg).is_err());
+/// ```
+///
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first offending stroke and point, the value and the limit.
 pub fn build_program(

@@ -178,6 +178,23 @@ fn crop_box(pts: &[(f64, f64)], w: usize, h: usize) -> (usize, usize, usize, usi
 }
 
 /// Fits the footprint to the mask; lengths are returned in mm using `px_per_mm`.
+///
+/// # Examples
+/// ```
+/// use stroke_fit::brush_model::{BrushProfile, Extrapolation, PointMm, Press};
+/// use stroke_fit::synth::{Degradation, photo};
+/// use stroke_fit::{fit_footprint, mask_from_gray};
+/// // A synthetic photo of a known press, 8 px/mm, blurred, noisy and JPEG-compressed.
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// let fp = pen1.predict(&Press::from_degrees(15.0, 5.0, 0.0), Extrapolation::Refuse).unwrap();
+/// let (px_per_mm, size_px) = (8.0, 160);
+/// let gray = photo(&fp, PointMm::new(3.0, 10.0), 0.0, px_per_mm, size_px, size_px, &Degradation::default(), 1);
+/// let mask = mask_from_gray(gray, size_px as usize, size_px as usize, "synthetic").unwrap();
+/// let fit = fit_footprint(&mask, px_per_mm);
+/// let rel = |a: f64, b: f64| (a - b).abs() / b;
+/// assert!(rel(fit.lt_mm, fp.lt_mm) < 0.05 && rel(fit.lh_mm, fp.lh_mm) < 0.05 && rel(fit.lr_mm, fp.lr_mm) < 0.05);
+/// assert!(fit.beta_rad.abs() < 0.02 && fit.iou > 0.9);
+/// ```
 pub fn fit_footprint(mask: &InkMask, px_per_mm: f64) -> StrokeFit {
     let (w, h) = (mask.width, mask.height);
     let pts: Vec<(f64, f64)> =

@@ -42,6 +42,23 @@ fn normal(rng: &mut SplitMix64) -> f64 {
     clippy::too_many_arguments,
     reason = "xtask's fixtures call this shape; grouping the placement (anchor, β) and the canvas (scale, size) is a change for both at once"
 )]
+///
+/// # Examples
+/// ```
+/// use stroke_fit::brush_model::{Footprint, PointMm};
+/// use stroke_fit::synth::{Degradation, photo};
+/// let fp = Footprint { lt_mm: 6.0, lh_mm: 2.0, lr_mm: 1.5 };
+/// let clean = Degradation { blur_px: 0.0, noise: 0.0, gradient: 0.0, bleed_px: 0.0, specks: 0, jpeg_quality: None };
+/// let gray = photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &clean, 7);
+/// assert_eq!(gray.len(), 100 * 100);
+/// // Dark ink on light paper: the pixels darker than mid-grey cover the footprint's area.
+/// let dark_px = gray.iter().filter(|g| **g < 0.5).count() as f64;
+/// let area_px = fp.area_mm2() * 10.0 * 10.0;
+/// assert!((dark_px - area_px).abs() < 0.05 * area_px);
+/// // One seed, one photo.
+/// assert_eq!(photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3),
+///            photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3));
+/// ```
 pub fn photo(
     fp: &Footprint,
     anchor_mm: PointMm,
@@ -105,6 +122,22 @@ pub fn photo(
 }
 
 /// Encodes grey levels as an 8-bit PNG that records its scale (`pHYs`, pixels per metre).
+///
+/// # Examples
+/// ```
+/// use stroke_fit::{load_ink, scale_from_metadata};
+/// use stroke_fit::brush_model::{Footprint, PointMm};
+/// use stroke_fit::synth::{Degradation, photo, png_with_scale};
+/// let fp = Footprint { lt_mm: 6.0, lh_mm: 2.0, lr_mm: 1.5 };
+/// let gray = photo(&fp, PointMm::new(1.0, 5.0), 0.0, 12.5, 125, 125, &Degradation::default(), 1);
+/// let path = std::env::temp_dir().join(format!("maobi-doc-stroke-{}.png", std::process::id()));
+/// std::fs::write(&path, png_with_scale(&gray, 125, 125, 12.5)).unwrap();
+/// // The file carries its scale, so a calibration photo needs no separate one.
+/// let (scale, mask) = (scale_from_metadata(&path), load_ink(&path));
+/// std::fs::remove_file(&path).unwrap();
+/// assert!((scale.unwrap() - 12.5).abs() < 1e-9);
+/// assert_eq!(mask.unwrap().width, 125);
+/// ```
 pub fn png_with_scale(gray: &[f32], width: u32, height: u32, px_per_mm: f64) -> Vec<u8> {
     let mut out = Vec::new();
     {

@@ -103,6 +103,19 @@ fn same_size(a: GrayRef<'_>, b: GrayRef<'_>) -> Result<(), MetricsError> {
 
 /// Cosine similarity of the two images as vectors. Both blank: 1; exactly one blank: 0.
 ///
+/// # Examples
+/// ```
+/// use stroke_metrics::{GrayRef, csim};
+/// let a = [1.0, 1.0, 0.0, 0.0];
+/// let b = [1.0, 0.0, 0.0, 0.0];
+/// let (a, b) = (GrayRef::new(&a, 2, 2).unwrap(), GrayRef::new(&b, 2, 2).unwrap());
+/// // (1·1) / (√2 · 1)
+/// assert!((csim(a, b).unwrap() - 0.5f64.sqrt()).abs() < 1e-12);
+/// // Images of different sizes are an error, not a score.
+/// let c = [0.0; 6];
+/// assert!(csim(a, GrayRef::new(&c, 3, 2).unwrap()).is_err());
+/// ```
+///
 /// # Errors
 /// [`MetricsError::SizeMismatch`].
 pub fn csim(a: GrayRef<'_>, b: GrayRef<'_>) -> Result<f64, MetricsError> {
@@ -122,6 +135,16 @@ pub fn csim(a: GrayRef<'_>, b: GrayRef<'_>) -> Result<f64, MetricsError> {
 }
 
 /// Intersection over union of the ink masks (`v ≥ 0.5`). Both blank: 1.
+///
+/// # Examples
+/// ```
+/// use stroke_metrics::{GrayRef, iou};
+/// // Ink is v ≥ 0.5: a has pixels 0 and 1, b has pixels 1 and 2.
+/// let a = [0.9, 0.5, 0.4, 0.0];
+/// let b = [0.0, 1.0, 0.7, 0.1];
+/// let (a, b) = (GrayRef::new(&a, 4, 1).unwrap(), GrayRef::new(&b, 4, 1).unwrap());
+/// assert!((iou(a, b).unwrap() - 1.0 / 3.0).abs() < 1e-12);
+/// ```
 ///
 /// # Errors
 /// [`MetricsError::SizeMismatch`].

@@ -108,6 +108,21 @@ impl SsimWorkspace {
 
 /// Mean SSIM of `a` and `b`, allocating a fresh [`SsimWorkspace`]; see the crate docs.
 ///
+/// # Examples
+/// ```
+/// use stroke_metrics::{GrayRef, ssim};
+/// // A 32 × 32 bar, and the same bar moved by 2 px.
+/// let bar = |x0: usize| -> Vec<f32> { (0..32 * 32).map(|i| if (x0..x0 + 6).contains(&(i % 32)) { 1.0 } else { 0.0 }).collect() };
+/// let (a, b) = (bar(10), bar(12));
+/// let (a, b) = (GrayRef::new(&a, 32, 32).unwrap(), GrayRef::new(&b, 32, 32).unwrap());
+/// assert!((ssim(a, a).unwrap() - 1.0).abs() < 1e-12);
+/// let s = ssim(a, b).unwrap();
+/// assert!(s > 0.0 && s < 1.0);
+/// // The window is 11 × 11: smaller images are refused.
+/// let tiny = [0.0f32; 100];
+/// assert!(ssim(GrayRef::new(&tiny, 10, 10).unwrap(), GrayRef::new(&tiny, 10, 10).unwrap()).is_err());
+/// ```
+///
 /// # Errors
 /// [`MetricsError::SizeMismatch`]; [`MetricsError::TooSmall`] below 11×11.
 pub fn ssim(a: GrayRef<'_>, b: GrayRef<'_>) -> Result<f64, MetricsError> {

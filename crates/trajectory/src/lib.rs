@@ -71,9 +71,8 @@ pub use skeleton::{
 pub use template::{Registration, StrokeFit, TemplateOptions};
 pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track};
 
-/// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons: 256²
-/// scored CSIM 0.896 / 0.877 (medians / skeleton), 512² 0.898 / 0.885, 768² no better (see
-/// docs/trajectory.md).
+/// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 pub const DEFAULT_ANALYSIS_PX: u32 = 512;
 
 /// How centre lines are found.
@@ -129,6 +128,18 @@ pub enum TrajectoryError {
 /// [`Method::Template`] here registers the glyph's own medians onto its own shape (the glyph is
 /// its own template); for a font or image glyph use [`centre_lines_from_template`].
 ///
+/// # Examples
+/// ```
+/// use trajectory::{Method, centre_lines, glyph};
+/// let g = glyph::embedded('十').unwrap();
+/// let paths = centre_lines(&g, Method::Medians, 256).unwrap();
+/// // 十 is written in two strokes: 横, then 竖.
+/// assert_eq!(paths.len(), 2);
+/// // Every point carries the glyph's local half-width (em units).
+/// assert!(paths.iter().all(|p| p.points.len() == p.half_widths.len()));
+/// assert!(paths.iter().all(|p| p.half_widths.iter().any(|w| *w > 0.0)));
+/// ```
+///
 /// # Errors
 /// [`TrajectoryError::NoMedians`] for [`Method::Medians`] or [`Method::Template`] on a source
 /// without medians; [`TrajectoryError::Empty`] for a blank glyph.
@@ -148,6 +159,17 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
 /// lines, in the template's stroke count and order, with what the registration found per stroke
 /// ([`Registration::strokes`]: strokes that found no ink are kept and flagged there). Analysis on
 /// an `analysis_px²` raster of the em box; otherwise [`TemplateOptions::default`].
+///
+/// # Examples
+/// ```
+/// use trajectory::{centre_lines_from_template, glyph, template};
+/// let hanzi_writer = glyph::embedded('十').unwrap();
+/// // A target with the shape only, as a font or a photo gives it.
+/// let target = template::shape_only(&hanzi_writer);
+/// let reg = centre_lines_from_template(&hanzi_writer, &target, 128).unwrap();
+/// assert_eq!(reg.paths.len(), 2);
+/// assert!(reg.strokes.iter().all(|s| s.found_ink));
+/// ```
 ///
 /// # Errors
 /// [`TrajectoryError::NoMedians`] when the template has no medians; [`TrajectoryError::Empty`]

@@ -13,7 +13,8 @@ use crate::skeleton::{GraphOptions, Skeleton};
 use crate::{Glyph, StrokePath, TrajectoryError, distance, glyph, raster};
 
 /// Medians are densified to at most this spacing (em units) before they are re-centred: a few
-/// analysis pixels at 512² (2 px), fine against a stroke's width. Not swept.
+/// analysis pixels at 512² (2 px), fine against a stroke's width. Hand-set (docs/trajectory.md,
+/// Tuned constants).
 pub(crate) const MEDIAN_STEP_EM: f64 = 8.0;
 
 /// [`crate::Method::Medians`]: each median (densified every [`MEDIAN_STEP_EM`]) is moved onto
@@ -129,10 +130,7 @@ pub(crate) fn centre_on_ridge(p: &[Point], dt: &[f32], n: usize, px_to_em: f64) 
 /// Where a stroke's centre line should end, as a fraction of the local half-width left: hand-drawn
 /// medians stop well inside the stroke's end cap, so each end is continued along its direction
 /// until the distance to the outline falls to this fraction of the half-width at the old end.
-/// Swept on the first 200 embedded characters (medians, CSIM): 0.35 / 0.5 / 0.65 / 0.8 / 0.95 →
-/// 0.888 / 0.895 / **0.895** / 0.891 / 0.886; for the corner knobs on the first 300, 0.4 / 0.5 /
-/// 0.65 / 0.8 → 0.916 / 0.916 / 0.916 / 0.914 (docs/trajectory.md, "Centre lines"). Tuned on the
-/// embedded set, no held-out score.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 pub(crate) const END_CAP_FRACTION: f64 = 0.65;
 
 /// Continues both ends of a centre line outward (see [`END_CAP_FRACTION`]), one em unit at a time.
@@ -195,8 +193,8 @@ fn run_out(from: Point, u: Vec2, w: f64, dt: &[f32], n: usize, px_to_em: f64) ->
 /// centre lines cut the corner inside it. At each sharp corner of a centre line (the turn test of
 /// [`crate::CORNER_RAD`] over ±[`crate::CORNER_REACH_EM`]) the line is continued out along the
 /// corner's outer bisector until the distance to the outline falls to [`END_CAP_FRACTION`] of the
-/// half-width at the corner, and the next leg starts from there. On the embedded set this raised
-/// the medians method's mean CSIM from 0.899 to 0.912 and IoU from 0.800 to 0.823.
+/// half-width at the corner, and the next leg starts from there (docs/trajectory.md, "Centre
+/// lines").
 pub(crate) fn knob_corners(mut p: Vec<Point>, mut w: Vec<f64>, dt: &[f32], n: usize, px_to_em: f64) -> StrokePath {
     let turns = crate::path::corner_turns(&p);
     let mut corners = Vec::with_capacity(turns.len());

@@ -41,15 +41,13 @@ impl CharBox {
 }
 
 /// The char box side (mm) [`auto_char_mm`] falls back to when the paths have no width or the
-/// profile gives no belly width: a middle size for the built-in brushes (pen1's automatic boxes
-/// run from 121 to 169 mm over the first 300 embedded characters), not tuned.
+/// profile gives no belly width: a middle size for the built-in brushes, not tuned
+/// (docs/trajectory.md, Tuned constants).
 const FALLBACK_CHAR_MM: f64 = 60.0;
 
 /// The lower percentile of the glyphs' half-widths [`auto_char_mm`] matches to the brush's
-/// range (with [`CHAR_BOX_HIGH_PERCENTILE`]). Scaling the resulting box by 0.9 or 1.1 lowered
-/// the mean CSIM over the first 200 embedded characters, and fixed sizes on ten test characters
-/// scored below it (docs/trajectory.md, "The char box"); the percentiles themselves were not
-/// swept.
+/// range (with [`CHAR_BOX_HIGH_PERCENTILE`]). Chosen on the tuning set (docs/trajectory.md,
+/// Tuned constants).
 const CHAR_BOX_LOW_PERCENTILE: f64 = 0.2;
 /// The upper percentile ([`CHAR_BOX_LOW_PERCENTILE`]).
 const CHAR_BOX_HIGH_PERCENTILE: f64 = 0.8;
@@ -57,6 +55,17 @@ const CHAR_BOX_HIGH_PERCENTILE: f64 = 0.8;
 /// The default char box size for a set of centre lines: the em scale that maps the glyphs'
 /// typical half-widths (20th to 80th percentile over all points) onto the brush's belly
 /// half-width range at tilt `alpha_rad`, matching their geometric middles. Returns mm.
+///
+/// # Examples
+/// ```
+/// use trajectory::brush_model::BrushProfile;
+/// use trajectory::{Method, auto_char_mm, centre_lines, glyph};
+/// let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// let size_mm = auto_char_mm(&paths, &pen1, 0.0);
+/// // A box in which pen1's widths match the glyph's strokes: about 12–17 cm for common characters.
+/// assert!((100.0..200.0).contains(&size_mm));
+/// ```
 pub fn auto_char_mm(paths: &[StrokePath], profile: &BrushProfile, alpha_rad: f64) -> f64 {
     let mut w: Vec<f64> = paths.iter().flat_map(|p| p.half_widths.iter().copied()).filter(|v| *v > 0.0).collect();
     w.sort_by(f64::total_cmp);

@@ -32,14 +32,12 @@ impl StrokePath {
     }
 }
 
-/// Turn (radians) above which a centre line has a corner. Swept on the first 200 embedded
-/// characters before corner knobs existed (medians, CSIM): 0.5 / 0.6 / 0.7 / 0.9 / 1.1 rad →
-/// 0.896 / 0.896 / **0.897** / 0.895 / 0.892 (docs/trajectory.md, "Track building"); no
-/// held-out score.
+/// Turn (radians) above which a centre line has a corner. Chosen on the tuning set
+/// (docs/trajectory.md, Tuned constants).
 pub const CORNER_RAD: f64 = 0.7;
 /// The turn is measured between the directions over this arc length before and after a point,
 /// em units (about a stroke width, so the rounded bends of hand-drawn medians still count).
-/// Hand-set, not swept.
+/// Hand-set (docs/trajectory.md, Tuned constants).
 pub const CORNER_REACH_EM: f64 = 50.0;
 
 /// The sharp corners of a centre line (em frame): for every point at least

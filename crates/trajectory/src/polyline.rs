@@ -9,7 +9,7 @@ use kurbo::{Point, Vec2};
 /// A direction is nearly horizontal when it rises or falls by at most this much per unit run
 /// (about 31°). Hand-set with the stroke rules of the skeleton method (docs/trajectory.md,
 /// "Skeleton rules"): 横 in kaishu rises a little to the right, and a box's bottom too, while
-/// 撇 and 捺 run well past it. Not swept.
+/// 撇 and 捺 run well past it. Hand-set (docs/trajectory.md, Tuned constants).
 pub(crate) const NEARLY_HORIZONTAL_SLOPE: f64 = 0.6;
 
 /// Whether `v` is nearly horizontal ([`NEARLY_HORIZONTAL_SLOPE`]), either sign.

@@ -363,19 +363,18 @@ fn uncovered(paths: &[StrokePath], mask: &[bool], n: usize, px_to_em: f64) -> f6
 const NEAR_INK_EM: f64 = 24.0;
 
 /// The most a registered stroke's half-width changes per em of its length (em/em), a forward
-/// and backward pass lowering the wider side. Without it a thin run-out next to a swollen body
-/// made the track's press jump by 6 mm in 0.15 mm, which the robot check refuses (40 mm/mm).
-/// LXGW WenKai Bold, characters 1–20: **1.0** / 0.5 → CSIM 0.927 / 0.928 (with the blunt-cap
-/// share at 0.9); at 0.5 hanzi-writer's own 八 lost 0.017 CSIM against the medians method.
+/// and backward pass lowering the wider side, so that a thin run-out next to a swollen body
+/// does not make the track's press jump faster than the robot check allows. Chosen on the
+/// tuning set (docs/trajectory.md, Tuned constants).
 const MAX_WIDTH_SLOPE: f64 = 1.0;
 
 /// Removes the folds re-centring can leave in a line: a point where the line turns back on
 /// itself (the segments before and after it point more than 90° apart) and one of those two
 /// segments is shorter than [`FOLD_EM`]. Re-centring moves neighbouring points by different
-/// amounts along their normals; where those cross, the line doubled back by a few em units, and
-/// track building's trailing press, sized from the width a footprint length behind, jumped at
-/// the fold past the robot's depth-rate limit (Zhi Mang Xing's 得). Real turns (hooks, 折) are
-/// longer than that on both sides. Repeats until none is left; the ends stay.
+/// amounts along their normals; where those cross, the line doubles back by a few em units, and
+/// track building's trailing press, sized from the width a footprint length behind, would jump
+/// at the fold past the robot's depth-rate limit. Real turns (hooks, 折) are longer than that on
+/// both sides. Repeats until none is left; the ends stay.
 fn unfold(mut p: Vec<Point>, mut w: Vec<f64>) -> (Vec<Point>, Vec<f64>) {
     let mut i = 1;
     while i + 1 < p.len() {

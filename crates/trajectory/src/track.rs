@@ -40,9 +40,9 @@ pub struct TrackOptions {
     pub sizing: Sizing,
 }
 
-/// Default spacing between track points, mm. Halving it changes a 512 px render of the test
-/// characters by less than 0.5 % IoU (a test checks it; on 46 common characters the mean change
-/// is 0.26 % and the worst 0.7 %, at 0.25 mm it was 0.44 % and 1.2 %).
+/// Default spacing between track points, mm: fine enough that halving it hardly changes the
+/// rendered character (a test checks it). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 pub const DEFAULT_SPACING_MM: f64 = 0.15;
 
 /// What track building measured.
@@ -128,6 +128,25 @@ pub const GLIDE_H_MM: f64 = 0.01;
 /// the stroke stays one robot stroke (no jump with the brush down). With `alpha_rad` at or above
 /// the model's tilt threshold the brush leans the way the upright model would point each
 /// footprint (the wrist turns while the brush glides at h = 0).
+///
+/// # Examples
+/// ```
+/// use trajectory::brush_model::BrushProfile;
+/// use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, glyph};
+/// let paths = centre_lines(&glyph::embedded('一').unwrap(), Method::Medians, 256).unwrap();
+/// let pen1 = BrushProfile::builtin("pen1").unwrap();
+/// let opts = TrackOptions {
+///     char_box: CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 80.0 },
+///     spacing_mm: DEFAULT_SPACING_MM,
+///     alpha_rad: 0.0,
+///     sizing: Sizing::Brush,
+/// };
+/// let built = build_track(&paths, &pen1, &opts).unwrap();
+/// assert_eq!(built.track.strokes.len(), 1);
+/// // The stroke lies in its box and presses within the brush's calibrated depths.
+/// let h = &pen1.ranges.h_mm;
+/// assert!(built.track.strokes[0].points.iter().all(|p| (10.0..=90.0).contains(&p.x_mm) && p.h_mm <= h.max));
+/// ```
 ///
 /// # Errors
 /// [`ProfileError`] if the profile cannot be inverted or predicts degenerate footprints.

@@ -72,6 +72,21 @@ fn program_moves(program: &Program) -> Vec<(Option<usize>, &Move)> {
 /// fraction and runs every move. The title goes, made inert ([`text::comment_text`]), into
 /// the first comment.
 ///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, aubo_lua, build_program, export::verify_lua, level_frame_in_front};
+/// let profile = BrushProfile::builtin("pen1").unwrap();
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
+/// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+/// let (program, _) = build_program(&track, &profile, &frame, &RobotConfig::default()).unwrap();
+/// let lua = aubo_lua(&program, "一 -- a title stays a comment").unwrap();
+/// assert!(lua.contains("return function(api)"));
+/// // The text reads back as the checked program.
+/// verify_lua(&lua, &program).unwrap();
+/// ```
+///
 /// # Errors
 /// [`RobotError::Unsafe`] when the text, read back ([`parse::read_lua`]), does not match the
 /// program (a number that cannot be printed so that it reads back as the checked value).
@@ -148,6 +163,20 @@ pub fn verify_lua(text: &str, program: &Program) -> Result<(), RobotError> {
 
 /// A URScript program: `movel(p[x, y, z, rx, ry, rz], a, v, r=blend)` with rotation vectors.
 /// The title goes, made inert ([`text::comment_text`]), into the first comment.
+///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, build_program, export::verify_urscript, level_frame_in_front, urscript};
+/// let profile = BrushProfile::builtin("pen1").unwrap();
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
+/// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+/// let (program, _) = build_program(&track, &profile, &frame, &RobotConfig::default()).unwrap();
+/// let script = urscript(&program, "一").unwrap();
+/// assert!(script.contains("def maobi_write():") && script.contains("movel(p["));
+/// verify_urscript(&script, &program).unwrap();
+/// ```
 ///
 /// # Errors
 /// [`RobotError::Unsafe`] when the text, read back ([`parse::read_urscript`]), does not match
@@ -301,6 +330,18 @@ fn same_pose(target: Target, read: &[f64; 6], want: &Pose) -> Result<(), String>
 /// before the strokes the reload rule picks. The title goes, made inert
 /// ([`text::comment_text`]), into the first comment.
 ///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, gcode};
+/// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
+/// let (text, _warnings) = gcode(&track, &RobotConfig::default(), "一").unwrap();
+/// assert!(text.starts_with("; maobi writing program: 一"));
+/// // The press is Z = −H: 3 mm below the touching plane.
+/// assert!(text.lines().any(|l| l.starts_with("G1") && l.contains("Z-3")));
+/// ```
+///
 /// # Errors
 /// [`RobotError::Unsafe`] when the text, read back ([`parse::read_gcode`]), does not match the
 /// moves made from the track (a value that is not finite or cannot be printed so that it
@@ -311,6 +352,20 @@ pub fn gcode(track: &Track, cfg: &RobotConfig, title: &str) -> Result<(String, V
 
 /// [`gcode`] with the track's character boundaries (`stroke_chars`, for the reload rule
 /// `before_each_char`).
+///
+/// # Examples
+/// ```
+/// use robot_io::brush_model::{Stroke, Track, TrackPoint};
+/// use robot_io::{RobotConfig, gcode, gcode_chars};
+/// let pt = |x: f64, y: f64| TrackPoint { x_mm: x, y_mm: y, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let stroke = |y: f64| Stroke { points: (0..=20).map(|i| pt(30.0 + f64::from(i), y)).collect() };
+/// // Two characters of one stroke each.
+/// let track = Track { strokes: vec![stroke(40.0), stroke(80.0)] };
+/// let cfg = RobotConfig::default();
+/// let (text, _) = gcode_chars(&track, Some(&[0, 1]), &cfg, "一一").unwrap();
+/// // Without an ink station the boundaries change nothing.
+/// assert_eq!(text, gcode(&track, &cfg, "一一").unwrap().0);
+/// ```
 ///
 /// # Errors
 /// As [`gcode`].

@@ -385,9 +385,7 @@ pub(super) fn merge_junctions(g: &mut Graph, opts: &GraphOptions) {
 }
 
 /// A branch's direction (and width) is measured out to this many of its node's half-widths...
-/// Moving the direction's span from the junction itself to half a width out to three widths out
-/// took the embedded set's stroke counts (a tuning set) from 65 % to 77 % together with joining
-/// loose ends (docs/trajectory.md, "Scores"); not swept on its own.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const BRANCH_REACH_WIDTHS: f64 = 3.0;
 /// ... and at least this far (px).
 const BRANCH_REACH_MIN_PX: f64 = 4.0;

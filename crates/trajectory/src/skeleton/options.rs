@@ -4,17 +4,12 @@
 //! a junction or chain point, px), except [`GraphOptions::loose_end_em`] (em units); angles are
 //! radians (degrees only in [`GraphOptions::set`]'s keys, for sweeps).
 //!
-//! Where the defaults came from: `cargo xtask skeleton-counts` (% of characters whose skeleton
-//! stroke count equals the medians'), one parameter at a time, on the **tuning half** of
-//! `fixtures/hanzi/heldout-2000.txt` (lines 1–1,000; the rules were first tuned on the embedded
-//! set). With all the defaults below: tuning half 76.8 %, embedded 82.6 % (both tuned on),
-//! **report half (lines 1,001–2,000, never tuned on) 72.8 %**. The sweeps quoted per constant
-//! are from docs/trajectory.md, "Skeleton stroke counts on characters not used for tuning"
-//! (values → % right on the tuning half, with the base the row started from);
-//! `cargo xtask tidy` checks that the values there and here agree. The learned decisions
-//! (`learned_pairing`, `learned_corners`, on by default; their thresholds swept on the tuning
-//! half) come on top of these rules: see docs/trajectory.md, "Learned junction pairing and
-//! corner splitting".
+//! The defaults were chosen on a tuning set with `cargo xtask skeleton-counts`; the sets, the
+//! sweeps and the scores on characters not tuned on are in docs/trajectory.md ("Skeleton stroke
+//! counts on characters not used for tuning", "Learned junction pairing and corner splitting",
+//! "Tuned constants"), and `cargo xtask tidy` checks that the values there and here agree. The
+//! learned decisions (`learned_pairing`, `learned_corners`, on by default) come on top of these
+//! rules.
 
 /// Tuning of the skeleton graph, relative to the local stroke half-width `w` (the distance
 /// transform at a junction).
@@ -149,77 +144,72 @@ impl GraphOptions {
     }
 }
 
-/// Spur length limit, in junction half-widths ([`GraphOptions::spur_factor`]). Sweep from 73.8 %:
-/// 1.5 / 2.5 → 72.6 / 71.6; from 75.1 %: 1.75 → 74.8.
+/// Spur length limit, in junction half-widths ([`GraphOptions::spur_factor`]). Chosen on the tuning
+/// set (docs/trajectory.md, Tuned constants).
 const SPUR_FACTOR: f64 = 2.0;
 
-/// Corner-spur length limit, in junction half-widths ([`GraphOptions::corner_spur_factor`]).
-/// Sweep from 73.8 %: 2.5 / 3.5 / 4 → 73.8 / 73.7 / 73.7.
+/// Corner-spur length limit, in junction half-widths ([`GraphOptions::corner_spur_factor`]). Chosen
+/// on the tuning set (docs/trajectory.md, Tuned constants).
 const CORNER_SPUR_FACTOR: f64 = 3.0;
 
-/// Junctions closer than this many half-widths merge ([`GraphOptions::merge_factor`]). Sweep
-/// from 73.8 % (1.5 before): 1.0 / 2.0 / 2.5 → 63.0 / **74.9** / 72.9; from 75.1 %: 1.75 / 2.25
-/// → 75.2 / 75.1; from 76.8 %: 1.5 → 74.1.
+/// Junctions closer than this many half-widths merge ([`GraphOptions::merge_factor`]). Chosen on
+/// the tuning set (docs/trajectory.md, Tuned constants).
 const MERGE_FACTOR: f64 = 2.0;
 
-/// Two branches continue each other above this angle, degrees
-/// ([`GraphOptions::straight_min_rad`]). Sweep from 73.8 %: 115 / 135 / 145 → 73.9 / 73.9 / 73.1;
-/// from 76.6 %: 120 / 130 → 76.6 / 76.6.
+/// Two branches continue each other above this angle, degrees ([`GraphOptions::straight_min_rad`]).
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const STRAIGHT_MIN_DEG: f64 = 125.0;
 
 /// A chain has a corner where it turns by more than this, degrees ([`GraphOptions::corner_rad`]).
-/// Sweep from 73.8 %: 40 / 60 / 70 → 73.3 / 72.6 / 48.2; from 75.1 %: 45 → 74.7.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const CORNER_DEG: f64 = 50.0;
 
 /// An end point this near a junction (em units) is joined to it ([`GraphOptions::loose_end_em`]).
-/// Sweep from 73.8 %: 5 / 14 / 20 → 62.1 / 74.1 / 73.9; from 75.1 %: 14 → 75.2.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const LOOSE_END_EM: f64 = 9.0;
 
 /// A corner spur points away from both legs by more than this, radians (120°;
-/// [`GraphOptions::corner_spur_away_rad`]). Sweep from 73.8 %: 110° / 130° → 73.1 / 73.1.
+/// [`GraphOptions::corner_spur_away_rad`]). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const CORNER_SPUR_AWAY_RAD: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
 
 /// How far each way a chain point's turn is measured, in local half-widths (a skeleton corner is
-/// rounded over about one width; [`GraphOptions::corner_reach`]). Sweep from 73.8 %: 2 / 3 / 3.5
-/// → 73.7 / 71.1 / 66.4; from 75.1 %: 2.25 → 75.2.
+/// rounded over about one width; [`GraphOptions::corner_reach`]). Chosen on the tuning set
+/// (docs/trajectory.md, Tuned constants).
 const CORNER_REACH: f64 = 2.5;
 
 /// A chain's end leg no longer than this many half-widths can be a hook (钩)
-/// ([`GraphOptions::hook_widths`]). Sweep from 73.8 %: 4 / 6 → 74.0 / 71.8; from 75.1 %: 4 → 75.2.
+/// ([`GraphOptions::hook_widths`]). Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const HOOK_WIDTHS: f64 = 5.0;
 
 /// ... when shorter than this fraction of the leg it turns from ([`GraphOptions::hook_ratio`]).
-/// Sweep from 73.8 %: 0.3 / 0.5 → 73.2 / 74.0; kept last, from 76.6 %: 0.5 → **76.8** (embedded
-/// 82.1 → 82.6 %).
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const HOOK_RATIO: f64 = 0.5;
 
 /// Short pieces inside other strokes are dropped up to this many half-widths
-/// ([`GraphOptions::covered_max_widths`]). Sweep from 73.8 %: 2 / 4 / 5 → 73.9 / 73.8 / 73.8;
-/// from 75.1 %: 2 → 75.1.
+/// ([`GraphOptions::covered_max_widths`]). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const COVERED_MAX_WIDTHS: f64 = 3.0;
 
 /// Branches pair only if the thinner is at least this fraction of the thicker's width
-/// ([`GraphOptions::pair_width_ratio`]). Sweep from 73.8 %: 0.4 / 0.5 / 0.6 / 0.7 → 73.4 / 73.5 /
-/// 73.0 / 57.2; from 74.9 %: 0.5 / 0.6 → **75.1** / 74.3; from 75.1 %: 0.45 / 0.55 → 75.2 / 75.2;
-/// off (0) from 76.6 % → 76.4.
+/// ([`GraphOptions::pair_width_ratio`]). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const PAIR_WIDTH_RATIO: f64 = 0.5;
 
 /// Open-chain 竖折 split when the vertical leg is at least this many times the horizontal
-/// ([`GraphOptions::open_box_min_ratio`]). Sweep from 75.6 %: 0.01 / 0.3 / 0.5 / 1 / 1.5 / 2 / 3
-/// → 76.6 / 76.6 / **76.6** / 76.3 / 75.8 / 75.8 / 75.6.
+/// ([`GraphOptions::open_box_min_ratio`]). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const OPEN_BOX_MIN_RATIO: f64 = 0.5;
 
-/// 提 rises by more than this per unit run ([`GraphOptions::ti_min_rise`]). Sweep from 75.1 %
-/// (0.2 before): 0.3 / 0.4 / 0.5 / 0.6 → 75.6 each; from 76.6 %: 0.2 → 76.1.
+/// 提 rises by more than this per unit run ([`GraphOptions::ti_min_rise`]). Chosen on the tuning set
+/// (docs/trajectory.md, Tuned constants).
 const TI_MIN_RISE: f64 = 0.4;
 
-/// A pair of branch ends continues through its junction at this probability of the learned
-/// model ([`GraphOptions::pair_threshold`]). Sweep on the tuning half, corner threshold 0.5:
-/// 0.05 / 0.1 / 0.15 / 0.2 / 0.3 / 0.4 / 0.5 / 0.6 → 83.2 / 83.1 / 83.1 / **83.1** / 82.5 /
-/// 82.4 / 81.9 / 81.4 (the middle of the plateau kept).
+/// A pair of branch ends continues through its junction at this probability of the learned model
+/// ([`GraphOptions::pair_threshold`]). Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const PAIR_THRESHOLD: f64 = 0.2;
 
 /// A corner splits at this probability of the learned model ([`GraphOptions::corner_threshold`]).
-/// Sweep on the tuning half, pair threshold 0.5: 0.4 / 0.5 / 0.6 / 0.7 / 0.8 → 81.1 / **81.9** /
-/// 81.6 / 81.6 / 82.0; pair threshold 0.3: 0.5 / 0.6 / 0.8 → 82.5 / 82.2 / 82.5.
+/// Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const CORNER_THRESHOLD: f64 = 0.5;

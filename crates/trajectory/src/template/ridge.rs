@@ -77,22 +77,18 @@ fn run_out_own(from: Point, u: Vec2, w_end: f64, dt: &[f32], n: usize, px_to_em:
 }
 
 /// A stroke end's run-out ([`extend_ends_own`]) stops where the distance to the outline falls to
-/// this share of the end's half-width. LXGW WenKai Bold, embedded characters 1–20, executed CSIM
-/// (before [`BLUNT_CHORD_FRACTION`]): 0.65 / 0.4 / 0.25 / 0.1 / 0 → 0.923 / 0.928 / 0.931 /
-/// **0.935** / 0.935 (0.65 with the distance as the width, as the medians method does: 0.925).
+/// this share of the end's half-width. Chosen on the tuning set (docs/trajectory.md, Tuned
+/// constants).
 const END_STOP_FRACTION: f64 = 0.1;
 
 /// Past the medians method's stop ([`crate::medians::END_CAP_FRACTION`] of the end's width) a
 /// run-out goes on only while the ink's half-chord across it is at least this share of the end's
-/// half-width. LXGW WenKai Bold, characters 1–20: none (stop at [`END_STOP_FRACTION`] alone) 0.935,
-/// 0.85 **0.930**, 0.9 0.928; at 0.8 and below hanzi-writer's own 八 lost more than 0.015 CSIM
-/// against the medians method (the test on its own outline), at 0.85 none does.
+/// half-width (a blunt cap). Chosen on the tuning set (docs/trajectory.md, Tuned constants).
 const BLUNT_CHORD_FRACTION: f64 = 0.85;
 
 /// A stroke end's run-out stops where its width grows again by this much (em units) after
-/// narrowing: it has passed a neck into other ink. Hand-set (2 and 4 within 0.001 CSIM on LXGW
-/// WenKai Bold, characters 1–20; without it a run-out into a neighbour made a press jump the
-/// robot check refuses).
+/// narrowing: it has passed a neck into other ink (a run-out into a neighbour would make a press
+/// jump the robot check refuses). Hand-set (docs/trajectory.md, Tuned constants).
 const RUN_OUT_REGROW_EM: f64 = 4.0;
 
 /// Moves each point across the stroke to the nearest ridge of the distance transform `dt`
