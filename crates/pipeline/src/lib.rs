@@ -45,7 +45,7 @@ pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;
 pub use write::{
-    CharReport, CharResult, RefineReport, Similarity, WriteOptions, execute_track, gray, level_frame_for,
+    BrushReport, CharReport, CharResult, PlanReport, RefineReport, Similarity, TimingMs, WriteOptions, execute_track, gray, level_frame_for,
     refine_target, render_char, render_states, side_by_side, similarity, write_char,
 };
 

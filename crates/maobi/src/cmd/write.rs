@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use bezier_raster::{ModelKind, coverage::overlay_png};
+use bezier_raster::ModelKind;
 use brush_model::BrushProfile;
 use pipeline::{
     BrushFit, BrushMiss, CharReport, CharResult, Flow, GlyphInput, Grid, Layout, Prepared, Sheet, SheetError,
@@ -83,8 +83,10 @@ pub struct Args {
     /// Output folder. An existing non-empty folder is refused unless --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
-    /// Replace an existing output folder (the new run is written beside it and swapped in once
-    /// complete; an error or Ctrl-C leaves the old one in place).
+    /// Replace an existing output folder that maobi wrote (the new run is written beside it
+    /// and swapped in once complete; an error or Ctrl-C leaves the old one in place). A folder
+    /// holding files maobi did not write (not in its `.maobi-written` list) is refused, naming
+    /// them: nothing else is ever deleted.
     #[arg(long)]
     force: bool,
     /// Print the summary as JSON on stdout.
@@ -101,11 +103,11 @@ pub struct Args {
 /// `--placement search|auto` of `write` and `evaluate`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct PlacementArg {
-    /// How template tracks (`--from template`, the default for --font and --image) are placed:
-    /// `search` builds the plan at a few char box sizes (0.8–1.35× the size from the widths),
-    /// with each stroke's corners split or written in one piece, and keeps the plan most like
-    /// the glyph (docs/trajectory.md, "Template registration"); where the size is fixed
-    /// (--char-mm, --sheet, several characters sharing one box) only the splits are searched.
+    /// How template tracks (`--from template`, the default for font and image glyphs) are
+    /// placed: `search` builds the plan at a few char box sizes (0.8–1.35× the size from the
+    /// widths), with each stroke's corners split or written in one piece, and keeps the plan
+    /// most like the glyph (docs/trajectory.md, "Template registration"); where the size is
+    /// fixed (--char-mm, or characters sharing one box size) only the splits are searched.
     /// `auto`: the size from the widths, every corner split. Other methods are not affected.
     #[arg(long, default_value = "search", value_parser = ["search", "auto"])]
     placement: String,
@@ -122,8 +124,9 @@ impl PlacementArg {
 #[derive(clap::Args, Debug)]
 pub(crate) struct RefineArgs {
     /// Refine each track by gradient descent against its glyph before executing it (see
-    /// docs/trajectory.md, "Refinement"): `write`'s report.json gains the before/after figures
-    /// and refine.png the loss curve; `evaluate`'s summary gains the means before and after.
+    /// docs/trajectory.md, "Refinement"): each character's report gains the before/after
+    /// figures (and, when writing, refine.png the loss curve); the means before and after
+    /// are printed.
     #[arg(long)]
     refine: bool,
     /// Gradient steps of --refine (default 20).
@@ -301,6 +304,12 @@ fn checked_chars(args: &Args) -> Result<Vec<char>> {
     if chars.is_empty() {
         bail!("TEXT is empty: give at least one character");
     }
+    let spaces = args.text.chars().count() - chars.len();
+    if spaces > 0 {
+        eprintln!(
+            "note: TEXT has {spaces} space(s) or line break(s); they are left out and the characters laid out one after another (use --per-line to break lines)"
+        );
+    }
     if args.image.is_some() && chars.len() != 1 {
         bail!("--image holds one character; TEXT has {}", chars.len());
     }
@@ -330,9 +339,9 @@ fn print_char(r: &CharReport) {
     let executed = match (r.executed, r.agreement) {
         (Some(e), Some(a)) => format!(
             "executed CSIM {:.4}  SSIM {:.4}  IoU {:.4}  (planned CSIM {:.4}, planned vs executed {:.4})",
-            e.csim, e.ssim, e.iou, r.csim, a.csim
+            e.csim, e.ssim, e.iou, r.plan.csim, a.csim
         ),
-        _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.csim, r.ssim, r.iou),
+        _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.plan.csim, r.plan.ssim, r.plan.iou),
     };
     println!(
         "{} ({} via {}, {}): {executed}{}  strokes {}{}  points {}  {:.1} ms",
@@ -340,11 +349,11 @@ fn print_char(r: &CharReport) {
         r.source,
         r.method,
         r.model,
-        r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
-        r.strokes_found,
-        r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
-        r.points,
-        r.millis
+        r.plan.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
+        r.plan.strokes_found,
+        r.plan.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
+        r.plan.points,
+        r.timing_ms.plan
     );
     if let Some(rf) = &r.refine {
         let fig = |s: Option<pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
@@ -411,7 +420,7 @@ fn summary_json(
         "char_mm": char_mm,
         "brush": profile.name,
         "model": args.model.name(),
-        "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
+        "plan_mean": {"csim": mean(|r| r.plan.csim), "ssim": mean(|r| r.plan.ssim), "iou": mean(|r| r.plan.iou)},
         "executed_mean": {
             "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
             "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
@@ -448,11 +457,15 @@ fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
-    write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;
+    write_atomic(&dir.join("overlay.png"), &crate::plot::overlay_legend_png(&r.reference, &r.render)?)?;
     if let Some(ex) = &r.executed {
         write_atomic(&dir.join("executed.png"), &ex.encode_png()?)?;
-        let row = pipeline::side_by_side(&[&r.reference, &r.render, ex]);
-        write_atomic(&dir.join("side-by-side.png"), &row.encode_png()?)?;
+        let row = crate::plot::labelled_row_png(&[
+            ("reference (glyph)", &r.reference),
+            ("plan", &r.render),
+            ("executed", ex),
+        ])?;
+        write_atomic(&dir.join("side-by-side.png"), &row)?;
     }
     // Where this character sits: in its box and, with --sheet, on the sheet, in paper mm.
     let track = r.track_file(profile, sheet.map(|l| [l.sheet.width_mm, l.sheet.height_mm]));

@@ -5,6 +5,7 @@ mod common;
 
 mod brush;
 mod neural;
+mod newcomer;
 mod photos;
 mod preview;
 mod prop_parsers;
