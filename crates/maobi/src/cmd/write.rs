@@ -17,7 +17,7 @@ use trajectory::Method;
 use crate::generator::committed_gen_model;
 
 use crate::common::{
-    BrushArg, OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
+    OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
     print_json, progress, recover_leftovers, write_atomic,
 };
 
@@ -47,8 +47,12 @@ pub struct Args {
     /// has stroke data; skeleton otherwise).
     #[arg(long = "from", value_parser = parse_method())]
     method: Option<Method>,
-    #[command(flatten)]
-    brush: BrushArg,
+    /// Brush: pen1, pen2, a scaled pen1 (pen1-s84, -s71, -s59, -s50, -s42, -s35, -s30, -s25), a
+    /// profile JSON file, or `auto`: the built-in whose width range suits the glyphs at the box
+    /// size, said in the summary (the default with --sheet or --char-mm; otherwise pen1, and the
+    /// box size follows its widths).
+    #[arg(long)]
+    brush: Option<String>,
     /// Stroke model that draws the footprints (`--renderer analytic`).
     #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
@@ -218,7 +222,16 @@ pub fn run(args: Args) -> Result<()> {
     let chars = checked_chars(&args)?;
     let flow = if args.rows { Flow::Rows } else { Flow::Columns };
     let (sheet, sheet_layout) = planned_sheet(&args, chars.len(), flow)?;
-    let profile = load_brush(&args.brush.brush)?;
+    // With a box size known before any glyph work (a sheet, --char-mm), `auto` (the default
+    // then) picks the brush once the glyphs are loaded; every built-in has pen1's tilt range.
+    let box_mm = sheet_layout.as_ref().map(|l| l.char_mm).or(args.char_mm);
+    let auto = match args.brush.as_deref() {
+        Some("auto") => true,
+        Some(_) => false,
+        None => box_mm.is_some(),
+    };
+    let named = if auto { "pen1" } else { args.brush.as_deref().unwrap_or("pen1") };
+    let mut profile = load_brush(named)?;
     let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
     // One run per output folder at a time; what a run that died left beside it is cleaned up
     // (or the old folder put back) before deciding whether the folder may be replaced.
@@ -227,6 +240,15 @@ pub fn run(args: Args) -> Result<()> {
     check_output_folder("--output", &args.output, args.force)?;
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
+    let choice = match box_mm {
+        // The generator is trained for pen1: the neural renderer keeps it.
+        Some(mm) if auto && !args.renderer.neural() => {
+            let c = pipeline::choose_brush(&prepared, &pipeline::builtin_brushes(), mm, alpha_rad);
+            profile = c.profile.clone();
+            Some(c)
+        }
+        _ => None,
+    };
     let refine = args.refine.options()?;
     let generator = match refine {
         Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
@@ -263,7 +285,8 @@ pub fn run(args: Args) -> Result<()> {
         write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
-    let summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
+    let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
+    summary["brush_choice"] = json!(choice);
     let sheet_track = SheetTrack::new(
         &lay,
         flow,
@@ -294,6 +317,10 @@ pub fn run(args: Args) -> Result<()> {
             summary["brush_fit"]["note"].as_str().unwrap_or(""),
             args.output.display()
         );
+        match &choice {
+            Some(c) => println!("brush (--brush auto): {}", c.reason),
+            None => println!("brush: {}", profile.name),
+        }
     }
     Ok(())
 }

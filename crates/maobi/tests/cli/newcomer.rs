@@ -79,3 +79,30 @@ fn a_font_glyph_is_placed_by_its_ink_box_not_cut_off() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["plan"]["strokes_found"], 5, "{r}");
 }
+
+#[test]
+fn a_sheet_gets_a_brush_that_fits_and_the_summary_says_which() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = |p: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    // The README's first sheet: pen1 is too wide for 85.7 mm boxes.
+    let p1 = dir.path().join("pen1");
+    ok(&maobi(&["write", "永字八法", "--sheet", "A4", "--size", "64", "--brush", "pen1", "-o", s(&p1)]));
+    let s1 = json(&p1.join("summary.json"));
+    assert_eq!(s1["brush_fit"]["covered"], false, "{}", s1["brush_fit"]);
+    assert!(s1["brush_choice"].is_null());
+    // By default a sheet gets the built-in whose width range suits its box size, and says why.
+    let auto = dir.path().join("auto");
+    let said = ok(&maobi(&["write", "永字八法", "--sheet", "A4", "--size", "64", "-o", s(&auto)]));
+    let sum = json(&auto.join("summary.json"));
+    let name = sum["brush_choice"]["name"].as_str().unwrap().to_string();
+    assert!(name != "pen1", "{}", sum["brush_choice"]);
+    assert_eq!(sum["brush"], name.as_str());
+    assert_eq!(sum["brush_fit"]["covered"], true, "{}", sum["brush_fit"]);
+    assert!(said.contains(&format!("brush (--brush auto): {name}")), "{said}");
+    let (box_mm, suits) = (sum["char_mm"].as_f64().unwrap(), sum["brush_choice"]["brush_char_mm"].as_f64().unwrap());
+    assert!((suits / box_mm).ln().abs() < 1.19f64.ln(), "{suits} mm for a {box_mm} mm box");
+    // The track records the brush the robot must hold.
+    assert_eq!(json(&auto.join("track.json"))["brush"]["name"], name.as_str());
+}

@@ -17,7 +17,22 @@ fn json(p: &Path) -> serde_json::Value {
 fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sheet");
-    ok(&maobi(&["write", "永字八法", "--sheet", "A4", "--size", "96", "--grid", "mi", "--out", s(&out)]));
+    // pen1 as given: the ink pot test below knows pen1's tool geometry (the default for a sheet,
+    // --brush auto, is tested in newcomer.rs).
+    ok(&maobi(&[
+        "write",
+        "永字八法",
+        "--sheet",
+        "A4",
+        "--size",
+        "96",
+        "--grid",
+        "mi",
+        "--brush",
+        "pen1",
+        "--out",
+        s(&out),
+    ]));
     for f in ["sheet.png", "summary.json", "track.json", "preview.html", "01-永/render.png", "04-法/report.json"] {
         assert!(out.join(f).is_file(), "{f}");
     }

@@ -402,8 +402,9 @@ mod tests {
         paths.iter().map(|p| p.bounding_box()).reduce(|a, b| a.union(b)).unwrap()
     }
 
-    /// Ma Shan Zheng's 永 reaches below the em box's bottom when placed by the em box alone
-    /// (its ink box and em box differ): placed by its ink box it lies inside, centred.
+    /// Ma Shan Zheng's 永 sits low in its em box (placed by the em box alone its ink reaches to
+    /// within 24 of the 1024 units of the bottom, at the image's edge): placed by its ink box it
+    /// is centred.
     #[test]
     fn a_glyph_is_placed_by_its_ink_box_inside_the_em() {
         let font = FontSet::open(&[fixture("msz")], None).unwrap();
@@ -420,15 +421,18 @@ mod tests {
         let gid = face.glyph_index('永').unwrap();
         let upem = f64::from(face.units_per_em());
         let raw = face.glyph_bounding_box(gid).unwrap();
-        // The em-box placement (y' = 900 − y·1024/upem) would put ink below y' = 1024.
+        // The em-box placement (y' = 900 − y·1024/upem) puts the ink's centre well off the em's.
+        let raw_top = EM_TOP - f64::from(raw.y_max) * EM / upem;
         let raw_bottom = EM_TOP - f64::from(raw.y_min) * EM / upem;
-        assert!(raw_bottom > EM, "the fixture's ink reaches {raw_bottom:.0} > {EM}: em and ink box differ");
+        let off = (raw_top + raw_bottom) / 2.0 - EM / 2.0;
+        assert!(off > 0.0 && raw_bottom > 1000.0, "ink {raw_top:.0}..{raw_bottom:.0}: em and ink box differ");
         let b = ink_box(&font.glyph('永').unwrap());
         assert!(b.x0 >= 0.0 && b.y0 >= 0.0 && b.x1 <= EM && b.y1 <= EM, "{b:?}");
         assert!((b.center().x - EM / 2.0).abs() < 1e-6 && (b.center().y - EM / 2.0).abs() < 1e-6, "{b:?}");
-        // The font's scale is kept (1024/upem): the box only moved.
+        // The font's scale is kept (1024/upem): the box only moved (the font's box holds the
+        // control points, so it may exceed the curves' by a few units).
         let h = f64::from(raw.y_max - raw.y_min) * EM / upem;
-        assert!((b.height() - h).abs() < 2.0, "{} vs {h}", b.height());
+        assert!(b.height() <= h + 1e-6 && h - b.height() < 5.0, "{} vs {h}", b.height());
     }
 
     #[test]
