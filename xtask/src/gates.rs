@@ -164,11 +164,11 @@ pub fn character_figures() -> Result<Figures> {
                 .collect::<Result<Vec<_>>>()?;
             let n = reports.len() as f64;
             let key = |m: &str| format!("chars/{}/{}/{m}", method.name(), model.name());
-            f.insert(key("csim"), fig(reports.iter().map(|r| r.csim).sum::<f64>() / n, 0.003, Better::Higher));
-            f.insert(key("ssim"), fig(reports.iter().map(|r| r.ssim).sum::<f64>() / n, 0.003, Better::Higher));
-            f.insert(key("iou"), fig(reports.iter().map(|r| r.iou).sum::<f64>() / n, 0.005, Better::Higher));
+            f.insert(key("csim"), fig(reports.iter().map(|r| r.plan.csim).sum::<f64>() / n, 0.003, Better::Higher));
+            f.insert(key("ssim"), fig(reports.iter().map(|r| r.plan.ssim).sum::<f64>() / n, 0.003, Better::Higher));
+            f.insert(key("iou"), fig(reports.iter().map(|r| r.plan.iou).sum::<f64>() / n, 0.005, Better::Higher));
             if model == ModelKind::Bsm {
-                let ch: Vec<f64> = reports.iter().filter_map(|r| r.chamfer_pct).collect();
+                let ch: Vec<f64> = reports.iter().filter_map(|r| r.plan.chamfer_pct).collect();
                 f.insert(key("chamfer_pct"), fig(ch.iter().sum::<f64>() / ch.len() as f64, 0.05, Better::Lower));
                 let ex: Vec<_> = reports.iter().filter_map(|r| r.executed).collect();
                 let ag: Vec<_> = reports.iter().filter_map(|r| r.agreement).collect();
@@ -177,7 +177,7 @@ pub fn character_figures() -> Result<Figures> {
                 f.insert(key("agreement_csim"), fig(ag.iter().map(|s| s.csim).sum::<f64>() / n, 0.002, Better::Higher));
                 let worst = ag.iter().map(|s| s.csim).fold(f64::INFINITY, f64::min);
                 f.insert(key("agreement_csim_worst"), fig(worst, 0.005, Better::Higher));
-                let right = reports.iter().filter(|r| r.strokes_expected == Some(r.strokes_found)).count();
+                let right = reports.iter().filter(|r| r.plan.strokes_expected == Some(r.plan.strokes_found)).count();
                 f.insert(key("strokes_right_fraction"), fig(right as f64 / n, 0.0, Better::Higher));
             }
         }

@@ -128,16 +128,16 @@ fn score(
     let res = write_placed(&p, pen, opts, rule)?;
     let (missing_ink, extra_ink) = ink_balance(&res.reference, res.executed.as_ref().unwrap_or(&res.render));
     let r = res.report;
-    let sim = r.executed.map_or((r.csim, r.ssim, r.iou), |e| (e.csim, e.ssim, e.iou));
-    let pct = |k: usize| 100.0 * k as f64 / r.points.max(1) as f64;
+    let sim = r.executed.map_or((r.plan.csim, r.plan.ssim, r.plan.iou), |e| (e.csim, e.ssim, e.iou));
+    let pct = |k: usize| 100.0 * k as f64 / r.plan.points.max(1) as f64;
     Ok(Row {
         font: font.to_string(),
         char: r.char,
         method: method.name(),
         scan,
         strokes_expected: expected,
-        strokes_found: r.strokes_found,
-        strokes_ok: fits_ok && r.strokes_found == expected,
+        strokes_found: r.plan.strokes_found,
+        strokes_ok: fits_ok && r.plan.strokes_found == expected,
         missing,
         doubled,
         uncovered_ink,
@@ -146,9 +146,9 @@ fn score(
         iou: sim.2,
         missing_ink,
         extra_ink,
-        clamped_low_pct: pct(r.clamped_low),
-        clamped_high_pct: pct(r.clamped_high),
-        free_csim: r.free_widths.map(|f| f.csim),
+        clamped_low_pct: pct(r.brush.clamped_low_points),
+        clamped_high_pct: pct(r.brush.clamped_high_points),
+        free_csim: r.plan.free_widths.map(|f| f.csim),
         char_mm: r.char_mm,
     })
 }

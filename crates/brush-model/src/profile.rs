@@ -111,7 +111,7 @@ pub enum ProfileError {
         length: f64,
     },
     /// No built-in profile has this name.
-    #[error("unknown built-in brush `{0}` (known: pen1, pen2)")]
+    #[error("unknown built-in brush `{0}` (known: pen1, pen2, pen1-s84 … pen1-s25)")]
     UnknownBuiltin(String),
 }
 
@@ -238,7 +238,8 @@ pub struct BrushProfile {
 }
 
 impl BrushProfile {
-    /// A built-in nominal profile by name: `pen1` or `pen2`.
+    /// A built-in nominal profile by name: `pen1`, `pen2` or a scaled `pen1-sNN`
+    /// ([`BrushProfile::SCALED`]).
     ///
     /// # Errors
     /// [`ProfileError::UnknownBuiltin`] for any other name.
@@ -251,12 +252,39 @@ impl BrushProfile {
                 let k = 32.0 / 48.0;
                 Ok(Self::nominal("pen2", Brush { length_mm: 32.0, radius_mm: 4.5 }, Range::new(11.0 * k, 20.0 * k)))
             }
-            other => Err(ProfileError::UnknownBuiltin(other.to_string())),
+            other => match Self::builtin_scale(other) {
+                Some(s) => Ok(Self::scaled_nominal(other, s)),
+                None => Err(ProfileError::UnknownBuiltin(other.to_string())),
+            },
         }
     }
 
-    /// Names of the built-in profiles.
-    pub const BUILTINS: [&'static str; 2] = ["pen1", "pen2"];
+    /// Names of the built-in profiles: pen1, pen2 and pen1's scalings ([`BrushProfile::SCALED`]).
+    pub const BUILTINS: [&'static str; 10] = [
+        "pen1", "pen2", "pen1-s84", "pen1-s71", "pen1-s59", "pen1-s50", "pen1-s42", "pen1-s35", "pen1-s30", "pen1-s25",
+    ];
+
+    /// The scaled nominal built-ins, largest first: pen1 with its length, radius and press range
+    /// all scaled by `s = 2^(−k/4)` for the k-th name, k = 1…8 (steps of about 1.19 from 0.84
+    /// down to 0.25), named `pen1-sNN` with NN the scale in percent, for characters smaller
+    /// than pen1 suits. Every footprint length of the nominal model ([`BrushProfile::nominal`])
+    /// is a sum of terms each proportional to a length (h, the mid press, the radius; R/L does
+    /// not change), so each footprint of the scaled brush is pen1's at the scaled press, scaled
+    /// by `s`: its width range, and the character size it suits, are pen1's times `s`. They are
+    /// nominal (derived, not calibrated), like pen1.
+    pub const SCALED: [&'static str; 8] =
+        ["pen1-s84", "pen1-s71", "pen1-s59", "pen1-s50", "pen1-s42", "pen1-s35", "pen1-s30", "pen1-s25"];
+
+    /// The scale of a [`BrushProfile::SCALED`] name (`None` for any other).
+    pub fn builtin_scale(name: &str) -> Option<f64> {
+        let k = Self::SCALED.iter().position(|n| *n == name)? + 1;
+        Some(2f64.powf(-(k as f64) / 4.0))
+    }
+
+    /// pen1 scaled by `s` (see [`BrushProfile::SCALED`]), named `name`.
+    fn scaled_nominal(name: &str, s: f64) -> Self {
+        Self::nominal(name, Brush { length_mm: 48.0 * s, radius_mm: 6.0 * s }, Range::new(11.0 * s, 20.0 * s))
+    }
 
     /// A nominal profile derived from the brush geometry over the paper's angle ranges
     /// (α 0–10°, β 0–5°). See `docs/brush-model.md` for the derivation of each coefficient.
@@ -540,5 +568,32 @@ impl BrushProfile {
                 b.width().hypot(b.height())
             })
             .fold(0.0, f64::max)
+    }
+}
+
+#[cfg(test)]
+mod scaled_tests {
+    use super::*;
+
+    /// A scaled pen1 leaves pen1's footprint scaled by s at the scaled press, at every corner of
+    /// the press ranges: its width range is pen1's times s.
+    #[test]
+    fn a_scaled_brush_leaves_pen1s_footprints_scaled() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        for name in BrushProfile::SCALED {
+            let s = BrushProfile::builtin_scale(name).unwrap();
+            let b = BrushProfile::builtin(name).unwrap();
+            assert_eq!(b.name, name);
+            assert!((format!("pen1-s{:.0}", 100.0 * s) == name), "{name} is named by its scale {s}");
+            for c in pen1.ranges.corners() {
+                let f1 = pen1.predict(&c, Extrapolation::Refuse).unwrap();
+                let scaled = Press { h_mm: c.h_mm * s, ..c };
+                let fs = b.predict(&scaled, Extrapolation::Refuse).unwrap();
+                for (a, z) in [(f1.lt_mm, fs.lt_mm), (f1.lh_mm, fs.lh_mm), (f1.lr_mm, fs.lr_mm)] {
+                    assert!((a * s - z).abs() < 1e-9, "{name}: {z} vs {a}×{s}");
+                }
+            }
+        }
+        assert!(BrushProfile::builtin_scale("pen1").is_none());
     }
 }

@@ -70,6 +70,11 @@ fn main() -> ExitCode {
             let _ = e.print();
             return ExitCode::SUCCESS;
         }
+        Err(e) if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            // `maobi` or `maobi robot` alone: the help as --help prints it, still a failure.
+            let _ = e.print();
+            return ExitCode::from(2);
+        }
         Err(e) => {
             eprintln!("{}", one_line(&e.render().to_string()));
             return ExitCode::from(2);
@@ -124,11 +129,26 @@ fn main() -> ExitCode {
     }
 }
 
-/// Folds clap's multi-line usage error into one line, dropping the usage and help hints.
+/// Folds clap's multi-line usage error into one line, dropping the usage and help hints; a
+/// tip (a similar subcommand or flag, how to pass a value) follows in parentheses.
 fn one_line(msg: &str) -> String {
-    msg.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
-        .collect::<Vec<_>>()
-        .join(" ")
+    let mut out = String::new();
+    let mut tips = Vec::new();
+    for l in msg.lines().map(str::trim) {
+        if l.is_empty() || l.starts_with("Usage:") || l.starts_with("For more information") {
+            continue;
+        }
+        if l.starts_with("tip:") {
+            tips.push(l);
+        } else {
+            if !out.is_empty() {
+                out.push(' ');
+            }
+            out.push_str(l);
+        }
+    }
+    if !tips.is_empty() {
+        out.push_str(&format!(" ({})", tips.join("; ")));
+    }
+    out
 }

@@ -250,3 +250,90 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
     }
     to_png(buf, w, h)
 }
+
+/// A label's font size for a panel `width_px` wide, px (the labels stay legible on 64 px
+/// panels and modest on 4096 px ones).
+fn label_px(width_px: u32) -> u32 {
+    (width_px / 16).clamp(9, 28)
+}
+
+/// Draws `lines` (text and colour) left-aligned from `(x, y)` downwards at `px` per line.
+fn draw_lines(
+    root: &DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>,
+    lines: &[(&str, RGBColor)],
+    x: i32,
+    y: i32,
+    px: u32,
+) -> Result<()> {
+    for (i, (text, colour)) in lines.iter().enumerate() {
+        let style = ("sans-serif", px).into_font().color(colour);
+        root.draw(&Text::new(*text, (x, y + i as i32 * (px as i32 + 2)), style)).map_err(|e| anyhow!("{e}"))?;
+    }
+    Ok(())
+}
+
+/// `side-by-side.png`: the panels left to right with a 4 px white gap, each with its label
+/// above it (e.g. "reference (glyph)", "plan", "executed"), black ink on white.
+///
+/// # Errors
+/// When drawing or encoding fails.
+pub fn labelled_row_png(panels: &[(&str, &bezier_raster::Coverage)]) -> Result<Vec<u8>> {
+    register_font();
+    let gap = 4u32;
+    let img_h = panels.iter().map(|(_, c)| c.height()).max().unwrap_or(0);
+    let px = panels.iter().map(|(_, c)| label_px(c.width())).min().unwrap_or(9);
+    let strip = px + 8;
+    let w = panels.iter().map(|(_, c)| c.width()).sum::<u32>() + gap * panels.len().saturating_sub(1) as u32;
+    let h = strip + img_h;
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    let mut x0 = 0u32;
+    for (_, c) in panels {
+        let g = c.to_gray8();
+        for y in 0..c.height() {
+            for x in 0..c.width() {
+                let v = g[(y * c.width() + x) as usize];
+                let o = (((strip + y) * w + x0 + x) * 3) as usize;
+                buf[o..o + 3].copy_from_slice(&[v, v, v]);
+            }
+        }
+        x0 += c.width() + gap;
+    }
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let mut x0 = 0i32;
+        for (label, c) in panels {
+            draw_lines(&root, &[(label, BLACK)], x0 + 4, 3, px)?;
+            x0 += (c.width() + gap) as i32;
+        }
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    to_png(buf, w, h)
+}
+
+/// `overlay.png`: the glyph against a render (paper white, ink of both black, glyph ink the
+/// render misses red, render ink outside the glyph blue), with a legend of the three colours
+/// below the image.
+///
+/// # Errors
+/// When the sizes differ, or drawing or encoding fails.
+pub fn overlay_legend_png(reference: &bezier_raster::Coverage, render: &bezier_raster::Coverage) -> Result<Vec<u8>> {
+    register_font();
+    let plain = bezier_raster::coverage::overlay_png(reference, render)?;
+    let img = image::load_from_memory(&plain)?.to_rgb8();
+    let (w, img_h) = img.dimensions();
+    let px = label_px(w);
+    let lines = [
+        ("black: glyph and plan", BLACK),
+        ("red: glyph only (missed)", RGBColor(220, 0, 0)),
+        ("blue: plan only (extra)", RGBColor(0, 0, 220)),
+    ];
+    let h = img_h + 6 + lines.len() as u32 * (px + 2);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    buf[..(w * img_h * 3) as usize].copy_from_slice(img.as_raw());
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        draw_lines(&root, &lines, 4, img_h as i32 + 4, px)?;
+        root.present().map_err(|e| anyhow!("{e}"))?;
+    }
+    to_png(buf, w, h)
+}

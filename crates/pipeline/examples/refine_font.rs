@@ -69,7 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             c1 - c0,
             l0.image,
             l1.image,
-            r.report.points,
+            r.report.plan.points,
             rf.footprints,
             rf.variables,
             rf.millis,

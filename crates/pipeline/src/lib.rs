@@ -21,6 +21,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod brush_choice;
 mod error;
 mod glyphs;
 mod marks;
@@ -30,6 +31,7 @@ mod sheet;
 mod text;
 mod write;
 
+pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{
@@ -50,8 +52,8 @@ pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;
 pub use write::{
-    CharReport, CharResult, RefineReport, Similarity, WriteOptions, execute_track, level_frame_for, refine_target,
-    render_char, render_states, side_by_side, similarity, write_char,
+    BrushReport, CharReport, CharResult, PlanReport, RefineReport, Similarity, TimingMs, WriteOptions, execute_track,
+    level_frame_for, refine_target, render_char, render_states, side_by_side, similarity, write_char,
 };
 
 // The README's example runs as a doctest.

@@ -35,7 +35,7 @@ pub enum BoxRule {
 /// let p = prepare(trajectory::glyph::embedded('十')?, None)?;
 /// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
 /// let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
-/// assert!(r.report.csim > 0.5, "{}", r.report.csim);
+/// assert!(r.report.plan.csim > 0.5, "{}", r.report.plan.csim);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn write_placed(p: &Prepared, profile: &BrushProfile, opts: &WriteOptions, rule: BoxRule) -> Result<CharResult> {

@@ -613,9 +613,9 @@ impl BrushFit {
     /// The verdict for characters written at `char_mm` whose widths suit `brush_char_mm`
     /// ([`BRUSH_FIT_CLAMPED_SHARE`], [`BRUSH_FIT_SIZE_FACTOR`]).
     pub fn of(reports: &[&CharReport], char_mm: f64, brush_char_mm: f64) -> Self {
-        let points: usize = reports.iter().map(|r| r.points).sum();
+        let points: usize = reports.iter().map(|r| r.plan.points).sum();
         let (low, high): (usize, usize) =
-            reports.iter().fold((0, 0), |(l, h), r| (l + r.clamped_low, h + r.clamped_high));
+            reports.iter().fold((0, 0), |(l, h), r| (l + r.brush.clamped_low_points, h + r.brush.clamped_high_points));
         let share = |n: usize| if points == 0 { 0.0 } else { n as f64 / points as f64 };
         let (k, f) = (BRUSH_FIT_CLAMPED_SHARE, BRUSH_FIT_SIZE_FACTOR);
         let (miss, note) = if share(low) > k || char_mm < brush_char_mm / f {

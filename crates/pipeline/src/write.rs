@@ -26,7 +26,7 @@ pub struct WriteOptions {
     pub alpha_rad: f64,
     /// Track point spacing, mm.
     pub spacing_mm: f64,
-    /// Also score the plan with footprints sized freely from the glyph ([`CharReport::free_widths`]).
+    /// Also score the plan with footprints sized freely from the glyph ([`PlanReport::free_widths`]).
     pub free_widths: bool,
     /// Also run the track as a robot program (default paper frame and `robot.json`, the
     /// simulator's motion) and score what it writes.
@@ -95,7 +95,9 @@ pub fn similarity(reference: &Coverage, render: &Coverage) -> Result<Similarity>
     })
 }
 
-/// Everything `maobi write` reports for one character.
+/// Everything `maobi write` reports for one character (its `report.json`), grouped: what the
+/// plan scores ([`PlanReport`]), what the executed program scores, how far the two agree, the
+/// brush, and the time taken. Every field is described in `docs/outputs.md`.
 #[derive(Clone, Debug, Serialize)]
 pub struct CharReport {
     /// The character.
@@ -106,38 +108,20 @@ pub struct CharReport {
     pub method: &'static str,
     /// Stroke model.
     pub model: &'static str,
-    /// Render vs reference.
-    pub csim: f64,
-    /// Render vs reference.
-    pub ssim: f64,
-    /// Render vs reference.
-    pub iou: f64,
-    /// Symmetric chamfer distance of the track to the medians, % of the em box (null without
-    /// medians).
-    pub chamfer_pct: Option<f64>,
-    /// Strokes in the source (null without medians).
-    pub strokes_expected: Option<usize>,
-    /// Strokes in the track.
-    pub strokes_found: usize,
-    /// Track points.
-    pub points: usize,
-    /// Wall time of track building, rendering and scoring, ms.
-    pub millis: f64,
     /// Char box side, mm.
     pub char_mm: f64,
-    /// Points whose glyph width was below / above what the brush can make (h clamped).
-    pub clamped_low: usize,
-    /// See `clamped_low`.
-    pub clamped_high: usize,
-    /// The plan's scores with every footprint sized freely from the glyph's width (h unclamped,
-    /// extrapolating beyond the brush's calibrated range). Not a bound: clamping can score higher
-    /// on some characters (an overshooting free width costs more than a clamped one).
-    pub free_widths: Option<Similarity>,
+    /// The plan (the track as built, rendered through the forward model) against the glyph.
+    pub plan: PlanReport,
     /// What the robot would write (the program executed as the simulator moves, through the
-    /// forward model) against the glyph: the headline figure.
+    /// forward model) against the glyph: the headline figure (null when not executed).
     pub executed: Option<Similarity>,
-    /// The plan's render against the executed render (how far the plan can be trusted).
+    /// The plan's render against the executed render (how far the plan can be trusted; null when
+    /// not executed).
     pub agreement: Option<Similarity>,
+    /// The brush and how well its width range covers the glyph at this size.
+    pub brush: BrushReport,
+    /// Wall times, ms.
+    pub timing_ms: TimingMs,
     /// Before/after figures of the refinement (when [`WriteOptions::refine`] is set); the
     /// figures above are then those of the refined track (or of the built one if the refined
     /// track was rejected).
@@ -146,6 +130,62 @@ pub struct CharReport {
     /// What template registration found (`--from template` on a font or image glyph).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub template: Option<TemplateReport>,
+}
+
+/// The plan's figures in a [`CharReport`]: the track as built, rendered, against the glyph.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlanReport {
+    /// Render vs reference: cosine similarity.
+    pub csim: f64,
+    /// Render vs reference: structural similarity.
+    pub ssim: f64,
+    /// Render vs reference: intersection over union at 0.5.
+    pub iou: f64,
+    /// Symmetric chamfer distance of the track to the medians, % of the em box (null without
+    /// medians).
+    pub chamfer_pct: Option<f64>,
+    /// Strokes in the source (null without medians or a template).
+    pub strokes_expected: Option<usize>,
+    /// Strokes in the track.
+    pub strokes_found: usize,
+    /// Track points.
+    pub points: usize,
+    /// The plan's scores with every footprint sized freely from the glyph's width (h unclamped,
+    /// extrapolating beyond the brush's calibrated range). Not a bound: clamping can score higher
+    /// on some characters (an overshooting free width costs more than a clamped one).
+    pub free_widths: Option<Similarity>,
+}
+
+impl PlanReport {
+    /// CSIM, SSIM and IoU of the plan.
+    pub fn similarity(&self) -> Similarity {
+        Similarity { csim: self.csim, ssim: self.ssim, iou: self.iou }
+    }
+
+    fn set_similarity(&mut self, s: Similarity) {
+        (self.csim, self.ssim, self.iou) = (s.csim, s.ssim, s.iou);
+    }
+}
+
+/// The brush in a [`CharReport`]: which one, and at how many track points the glyph asked for a
+/// width it cannot make (its press depth h clamped to the calibrated range).
+#[derive(Clone, Debug, Serialize)]
+pub struct BrushReport {
+    /// The brush profile's name (`pen1`, or the name in a profile file).
+    pub name: String,
+    /// Track points whose glyph width was below what the brush can make.
+    pub clamped_low_points: usize,
+    /// Track points whose glyph width was above what the brush can make.
+    pub clamped_high_points: usize,
+}
+
+/// Wall times in a [`CharReport`], ms.
+#[derive(Clone, Debug, Serialize)]
+pub struct TimingMs {
+    /// Building the track, rendering the plan and scoring it, ms.
+    pub plan: f64,
+    /// The refinement (null without one), ms.
+    pub refine: Option<f64>,
 }
 
 /// What refinement did to one character.
@@ -167,7 +207,8 @@ pub struct RefineReport {
     pub variables: usize,
     /// Footprints in the image term.
     pub footprints: usize,
-    /// Wall time of the refinement itself, ms.
+    /// Wall time of the refinement itself, ms (`time_ms` in JSON).
+    #[serde(rename = "time_ms")]
     pub millis: f64,
     /// Why the refined track was not used (it failed `robot check`), if it was not.
     pub rejected: Option<String>,
@@ -288,20 +329,25 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         source: p.glyph.source.kind(),
         method: p.method.name(),
         model: opts.model.name(),
-        csim: sim.csim,
-        ssim: sim.ssim,
-        iou: sim.iou,
-        chamfer_pct: chamfer,
-        strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.template.as_ref().map(|t| t.strokes)),
-        strokes_found: built.track.strokes.len(),
-        points: built.track.point_count(),
-        millis,
         char_mm: char_box.size_mm,
-        clamped_low: built.clamped_low,
-        clamped_high: built.clamped_high,
-        free_widths,
+        plan: PlanReport {
+            csim: sim.csim,
+            ssim: sim.ssim,
+            iou: sim.iou,
+            chamfer_pct: chamfer,
+            strokes_expected: p.glyph.medians.as_ref().map(Vec::len).or(p.template.as_ref().map(|t| t.strokes)),
+            strokes_found: built.track.strokes.len(),
+            points: built.track.point_count(),
+            free_widths,
+        },
         executed,
         agreement,
+        brush: BrushReport {
+            name: profile.name.clone(),
+            clamped_low_points: built.clamped_low,
+            clamped_high_points: built.clamped_high,
+        },
+        timing_ms: TimingMs { plan: millis, refine: None },
         refine: None,
         template: p.template.clone(),
     };
@@ -362,7 +408,7 @@ fn refine_result(
     .map_err(|source| Error::Refine { ch: p.glyph.ch, source })?;
     let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
     let planned_after = similarity(&r.reference, &render)?;
-    let planned_before = Similarity { csim: r.report.csim, ssim: r.report.ssim, iou: r.report.iou };
+    let planned_before = r.report.plan.similarity();
     let mut rejected = None;
     let mut executed_after = None;
     let mut executed = None;
@@ -392,8 +438,8 @@ fn refine_result(
         rejected: rejected.clone(),
     };
     if rejected.is_none() {
-        (r.report.csim, r.report.ssim, r.report.iou) = (planned_after.csim, planned_after.ssim, planned_after.iou);
-        r.report.points = refined.track.point_count();
+        r.report.plan.set_similarity(planned_after);
+        r.report.plan.points = refined.track.point_count();
         if let Some((img, states)) = executed {
             r.report.executed = executed_after;
             r.report.agreement = Some(similarity(&render, &img)?);
@@ -401,11 +447,12 @@ fn refine_result(
             r.executed_states = Some(states);
         }
         if let Some(m) = p.glyph.medians.as_ref() {
-            r.report.chamfer_pct = Some(chamfer_pct(&refined.track, &r.char_box, m));
+            r.report.plan.chamfer_pct = Some(chamfer_pct(&refined.track, &r.char_box, m));
         }
         r.track = refined.track;
         r.render = render;
     }
+    r.report.timing_ms.refine = Some(report.millis);
     r.report.refine = Some(report);
     Ok(())
 }
@@ -477,7 +524,7 @@ pub fn rerender_with_generator(
         };
         let img = neural(&r.track)?;
         let sim = similarity(&r.reference, &img)?;
-        (r.report.csim, r.report.ssim, r.report.iou) = (sim.csim, sim.ssim, sim.iou);
+        r.report.plan.set_similarity(sim);
         if let Some(states) = &r.executed_states {
             // The executed path through the same generator.
             let executed = Track { strokes: vec![brush_model::Stroke { points: states.clone() }] };

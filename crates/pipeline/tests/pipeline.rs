@@ -52,7 +52,7 @@ fn write_text_writes_each_character_as_write_char_does_in_its_box() {
     for ((p, r), bx) in chars.iter().zip(&w.results).zip(b) {
         let alone = write_char(p, &pen, *bx, &quick()).unwrap();
         assert_eq!(alone.track, r.track);
-        assert_eq!(alone.report.csim, r.report.csim);
+        assert_eq!(alone.report.plan.csim, r.report.plan.csim);
     }
 }
 

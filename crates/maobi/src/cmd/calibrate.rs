@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Form, PressRanges, Range, load_measurements};
 
-use crate::common::{check_range, load_brush, print_json, write_atomic};
+use crate::common::{check_output_file, check_range, load_brush, print_json, write_atomic};
 
 /// Arguments of `maobi calibrate`.
 #[derive(clap::Args, Debug)]
@@ -39,6 +39,9 @@ pub struct Args {
     /// Print the fit report as JSON instead of a table.
     #[arg(long)]
     json: bool,
+    /// Replace the output files if they exist (without it, an existing file is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -50,6 +53,14 @@ enum FormArg {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_range("--min-iou", args.min_iou, 0.0, 1.0, "")?;
+    if let Some(out) = &args.output {
+        check_output_file("-o", out, args.force)?;
+        if args.images.is_some() {
+            for beside in ["measurements.csv", "regression.png"] {
+                check_output_file("-o (beside it)", &out.with_file_name(beside), args.force)?;
+            }
+        }
+    }
     let (rows, source) = match (&args.measurements, &args.images) {
         (Some(m), _) => (load_measurements(m)?, m.clone()),
         (None, Some(dir)) => {

@@ -34,8 +34,10 @@ pub struct Args {
     /// --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
-    /// Replace an existing output folder (the new dataset is written beside it and swapped in
-    /// once complete; an error or Ctrl-C leaves the old one in place).
+    /// Replace an existing output folder that maobi wrote (the new dataset is written beside it
+    /// and swapped in once complete; an error or Ctrl-C leaves the old one in place). A folder
+    /// holding files maobi did not write (not in its `.maobi-written` list) is refused, naming
+    /// them: nothing else is ever deleted.
     #[arg(long)]
     force: bool,
 }

@@ -71,12 +71,20 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         let models: BTreeMap<_, _> =
             table.iter().map(|(k, (c, s))| (k.clone(), json!({"csim": c, "ssim": s}))).collect();
-        print_json(&json!({"n": args.n, "reference": "analytic b-bsm", "generator_seconds": secs, "models": models}))?;
+        let weights = args.generator.as_ref().map_or("committed".to_string(), |p| p.display().to_string());
+        print_json(
+            &json!({"n": args.n, "reference": "analytic b-bsm", "generator": weights, "generator_seconds": secs, "models": models}),
+        )?;
     } else {
         crate::outln!(
-            "{} held-out presses of {}, each model against the analytic B-BSM (%):",
+            "{} held-out presses of {}, each model against the analytic B-BSM (%); b-bsmg is {}:",
             args.n,
-            g.config.profile.name
+            g.config.profile.name,
+            args.generator
+                .as_ref()
+                .map_or("the committed generator (fixtures/generator/pen1.safetensors)".to_string(), |p| p
+                    .display()
+                    .to_string())
         )?;
         print_model_table(["b-bsmg", "circle", "ellipse", "line", "qbc"].map(|name| {
             let (c, s) = table[name];

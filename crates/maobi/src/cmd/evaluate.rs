@@ -54,7 +54,8 @@ pub struct Args {
     /// Constant tilt α, degrees.
     #[arg(long, default_value_t = 0.0)]
     alpha: f64,
-    /// Print every character's report and the means as JSON.
+    /// Print every character's report (the fields docs/outputs.md lists for report.json) and
+    /// the means as JSON instead of the table.
     #[arg(long)]
     json: bool,
     #[command(flatten)]
@@ -129,14 +130,107 @@ pub fn run(args: Args) -> Result<()> {
             &json!({"method": method_name(&reports), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
         )?;
     } else {
-        println!(
-            "{} characters, {} via {}, brush {}:",
+        crate::outln!(
+            "{} characters, {} via {}, brush {} (plan: the track as built; executed: its program as the simulator runs it; scores against the glyph):",
             reports.len(),
             args.model.name(),
             method_name(&reports),
             profile.name
-        );
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        )?;
+        print_table(&reports, &summary)?;
+    }
+    Ok(())
+}
+
+/// `text` padded to five terminal columns (a CJK character takes two).
+fn column(text: &str) -> String {
+    let width: usize = text.chars().map(|c| if c as u32 >= 0x1100 { 2 } else { 1 }).sum();
+    format!("{text}{}", " ".repeat(5usize.saturating_sub(width)))
+}
+
+/// The per-character table, the means last, then what the summary adds (free widths, fonts'
+/// uncovered characters, refinement).
+fn print_table(reports: &[CharReport], summary: &serde_json::Value) -> Result<()> {
+    let f4 = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+    let line = |ch: &str,
+                strokes: String,
+                plan: Option<f64>,
+                ex: [Option<f64>; 3],
+                ag: Option<f64>,
+                chamfer: Option<f64>,
+                ms: f64| {
+        crate::outln!(
+            "{ch}{strokes:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9.1}",
+            f4(plan),
+            f4(ex[0]),
+            f4(ex[1]),
+            f4(ex[2]),
+            f4(ag),
+            chamfer.map_or("-".to_string(), |c| format!("{c:.2}")),
+            ms
+        )
+    };
+    crate::outln!(
+        "{:<5}{:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "char",
+        "strokes",
+        "plan CSIM",
+        "exec CSIM",
+        "exec SSIM",
+        "exec IoU",
+        "agreement",
+        "chamfer%",
+        "ms"
+    )?;
+    for r in reports {
+        let p = &r.plan;
+        let strokes = format!("{}{}", p.strokes_found, p.strokes_expected.map_or(String::new(), |e| format!("/{e}")));
+        let ex = r.executed;
+        line(
+            &column(&r.char),
+            strokes,
+            Some(p.csim),
+            [ex.map(|e| e.csim), ex.map(|e| e.ssim), ex.map(|e| e.iou)],
+            r.agreement.map(|a| a.csim),
+            p.chamfer_pct,
+            r.timing_ms.plan,
+        )?;
+    }
+    let g = |v: &serde_json::Value| v.as_f64();
+    let ex = &summary["executed"];
+    let strokes = summary["strokes_match_fraction"].as_f64().map_or("-".to_string(), |f| format!("{:.0}%", 100.0 * f));
+    line(
+        &column("mean"),
+        strokes,
+        g(&summary["csim"]),
+        [g(&ex["csim"]), g(&ex["ssim"]), g(&ex["iou"])],
+        g(&summary["agreement"]["csim"]),
+        g(&summary["chamfer_pct"]),
+        g(&summary["millis_mean"]).unwrap_or(f64::NAN),
+    )?;
+    if let Some(w) = g(&ex["csim_min"]) {
+        crate::outln!(
+            "worst executed CSIM {w:.4}; plan SSIM {} and IoU {} (means)",
+            f4(g(&summary["ssim"])),
+            f4(g(&summary["iou"]))
+        )?;
+    }
+    let fw = &summary["free_widths"];
+    if let Some(c) = g(&fw["csim"]) {
+        crate::outln!("plan with footprints sized freely from the glyph (not a bound): CSIM {c:.4} (mean)")?;
+    }
+    if let Some(n) = summary["uncovered"]["count"].as_u64().filter(|n| *n > 0) {
+        crate::outln!("not in the font: {n} ({})", summary["uncovered"]["chars"].as_str().unwrap_or(""))?;
+    }
+    if let Some(rf) = summary.get("refine") {
+        crate::outln!(
+            "refined {} ({} rejected): executed CSIM {} → {}, {:.0} ms each on average",
+            rf["count"],
+            rf["rejected"],
+            f4(g(&rf["executed_before"]["csim"])),
+            f4(g(&rf["executed_after"]["csim"])),
+            g(&rf["millis_mean"]).unwrap_or(f64::NAN)
+        )?;
     }
     Ok(())
 }
@@ -145,15 +239,17 @@ pub fn run(args: Args) -> Result<()> {
 pub fn summarize(r: &[CharReport]) -> serde_json::Value {
     let n = r.len() as f64;
     let mean = |f: &dyn Fn(&CharReport) -> f64| r.iter().map(f).sum::<f64>() / n;
-    let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.strokes_expected.is_some()).collect();
+    let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.plan.strokes_expected.is_some()).collect();
     // A registered template always has the template's count: it is right when every stroke
     // found its own ink.
     let strokes_ok = with_medians
         .iter()
-        .filter(|c| c.strokes_expected == Some(c.strokes_found) && c.template.as_ref().is_none_or(|t| t.strokes_ok))
+        .filter(|c| {
+            c.plan.strokes_expected == Some(c.plan.strokes_found) && c.template.as_ref().is_none_or(|t| t.strokes_ok)
+        })
         .count();
-    let chamfers: Vec<f64> = r.iter().filter_map(|c| c.chamfer_pct).collect();
-    let fw: Vec<_> = r.iter().filter_map(|c| c.free_widths).collect();
+    let chamfers: Vec<f64> = r.iter().filter_map(|c| c.plan.chamfer_pct).collect();
+    let fw: Vec<_> = r.iter().filter_map(|c| c.plan.free_widths).collect();
     let mean_sim = |v: Vec<pipeline::Similarity>| {
         let k = v.len() as f64;
         if v.is_empty() {
@@ -169,12 +265,12 @@ pub fn summarize(r: &[CharReport]) -> serde_json::Value {
     };
     json!({
         "count": r.len(),
-        "csim": mean(&|c| c.csim),
-        "ssim": mean(&|c| c.ssim),
-        "iou": mean(&|c| c.iou),
+        "csim": mean(&|c| c.plan.csim),
+        "ssim": mean(&|c| c.plan.ssim),
+        "iou": mean(&|c| c.plan.iou),
         "chamfer_pct": if chamfers.is_empty() { None } else { Some(chamfers.iter().sum::<f64>() / chamfers.len() as f64) },
         "strokes_match_fraction": if with_medians.is_empty() { None } else { Some(strokes_ok as f64 / with_medians.len() as f64) },
-        "millis_mean": mean(&|c| c.millis),
+        "millis_mean": mean(&|c| c.timing_ms.plan),
         "executed": mean_sim(r.iter().filter_map(|c| c.executed).collect()),
         "agreement": mean_sim(r.iter().filter_map(|c| c.agreement).collect()),
         // The plan with footprints sized freely from the glyph (not a bound: see CharReport).

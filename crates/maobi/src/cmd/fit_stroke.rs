@@ -7,7 +7,7 @@ use bezier_raster::{Bsm, StrokeModel};
 use serde_json::json;
 use stroke_fit::{PhotoError, StrokeFit, fit_footprint, load_ink, scale_from_metadata};
 
-use crate::common::{MAX_PX_PER_MM, MIN_PX_PER_MM, check_range, print_json, write_atomic};
+use crate::common::{MAX_PX_PER_MM, MIN_PX_PER_MM, check_output_file, check_range, print_json, write_atomic};
 
 /// Arguments of `maobi fit-stroke`.
 #[derive(clap::Args, Debug)]
@@ -23,6 +23,9 @@ pub struct Args {
     /// Print `{"lt_mm","lh_mm","lr_mm","anchor_mm","beta_rad","iou"}` as JSON.
     #[arg(long)]
     json: bool,
+    /// Replace the --overlay file if it exists (without it, an existing file is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The scale of a photo: given (by the flag or column `what`), or from its metadata; either
@@ -60,6 +63,7 @@ pub fn fit_photo(photo: &Path, given: Option<f64>, what: &str) -> Result<(Stroke
 pub fn run(args: Args) -> Result<()> {
     let (fit, mask, scale) = fit_photo(&args.photo, args.px_per_mm, "--px-per-mm")?;
     if let Some(out) = &args.overlay {
+        check_output_file("--overlay", out, args.force)?;
         write_atomic(out, &overlay(&mask, &fit, scale).with_context(|| format!("drawing {}", out.display()))?)?;
     }
     if args.json {

@@ -41,6 +41,9 @@ pub struct Args {
     /// (the press: the middle of the brush's calibrated h and α ranges, β = 0).
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
+    /// Replace the --plot file if it exists (without it, an existing file is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// CSIM and SSIM summaries of one model.
@@ -83,6 +86,7 @@ pub fn run(args: Args) -> Result<()> {
             alpha_rad: 0.5 * (r.alpha_rad.min + r.alpha_rad.max),
             beta_rad: 0.0,
         };
+        crate::common::check_output_file("--plot", plot, args.force)?;
         crate::common::write_atomic(plot, &crate::plot::models_png(&profile, &press)?)?;
         eprintln!("wrote {}: every stroke model's footprint of one press, axes in mm", plot.display());
     }

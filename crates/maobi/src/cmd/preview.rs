@@ -13,7 +13,7 @@ use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program_chars};
 use serde_json::{Value, json};
 
-use crate::common::write_atomic;
+use crate::common::{check_output_file, write_atomic};
 
 /// Arguments of `maobi preview`.
 #[derive(clap::Args, Debug)]
@@ -33,6 +33,9 @@ pub struct Args {
     /// Output HTML file.
     #[arg(short, long)]
     output: PathBuf,
+    /// Replace the output file if it exists (without it, an existing file is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// What the preview shows.
@@ -130,6 +133,7 @@ pub fn run(a: Args) -> Result<()> {
         track,
     };
     let html = preview_html(&input, frame.as_ref(), cfg.as_ref())?;
+    check_output_file("-o", &a.output, a.force)?;
     write_atomic(&a.output, html.as_bytes())?;
     println!("preview of {} strokes written to {}", input.track.strokes.len(), a.output.display());
     Ok(())
@@ -198,9 +202,17 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     let (samples, verdict, safe, dips) = match built {
         Ok((program, report)) => {
             let s = execute_tagged(&program, frame);
+            // Ink is off unless the robot configuration names an ink pot: say so, not "0 dips".
+            let dips = if cfg.ink.is_none() {
+                "ink dipping off (no \"ink\" in robot.json: see fixtures/robot/robot-ink.json)".to_string()
+            } else {
+                format!("{} ink dip(s)", report.dips)
+            };
+            // One time: the program as the simulator runs it (what the timeline plays).
+            let run_s = s.last().map_or(0.0, |x| x.t);
             let v = format!(
-                "safe ({where_}): {} strokes, {} points, {} moves, {} ink dip(s); deepest press {:.2} mm; about {:.0} s",
-                report.strokes, report.points, report.moves, report.dips, report.max_press_mm, report.estimated_seconds
+                "safe ({where_}): {} strokes, {} points, {} moves, {dips}; deepest press {:.2} mm; {run_s:.1} s to write",
+                report.strokes, report.points, report.moves, report.max_press_mm
             );
             (s, v, true, report.dips)
         }

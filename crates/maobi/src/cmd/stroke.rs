@@ -8,8 +8,8 @@ use brush_model::Extrapolation;
 use serde_json::json;
 
 use crate::common::{
-    BrushArg, MAX_PX_PER_MM, MIN_PX_PER_MM, PressArgs, StrokeRendererArgs, check_range, load_brush, parse_model,
-    print_json, write_atomic,
+    BrushArg, MAX_PX_PER_MM, MIN_PX_PER_MM, PressArgs, StrokeRendererArgs, check_output_file, check_range, load_brush,
+    parse_model, print_json, write_atomic,
 };
 
 /// Arguments of `maobi stroke`.
@@ -34,6 +34,9 @@ pub struct Args {
     /// Output file: `.png` (black ink on white) or `.svg`.
     #[arg(short, long)]
     output: PathBuf,
+    /// Replace the output file if it exists (without it, an existing file is refused).
+    #[arg(long)]
+    force: bool,
     /// Print the footprint, scale and anchor as JSON.
     #[arg(long)]
     json: bool,
@@ -73,6 +76,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         _ => bail!("-o {}: expected a .png or .svg file name", args.output.display()),
     };
+    check_output_file("-o", &args.output, args.force)?;
     write_atomic(&args.output, &bytes)?;
     if args.json {
         print_json(&json!({
@@ -112,6 +116,7 @@ fn run_neural(args: &Args) -> Result<()> {
         "the generator knows only its training range: --extrapolate works with --renderer analytic",
     )?;
     let img = g.render(&[press])?.remove(0);
+    check_output_file("-o", &args.output, args.force)?;
     write_atomic(&args.output, &img.encode_png()?)?;
     if args.json {
         let canvas = StrokeCanvas::with_scale(g.config.size, g.config.px_per_mm);

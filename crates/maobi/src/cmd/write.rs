@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use bezier_raster::{ModelKind, coverage::overlay_png};
+use bezier_raster::ModelKind;
 use brush_model::BrushProfile;
 use pipeline::{
     BrushFit, BrushMiss, CharReport, CharResult, Flow, GlyphInput, Grid, Layout, Prepared, Sheet, SheetError,
@@ -17,7 +17,7 @@ use trajectory::Method;
 use crate::generator::committed_gen_model;
 
 use crate::common::{
-    BrushArg, OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
+    OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
     print_json, progress, recover_leftovers, write_atomic,
 };
 
@@ -47,8 +47,12 @@ pub struct Args {
     /// has stroke data; skeleton otherwise).
     #[arg(long = "from", value_parser = parse_method())]
     method: Option<Method>,
-    #[command(flatten)]
-    brush: BrushArg,
+    /// Brush: pen1, pen2, a scaled pen1 (pen1-s84, -s71, -s59, -s50, -s42, -s35, -s30, -s25), a
+    /// profile JSON file, or `auto`: the built-in whose width range suits the glyphs at the box
+    /// size, said in the summary (the default with --sheet or --char-mm; otherwise pen1, and the
+    /// box size follows its widths).
+    #[arg(long)]
+    brush: Option<String>,
     /// Stroke model that draws the footprints (`--renderer analytic`).
     #[arg(long, default_value = "bsm", value_parser = parse_model())]
     model: ModelKind,
@@ -91,8 +95,10 @@ pub struct Args {
     /// Output folder. An existing non-empty folder is refused unless --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
-    /// Replace an existing output folder (the new run is written beside it and swapped in once
-    /// complete; an error or Ctrl-C leaves the old one in place).
+    /// Replace an existing output folder that maobi wrote (the new run is written beside it
+    /// and swapped in once complete; an error or Ctrl-C leaves the old one in place). A folder
+    /// holding files maobi did not write (not in its `.maobi-written` list) is refused, naming
+    /// them: nothing else is ever deleted.
     #[arg(long)]
     force: bool,
     /// Print the summary as JSON on stdout.
@@ -109,11 +115,11 @@ pub struct Args {
 /// `--placement search|auto` of `write` and `evaluate`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct PlacementArg {
-    /// How template tracks (`--from template`, the default for --font and --image) are placed:
-    /// `search` builds the plan at a few char box sizes (0.8–1.35× the size from the widths),
-    /// with each stroke's corners split or written in one piece, and keeps the plan most like
-    /// the glyph (docs/trajectory.md, "Template registration"); where the size is fixed
-    /// (--char-mm, --sheet, several characters sharing one box) only the splits are searched.
+    /// How template tracks (`--from template`, the default for font and image glyphs) are
+    /// placed: `search` builds the plan at a few char box sizes (0.8–1.35× the size from the
+    /// widths), with each stroke's corners split or written in one piece, and keeps the plan
+    /// most like the glyph (docs/trajectory.md, "Template registration"); where the size is
+    /// fixed (--char-mm, or characters sharing one box size) only the splits are searched.
     /// `auto`: the size from the widths, every corner split. Other methods are not affected.
     #[arg(long, default_value = "search", value_parser = ["search", "auto"])]
     placement: String,
@@ -130,8 +136,9 @@ impl PlacementArg {
 #[derive(clap::Args, Debug)]
 pub(crate) struct RefineArgs {
     /// Refine each track by gradient descent against its glyph before executing it (see
-    /// docs/trajectory.md, "Refinement"): `write`'s report.json gains the before/after figures
-    /// and refine.png the loss curve; `evaluate`'s summary gains the means before and after.
+    /// docs/trajectory.md, "Refinement"): each character's report gains the before/after
+    /// figures (and, when writing, refine.png the loss curve); the means before and after
+    /// are printed.
     #[arg(long)]
     refine: bool,
     /// Gradient steps of --refine (default 20).
@@ -223,7 +230,16 @@ pub fn run(args: Args) -> Result<()> {
     let chars = checked_chars(&args)?;
     let flow = if args.rows { Flow::Rows } else { Flow::Columns };
     let (sheet, sheet_layout) = planned_sheet(&args, chars.len(), flow)?;
-    let profile = load_brush(&args.brush.brush)?;
+    // With a box size known before any glyph work (a sheet, --char-mm), `auto` (the default
+    // then) picks the brush once the glyphs are loaded; every built-in has pen1's tilt range.
+    let box_mm = sheet_layout.as_ref().map(|l| l.char_mm).or(args.char_mm);
+    let auto = match args.brush.as_deref() {
+        Some("auto") => true,
+        Some(_) => false,
+        None => box_mm.is_some(),
+    };
+    let named = if auto { "pen1" } else { args.brush.as_deref().unwrap_or("pen1") };
+    let mut profile = load_brush(named)?;
     let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
     // One run per output folder at a time; what a run that died left beside it is cleaned up
     // (or the old folder put back) before deciding whether the folder may be replaced.
@@ -232,6 +248,15 @@ pub fn run(args: Args) -> Result<()> {
     check_output_folder("--output", &args.output, args.force)?;
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
+    let choice = match box_mm {
+        // The generator is trained for pen1: the neural renderer keeps it.
+        Some(mm) if auto && !args.renderer.neural() => {
+            let c = pipeline::choose_brush(&prepared, &pipeline::builtin_brushes(), mm, alpha_rad);
+            profile = c.profile.clone();
+            Some(c)
+        }
+        _ => None,
+    };
     let refine = args.refine.options()?;
     let generator = match refine {
         Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
@@ -269,7 +294,8 @@ pub fn run(args: Args) -> Result<()> {
         write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
-    let summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
+    let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
+    summary["brush_choice"] = json!(choice);
     let mut sheet_track = SheetTrack::new(
         &lay,
         flow,
@@ -322,6 +348,10 @@ pub fn run(args: Args) -> Result<()> {
             summary["brush_fit"]["note"].as_str().unwrap_or(""),
             args.output.display()
         );
+        match &choice {
+            Some(c) => println!("brush (--brush auto): {}", c.reason),
+            None => println!("brush: {}", profile.name),
+        }
     }
     Ok(())
 }
@@ -331,6 +361,12 @@ fn checked_chars(args: &Args) -> Result<Vec<char>> {
     let chars: Vec<char> = args.text.chars().filter(|c| !c.is_whitespace()).collect();
     if chars.is_empty() {
         bail!("TEXT is empty: give at least one character");
+    }
+    let spaces = args.text.chars().count() - chars.len();
+    if spaces > 0 {
+        eprintln!(
+            "note: TEXT has {spaces} space(s) or line break(s); they are left out and the characters laid out one after another (use --per-line to break lines)"
+        );
     }
     if args.image.is_some() && chars.len() != 1 {
         bail!("--image holds one character; TEXT has {}", chars.len());
@@ -361,9 +397,9 @@ fn print_char(r: &CharReport) {
     let executed = match (r.executed, r.agreement) {
         (Some(e), Some(a)) => format!(
             "executed CSIM {:.4}  SSIM {:.4}  IoU {:.4}  (planned CSIM {:.4}, planned vs executed {:.4})",
-            e.csim, e.ssim, e.iou, r.csim, a.csim
+            e.csim, e.ssim, e.iou, r.plan.csim, a.csim
         ),
-        _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.csim, r.ssim, r.iou),
+        _ => format!("planned CSIM {:.4}  SSIM {:.4}  IoU {:.4}", r.plan.csim, r.plan.ssim, r.plan.iou),
     };
     println!(
         "{} ({} via {}, {}): {executed}{}  strokes {}{}  points {}  {:.1} ms",
@@ -371,11 +407,11 @@ fn print_char(r: &CharReport) {
         r.source,
         r.method,
         r.model,
-        r.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
-        r.strokes_found,
-        r.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
-        r.points,
-        r.millis
+        r.plan.chamfer_pct.map_or(String::new(), |c| format!("  chamfer {c:.2}%")),
+        r.plan.strokes_found,
+        r.plan.strokes_expected.map_or(String::new(), |e| format!("/{e}")),
+        r.plan.points,
+        r.timing_ms.plan
     );
     if let Some(rf) = &r.refine {
         let fig = |s: Option<pipeline::Similarity>| s.map_or("-".into(), |s| format!("{:.4}", s.csim));
@@ -442,7 +478,7 @@ fn summary_json(
         "char_mm": char_mm,
         "brush": profile.name,
         "model": args.model.name(),
-        "mean": {"csim": mean(|r| r.csim), "ssim": mean(|r| r.ssim), "iou": mean(|r| r.iou)},
+        "plan_mean": {"csim": mean(|r| r.plan.csim), "ssim": mean(|r| r.plan.ssim), "iou": mean(|r| r.plan.iou)},
         "executed_mean": {
             "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
             "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
@@ -479,11 +515,15 @@ fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
-    write_atomic(&dir.join("overlay.png"), &overlay_png(&r.reference, &r.render)?)?;
+    write_atomic(&dir.join("overlay.png"), &crate::plot::overlay_legend_png(&r.reference, &r.render)?)?;
     if let Some(ex) = &r.executed {
         write_atomic(&dir.join("executed.png"), &ex.encode_png()?)?;
-        let row = pipeline::side_by_side(&[&r.reference, &r.render, ex]);
-        write_atomic(&dir.join("side-by-side.png"), &row.encode_png()?)?;
+        let row = crate::plot::labelled_row_png(&[
+            ("reference (glyph)", &r.reference),
+            ("plan", &r.render),
+            ("executed", ex),
+        ])?;
+        write_atomic(&dir.join("side-by-side.png"), &row)?;
     }
     // Where this character sits: in its box and, with --sheet, on the sheet, in paper mm.
     let track = r.track_file(profile, sheet.map(|l| [l.sheet.width_mm, l.sheet.height_mm]));

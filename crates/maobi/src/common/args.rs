@@ -11,7 +11,7 @@ use super::check_range;
 /// The `--brush` argument shared by most commands.
 #[derive(clap::Args, Debug, Clone)]
 pub struct BrushArg {
-    /// Brush: pen1, pen2 or a profile JSON file.
+    /// Brush: pen1, pen2, a scaled pen1 (pen1-s84 … pen1-s25) or a profile JSON file.
     #[arg(long, default_value = "pen1")]
     pub brush: String,
 }

@@ -73,7 +73,9 @@ pub fn load_brush(spec: &str) -> Result<BrushProfile> {
     }
     let path = Path::new(spec);
     if !path.exists() && !spec.ends_with(".json") {
-        anyhow::bail!("--brush `{spec}`: not a built-in brush (pen1, pen2) nor an existing profile file");
+        anyhow::bail!(
+            "--brush `{spec}`: not a built-in brush (pen1, pen2, pen1-s84 … pen1-s25) nor an existing profile file"
+        );
     }
     Ok(BrushProfile::load(path)?)
 }

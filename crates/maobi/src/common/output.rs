@@ -245,11 +245,62 @@ pub fn recover_leftovers(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Refuses an existing non-empty output folder (a file, or a folder with anything in it) unless
-/// `force`; with `force`, refuses anything but a folder. `flag` names the output in errors.
+/// The file in every output folder a run installs that lists, one relative path (`/`-separated)
+/// a line, each file the run wrote there: what a later `--force` may replace.
+pub const MANIFEST: &str = ".maobi-written";
+
+/// Every file under `dir` (not following symlinks; a symlink counts as a file), as relative
+/// `/`-separated paths, sorted.
+fn files_under(dir: &Path) -> Result<Vec<String>> {
+    let mut out = Vec::new();
+    let mut todo = vec![(dir.to_path_buf(), String::new())];
+    while let Some((d, rel)) = todo.pop() {
+        for e in std::fs::read_dir(&d).with_context(|| format!("cannot read {}", d.display()))? {
+            let e = e.with_context(|| format!("cannot read {}", d.display()))?;
+            let name = e.file_name().to_string_lossy().into_owned();
+            let r = if rel.is_empty() { name } else { format!("{rel}/{name}") };
+            if e.file_type().with_context(|| format!("cannot read {}", e.path().display()))?.is_dir() {
+                todo.push((e.path(), r));
+            } else {
+                out.push(r);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// The files in the output folder `out` that no maobi run wrote: not listed in its
+/// [`MANIFEST`] (all of them when it has none).
 ///
 /// # Errors
-/// As described, naming the flag and the path.
+/// The folder cannot be read.
+pub fn foreign_files(out: &Path) -> Result<Vec<String>> {
+    let listed: std::collections::HashSet<String> = std::fs::read_to_string(out.join(MANIFEST))
+        .map(|s| s.lines().map(str::to_string).collect())
+        .unwrap_or_default();
+    Ok(files_under(out)?.into_iter().filter(|f| f != MANIFEST && !listed.contains(f)).collect())
+}
+
+/// The error for an output folder holding files maobi did not write.
+fn foreign_error(flag: &str, out: &Path, foreign: &[String]) -> anyhow::Error {
+    let shown: Vec<&str> = foreign.iter().take(5).map(String::as_str).collect();
+    let more =
+        if foreign.len() > shown.len() { format!(" and {} more", foreign.len() - shown.len()) } else { String::new() };
+    anyhow::anyhow!(
+        "{flag} {}: holds {} file(s) maobi did not write ({}{more}); --force replaces only what maobi wrote there: move them away, or name another folder",
+        out.display(),
+        foreign.len(),
+        shown.join(", ")
+    )
+}
+
+/// Refuses an existing non-empty output folder (a file, or a folder with anything in it) unless
+/// `force`; with `force`, refuses anything but a folder, and a folder holding files no maobi
+/// run wrote ([`foreign_files`]). `flag` names the output in errors.
+///
+/// # Errors
+/// As described, naming the flag and the path (and the files maobi did not write).
 pub fn check_output_folder(flag: &str, out: &Path, force: bool) -> Result<()> {
     let meta = match std::fs::symlink_metadata(out) {
         Ok(m) => m,
@@ -259,6 +310,10 @@ pub fn check_output_folder(flag: &str, out: &Path, force: bool) -> Result<()> {
     if force {
         if !meta.is_dir() {
             bail!("{flag} {}: exists and is not a folder; --force replaces folders only", out.display());
+        }
+        let foreign = foreign_files(out)?;
+        if !foreign.is_empty() {
+            return Err(foreign_error(flag, out, &foreign));
         }
         return Ok(());
     }
@@ -274,6 +329,21 @@ pub fn check_output_folder(flag: &str, out: &Path, force: bool) -> Result<()> {
 fn folder_is_empty(out: &Path, meta: &std::fs::Metadata) -> Result<bool> {
     Ok(meta.is_dir()
         && std::fs::read_dir(out).with_context(|| format!("cannot read {}", out.display()))?.next().is_none())
+}
+
+/// Refuses to replace an existing single-file output unless `force` (as every command treats an
+/// existing output: never replaced silently). `flag` names the output. A symlink is followed
+/// to the file it names ([`output_target`]).
+///
+/// # Errors
+/// `path` (or the file it links to) exists and `force` is not given; as [`output_target`].
+pub fn check_output_file(flag: &str, path: &Path, force: bool) -> Result<()> {
+    // Through symlinks to the file that would be written; special files are refused there.
+    let target = output_target(path)?;
+    if !force && target.is_file() {
+        bail!("{flag} {}: already exists; give --force to replace it", path.display());
+    }
+    Ok(())
 }
 
 /// Whether `out` is missing or an empty folder (nothing a run would replace).
@@ -339,6 +409,18 @@ impl Stage {
         let old = parent_of(&self.path).join(format!("{}.old", name_of(&self.path)));
         let had_old = replace && std::fs::symlink_metadata(out).is_ok();
         let result = (|| -> Result<()> {
+            // What this run wrote, for the next --force.
+            let mut list = files_under(&self.path)?.join("\n");
+            list.push('\n');
+            std::fs::write(self.path.join(MANIFEST), list)
+                .with_context(|| format!("cannot write {}", self.path.join(MANIFEST).display()))?;
+            // A file put into the old folder while this run worked is not replaced either.
+            if had_old && std::fs::symlink_metadata(out).is_ok_and(|m| m.is_dir()) {
+                let foreign = foreign_files(out)?;
+                if !foreign.is_empty() {
+                    return Err(foreign_error(flag, out, &foreign));
+                }
+            }
             step("swap-aside")?;
             if had_old {
                 std::fs::rename(out, &old)

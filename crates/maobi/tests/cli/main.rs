@@ -8,6 +8,7 @@ mod common;
 
 mod brush;
 mod neural;
+mod newcomer;
 mod observe;
 mod photos;
 mod preview;

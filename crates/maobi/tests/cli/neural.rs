@@ -43,6 +43,10 @@ fn train_a_tiny_generator_and_use_it() {
         serde_json::from_str(&ok(&maobi(&["eval-generator", "--generator", s(&m), "--n", "16", "--json"]))).unwrap();
     assert_eq!(j["n"], 16);
     assert!(j["models"]["b-bsmg"]["csim"]["mean"].as_f64().unwrap() > 0.0);
+    // Which weights were scored is said, in JSON and in the table's heading.
+    assert_eq!(j["generator"].as_str(), Some(s(&m)));
+    let table = ok(&maobi(&["eval-generator", "--generator", s(&m), "--n", "4"]));
+    assert!(table.lines().next().unwrap().contains(s(&m)), "{table}");
     // Resume continues from the checkpoint.
     ok(&maobi(&[
         "train",
@@ -100,12 +104,13 @@ fn the_committed_generator_renders_strokes_and_characters() {
     ok(&maobi(&["write", "十", "--renderer", "neural", "--size", "128", "-o", s(&w)]));
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(w.join("report.json")).unwrap()).unwrap();
     assert_eq!(r["model"], "b-bsmg");
-    assert!(r["csim"].as_f64().unwrap() > 0.7, "{r}");
+    assert!(r["plan"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     fails(
         &maobi(&["write", "十", "--renderer", "neural", "--brush", "pen2", "--out", s(&dir.path().join("x"))]),
         "trained for brush `pen1`",
     );
     let j: serde_json::Value = serde_json::from_str(&ok(&maobi(&["eval-generator", "--n", "20", "--json"]))).unwrap();
+    assert_eq!(j["generator"], "committed");
     for m in ["b-bsmg", "circle", "ellipse", "line", "qbc"] {
         assert!(j["models"][m]["ssim"]["mean"].as_f64().unwrap() > 0.5, "{m}");
     }

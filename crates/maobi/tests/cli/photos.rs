@@ -96,5 +96,8 @@ fn bad_photos_are_listed_or_refused() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("left out 1 photo(s)") && e.contains("two.png"), "{e}");
     fails(&maobi(&["calibrate", "--images", s(&set)]), "needs -o");
-    fails(&maobi(&["calibrate", "--images", s(dir.path()), "-o", s(&dir.path().join("q.json"))]), "labels.csv");
+    // (Into another folder: measurements.csv and regression.png beside p.json are not replaced.)
+    let q = dir.path().join("q/q.json");
+    fails(&maobi(&["calibrate", "--images", s(dir.path()), "-o", s(&dir.path().join("q.json"))]), "already exists");
+    fails(&maobi(&["calibrate", "--images", s(dir.path()), "-o", s(&q)]), "labels.csv");
 }

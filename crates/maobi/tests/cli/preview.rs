@@ -69,7 +69,7 @@ fn the_page_is_self_contained_and_offline() {
             .replace("\"size_mm\": [300, 300]", "\"size_mm\": [20, 20]"),
     )
     .unwrap();
-    ok(&maobi(&["preview", s(&out.join("track.json")), "--paper", s(&small), "-o", s(&p)]));
+    ok(&maobi(&["preview", s(&out.join("track.json")), "--paper", s(&small), "-o", s(&p), "--force"]));
     assert!(std::fs::read_to_string(&p).unwrap().contains("refused (on the given paper.json)"));
     crate::common::fails(&maobi(&["preview", s(&dir.path().join("none.json")), "-o", s(&p)]), "none.json");
 }
@@ -108,6 +108,23 @@ fn the_preview_plays_in_headless_chromium() {
     let feet = body_attr(&dom, "feet").unwrap();
     assert!(t > 1.0, "the animation did not advance: t = {t}");
     assert!(drawn > 0.0 && drawn <= feet && feet > 100.0, "drawn {drawn} of {feet}");
+    // Without #autoplay the page opens on the finished sheet: the clock at the end, every
+    // footprint drawn, and the verdict's time is the timeline's.
+    let o = Command::new(&browser)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--dump-dom"])
+        .arg(format!("--user-data-dir={}", dir.path().join("profile").display()))
+        .args(["--virtual-time-budget=1000"])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("chromium runs");
+    let still = String::from_utf8_lossy(&o.stdout);
+    let duration = body_attr(&still, "duration").unwrap();
+    assert_eq!(body_attr(&still, "t"), Some(duration), "not the finished sheet on load");
+    assert_eq!(body_attr(&still, "drawn"), body_attr(&still, "feet"));
+    assert_eq!(body_attr(&still, "playing"), Some(0.0));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains(&format!("{duration:.1} s to write")), "one time in the verdict and the timeline");
+    assert!(html.contains("#autoplay") && html.contains("#speed=N"), "the URL options are on the page");
     let shot = Path::new(env!("CARGO_TARGET_TMPDIR")).join("preview.png");
     let _ = std::fs::remove_file(&shot);
     let o = run(&[&format!("--screenshot={}", shot.display())]);

@@ -326,7 +326,9 @@ fn dataset_streams_labels_in_order() {
     for (i, r) in rows.iter().enumerate() {
         assert!(r.starts_with(&format!("fp_{i:06}.png,")), "row {i}: {r}");
     }
-    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1501);
+    // The images, labels.csv and the list of what maobi wrote (.maobi-written).
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1502);
+    assert_eq!(std::fs::read_to_string(out.join(".maobi-written")).unwrap().lines().count(), 1501);
 }
 
 #[cfg(unix)]
@@ -363,7 +365,7 @@ fn an_interrupted_dataset_leaves_a_consistent_prefix_and_no_temporary_files() {
     let mut files: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n != "labels.csv")
+        .filter(|n| n != "labels.csv" && n != ".maobi-written")
         .collect();
     files.sort();
     assert!(files.iter().all(|f| !f.contains("tmp")), "temporary files left");
@@ -435,7 +437,7 @@ fn names(dir: &Path) -> Vec<String> {
 fn dataset_rows(out: &Path) -> usize {
     let rows = labels_rows(&out.join("labels.csv"));
     let listed: Vec<String> = rows.iter().map(|r| r.split(',').next().unwrap().to_string()).collect();
-    let files: Vec<String> = names(out).into_iter().filter(|n| n != "labels.csv").collect();
+    let files: Vec<String> = names(out).into_iter().filter(|n| n != "labels.csv" && n != ".maobi-written").collect();
     assert_eq!(listed, files, "labels.csv lists exactly the images in {}", out.display());
     rows.len()
 }
@@ -497,15 +499,17 @@ fn write_force_swap_survives_an_error_a_signal_or_a_kill_at_each_step() {
     let out = dir.path().join("out");
     let marker = dir.path().join("marker");
     let write = ["write", "十", "--size", "64", "--out", s(&out), "--force"];
+    // An older run's outputs: a file maobi wrote, listed in the folder's manifest.
     let old = |out: &Path| {
         std::fs::create_dir_all(out).unwrap();
         std::fs::write(out.join("old.txt"), "old").unwrap();
+        std::fs::write(out.join(".maobi-written"), "old.txt\n").unwrap();
     };
     old(&out);
     for step in ["swap-aside", "swap-install", "swap-cleanup"] {
         // An error at the step (a full disk): exit 2, the old folder in place, nothing left.
         fails(&hooked(&write, &format!("fail:{step}"), &marker), "No space left on device");
-        assert_eq!(names(&out), ["old.txt"], "{step}: error");
+        assert_eq!(names(&out), [".maobi-written", "old.txt"], "{step}: error");
         assert_eq!(names(dir.path()), ["out"], "{step}: error");
         // Ctrl-C at the step (before: a SIGINT between removing the old and installing the new
         // left neither): exit 130, the old folder in place, nothing left.
@@ -516,7 +520,7 @@ fn write_force_swap_survives_an_error_a_signal_or_a_kill_at_each_step() {
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(130), "{step}: {e}");
         assert!(e.contains("interrupted"), "{step}: {e}");
-        assert_eq!(names(&out), ["old.txt"], "{step}: Ctrl-C");
+        assert_eq!(names(&out), [".maobi-written", "old.txt"], "{step}: Ctrl-C");
         std::fs::remove_file(&marker).unwrap();
         assert_eq!(names(dir.path()), ["out"], "{step}: Ctrl-C");
         // Killed at the step: the next run puts the old folder back (or, once the new one is in
@@ -540,7 +544,7 @@ fn write_force_swap_survives_an_error_a_signal_or_a_kill_at_each_step() {
             if step == "swap-install" {
                 assert!(e.contains("note: put back"), "{step}: {e}");
             }
-            assert_eq!(names(&out), ["old.txt"], "{step}: kill");
+            assert_eq!(names(&out), [".maobi-written", "old.txt"], "{step}: kill");
         }
         assert_eq!(names(dir.path()), ["out"], "{step}: kill");
     }
@@ -692,7 +696,7 @@ fn ink_in_the_alpha_channel_is_read_on_white() {
     ok(&maobi(&["write", "永", "--image", s(&yong), "--size", "128", "--out", s(&w)]));
     let rep: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(w.join("report.json")).unwrap()).unwrap();
-    assert!(rep["strokes_found"].as_u64().unwrap() >= 3, "{rep}");
+    assert!(rep["plan"]["strokes_found"].as_u64().unwrap() >= 3, "{rep}");
     // The alpha-ink stroke fits as the opaque original does (its scale given: the PNG lost it).
     let plain = ok(&maobi(&["fit-stroke", &fixture("photos/stroke_05.png")]));
     let alpha = ok(&maobi(&["fit-stroke", s(&stroke), "--px-per-mm", "8"]));

@@ -17,9 +17,24 @@ fn json(p: &Path) -> serde_json::Value {
 fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sheet");
-    // Without registration marks (tests/cli/observe.rs has them): the dips counted below are
-    // the characters' own.
-    ok(&maobi(&["write", "永字八法", "--sheet", "A4", "--size", "96", "--grid", "mi", "--no-marks", "--out", s(&out)]));
+    // pen1 as given: the ink pot test below knows pen1's tool geometry (the default for a sheet,
+    // --brush auto, is tested in newcomer.rs); without registration marks (observe.rs has
+    // them), so the dips counted below are the characters' own.
+    ok(&maobi(&[
+        "write",
+        "永字八法",
+        "--sheet",
+        "A4",
+        "--size",
+        "96",
+        "--grid",
+        "mi",
+        "--brush",
+        "pen1",
+        "--no-marks",
+        "--out",
+        s(&out),
+    ]));
     for f in ["sheet.png", "summary.json", "track.json", "preview.html", "01-永/render.png", "04-法/report.json"] {
         assert!(out.join(f).is_file(), "{f}");
     }
@@ -136,9 +151,31 @@ fn out_is_never_mixed_force_replaces_and_sizes_are_checked() {
     std::fs::write(out.join("old.txt"), "old run").unwrap();
     fails(&maobi(&["write", "十口", "--size", "64", "--out", s(&out)]), "--force");
     assert!(out.join("old.txt").is_file());
+    // --force replaces only what maobi wrote: a file it did not write is kept, and named.
+    fails(&maobi(&["write", "十口", "--size", "64", "--out", s(&out), "--force"]), "maobi did not write (old.txt)");
+    assert_eq!(std::fs::read_to_string(out.join("old.txt")).unwrap(), "old run");
+    std::fs::remove_file(out.join("old.txt")).unwrap();
+    ok(&maobi(&["write", "十口", "--size", "64", "--out", s(&out)]));
+    let manifest = std::fs::read_to_string(out.join(".maobi-written")).unwrap();
+    assert!(
+        manifest.lines().any(|l| l == "02-口/render.png") && manifest.lines().any(|l| l == "sheet.png"),
+        "{manifest}"
+    );
     ok(&maobi(&["write", "十口", "--size", "64", "--sheet", "A5", "--out", s(&out), "--force"]));
-    assert!(!out.join("old.txt").exists(), "the old run was mixed in");
     assert!(out.join("track.json").is_file() && out.join("02-口/render.png").is_file());
+    // A file added to maobi's folder (a model trained into it, notes) stops --force.
+    std::fs::create_dir_all(out.join("gen")).unwrap();
+    std::fs::write(out.join("gen/pen1.safetensors"), "weights").unwrap();
+    fails(&maobi(&["write", "十口", "--size", "64", "--out", s(&out), "--force"]), "gen/pen1.safetensors");
+    assert!(out.join("gen/pen1.safetensors").is_file());
+    std::fs::remove_dir_all(out.join("gen")).unwrap();
+    // A single-file output is refused as well unless --force.
+    let html = dir.path().join("p.html");
+    std::fs::write(&html, "mine").unwrap();
+    fails(&maobi(&["preview", s(&out.join("track.json")), "-o", s(&html)]), "already exists; give --force");
+    assert_eq!(std::fs::read_to_string(&html).unwrap(), "mine");
+    ok(&maobi(&["preview", s(&out.join("track.json")), "-o", s(&html), "--force"]));
+    std::fs::remove_file(&html).unwrap();
     // Nothing staged is left beside it.
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(left.len(), 1, "{left:?}");

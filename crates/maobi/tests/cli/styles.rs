@@ -22,7 +22,7 @@ fn a_font_glyph_is_written_from_its_registered_template() {
     ok(&maobi(&["write", "永", "--font", s(&msz), "--size", "128", "-o", s(&out)]));
     let r = json(&out.join("report.json"));
     assert_eq!((r["source"].as_str(), r["method"].as_str()), (Some("font"), Some("template")));
-    assert_eq!((r["strokes_expected"].as_u64(), r["strokes_found"].as_u64()), (Some(5), Some(5)));
+    assert_eq!((r["plan"]["strokes_expected"].as_u64(), r["plan"]["strokes_found"].as_u64()), (Some(5), Some(5)));
     let t = &r["template"];
     assert_eq!(t["strokes"], 5);
     assert_eq!(t["fits"].as_array().unwrap().len(), 5);
@@ -45,8 +45,8 @@ fn every_font_container_and_a_collection_face() {
         ok(&maobi(&["write", "十", "--font", s(&fonts.join(f)), "--size", "96", "-o", s(&out)]));
         let r = json(&out.join("report.json"));
         assert_eq!(r["method"], "template", "{f}");
-        assert_eq!(r["strokes_found"], 2, "{f}");
-        csims.push(r["csim"].as_f64().unwrap());
+        assert_eq!(r["plan"]["strokes_found"], 2, "{f}");
+        csims.push(r["plan"]["csim"].as_f64().unwrap());
     }
     // The same glyph in every container (CFF outlines are rounded to font units).
     for c in &csims[1..] {
@@ -86,7 +86,7 @@ fn every_font_container_and_a_collection_face() {
         "-o",
         s(&both),
     ]));
-    assert!(json(&both.join("report.json"))["strokes_found"] == 2);
+    assert!(json(&both.join("report.json"))["plan"]["strokes_found"] == 2);
 }
 
 #[test]
@@ -151,7 +151,7 @@ fn template_placement_is_searched_unless_asked_not_to() {
             "--json",
         ]));
         let c = &v["chars"][0];
-        (c["char_mm"].as_f64().unwrap(), c["csim"].as_f64().unwrap())
+        (c["char_mm"].as_f64().unwrap(), c["plan"]["csim"].as_f64().unwrap())
     };
     let (auto_mm, auto_csim) = run("auto");
     let (mm, csim) = run("search");

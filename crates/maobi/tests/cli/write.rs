@@ -25,30 +25,50 @@ fn one_character_gets_all_five_outputs() {
     }
     let img = image::open(out.join("render.png")).unwrap();
     assert_eq!((img.width(), img.height()), (128, 128));
+    // The pictures explain themselves: labels above the three panels, a legend below the overlay.
+    let row = image::open(out.join("side-by-side.png")).unwrap().to_rgb8();
+    assert_eq!(row.width(), 3 * 128 + 2 * 4);
+    let strip = row.height() - 128;
+    assert!(strip >= 9, "a label strip above the panels: {}", row.height());
+    for panel in 0..3 {
+        let x0 = panel * (128 + 4);
+        let dark =
+            (x0..x0 + 128).flat_map(|x| (0..strip).map(move |y| (x, y))).filter(|&(x, y)| row.get_pixel(x, y)[0] < 128);
+        assert!(dark.count() > 10, "panel {panel} has a label");
+    }
+    let ovl = image::open(out.join("overlay.png")).unwrap().to_rgb8();
+    assert_eq!(ovl.width(), 128);
+    assert!(ovl.height() > 128 + 20, "a legend below the overlay");
+    let below = |f: &dyn Fn(&image::Rgb<u8>) -> bool| {
+        (128..ovl.height()).flat_map(|y| (0..128).map(move |x| (x, y))).filter(|&(x, y)| f(ovl.get_pixel(x, y))).count()
+    };
+    assert!(below(&|p| p[0] > 150 && p[1] < 80 && p[2] < 80) > 5, "red legend text");
+    assert!(below(&|p| p[2] > 150 && p[0] < 80 && p[1] < 80) > 5, "blue legend text");
     let r = json(&out.join("report.json"));
     assert_eq!(r["char"], "永");
     assert_eq!(r["source"], "embedded");
     assert_eq!(r["method"], "medians");
-    assert_eq!(r["strokes_expected"], 5);
-    assert_eq!(r["strokes_found"], 5);
-    for k in ["csim", "ssim", "iou", "chamfer_pct", "millis"] {
-        assert!(r[k].as_f64().unwrap() > 0.0, "{k}");
+    assert_eq!(r["plan"]["strokes_expected"], 5);
+    assert_eq!(r["plan"]["strokes_found"], 5);
+    for k in ["csim", "ssim", "iou", "chamfer_pct"] {
+        assert!(r["plan"][k].as_f64().unwrap() > 0.0, "{k}");
     }
-    assert!(r["csim"].as_f64().unwrap() > 0.7, "{r}");
+    assert!(r["timing_ms"]["plan"].as_f64().unwrap() > 0.0, "{r}");
+    assert!(r["plan"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     // What the robot would write: the program executed as the simulator moves, through the same
     // forward model. It scores like the plan, and the two images agree.
     assert!(r["executed"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     assert!(r["agreement"]["csim"].as_f64().unwrap() > 0.97, "{r}");
-    assert!((r["executed"]["csim"].as_f64().unwrap() - r["csim"].as_f64().unwrap()).abs() < 0.02, "{r}");
+    assert!((r["executed"]["csim"].as_f64().unwrap() - r["plan"]["csim"].as_f64().unwrap()).abs() < 0.02, "{r}");
     // The plan with footprints sized freely from the glyph, named for what it is (not a bound).
-    assert!(r["free_widths"]["csim"].as_f64().unwrap() > 0.7, "{r}");
+    assert!(r["plan"]["free_widths"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     assert!(r.get("upper_bound").is_none(), "{r}");
     // The track parses back into brush-model's Track and sits inside the char box.
     let t = json(&out.join("track.json"));
     let b: Vec<f64> = t["char_box_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
     let track: Track = serde_json::from_value(serde_json::json!({"strokes": t["strokes"]})).unwrap();
     assert_eq!(track.strokes.len(), 5);
-    assert_eq!(track.point_count() as u64, r["points"].as_u64().unwrap());
+    assert_eq!(track.point_count() as u64, r["plan"]["points"].as_u64().unwrap());
     let pen1 = brush_model::BrushProfile::builtin("pen1").unwrap();
     for p in track.points() {
         assert!(
@@ -58,6 +78,40 @@ fn one_character_gets_all_five_outputs() {
         assert!(pen1.ranges.h_mm.contains(p.h_mm) || (0.0..=0.01).contains(&p.h_mm), "h {}", p.h_mm);
     }
     assert_eq!(t["brush"]["name"], "pen1");
+    // The report is grouped, and says which brush.
+    assert_eq!(r["brush"]["name"], "pen1");
+    for k in ["clamped_low_points", "clamped_high_points"] {
+        assert!(r["brush"][k].is_u64(), "{k}: {r}");
+    }
+    assert!(r.get("csim").is_none() && r.get("millis").is_none(), "no ungrouped figures: {r}");
+    every_field_is_documented(&r, "report.json");
+}
+
+/// Every field (as a dotted path, array items as `[]`) of a JSON output appears in
+/// docs/outputs.md, written as `` `path` ``.
+fn every_field_is_documented(v: &serde_json::Value, file: &str) {
+    fn paths(v: &serde_json::Value, prefix: &str, out: &mut Vec<String>) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m {
+                    let p = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+                    out.push(p.clone());
+                    paths(x, &p, out);
+                }
+            }
+            serde_json::Value::Array(a) => {
+                if let Some(x) = a.first() {
+                    paths(x, &format!("{prefix}[]"), out);
+                }
+            }
+            _ => {}
+        }
+    }
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/outputs.md")).unwrap();
+    let mut all = Vec::new();
+    paths(v, "", &mut all);
+    let missing: Vec<&String> = all.iter().filter(|p| !doc.contains(&format!("`{p}`"))).collect();
+    assert!(missing.is_empty(), "{file}: fields not described in docs/outputs.md: {missing:?}");
 }
 
 #[test]
@@ -70,9 +124,24 @@ fn several_characters_make_a_sheet() {
     }
     let sum = json(&out.join("summary.json"));
     assert_eq!(sum["chars"].as_array().unwrap().len(), 3);
-    let m = sum["mean"]["csim"].as_f64().unwrap();
-    let direct: f64 = sum["chars"].as_array().unwrap().iter().map(|c| c["csim"].as_f64().unwrap()).sum::<f64>() / 3.0;
+    let m = sum["plan_mean"]["csim"].as_f64().unwrap();
+    let direct: f64 =
+        sum["chars"].as_array().unwrap().iter().map(|c| c["plan"]["csim"].as_f64().unwrap()).sum::<f64>() / 3.0;
     assert!((m - direct).abs() < 1e-12);
+    // Each of `chars` is a report.json, documented as such.
+    let mut top = sum.clone();
+    top.as_object_mut().unwrap().remove("chars");
+    every_field_is_documented(&top, "summary.json");
+    // The layout the README describes: sheet.png, summary.json, track.json and preview.html at
+    // the top, one NN-字 folder per character with its own outputs.
+    for f in ["sheet.png", "summary.json", "track.json", "preview.html"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    for f in ["render.png", "reference.png", "executed.png", "overlay.png", "side-by-side.png", "report.json"] {
+        assert!(out.join("02-口").join(f).is_file(), "02-口/{f}");
+    }
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).unwrap();
+    assert!(readme.contains("NN-") && readme.contains("summary.json") && readme.contains("docs/outputs.md"));
     let sheet = image::open(out.join("sheet.png")).unwrap();
     // Columns right to left: three characters in one column of four.
     assert!(sheet.height() > 3 * 96 && sheet.width() < 2 * 96, "{}×{}", sheet.width(), sheet.height());
@@ -92,21 +161,21 @@ fn skeleton_font_and_image_sources() {
     ok(&maobi(&["write", "十", "--from", "skeleton", "--size", "128", "-o", s(&sk)]));
     let r = json(&sk.join("report.json"));
     assert_eq!(r["method"], "skeleton");
-    assert_eq!(r["strokes_found"], 2);
-    assert!(r["chamfer_pct"].as_f64().unwrap() < 3.0);
+    assert_eq!(r["plan"]["strokes_found"], 2);
+    assert!(r["plan"]["chamfer_pct"].as_f64().unwrap() < 3.0);
     let font = fixtures().join("fonts/ukai-subset.ttf");
     let f = dir.path().join("font");
     ok(&maobi(&["write", "永", "--font", s(&font), "--from", "skeleton", "--size", "128", "--out", s(&f)]));
     let r = json(&f.join("report.json"));
     assert_eq!((r["source"].as_str(), r["method"].as_str()), (Some("font"), Some("skeleton")));
-    assert!(r["chamfer_pct"].is_null() && r["strokes_expected"].is_null() && r["template"].is_null());
-    assert!(r["csim"].as_f64().unwrap() > 0.6);
+    assert!(r["plan"]["chamfer_pct"].is_null() && r["plan"]["strokes_expected"].is_null() && r["template"].is_null());
+    assert!(r["plan"]["csim"].as_f64().unwrap() > 0.6);
     // A photo of a character: use the reference image written above.
     let img = dir.path().join("img");
     ok(&maobi(&["write", "十", "--image", s(&sk.join("reference.png")), "--size", "128", "--out", s(&img)]));
     let r = json(&img.join("report.json"));
     assert_eq!(r["source"], "image");
-    assert_eq!(r["strokes_found"], 2);
+    assert_eq!(r["plan"]["strokes_found"], 2);
 }
 
 #[test]
@@ -141,7 +210,8 @@ fn evaluate_reports_means_and_refuses_unknown_characters() {
     let j: serde_json::Value =
         serde_json::from_str(&ok(&maobi(&["evaluate", "--chars", "十口", "--size", "128", "--json"]))).unwrap();
     assert_eq!(j["summary"]["count"], 2);
-    let mean = (j["chars"][0]["csim"].as_f64().unwrap() + j["chars"][1]["csim"].as_f64().unwrap()) / 2.0;
+    let mean =
+        (j["chars"][0]["plan"]["csim"].as_f64().unwrap() + j["chars"][1]["plan"]["csim"].as_f64().unwrap()) / 2.0;
     assert!((j["summary"]["csim"].as_f64().unwrap() - mean).abs() < 1e-12);
     assert_eq!(j["summary"]["strokes_match_fraction"], 1.0);
     assert!(j["summary"]["free_widths"]["csim"].as_f64().unwrap() > 0.5, "{j}");

@@ -5,7 +5,11 @@
 //! and takes each character from the first file whose character map covers it.
 //!
 //! Outlines land in the em frame like hanzi-writer-data: font units are scaled so the em is 1024
-//! units, with the baseline at `y = 0` of the original frame (`y' = 900 − y·1024/upem`).
+//! units (`y' = 900 − y·1024/upem`), then each glyph is placed by its real ink box: moved so
+//! that box is centred in the 1024-unit em box (and shrunk to fit when it is larger than the
+//! em). Fonts put the em box in different places (the baseline, ascender and descender vary:
+//! a glyph that reaches below hanzi-writer-data's descender of 124 units would be cut off), and
+//! a character is centred in its box on the paper as calligraphers centre it in its grid cell.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
@@ -332,7 +336,8 @@ fn outline_of(face: &ttf_parser::Face<'_>, path: &Path, index: u32, ch: char) ->
             format!("glyph of {ch:?}: {} outline elements; at most {max}", sink.path.elements().len()),
         ));
     }
-    if let Some(q) = path_outside(&sink.path) {
+    let placed = centred_in_em(&sink.path);
+    if let Some(q) = path_outside(&placed) {
         return Err(malformed(
             path,
             format!(
@@ -347,10 +352,29 @@ fn outline_of(face: &ttf_parser::Face<'_>, path: &Path, index: u32, ch: char) ->
     Ok(Some(Glyph {
         ch,
         source: GlyphSource::Font { path: path.display().to_string(), face_index: index },
-        shape: Shape::Outlines(vec![sink.path]),
+        shape: Shape::Outlines(vec![placed]),
         stroke_outlines: None,
         medians: None,
     }))
+}
+
+/// `path` (em units) moved so its ink box is centred in the em box `0..EM` on both axes, and
+/// scaled about that centre to fit when the ink box is larger than the em. An empty outline is
+/// returned as it is.
+fn centred_in_em(path: &BezPath) -> BezPath {
+    use kurbo::Shape as _;
+    let b = path.bounding_box();
+    if path.elements().is_empty() || !(b.width() > 0.0 && b.height() > 0.0) || !b.is_finite() {
+        return path.clone();
+    }
+    let k = (EM / b.width()).min(EM / b.height()).min(1.0);
+    let c = b.center();
+    let t = kurbo::Affine::translate((EM / 2.0, EM / 2.0))
+        * kurbo::Affine::scale(k)
+        * kurbo::Affine::translate((-c.x, -c.y));
+    let mut out = path.clone();
+    out.apply_affine(t);
+    out
 }
 
 /// A glyph from the first of `paths` (font files or folders of them, see [`font_files`]) whose
@@ -362,4 +386,64 @@ fn outline_of(face: &ttf_parser::Face<'_>, path: &Path, index: u32, ch: char) ->
 /// As [`FontSet::open`] and [`FontSet::glyph`].
 pub fn from_font_files(paths: &[PathBuf], face_index: Option<u32>, ch: char) -> Result<Glyph, GlyphError> {
     FontSet::open(paths, face_index)?.glyph(ch)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use kurbo::Shape as _;
+
+    fn fixture(rel: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts").join(rel)
+    }
+
+    fn ink_box(g: &Glyph) -> kurbo::Rect {
+        let Shape::Outlines(paths) = &g.shape else { panic!("a font glyph is outlines") };
+        paths.iter().map(|p| p.bounding_box()).reduce(|a, b| a.union(b)).unwrap()
+    }
+
+    /// Ma Shan Zheng's 永 sits low in its em box (placed by the em box alone its ink reaches to
+    /// within 24 of the 1024 units of the bottom, at the image's edge): placed by its ink box it
+    /// is centred.
+    #[test]
+    fn a_glyph_is_placed_by_its_ink_box_inside_the_em() {
+        let font = FontSet::open(&[fixture("msz")], None).unwrap();
+        let data = font
+            .files
+            .iter()
+            .find_map(|f| {
+                let d = font.sfnt(f).ok()?;
+                let face = ttf_parser::Face::parse(&d, 0).ok()?;
+                face.glyph_index('永').filter(|g| g.0 != 0).map(|_| d.clone())
+            })
+            .expect("msz covers 永");
+        let face = ttf_parser::Face::parse(&data, 0).unwrap();
+        let gid = face.glyph_index('永').unwrap();
+        let upem = f64::from(face.units_per_em());
+        let raw = face.glyph_bounding_box(gid).unwrap();
+        // The em-box placement (y' = 900 − y·1024/upem) puts the ink's centre well off the em's.
+        let raw_top = EM_TOP - f64::from(raw.y_max) * EM / upem;
+        let raw_bottom = EM_TOP - f64::from(raw.y_min) * EM / upem;
+        let off = (raw_top + raw_bottom) / 2.0 - EM / 2.0;
+        assert!(off > 0.0 && raw_bottom > 1000.0, "ink {raw_top:.0}..{raw_bottom:.0}: em and ink box differ");
+        let b = ink_box(&font.glyph('永').unwrap());
+        assert!(b.x0 >= 0.0 && b.y0 >= 0.0 && b.x1 <= EM && b.y1 <= EM, "{b:?}");
+        assert!((b.center().x - EM / 2.0).abs() < 1e-6 && (b.center().y - EM / 2.0).abs() < 1e-6, "{b:?}");
+        // The font's scale is kept (1024/upem): the box only moved (the font's box holds the
+        // control points, so it may exceed the curves' by a few units).
+        let h = f64::from(raw.y_max - raw.y_min) * EM / upem;
+        assert!(b.height() <= h + 1e-6 && h - b.height() < 5.0, "{} vs {h}", b.height());
+    }
+
+    #[test]
+    fn an_ink_box_larger_than_the_em_is_shrunk_to_fit() {
+        let mut p = BezPath::new();
+        p.move_to((-300.0, 100.0));
+        p.line_to((1500.0, 100.0));
+        p.line_to((1500.0, 400.0));
+        p.close_path();
+        let b = centred_in_em(&p).bounding_box();
+        assert!((b.x0 - 0.0).abs() < 1e-9 && (b.x1 - EM).abs() < 1e-9, "{b:?}");
+        assert!((b.height() - 300.0 * EM / 1800.0).abs() < 1e-9, "{b:?}");
+    }
 }
