@@ -95,7 +95,7 @@ fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
     let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let trace = dir.path().join("trace.jsonl");
     let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=200", "--trace", s(&trace)])
+        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=50", "--trace", s(&trace)])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
