@@ -25,7 +25,7 @@ pub struct Args {
     /// character's reference.png and render.png).
     #[arg(long, value_name = "DIR")]
     sheet: PathBuf,
-    /// Output folder: NN-<char>/observed.png per character and summary.json. An existing
+    /// Output folder: `NN-<char>/observed.png` per character and summary.json. An existing
     /// non-empty folder is refused unless --force is given.
     #[arg(short, long, visible_alias = "out", value_name = "DIR")]
     output: PathBuf,
