@@ -109,20 +109,18 @@ pub fn line_motion(from: &Pose, to: &Pose, v_m_s: f64, t0_s: f64) -> Vec<TraceEn
     (1..=n)
         .map(|k| {
             let f = k as f64 / n as f64;
-            let pose = if k == n {
-                *to
-            } else {
-                let t = a.translation.vector.lerp(&b.translation.vector, f);
-                let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 {
-                    a.rotation
-                } else {
-                    b.rotation
-                });
-                Pose::from_iso(&nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(t), r))
-            };
+            let pose = if k == n { *to } else { pose_between(&a, &b, f) };
             TraceEntry { t_s: t0_s + f * duration, kind: TraceKind::Line, pose }
         })
         .collect()
+}
+
+/// The pose a fraction `f` (0..1) of the way from `a` to `b`: the position on the straight line,
+/// the orientation by slerp (the nearer end's for a half turn, where slerp is undefined).
+pub(crate) fn pose_between(a: &nalgebra::Isometry3<f64>, b: &nalgebra::Isometry3<f64>, f: f64) -> Pose {
+    let t = a.translation.vector.lerp(&b.translation.vector, f);
+    let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 { a.rotation } else { b.rotation });
+    Pose::from_iso(&nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(t), r))
 }
 
 /// Executes a joint move: joints interpolated linearly at joint speed `v_rad_s`, the TCP pose by

@@ -422,17 +422,7 @@ pub fn ramped_line_motion(from: &Pose, to: &Pose, v_m_s: f64, a_m_s2: f64, t0_s:
         .map(|k| {
             let t = total * k as f64 / n as f64;
             let f = at(t) / len;
-            let pose = if k == n {
-                *to
-            } else {
-                let p = a.translation.vector.lerp(&b.translation.vector, f);
-                let r = a.rotation.try_slerp(&b.rotation, f, 1e-12).unwrap_or(if f < 0.5 {
-                    a.rotation
-                } else {
-                    b.rotation
-                });
-                Pose::from_iso(&Isometry3::from_parts(nalgebra::Translation3::from(p), r))
-            };
+            let pose = if k == n { *to } else { crate::exec::pose_between(&a, &b, f) };
             TraceEntry { t_s: t0_s + t, kind: crate::exec::TraceKind::Line, pose }
         })
         .collect()

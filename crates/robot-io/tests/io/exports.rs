@@ -3,37 +3,13 @@
 //! text is refused by the parse-back check, and a number that would print as something else
 //! (a speed of 1e-300 as `0.000000`) refuses the export.
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::export::parse::{GcodeStatement, ReadMove, read_gcode, read_lua, read_urscript};
 use robot_io::export::text::{MAX_COMMENT_CHARS, Target, comment_text};
 use robot_io::export::{aubo_lua, gcode, urscript, verify_gcode, verify_lua, verify_urscript};
-use robot_io::frame::PaperFrame;
 use robot_io::program::{Move, Program, RobotConfig, build_program};
 use robot_io::{InkStation, Reload, RobotError};
 
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-fn paper() -> PaperFrame {
-    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
-}
-
-/// Two short strokes, pressed at 15 mm, tilted 0.05 rad.
-fn small_track() -> Track {
-    let line = |pts: &[(f64, f64)], beta: f64| Stroke {
-        points: pts
-            .iter()
-            .map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta })
-            .collect(),
-    };
-    Track {
-        strokes: vec![
-            line(&[(40.0, 60.0), (50.0, 60.0), (60.0, 61.0), (70.0, 62.0)], std::f64::consts::PI),
-            line(&[(55.0, 40.0), (55.0, 55.0), (55.0, 70.0), (55.5, 85.0)], -std::f64::consts::FRAC_PI_2),
-        ],
-    }
-}
+use crate::common::{paper, pen1, small_track};
 
 /// A pot beside the sheet, dipped before every stroke, with a dwell.
 fn inked() -> RobotConfig {

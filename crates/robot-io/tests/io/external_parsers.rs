@@ -12,12 +12,13 @@ use std::io::{Read, Write};
 use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use brush_model::{Stroke, Track, TrackPoint};
 use robot_io::export::{aubo_lua, gcode};
-use robot_io::frame::PaperFrame;
 use robot_io::program::{Move, Program, RobotConfig, build_program};
 use robot_io::{InkStation, Reload};
 use serde_json::Value;
+
+use crate::common::{paper, pen1};
 
 /// Longest a tool may take on one case before the test fails.
 const TOOL_LIMIT: Duration = Duration::from_secs(20);
@@ -27,14 +28,6 @@ const TOOL_LIMIT: Duration = Duration::from_secs(20);
 /// floor for lengths and angles that are rounding noise around 0.
 fn close(read: f64, want: f64) -> bool {
     (read - want).abs() <= 1e-9 * want.abs() + 1e-12
-}
-
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-fn paper() -> PaperFrame {
-    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
 }
 
 /// Two short strokes, pressed at 15 and 18 mm, tilted 0.05 rad.

@@ -4,16 +4,14 @@
 // Poses written as a teach pendant shows them: rx = 3.14 rad (the tool flipped), not π.
 #![allow(clippy::approx_constant, reason = "3.14 rad is a pendant-style rx, deliberately not π")]
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use brush_model::{Stroke, Track, TrackPoint};
 use robot_io::exec::{execute_program, execute_program_tagged, trace_to_states};
 use robot_io::frame::PaperFrame;
+
+use crate::common::pen1;
 use robot_io::program::{
     DWELL_SINK_MM, InkStation, Move, Reload, RobotConfig, build_program, build_program_chars, dip_plan,
 };
-
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
 
 /// The fixture's paper (300 × 300 mm, level, origin at base (0.3, 0.25, 0.05)).
 fn paper() -> PaperFrame {

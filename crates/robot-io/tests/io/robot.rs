@@ -7,7 +7,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use brush_model::{Track, TrackPoint};
 use nalgebra::{Rotation3, Vector3};
 use robot_io::RobotError;
 use robot_io::aubo::{RunOptions, run_program};
@@ -19,29 +19,7 @@ use robot_io::pose::{Pose, brush_pose};
 use robot_io::program::{RobotConfig, build_program, tcp_iso};
 use robot_io::sim::{Faults, Simulator};
 
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-fn paper() -> PaperFrame {
-    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
-}
-
-/// Two short strokes: a horizontal and a vertical, pressed at 15 mm.
-fn small_track() -> Track {
-    let line = |pts: &[(f64, f64)], beta: f64| Stroke {
-        points: pts
-            .iter()
-            .map(|&(x, y)| TrackPoint { x_mm: x, y_mm: y, h_mm: 15.0, alpha_rad: 0.05, beta_rad: beta })
-            .collect(),
-    };
-    Track {
-        strokes: vec![
-            line(&[(40.0, 60.0), (50.0, 60.0), (60.0, 61.0), (70.0, 62.0)], std::f64::consts::PI),
-            line(&[(55.0, 40.0), (55.0, 55.0), (55.0, 70.0), (55.5, 85.0)], -std::f64::consts::FRAC_PI_2),
-        ],
-    }
-}
+use crate::common::{paper, pen1, small_track};
 
 /// The default settings with steps of up to 16 mm allowed within a stroke: [`small_track`]'s
 /// points lie 10–15 mm apart, where a planned track's lie 0.15 mm apart.

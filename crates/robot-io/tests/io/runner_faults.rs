@@ -12,16 +12,17 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use brush_model::{Stroke, Track, TrackPoint};
 use robot_io::RobotError;
 use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program, send_script};
-use robot_io::frame::PaperFrame;
 use robot_io::kinematics;
 use robot_io::pose::Pose;
 use robot_io::program::{Move, Program, RobotConfig, build_program, tcp_iso};
 use robot_io::wire::{self, FrameDecoder};
 use serde_json::{Value, json};
+
+use crate::common::{paper, pen1};
 
 // ---------------------------------------------------------------------------------------------
 // The fake controller.
@@ -262,14 +263,6 @@ fn serve(mut s: std::net::TcpStream, ctl: &Mutex<Ctl>, hook: &mut Hook, stop: &A
 
 // ---------------------------------------------------------------------------------------------
 // Programs and options.
-
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-fn paper() -> PaperFrame {
-    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
-}
 
 /// Horizontal strokes of `n` points 1 mm apart, pressed at 12 mm, one per 10 mm row.
 fn rows(strokes: usize, n: usize) -> Track {

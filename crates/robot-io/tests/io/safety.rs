@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+use brush_model::{Stroke, Track, TrackPoint};
 use robot_io::RobotError;
 use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
@@ -20,13 +20,7 @@ use robot_io::program::{
 };
 use robot_io::sim::{Faults, Simulator};
 
-fn pen1() -> BrushProfile {
-    BrushProfile::builtin("pen1").unwrap()
-}
-
-fn paper() -> PaperFrame {
-    PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0])
-}
+use crate::common::{paper, pen1};
 
 fn pt(x: f64, y: f64, h: f64, alpha: f64, beta: f64) -> TrackPoint {
     TrackPoint { x_mm: x, y_mm: y, h_mm: h, alpha_rad: alpha, beta_rad: beta }
