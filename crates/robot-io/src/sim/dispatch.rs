@@ -156,6 +156,18 @@ impl Shared {
         self.connections.load(Ordering::SeqCst)
     }
 
+    /// What every motion command does first: takes motion for `session` ([`Shared::claim`]) and
+    /// counts the move, answering with the injected fault when one is due (a dropped link or a
+    /// full queue); the locked state otherwise.
+    fn start_move(&self, session: u64, id: &Value) -> Result<MutexGuard<'_, State>, Reply> {
+        let mut st = self.claim(self.lock(), session, id)?;
+        match st.move_fault(&self.options.faults) {
+            Some(MoveFault::Drop) => Err(Reply::Drop),
+            Some(MoveFault::QueueFull) => Err(ok(id, json!(crate::aubo::QUEUE_FULL))),
+            None => Ok(st),
+        }
+    }
+
     /// Takes motion for `session` (or finds it already its own), waiting up to
     /// [`SimOptions::owner_wait`] for another owner to go; the refusal otherwise.
     fn claim<'a>(
@@ -561,16 +573,10 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
         }
         "MotionControl.moveJoint" | "MotionControl.moveLine" => {
             let joint = rest == "MotionControl.moveJoint";
-            let mut st = match shared.claim(shared.lock(), session, &id) {
+            let st = match shared.start_move(session, &id) {
                 Ok(st) => st,
-                Err(refused) => return refused,
+                Err(reply) => return reply,
             };
-            if let Some(fault) = st.move_fault(&shared.options.faults) {
-                return match fault {
-                    MoveFault::Drop => Reply::Drop,
-                    MoveFault::QueueFull => ok(&id, json!(crate::aubo::QUEUE_FULL)),
-                };
-            }
             let Some(m) = MoveArgs::parse(params, joint) else {
                 return ok(&id, json!(INVALID_ARGUMENT));
             };
@@ -588,16 +594,10 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
         | "MotionControl.pathBufferList"
         | "MotionControl.pathBufferValid" => path_buffer(shared, rest, params, &id),
         "MotionControl.movePathBuffer" => {
-            let mut st = match shared.claim(shared.lock(), session, &id) {
+            let st = match shared.start_move(session, &id) {
                 Ok(st) => st,
-                Err(refused) => return refused,
+                Err(reply) => return reply,
             };
-            if let Some(fault) = st.move_fault(&shared.options.faults) {
-                return match fault {
-                    MoveFault::Drop => Reply::Drop,
-                    MoveFault::QueueFull => ok(&id, json!(crate::aubo::QUEUE_FULL)),
-                };
-            }
             let name = match arg(params, "name", 0).and_then(Value::as_str) {
                 Some(n) if arity(params, &["name"], &[]) => n,
                 _ => return ok(&id, json!(INVALID_ARGUMENT)),
