@@ -1,8 +1,7 @@
 //! `maobi robot` end to end: check, refusals, exports, and a run against the simulator process.
 
-use crate::common::{fails, maobi, ok, s};
+use crate::common::{Sim, fails, free_port, maobi, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 
 fn paper() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")
@@ -106,24 +105,9 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     // the brush on the paper.
     let dir = tempfile::tempdir().unwrap();
     let track = written(dir.path());
-    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let port = free_port();
     let trace = dir.path().join("trace.json");
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=4", "--trace", s(&trace)])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    // Wait for the simulator to listen.
-    let mut up = false;
-    for _ in 0..100 {
-        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
-            up = true;
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    assert!(up, "simulator did not start");
+    let sim = Sim::start(port, &["--fault", "drop-after=4", "--trace", s(&trace)]);
     let o = maobi(&[
         "robot",
         "send",
@@ -141,8 +125,7 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     assert!(out.contains("2 of 2 strokes completed; 1 reconnect(s), 1 stroke(s) resumed"), "{out}");
     assert!(out.contains("2 path buffer(s)"), "{out}");
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let _ = sim.kill();
-    let _ = sim.wait();
+    drop(sim);
     // The executed path renders back to the planned image: the same forward model sees the same
     // motion (the stroke cut by the drop is written again over itself).
     let img = dir.path().join("trace.png");

@@ -2,7 +2,7 @@
 //! limits, a mirrored paper frame, an extreme tilt and a blend the controller rejects are
 //! refused, and Ctrl-C during `send` lifts the brush and exits non-zero saying "interrupted".
 
-use crate::common::{fails, maobi, ok, s};
+use crate::common::{Sim, fails, free_port, maobi, ok, s};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -74,24 +74,11 @@ fn ordinary_tracks_pass_and_unsafe_inputs_are_refused() {
 fn ctrl_c_during_send_lifts_the_brush_and_exits_non_zero() {
     let dir = tempfile::tempdir().unwrap();
     let track = write(dir.path(), "yong", &[]);
-    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let port = free_port();
     let trace = dir.path().join("trace.json");
-    // Every answer delayed 3 ms: 永's 2000-odd moves take several seconds.
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "delay-ms=40", "--trace", s(&trace)])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut up = false;
-    for _ in 0..100 {
-        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
-            up = true;
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    assert!(up, "simulator did not start");
+    // Every answer delayed 40 ms: the path buffer needs few calls, so the run lasts past the
+    // Ctrl-C below.
+    let sim = Sim::start(port, &["--fault", "delay-ms=40", "--trace", s(&trace)]);
     let send = Command::new(env!("CARGO_BIN_EXE_maobi"))
         .args(["robot", "send", s(&track), "--paper", s(&paper()), "--host", "127.0.0.1", "--port", &port.to_string()])
         .stdout(Stdio::piped())
@@ -122,8 +109,7 @@ fn ctrl_c_during_send_lifts_the_brush_and_exits_non_zero() {
     // The last executed pose is 20 mm above the sheet (the fixture's paper lies at z = 0.05 m,
     // facing up).
     std::thread::sleep(Duration::from_millis(400));
-    let _ = sim.kill();
-    let _ = sim.wait();
+    drop(sim);
     // The trace is a JSON array, or one JSON record per line.
     let text = std::fs::read_to_string(&trace).unwrap();
     let last = match serde_json::from_str::<serde_json::Value>(&text) {

@@ -1,9 +1,8 @@
 //! A whole sheet: layout on real paper, one sheet-level track.json that `robot check` and
 //! `robot send` take, ink dips on the simulator through a dropped link, and --out/--force.
 
-use crate::common::{fails, maobi, ok, s};
+use crate::common::{Sim, fails, free_port, maobi, ok, s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot").join(name)
@@ -92,23 +91,9 @@ fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
     .unwrap();
     assert_eq!(c["dips"].as_u64().unwrap(), 4, "{c}");
     // Sent to the simulator, which drops the link once: the whole sheet, resumed at a stroke.
-    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let port = free_port();
     let trace = dir.path().join("trace.jsonl");
-    let mut sim = Command::new(env!("CARGO_BIN_EXE_maobi"))
-        .args(["robot", "sim", "--port", &port.to_string(), "--fault", "drop-after=50", "--trace", s(&trace)])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut up = false;
-    for _ in 0..200 {
-        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
-            up = true;
-            break;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    assert!(up, "simulator did not start");
+    let sim = Sim::start(port, &["--fault", "drop-after=50", "--trace", s(&trace)]);
     let sent = ok(&maobi(&[
         "robot",
         "send",
@@ -125,8 +110,7 @@ fn a4_sheet_is_one_program_with_ink_dips_through_a_dropped_link() {
         "2000",
     ]));
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let _ = sim.kill();
-    let _ = sim.wait();
+    drop(sim);
     let n = strokes.len();
     assert!(sent.contains(&format!("{n} of {n} strokes completed; 1 reconnect(s), 1 stroke(s) resumed")), "{sent}");
     // The trace goes to the ink pot (beside the sheet, base x 0.63 m, below the paper plane) once

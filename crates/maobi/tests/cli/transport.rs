@@ -2,48 +2,14 @@
 //! framed transport through a dropped link, the same program over lines and HTTP, a refused
 //! login; and the official AUBO SDK client (`pyaubo_sdk`) driving the simulator end to end.
 
-use crate::common::{fails, maobi, ok, s};
+use crate::common::{Sim, fails, free_port, maobi, ok, s};
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Duration;
 
 fn paper() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/paper.json")
-}
-
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
-
-/// `maobi robot sim` with `args`, once its first port accepts connections (at most 5 s).
-struct Sim(Child);
-
-impl Sim {
-    fn start(port: u16, args: &[&str]) -> Sim {
-        let child = Command::new(env!("CARGO_BIN_EXE_maobi"))
-            .args(["robot", "sim", "--port", &port.to_string()])
-            .args(args)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
-        let sim = Sim(child);
-        for _ in 0..250 {
-            if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
-                return sim;
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        panic!("the simulator did not start");
-    }
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 #[test]
