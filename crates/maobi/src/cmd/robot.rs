@@ -14,7 +14,7 @@ use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{RobotError, TrackFile};
 
-use crate::common::{print_json, progress, write_atomic};
+use crate::common::{check_output_file, print_json, progress, write_atomic};
 
 /// `maobi robot` subcommands.
 #[derive(clap::Subcommand, Debug)]
@@ -29,6 +29,42 @@ pub enum RobotCmd {
     Sim(SimArgs),
     /// Render a simulator trace as what the brush wrote, framed like `maobi write`'s render.
     RenderTrace(RenderTraceArgs),
+    /// Read the arm's kinematic parameters from its controller (getKinematicsParam) into a file
+    /// for `robot export --kinematics`.
+    Kinematics(KinematicsArgs),
+}
+
+/// Arguments of `maobi robot kinematics`.
+#[derive(clap::Args, Debug)]
+pub struct KinematicsArgs {
+    /// Controller host.
+    #[arg(long)]
+    host: String,
+    /// Port (default: 30004 for framed and lines, 9012 for http).
+    #[arg(long)]
+    port: Option<u16>,
+    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines or
+    /// http.
+    #[arg(long, default_value = "framed")]
+    transport: Transport,
+    /// User for the framed transport's login.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
+    user: String,
+    /// Password for the framed transport's login.
+    #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
+    password: String,
+    /// The robot's name on the controller (default: the first it reports).
+    #[arg(long)]
+    robot_name: Option<String>,
+    /// Timeout per call, ms.
+    #[arg(long, default_value_t = 2000)]
+    timeout_ms: u64,
+    /// Output file (arm.json).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Arguments of `maobi robot render-trace`.
@@ -48,6 +84,9 @@ pub struct RenderTraceArgs {
     /// Output PNG.
     #[arg(short, long)]
     output: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Inputs every program command needs.
@@ -89,6 +128,24 @@ pub struct ExportArgs {
     /// writing it (HOST or HOST:PORT, default port 30002), framed by `\r\n\r\n`.
     #[arg(long, group = "destination", value_name = "HOST[:PORT]")]
     send_script: Option<String>,
+    /// Replace an existing output file.
+    #[arg(long)]
+    force: bool,
+    /// aubo-lua only: how pressed strokes are written: path-buffer (each stroke one path
+    /// buffer of joint waypoints on its timing, computed on --kinematics and checked against
+    /// the controller's before anything moves) or moves (a moveLine per point of the
+    /// compacted track, blends at most half the shorter neighbouring move).
+    #[arg(long, default_value = "path-buffer", value_parser = ["path-buffer", "moves"])]
+    motion: String,
+    /// The arm's kinematics as its controller reports them (`maobi robot kinematics -o
+    /// arm.json`): the path buffer's joints are computed on them (and the URScript and G-code
+    /// speeds timed on them).
+    #[arg(long, value_name = "ARM.json")]
+    kinematics: Option<PathBuf>,
+    /// Compute path-buffer joints on the nominal AUBO-i5 parameters instead of --kinematics
+    /// (the script still stops before moving an arm whose controller reports others).
+    #[arg(long, conflicts_with = "kinematics")]
+    accept_nominal_kinematics: bool,
 }
 
 /// Arguments of `maobi robot send`.
@@ -175,6 +232,7 @@ pub fn run(cmd: RobotCmd) -> Result<()> {
         RobotCmd::Send(a) => send(a),
         RobotCmd::Sim(a) => sim(a),
         RobotCmd::RenderTrace(a) => render_trace(a),
+        RobotCmd::Kinematics(a) => kinematics(a),
     }
 }
 
@@ -245,34 +303,111 @@ fn check(a: CheckArgs) -> Result<()> {
 }
 
 fn export(a: ExportArgs) -> Result<()> {
+    if let Some(out) = &a.output {
+        check_output_file("-o", out, a.force)?;
+    }
+    let lua = a.format == "aubo-lua";
+    let by_moves = a.motion == "moves";
+    if by_moves && !lua {
+        bail!("--motion moves applies to --format aubo-lua (URScript writes process moves, G-code merged moves)");
+    }
     let l = load(&a.program)?;
+    let arm = match &a.kinematics {
+        Some(p) => Some(robot_io::export::ArmKinematics::load(p)?),
+        None => None,
+    };
     let track = l.track.track();
-    let (program, _) = build_program_chars(&track, l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
+    let chars = l.track.stroke_chars.as_deref();
+    let (program, _) = build_program_chars(&track, chars, &l.track.brush, &l.frame, &l.cfg)?;
+    if lua && !by_moves && arm.is_none() && !a.accept_nominal_kinematics {
+        bail!(
+            "--format aubo-lua writes joint waypoints, which need the arm's own kinematics: give --kinematics ARM.json \
+             (from `maobi robot kinematics --host HOST -o ARM.json`), or --accept-nominal-kinematics (the script \
+             then stops before moving an arm whose controller reports other parameters), or --motion moves"
+        );
+    }
+    // URScript and G-code take only speeds from the timing (no joint is exported), so the
+    // nominal arm serves when no other is given.
+    let kin = arm.as_ref().map_or(robot_io::kinematics::DhParams::AUBO_I5, |k| k.kinematics);
     let t = title(&l.track);
-    let text = match a.format.as_str() {
-        "aubo-lua" => robot_io::export::aubo_lua(&program, &t)?,
-        "urscript" => robot_io::export::urscript(&program, &t)?,
+    let (text, what) = match a.format.as_str() {
+        "aubo-lua" if by_moves => {
+            let compact = robot_io::program::compact_program(&program, &l.cfg);
+            robot_io::program::check_blends(&compact)?;
+            let text = robot_io::export::aubo_lua(&compact, &t)?;
+            (text, format!("{} moves", compact.move_count()))
+        }
+        "aubo-lua" => {
+            let text = robot_io::export::aubo_lua_path_buffer(&program, &kin, &l.cfg, &t)?;
+            let buffers = text.matches("mc:movePathBuffer(name)").count();
+            let calls = text.lines().filter(|l| l.trim_start().starts_with("mc:move")).count();
+            (text, format!("{buffers} path buffers, {calls} motion calls"))
+        }
+        "urscript" => {
+            let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
+            let text = robot_io::export::urscript(&program, &timing, &l.cfg, &t)?;
+            let moves = text.lines().filter(|l| l.starts_with("  move")).count();
+            (text, format!("{moves} moves"))
+        }
         _ => {
-            let (g, warnings) = robot_io::export::gcode_chars(&track, l.track.stroke_chars.as_deref(), &l.cfg, &t)?;
+            let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
+            let times = robot_io::export::point_times(&program, &timing)?;
+            let (g, warnings) = robot_io::export::gcode_chars(&track, chars, &times, &l.cfg, &t)?;
             for w in warnings {
                 eprintln!("warning: {w}");
             }
-            g
+            let moves = g.lines().filter(|l| l.starts_with("G0") || l.starts_with("G1")).count();
+            (g, format!("{moves} moves"))
         }
     };
+    if lua && !by_moves && arm.is_none() {
+        eprintln!(
+            "warning: the path buffer's joints were computed on the nominal AUBO-i5 parameters \
+             (--accept-nominal-kinematics); the script stops before moving an arm whose controller reports others"
+        );
+    }
     if let Some(host) = &a.send_script {
-        if a.format != "aubo-lua" {
+        if !lua {
             bail!("--send-script sends ARCS Lua scripts: use --format aubo-lua");
         }
         let addr = if host.contains(':') { host.clone() } else { format!("{host}:{}", SCRIPT_PORT) };
         robot_io::aubo::send_script(&addr, &text, Duration::from_secs(5))
             .with_context(|| format!("sending the script to {addr}"))?;
-        println!("script of {} moves sent to {addr}", program.move_count());
+        println!("script of {what} sent to {addr}");
     }
     if let Some(out) = &a.output {
         write_atomic(out, text.as_bytes())?;
-        println!("{} program of {} moves written to {}", a.format, program.move_count(), out.display());
+        println!("{} program of {what} ({} lines) written to {}", a.format, text.lines().count(), out.display());
     }
+    Ok(())
+}
+
+fn kinematics(a: KinematicsArgs) -> Result<()> {
+    if !(1..=600_000).contains(&a.timeout_ms) {
+        bail!("--timeout-ms must be between 1 and 600000, got {}", a.timeout_ms);
+    }
+    check_output_file("-o", &a.output, a.force)?;
+    let port = a.port.unwrap_or(a.transport.default_port());
+    let addr = format!("{}:{port}", a.host);
+    let link = Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() };
+    let (mut client, names) = robot_io::AuboClient::open(&addr, &link, Duration::from_millis(a.timeout_ms))
+        .with_context(|| format!("connecting to {addr} ({})", a.transport))?;
+    let robot = match &a.robot_name {
+        Some(r) => r.clone(),
+        None => names.first().cloned().with_context(|| format!("{addr}: the controller reports no robot"))?,
+    };
+    let params =
+        client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
+    let arm = robot_io::export::ArmKinematics {
+        robot: robot.clone(),
+        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", a.transport),
+        real: true,
+        kinematics: params,
+    };
+    let mut text = serde_json::to_string_pretty(&arm)?;
+    text.push('\n');
+    write_atomic(&a.output, text.as_bytes())?;
+    println!("{robot}'s kinematics (getKinematicsParam(true)) from {addr} written to {}", a.output.display());
     Ok(())
 }
 
@@ -462,6 +597,7 @@ fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::exec::TraceEntry>>
 }
 
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
+    check_output_file("-o", &a.output, a.force)?;
     let name = a.track.display().to_string();
     let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
     let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;

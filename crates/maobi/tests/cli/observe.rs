@@ -161,6 +161,7 @@ fn sheets_carry_registration_marks_that_the_robot_checks_and_exports() {
             format,
             "-o",
             s(&f),
+            "--accept-nominal-kinematics",
         ]));
         assert!(std::fs::metadata(&f).unwrap().len() > 0);
     }

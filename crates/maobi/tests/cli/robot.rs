@@ -47,7 +47,8 @@ fn check_and_export_a_written_character() {
     );
     for (fmt, needle) in [("aubo-lua", "return function(api)"), ("urscript", "movel(p["), ("gcode", "G1 X")] {
         let out = dir.path().join(format!("prog.{fmt}"));
-        let o = maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&out)]);
+        let nominal = "--accept-nominal-kinematics";
+        let o = maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&out), nominal]);
         let said = ok(&o);
         assert!(said.contains(&format!("{fmt} program of")) && said.contains(&out.display().to_string()), "{said}");
         assert!(std::fs::read_to_string(&out).unwrap().contains(needle), "{fmt}");
@@ -155,7 +156,19 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
         c.read_to_string(&mut buf).unwrap();
         buf
     });
-    ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", "aubo-lua", "--send-script", &addr]));
+    let nominal = "--accept-nominal-kinematics";
+    ok(&maobi(&[
+        "robot",
+        "export",
+        s(&track),
+        "--paper",
+        s(&paper()),
+        "--format",
+        "aubo-lua",
+        "--send-script",
+        &addr,
+        nominal,
+    ]));
     let got = reader.join().unwrap();
     assert!(got.starts_with("-- maobi") && got.ends_with("end\n\r\n\r\n"), "{}", &got[got.len() - 20..]);
     // A file that is not a trace is refused, naming it.
@@ -177,4 +190,120 @@ fn send_runs_on_the_simulator_and_survives_a_drop() {
     );
     // Dry run connects to nothing.
     ok(&maobi(&["robot", "send", s(&track), "--paper", s(&paper()), "--host", "192.0.2.1", "--dry-run"]));
+}
+
+#[test]
+fn export_and_render_trace_replace_a_file_only_with_force() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = written(dir.path());
+    let pp = paper();
+    let out = dir.path().join("p.script");
+    std::fs::write(&out, "mine").unwrap();
+    let export = |force: bool| {
+        let mut a = vec!["robot", "export", s(&track), "--paper", s(&pp), "--format", "urscript", "-o", s(&out)];
+        if force {
+            a.push("--force");
+        }
+        maobi(&a)
+    };
+    fails(&export(false), "already exists; give --force");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "mine");
+    ok(&export(true));
+    assert!(std::fs::read_to_string(&out).unwrap().contains("movep(p["));
+    // render-trace refuses before reading anything; with --force it goes on (to the trace,
+    // which is not one here).
+    let png = dir.path().join("t.png");
+    std::fs::write(&png, "mine").unwrap();
+    let trace = dir.path().join("trace.jsonl");
+    std::fs::write(&trace, "{}\n").unwrap();
+    let render = |force: bool| {
+        let mut a = vec!["robot", "render-trace", s(&trace), "--track", s(&track), "--paper", s(&pp), "-o", s(&png)];
+        if force {
+            a.push("--force");
+        }
+        maobi(&a)
+    };
+    fails(&render(false), "already exists; give --force");
+    fails(&render(true), "not a simulator trace");
+    assert_eq!(std::fs::read_to_string(&png).unwrap(), "mine");
+}
+
+#[test]
+fn lua_path_buffers_use_the_kinematics_read_from_the_controller() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = written(dir.path());
+    let pp = paper();
+    let lua = dir.path().join("p.lua");
+    let export = |extra: &[&str]| {
+        let mut a = vec!["robot", "export", s(&track), "--paper", s(&pp), "--format", "aubo-lua", "-o", s(&lua)];
+        a.extend_from_slice(extra);
+        a.push("--force");
+        maobi(&a)
+    };
+    // Nominal parameters never silently: refused without a file or the flag.
+    fails(&export(&[]), "--kinematics ARM.json");
+    assert!(!lua.exists());
+    // The simulator's parameters, read as a controller's.
+    let port = free_port();
+    let sim = Sim::start(port, &[]);
+    let arm = dir.path().join("arm.json");
+    let port = port.to_string();
+    let read = || maobi(&["robot", "kinematics", "--host", "127.0.0.1", "--port", &port, "-o", s(&arm)]);
+    let said = ok(&read());
+    drop(sim);
+    assert!(said.contains("getKinematicsParam(true)") && said.contains(s(&arm)), "{said}");
+    let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&arm).unwrap()).unwrap();
+    assert_eq!(j["real"], true);
+    assert_eq!(j["kinematics"]["a_m"][2].as_f64(), Some(0.408), "{j}");
+    fails(&read(), "already exists; give --force");
+    let said = ok(&export(&["--kinematics", s(&arm)]));
+    assert!(said.contains("2 path buffers"), "{said}");
+    let text = std::fs::read_to_string(&lua).unwrap();
+    assert!(
+        text.contains("getKinematicsParam(true)") && text.contains("local want = {a = {0.000000, 0.000000, 0.408000")
+    );
+    assert_eq!(text.matches("mc:movePathBuffer(name)").count(), 2);
+    // The flag gives the same program, with a warning.
+    let o = export(&["--accept-nominal-kinematics"]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nominal AUBO-i5"));
+    assert_eq!(std::fs::read_to_string(&lua).unwrap(), text);
+    // A move per point of the compacted track instead: no joints, no kinematics needed.
+    let said = ok(&export(&["--motion", "moves"]));
+    let moves = std::fs::read_to_string(&lua).unwrap();
+    assert!(!moves.contains("pathBuffer") && moves.contains("mc:moveLine("), "{said}");
+    let points: usize =
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&track).unwrap()).unwrap()["strokes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|st| st.as_array().unwrap().len())
+            .sum();
+    assert!(moves.matches("mc:moveLine(").count() < points, "{said}");
+    fails(
+        &maobi(&[
+            "robot",
+            "export",
+            s(&track),
+            "--paper",
+            s(&paper()),
+            "--format",
+            "gcode",
+            "-o",
+            s(&lua),
+            "--motion",
+            "moves",
+            "--force",
+        ]),
+        "--motion moves applies to --format aubo-lua",
+    );
+    // A file of nominal (not real) parameters, or one out of range, is refused, naming it.
+    let mut bad = j.clone();
+    bad["real"] = serde_json::json!(false);
+    std::fs::write(&arm, bad.to_string()).unwrap();
+    fails(&export(&["--kinematics", s(&arm)]), "`real` is false");
+    bad["real"] = serde_json::json!(true);
+    bad["kinematics"]["d_m"][1] = serde_json::json!(1e9);
+    std::fs::write(&arm, bad.to_string()).unwrap();
+    fails(&export(&["--kinematics", s(&arm)]), "arm.json: kinematics: d[1]");
 }

@@ -133,7 +133,8 @@ fn a_hostile_char_field_stays_inside_the_exported_comment() {
     std::fs::write(&track, t.to_string()).unwrap();
     for fmt in ["gcode", "aubo-lua", "urscript"] {
         let prog = dir.path().join(format!("p.{fmt}"));
-        ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&prog)]));
+        let nominal = "--accept-nominal-kinematics";
+        ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", fmt, "-o", s(&prog), nominal]));
         let text = std::fs::read_to_string(&prog).unwrap();
         assert!(!text.contains(['\r', '\u{2028}']), "{fmt}");
         let first = text.lines().next().unwrap();

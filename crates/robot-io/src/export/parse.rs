@@ -3,8 +3,10 @@
 //! refuses anything else, naming the line. The exporters compare what these read with the
 //! checked program before they return the text.
 
+use super::lua;
 use super::text::{MAX_DECIMALS, Target, is_inert_comment, unsafe_anywhere};
 use crate::RobotError;
+use crate::kinematics::DhParams;
 
 /// A move of an exported arm program (ARCS Lua or URScript), as read back from its text.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,6 +45,44 @@ pub enum ReadMove {
         /// Blend radius, m.
         blend_m: f64,
     },
+    /// A process move (URScript `movep(p[...], a=a, v=v, r=blend)`: constant tool speed,
+    /// blended).
+    Process {
+        /// Position (m) and rotation vector (rad).
+        target: [f64; 6],
+        /// Tool acceleration, m/s².
+        a: f64,
+        /// Tool speed, m/s.
+        v: f64,
+        /// Blend radius, m.
+        blend_m: f64,
+    },
+    /// A path buffer run (Lua `mc:movePathBuffer(name)` after its allocation, waypoints,
+    /// evaluation and checks): the index of the buffer in [`ReadProgram::path_buffers`].
+    PathBuffer {
+        /// Index into [`ReadProgram::path_buffers`].
+        buffer: usize,
+    },
+}
+
+/// A path buffer of an exported ARCS Lua program, as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadPathBuffer {
+    /// Its name (`maobi_stroke_N`, N the stroke's number from 1).
+    pub name: String,
+    /// The size given to `pathBufferAlloc` (its type is always 2).
+    pub size: usize,
+    /// The joint waypoints appended, rad, in order.
+    pub waypoints: Vec<[f64; 6]>,
+    /// The joint accelerations given to `pathBufferEval`, rad/s².
+    pub acc_rad_s2: [f64; 6],
+    /// The joint speeds given to `pathBufferEval`, rad/s.
+    pub speed_rad_s: [f64; 6],
+    /// The waypoint interval given to `pathBufferEval`, s.
+    pub interval_s: f64,
+    /// The joints the arm must report (within [`crate::sim::PATH_START_TOLERANCE_RAD`])
+    /// before `movePathBuffer`, rad.
+    pub start_q: [f64; 6],
 }
 
 /// An exported arm program as read back.
@@ -54,6 +94,11 @@ pub struct ReadProgram {
     pub speed_fraction: Option<f64>,
     /// The moves in the order they run, each with its line number (from 1).
     pub moves: Vec<(usize, ReadMove)>,
+    /// The kinematics the Lua program checks the controller's `getKinematicsParam(true)`
+    /// against before anything moves (a path-buffer program; `None` otherwise).
+    pub kinematics: Option<DhParams>,
+    /// The path buffers, in the order they run.
+    pub path_buffers: Vec<ReadPathBuffer>,
 }
 
 /// A statement of an exported G-code program, as read back.
@@ -159,6 +204,17 @@ impl Cur<'_> {
         Some(v)
     }
 
+    /// A whole number without a sign or leading zeros, at most 9 digits.
+    fn int(&mut self) -> Option<usize> {
+        let n = self.0.bytes().take_while(u8::is_ascii_digit).count();
+        if n == 0 || n > 9 || (n > 1 && self.0.starts_with('0')) {
+            return None;
+        }
+        let v = self.0[..n].parse().ok()?;
+        self.0 = &self.0[n..];
+        Some(v)
+    }
+
     /// `N` numbers separated by `, `.
     fn nums<const N: usize>(&mut self) -> Option<[f64; N]> {
         let mut out = [0.0; N];
@@ -250,6 +306,35 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     ] {
         expect(&mut it, want, last)?;
     }
+    // A path-buffer program: `sleep` bound, then the controller's kinematics checked.
+    let sleep = lua::sleep_lines();
+    let kinematics = if it.peek().is_some_and(|(_, l)| *l == sleep[0]) {
+        for want in &sleep {
+            expect(&mut it, want, last)?;
+        }
+        expect(&mut it, "  do", last)?;
+        let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before the kinematics".into() })?;
+        let k = whole(l, |c| {
+            c.lit(lua::WANT_PREFIX)?;
+            let a_m = c.nums::<6>()?;
+            c.lit("}, alpha = {")?;
+            let alpha_rad = c.nums::<6>()?;
+            c.lit("}, d = {")?;
+            let d_m = c.nums::<6>()?;
+            c.lit("}, theta = {")?;
+            let theta_rad = c.nums::<6>()?;
+            c.lit("}}")?;
+            Some(DhParams { a_m, alpha_rad, d_m, theta_rad })
+        })
+        .ok_or_else(|| unexpected(n, l, "`    local want = {a = {...}, alpha = {...}, d = {...}, theta = {...}}`"))?;
+        k.validate().map_err(|why| At { line: n, reason: format!("the kinematics: {why}") })?;
+        for want in lua::kinematics_check_lines() {
+            expect(&mut it, &want, last)?;
+        }
+        Some(k)
+    } else {
+        None
+    };
     let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setTcpOffset".into() })?;
     let tcp_offset_m = whole(l, |c| {
         c.lit("  robot:getRobotConfig():setTcpOffset({0, 0, ")?;
@@ -268,6 +353,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     })
     .ok_or_else(|| unexpected(n, l, "`  mc:setSpeedFraction(f)`"))?;
     let mut moves = Vec::new();
+    let mut path_buffers = Vec::new();
     loop {
         let Some((n, l)) = it.next() else {
             return Err(At { line: last, reason: "the program does not end with `end`".into() });
@@ -280,6 +366,20 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
         }
         let m = if l == "  do" {
             let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
+            if l.starts_with("    local name = ") {
+                if kinematics.is_none() {
+                    return Err(At {
+                        line: m,
+                        reason: "a path buffer in a program that does not check the controller's kinematics first"
+                            .into(),
+                    });
+                }
+                let (buffer, lift) = read_path_buffer(&mut it, (m, l), last)?;
+                moves.push((n, ReadMove::PathBuffer { buffer: path_buffers.len() }));
+                path_buffers.push(buffer);
+                moves.push(lift);
+                continue;
+            }
             let pose = whole(l, |c| {
                 c.lit("    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {")?;
                 let p = c.nums::<6>()?;
@@ -305,30 +405,147 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
             expect(&mut it, "  end", last)?;
             ReadMove::JointPose { target: pose, a, v }
         } else {
-            whole(l, |c| {
-                if c.lit("  mc:moveJoint({").is_some() {
-                    let q = c.nums::<6>()?;
-                    c.lit("}, ")?;
-                    let [a, v] = c.nums::<2>()?;
-                    c.lit(", 0, 0)")?;
-                    Some(ReadMove::Joint { q, a, v })
-                } else {
-                    c.lit("  mc:moveLine({")?;
-                    let target = c.nums::<6>()?;
-                    c.lit("}, ")?;
-                    let [a, v, blend_m] = c.nums::<3>()?;
-                    c.lit(", 0)")?;
-                    Some(ReadMove::Line { target, a, v, blend_m })
-                }
-            })
-            .ok_or_else(|| unexpected(n, l, "a move (`mc:moveLine`, `mc:moveJoint`, `do`), a `--` comment or `end`"))?
+            lua_move(l, "  ").ok_or_else(|| {
+                unexpected(n, l, "a move (`mc:moveLine`, `mc:moveJoint`, `do`), a `--` comment or `end`")
+            })?
         };
         moves.push((n, m));
     }
     if let Some((n, l)) = it.next() {
         return Err(unexpected(n, l, "nothing after the final `end`"));
     }
-    Ok(ReadProgram { tcp_offset_m, speed_fraction: Some(speed_fraction), moves })
+    Ok(ReadProgram { tcp_offset_m, speed_fraction: Some(speed_fraction), moves, kinematics, path_buffers })
+}
+
+/// A Lua `mc:moveJoint({q}, a, v, 0, 0)` or `mc:moveLine({pose}, a, v, blend, 0)` after
+/// `indent`.
+fn lua_move(l: &str, indent: &str) -> Option<ReadMove> {
+    whole(l, |c| {
+        c.lit(indent)?;
+        if c.lit("mc:moveJoint({").is_some() {
+            let q = c.nums::<6>()?;
+            c.lit("}, ")?;
+            let [a, v] = c.nums::<2>()?;
+            c.lit(", 0, 0)")?;
+            Some(ReadMove::Joint { q, a, v })
+        } else {
+            c.lit("mc:moveLine({")?;
+            let target = c.nums::<6>()?;
+            c.lit("}, ")?;
+            let [a, v, blend_m] = c.nums::<3>()?;
+            c.lit(", 0)")?;
+            Some(ReadMove::Line { target, a, v, blend_m })
+        }
+    })
+}
+
+/// A path-buffer block after its `  do` (`first`: the name line): the allocation, the
+/// waypoints, the evaluation, the waits, the arm's joints checked, `movePathBuffer`, the lift
+/// (returned with its line), the wait and `pathBufferFree`, `  end`.
+fn read_path_buffer<'a>(
+    it: &mut impl Iterator<Item = (usize, &'a str)>,
+    first: (usize, &str),
+    last: usize,
+) -> Result<(ReadPathBuffer, (usize, ReadMove)), At> {
+    let ends = |what: &str| At { line: last, reason: format!("the text ends inside a path buffer, before {what}") };
+    let (n, l) = first;
+    let stroke = whole(l, |c| {
+        c.lit("    local name = \"maobi_stroke_")?;
+        let k = c.int()?;
+        c.lit("\"")?;
+        (k >= 1).then_some(k - 1)
+    })
+    .ok_or_else(|| unexpected(n, l, "`    local name = \"maobi_stroke_N\"`"))?;
+    let name = lua::buffer_name(stroke);
+    let (n, l) = it.next().ok_or_else(|| ends("pathBufferAlloc"))?;
+    let size = whole(l, |c| {
+        c.lit("    mc:pathBufferAlloc(name, 2, ")?;
+        let k = c.int()?;
+        c.lit(")")?;
+        Some(k)
+    })
+    .ok_or_else(|| unexpected(n, l, "`    mc:pathBufferAlloc(name, 2, SIZE)`"))?;
+    if !(2..=crate::timing::MAX_STROKE_WAYPOINTS).contains(&size) {
+        return Err(At {
+            line: n,
+            reason: format!(
+                "a path buffer of {size} waypoints (2 to {} expected)",
+                crate::timing::MAX_STROKE_WAYPOINTS
+            ),
+        });
+    }
+    let mut waypoints: Vec<[f64; 6]> = Vec::new();
+    let (mut n, mut l) = it.next().ok_or_else(|| ends("pathBufferAppend"))?;
+    while l == "    mc:pathBufferAppend(name, {" {
+        let mut piece = 0;
+        loop {
+            let (m, w) = it.next().ok_or_else(|| ends("the end of pathBufferAppend"))?;
+            if w == "    })" {
+                break;
+            }
+            let q = whole(w, |c| {
+                c.lit("      {")?;
+                let q = c.nums::<6>()?;
+                c.lit("},")?;
+                Some(q)
+            })
+            .ok_or_else(|| unexpected(m, w, "a waypoint `      {q1, q2, q3, q4, q5, q6},` or `    })`"))?;
+            piece += 1;
+            if waypoints.len() == size || piece > crate::aubo::PATH_APPEND_WAYPOINTS {
+                return Err(At {
+                    line: m,
+                    reason: format!(
+                        "more waypoints than the {size} allocated, or more than {} in one append",
+                        crate::aubo::PATH_APPEND_WAYPOINTS
+                    ),
+                });
+            }
+            waypoints.push(q);
+        }
+        if piece == 0 {
+            return Err(At { line: n, reason: "an append without waypoints".into() });
+        }
+        (n, l) = it.next().ok_or_else(|| ends("pathBufferEval"))?;
+    }
+    if waypoints.len() != size {
+        return Err(At {
+            line: n,
+            reason: format!("{} waypoints appended where {size} were allocated", waypoints.len()),
+        });
+    }
+    let (acc_rad_s2, speed_rad_s, interval_s) = whole(l, |c| {
+        c.lit("    mc:pathBufferEval(name, {")?;
+        let a = c.nums::<6>()?;
+        c.lit("}, {")?;
+        let v = c.nums::<6>()?;
+        c.lit("}, ")?;
+        let t = c.num()?;
+        c.lit(")")?;
+        Some((a, v, t))
+    })
+    .ok_or_else(|| {
+        unexpected(n, l, "`    mc:pathBufferAppend(name, {` or `    mc:pathBufferEval(name, {a}, {v}, t)`")
+    })?;
+    for want in lua::valid_wait_lines() {
+        expect(it, &want, last)?;
+    }
+    let (n, l) = it.next().ok_or_else(|| ends("the joints check"))?;
+    let start_q = whole(l, |c| {
+        c.lit(lua::START_PREFIX)?;
+        let q = c.nums::<6>()?;
+        c.lit("}")?;
+        Some(q)
+    })
+    .ok_or_else(|| unexpected(n, l, "`    local q0 = {q1, q2, q3, q4, q5, q6}`"))?;
+    for want in lua::start_check_lines() {
+        expect(it, &want, last)?;
+    }
+    let (n, l) = it.next().ok_or_else(|| ends("the lift"))?;
+    let lift = lua_move(l, "    ").ok_or_else(|| unexpected(n, l, "the lift `    mc:moveLine({pose}, a, v, 0, 0)`"))?;
+    for want in lua::free_lines() {
+        expect(it, &want, last)?;
+    }
+    Ok((ReadPathBuffer { name, size, waypoints, acc_rad_s2, speed_rad_s, interval_s, start_q }, (n, lift)))
 }
 
 /// Reads back a URScript program as [`super::urscript`] writes it: header comments
@@ -385,7 +602,12 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
                 c.lit(")")?;
                 Some(ReadMove::JointPose { target, a, v })
             } else {
-                c.lit("  movel(p[")?;
+                let process = if c.lit("  movep(p[").is_some() {
+                    true
+                } else {
+                    c.lit("  movel(p[")?;
+                    false
+                };
                 let target = c.nums::<6>()?;
                 c.lit("], a=")?;
                 let a = c.num()?;
@@ -394,17 +616,23 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
                 c.lit(", r=")?;
                 let blend_m = c.num()?;
                 c.lit(")")?;
-                Some(ReadMove::Line { target, a, v, blend_m })
+                Some(if process {
+                    ReadMove::Process { target, a, v, blend_m }
+                } else {
+                    ReadMove::Line { target, a, v, blend_m }
+                })
             }
         })
-        .ok_or_else(|| unexpected(n, l, "a move (`movel(p[...])`, `movej(...)`), a `#` comment or `end`"))?;
+        .ok_or_else(|| {
+            unexpected(n, l, "a move (`movel(p[...])`, `movep(p[...])`, `movej(...)`), a `#` comment or `end`")
+        })?;
         moves.push((n, m));
     }
     expect(&mut it, "maobi_write()", last)?;
     if let Some((n, l)) = it.next() {
         return Err(unexpected(n, l, "nothing after `maobi_write()`"));
     }
-    Ok(ReadProgram { tcp_offset_m, speed_fraction: None, moves })
+    Ok(ReadProgram { tcp_offset_m, speed_fraction: None, moves, kinematics: None, path_buffers: Vec::new() })
 }
 
 /// Reads back G-code as [`super::gcode`] writes it: comment lines (`; text`), and the

@@ -5,9 +5,12 @@
 
 use robot_io::export::parse::{GcodeStatement, ReadMove, read_gcode, read_lua, read_urscript};
 use robot_io::export::text::{MAX_COMMENT_CHARS, Target, comment_text};
-use robot_io::export::{aubo_lua, gcode, urscript, verify_gcode, verify_lua, verify_urscript};
-use robot_io::program::{Move, Program, RobotConfig, build_program};
-use robot_io::{InkStation, Reload, RobotError};
+use robot_io::export::{
+    PointTimes, aubo_lua, gcode, gcode_merge, point_times, urscript, verify_gcode, verify_lua, verify_urscript,
+};
+use robot_io::kinematics::DhParams;
+use robot_io::program::{Move, Program, RobotConfig, build_program, compact_program};
+use robot_io::{InkStation, ProgramTiming, Reload, RobotError, time_program};
 
 use crate::common::{paper, pen1, small_track};
 
@@ -30,14 +33,25 @@ fn program(cfg: &RobotConfig) -> Program {
     build_program(&small_track(), &pen1(), &paper(), cfg).unwrap().0
 }
 
+/// The timing of `p` on the nominal arm (the exports take only its speeds).
+fn timing(p: &Program, cfg: &RobotConfig) -> ProgramTiming {
+    time_program(p, &DhParams::AUBO_I5, cfg).unwrap()
+}
+
+/// When the timed strokes of the small track's program reach its points.
+fn times(cfg: &RobotConfig) -> PointTimes {
+    let p = program(cfg);
+    point_times(&p, &timing(&p, cfg)).unwrap()
+}
+
 /// The three exports of the small track (with dips) under `title`.
 fn exports(title: &str) -> [(Target, String); 3] {
     let cfg = inked();
     let p = program(&cfg);
     [
         (Target::Lua, aubo_lua(&p, title).unwrap()),
-        (Target::UrScript, urscript(&p, title).unwrap()),
-        (Target::Gcode, gcode(&small_track(), &cfg, title).unwrap().0),
+        (Target::UrScript, urscript(&p, &timing(&p, &cfg), &cfg, title).unwrap()),
+        (Target::Gcode, gcode(&small_track(), &times(&cfg), &cfg, title).unwrap().0),
     ]
 }
 
@@ -54,8 +68,11 @@ fn verify(target: Target, text: &str) -> Result<(), RobotError> {
     let cfg = inked();
     match target {
         Target::Lua => verify_lua(text, &program(&cfg)),
-        Target::UrScript => verify_urscript(text, &program(&cfg)),
-        Target::Gcode => verify_gcode(text, &small_track(), None, &cfg),
+        Target::UrScript => {
+            let p = program(&cfg);
+            verify_urscript(text, &p, &timing(&p, &cfg), &cfg)
+        }
+        Target::Gcode => verify_gcode(text, &small_track(), None, &times(&cfg), &cfg),
     }
 }
 
@@ -114,8 +131,14 @@ fn exports_read_back_as_the_checked_program() {
     let cfg = inked();
     let p = program(&cfg);
     let lua = read_lua(&aubo_lua(&p, "十").unwrap()).unwrap();
-    let ur = read_urscript(&urscript(&p, "十").unwrap()).unwrap();
-    assert_eq!((lua.moves.len(), ur.moves.len()), (p.move_count(), p.move_count()));
+    let ur = read_urscript(&urscript(&p, &timing(&p, &cfg), &cfg, "十").unwrap()).unwrap();
+    // URScript: the pressed moves compacted (stroke 1's (60, 61) lies on its neighbours' line),
+    // each a process move.
+    let compact = compact_program(&p, &cfg);
+    assert_eq!((lua.moves.len(), ur.moves.len()), (p.move_count(), compact.move_count()));
+    assert!(compact.move_count() < p.move_count());
+    let process = ur.moves.iter().filter(|(_, m)| matches!(m, ReadMove::Process { .. })).count();
+    assert_eq!(process, compact.strokes.iter().map(|s| s.press.len()).sum::<usize>());
     assert_eq!(lua.speed_fraction, Some(p.speed_fraction));
     assert_eq!(lua.tcp_offset_m, p.tcp_offset_m);
     // Lua carries the poses as the program has them, to the bit here.
@@ -135,15 +158,22 @@ fn exports_read_back_as_the_checked_program() {
     let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.2, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
     let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
     assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
-    let ur_q = read_urscript(&urscript(&joints, "q").unwrap()).unwrap();
+    let ur_q = read_urscript(&urscript(&joints, &timing(&joints, &cfg), &cfg, "q").unwrap()).unwrap();
     assert!(matches!(ur_q.moves[0].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[0]);
     // A program whose start differs from the text's is refused.
     let e = verify_lua(&aubo_lua(&joints, "q").unwrap(), &p).unwrap_err().to_string();
     assert!(e.contains("line 9"), "{e}");
-    let g = read_gcode(&gcode(&small_track(), &cfg, "十").unwrap().0).unwrap();
+    let g = read_gcode(&gcode(&small_track(), &times(&cfg), &cfg, "十").unwrap().0).unwrap();
     let pressed =
         g.iter().filter(|(_, s)| matches!(s, GcodeStatement::Move { rapid: false, x_mm: Some(_), .. })).count();
-    assert_eq!(pressed, small_track().point_count());
+    // Per stroke the descent and the merged moves: (60, 61) of stroke 1 and (55, 55) of
+    // stroke 2 lie on their neighbours' lines and are left out.
+    let merged: usize = small_track()
+        .strokes
+        .iter()
+        .map(|st| gcode_merge(&st.points.iter().map(|p| [p.x_mm, p.y_mm, -p.h_mm]).collect::<Vec<_>>()).len())
+        .sum();
+    assert_eq!((pressed, merged), (small_track().point_count() - 2, small_track().point_count() - 2));
     assert_eq!(g.first().map(|s| s.1), Some(GcodeStatement::Millimetres));
     assert_eq!(g.last().map(|s| s.1), Some(GcodeStatement::End));
 }
@@ -223,31 +253,35 @@ fn numbers_that_would_print_as_something_else_refuse_the_export() {
             *v = v_m_s;
         }
     }
-    // URScript has no speed fraction: it runs the checked speeds themselves.
+    // URScript has no speed fraction, and its process speeds come from the timing, at most
+    // the program's speed (an infinite one bounds nothing).
     type Change = fn(&mut Program);
     let arm: [(Change, &str, bool); 4] = [
         (|p| p.speed_fraction = 1e-300, "the speed fraction reads 0 where it is 1e-300", false),
         (|p| slow_line(p, 1e-300), "the speed reads 0 where it is 1e-300", true),
         (|p| p.tcp_offset_m = f64::NAN, "expected `  robot:getRobotConfig():setTcpOffset", true),
-        (|p| slow_line(p, f64::INFINITY), "expected a move", true),
+        (|p| slow_line(p, f64::INFINITY), "expected a move", false),
     ];
+    let t = timing(&base, &cfg);
     for (change, needle, ur_refuses) in arm {
         let mut p = base.clone();
         change(&mut p);
         let e = aubo_lua(&p, "t").unwrap_err().to_string();
         assert!(e.contains(needle), "{e}");
-        assert_eq!(urscript(&p, "t").is_err(), ur_refuses, "{needle}");
+        assert_eq!(urscript(&p, &t, &cfg, "t").is_err(), ur_refuses, "{needle}");
     }
     // A write speed of 1e-9 m/s prints in full and reads back as itself.
     let mut p = base.clone();
     slow_line(&mut p, 1e-9);
     let lua = aubo_lua(&p, "t").unwrap();
     assert!(lua.contains(", 0.000000001, 0.000500, 0)"), "{lua}");
-    assert!(urscript(&p, "t").is_ok());
-    // G-code: a feed rate that prints as 0, and one that prints in full.
+    assert!(urscript(&p, &t, &cfg, "t").unwrap().contains(", a=0.300000, v=0.000000001, r="));
+    // G-code (strokes not timed: fed at the write speed): a feed rate that prints as 0, and
+    // one that prints in full.
+    let untimed = PointTimes { strokes: vec![None, None] };
     for (write, ok) in [(1e-300, false), (1e-9, true), (f64::NAN, false)] {
         let c = RobotConfig { write_speed_m_s: write, ..cfg.clone() };
-        match gcode(&small_track(), &c, "t") {
+        match gcode(&small_track(), &untimed, &c, "t") {
             Ok((g, _)) => assert!(ok && g.contains(" F0.000060\n"), "{write:e}: {g}"),
             Err(e) => assert!(!ok && e.to_string().contains("G-code"), "{write:e}: {e}"),
         }

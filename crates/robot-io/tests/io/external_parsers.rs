@@ -13,9 +13,10 @@ use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 use brush_model::{Stroke, Track, TrackPoint};
-use robot_io::export::{aubo_lua, gcode};
+use robot_io::export::{GCODE_MERGE_TOLERANCE_MM, PointTimes, aubo_lua, aubo_lua_path_buffer, gcode, point_times};
+use robot_io::kinematics::DhParams;
 use robot_io::program::{Move, Program, RobotConfig, build_program};
-use robot_io::{InkStation, Reload};
+use robot_io::{InkStation, Reload, time_program};
 use serde_json::Value;
 
 use crate::common::{paper, pen1};
@@ -72,6 +73,12 @@ fn config(dwell_s: Option<f64>) -> RobotConfig {
 
 fn program(cfg: &RobotConfig) -> Program {
     build_program(&small_track(), &pen1(), &paper(), cfg).unwrap().0
+}
+
+/// When the small track's strokes, timed on the nominal arm, reach each of their points.
+fn times(cfg: &RobotConfig) -> PointTimes {
+    let p = program(cfg);
+    point_times(&p, &time_program(&p, &DhParams::AUBO_I5, cfg).unwrap()).unwrap()
 }
 
 /// Titles that try to leave the first comment of a Lua or G-code program.
@@ -185,8 +192,12 @@ end
 local function value(v)
   if type(v) == "table" then
     local o = {}
-    for i = 1, #v do o[i] = num(v[i]) end
+    for i = 1, #v do
+      if type(v[i]) == "table" then o[i] = value(v[i]) else o[i] = num(v[i]) end
+    end
     return "[" .. table.concat(o, ",") .. "]"
+  elseif type(v) == "boolean" then
+    return tostring(v)
   elseif type(v) == "string" then
     if v:find('[^%w_]') then error("unexpected string argument") end
     return '"' .. v .. '"'
@@ -209,11 +220,35 @@ local function method(obj, name, f)
   end
 end
 local mc, cfg, alg, state, robot, api = {}, {}, {}, {}, {}, {}
+-- Path buffers: appended waypoints by name; the one appended and not yet moved.
+local buffers, pending, polls = {}, nil, {}
 method(mc, "setSpeedFraction", function() return 0 end)
 method(mc, "moveLine", function() return 0 end)
 method(mc, "moveJoint", function(q) joints = copy(q) return 0 end)
+method(mc, "pathBufferAlloc", function(name) buffers[name] = {} polls[name] = 0 return 0 end)
+method(mc, "pathBufferAppend", function(name, w)
+  for i = 1, #w do table.insert(buffers[name], copy(w[i])) end
+  pending = name
+  return 0
+end)
+method(mc, "pathBufferEval", function() return 0 end)
+-- Valid from the second poll on, so the wait loop runs.
+method(mc, "pathBufferValid", function(name) polls[name] = polls[name] + 1 return polls[name] > 1 end)
+method(mc, "movePathBuffer", function(name)
+  local b = buffers[name]
+  joints = copy(b[#b])
+  pending = nil
+  return 0
+end)
+method(mc, "pathBufferFree", function(name) buffers[name] = nil return 0 end)
+method(mc, "getExecId", function() return -1 end)
 method(cfg, "setTcpOffset", function() return 0 end)
-method(state, "getJointPositions", function() return copy(joints) end)
+method(cfg, "getKinematicsParam", function() return KIN end)
+-- ARM_MODE "follows": the approach brought the arm to the buffer's first waypoint.
+method(state, "getJointPositions", function()
+  if ARM_MODE == "follows" and pending ~= nil then return copy(buffers[pending][1]) end
+  return copy(joints)
+end)
 method(alg, "inverseKinematics", function()
   if IK_MODE == "status" then return copy(IK_Q), 0
   elseif IK_MODE == "joints" then return copy(IK_Q)
@@ -233,6 +268,7 @@ method(api, "getRobotInterface", function(name)
   return robot
 end)
 _G.api = api
+if HAVE_SCHED then _G.sched = {sleep = function(t) rec("sleep", t) end} end
 local chunk = assert(load(io.read("a"), "=export", "t"))
 local main = chunk()
 if type(main) ~= "function" then error("the script does not return a function") end
@@ -244,10 +280,28 @@ fn lua_list(v: &[f64]) -> String {
     format!("{{{}}}", v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", "))
 }
 
-/// Runs `script` under `lua5.4` with the stub.
+/// Runs `script` under `lua5.4` with the stub (the nominal arm, following the program).
 fn run_lua(script: &str, ik_mode: &str) -> Ran {
+    run_lua_arm(script, ik_mode, &kin_table(&DhParams::AUBO_I5, ""), "follows", true)
+}
+
+/// The Lua table `getKinematicsParam` answers for `k`, with `extra` fields (`beta = {...}`).
+fn kin_table(k: &DhParams, extra: &str) -> String {
+    format!(
+        "{{a = {}, alpha = {}, d = {}, theta = {}{extra}}}",
+        lua_list(&k.a_m),
+        lua_list(&k.alpha_rad),
+        lua_list(&k.d_m),
+        lua_list(&k.theta_rad)
+    )
+}
+
+/// Runs `script` under `lua5.4` with the stub: `kin` the controller's kinematics (a Lua table
+/// expression), `arm_mode` whether the arm follows the program (`follows`) or stays where it
+/// was, `sched` whether the controller's Lua has `sched.sleep`.
+fn run_lua_arm(script: &str, ik_mode: &str, kin: &str, arm_mode: &str, sched: bool) -> Ran {
     let driver = format!(
-        "local IK_MODE = {ik_mode:?}\nlocal HOME_Q = {}\nlocal IK_Q = {}\n{LUA_DRIVER}",
+        "local IK_MODE = {ik_mode:?}\nlocal HOME_Q = {}\nlocal IK_Q = {}\nlocal KIN = {kin}\nlocal ARM_MODE = {arm_mode:?}\nlocal HAVE_SCHED = {sched}\n{LUA_DRIVER}",
         lua_list(&HOME_Q),
         lua_list(&IK_Q)
     );
@@ -265,7 +319,9 @@ struct Call {
 enum Arg {
     Num(f64),
     List(Vec<f64>),
+    Lists(Vec<Vec<f64>>),
     Text(String),
+    Bool(bool),
 }
 
 fn parse_calls(stdout: &str) -> Vec<Call> {
@@ -279,8 +335,14 @@ fn parse_calls(stdout: &str) -> Vec<Call> {
                 .iter()
                 .map(|a| match a {
                     Value::Number(n) => Arg::Num(n.as_f64().unwrap()),
+                    Value::Array(xs) if xs.first().is_some_and(Value::is_array) => Arg::Lists(
+                        xs.iter()
+                            .map(|x| x.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect())
+                            .collect(),
+                    ),
                     Value::Array(xs) => Arg::List(xs.iter().map(|x| x.as_f64().unwrap()).collect()),
                     Value::String(s) => Arg::Text(s.clone()),
+                    Value::Bool(b) => Arg::Bool(*b),
                     other => panic!("{other}"),
                 })
                 .collect();
@@ -352,7 +414,14 @@ fn same_calls(got: &[Call], want: &[Call]) -> Result<(), String> {
             let ok = match (ga, wa) {
                 (Arg::Num(r), Arg::Num(x)) => close(*r, *x),
                 (Arg::List(r), Arg::List(x)) => r.len() == x.len() && r.iter().zip(x).all(|(r, x)| close(*r, *x)),
+                (Arg::Lists(r), Arg::Lists(x)) => {
+                    r.len() == x.len()
+                        && r.iter()
+                            .zip(x)
+                            .all(|(r, x)| r.len() == x.len() && r.iter().zip(x).all(|(r, x)| close(*r, *x)))
+                }
                 (Arg::Text(r), Arg::Text(x)) => r == x,
+                (Arg::Bool(r), Arg::Bool(x)) => r == x,
                 _ => false,
             };
             if !ok {
@@ -467,6 +536,149 @@ fn lua_harness_catches_injected_code() {
     assert!(e.contains("call 2") && e.contains("setSpeedFraction"), "{e}");
 }
 
+/// The calls a path-buffer program makes that read the arm's parameters or change the arm or
+/// its settings, as `program` timed on `kin` makes them: the kinematics read, the tool offset,
+/// the speed fraction, the start (inverse kinematics, joint move), then per stroke its dip and
+/// approach `moveLine`s, its path buffer (allocated, appended in pieces of 1,000 waypoints,
+/// evaluated with the joint limits and the interval, moved), its lift and the buffer freed.
+fn expected_path_buffer_calls(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Vec<Call> {
+    let call = |name: &str, args: Vec<Arg>| Call { name: name.into(), args };
+    let timing = time_program(program, kin, cfg).unwrap();
+    let line = |m: &Move| {
+        let Move::Line { pose, a, v, blend_m } = *m else { panic!("{m:?}") };
+        call("moveLine", vec![Arg::List(pose.0.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(blend_m), Arg::Num(0.0)])
+    };
+    let Move::JointPose { pose, a, v } = program.start else { panic!("{:?}", program.start) };
+    let mut out = vec![
+        call("getKinematicsParam", vec![Arg::Bool(true)]),
+        call("setTcpOffset", vec![Arg::List(vec![0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0])]),
+        call("setSpeedFraction", vec![Arg::Num(program.speed_fraction)]),
+        call("inverseKinematics", vec![Arg::List(HOME_Q.to_vec()), Arg::List(pose.0.to_vec())]),
+        call("moveJoint", vec![Arg::List(IK_Q.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(0.0), Arg::Num(0.0)]),
+    ];
+    let lim = cfg.limits;
+    for st in &program.strokes {
+        out.extend(st.dip.iter().chain(&st.approach).map(line));
+        let t = timing.strokes.iter().find(|t| t.stroke == st.index).unwrap();
+        let name = || Arg::Text(format!("maobi_stroke_{}", st.index + 1));
+        out.push(call("pathBufferAlloc", vec![name(), Arg::Num(2.0), Arg::Num(t.joints.len() as f64)]));
+        for piece in t.joints.chunks(1000) {
+            out.push(call("pathBufferAppend", vec![name(), Arg::Lists(piece.iter().map(|q| q.to_vec()).collect())]));
+        }
+        out.push(call(
+            "pathBufferEval",
+            vec![
+                name(),
+                Arg::List(vec![lim.max_joint_acc_rad_s2; 6]),
+                Arg::List(vec![lim.max_joint_speed_rad_s; 6]),
+                Arg::Num(t.interval_s),
+            ],
+        ));
+        out.push(call("movePathBuffer", vec![name()]));
+        out.push(line(&st.lift));
+        out.push(call("pathBufferFree", vec![name()]));
+    }
+    out
+}
+
+/// The calls of [`expected_path_buffer_calls`]' kinds.
+fn path_buffer_effects(calls: &[Call]) -> Vec<Call> {
+    const KINDS: &[&str] = &[
+        "getKinematicsParam",
+        "setTcpOffset",
+        "setSpeedFraction",
+        "inverseKinematics",
+        "moveJoint",
+        "moveLine",
+        "pathBufferAlloc",
+        "pathBufferAppend",
+        "pathBufferEval",
+        "movePathBuffer",
+        "pathBufferFree",
+    ];
+    calls.iter().filter(|c| KINDS.contains(&c.name.as_str())).cloned().collect()
+}
+
+#[test]
+fn lua_path_buffer_exports_run_under_real_lua_as_the_timed_program() {
+    if !have_lua() {
+        return skipped("lua_path_buffer_exports_run_under_real_lua_as_the_timed_program", NO_LUA);
+    }
+    let kin = DhParams::AUBO_I5;
+    for cfg in [config(Some(0.5)), config(None)] {
+        let p = program(&cfg);
+        let script = aubo_lua_path_buffer(&p, &kin, &cfg, "十").unwrap();
+        let c = luac_check(&script);
+        assert!(c.status.success(), "luac5.4 -p: {}", c.stderr);
+        let ran = run_lua(&script, "status");
+        assert!(ran.status.success(), "{}", ran.stderr);
+        let calls = parse_calls(&ran.stdout);
+        assert_eq!(calls.last().map(|c| c.name.as_str()), Some("done"));
+        let want = expected_path_buffer_calls(&p, &kin, &cfg);
+        assert_eq!(want.iter().filter(|c| c.name == "movePathBuffer").count(), p.strokes.len());
+        if let Err(e) = same_calls(&path_buffer_effects(&calls), &want) {
+            panic!("{e}");
+        }
+        // Before each buffer moves: polled until valid (false, then true here), the approach
+        // waited for, the arm's joints read; after its lift, the arm waited for again.
+        let names: Vec<&str> = calls.iter().map(|c| c.name.as_str()).collect();
+        for (i, _) in names.iter().enumerate().filter(|(_, n)| **n == "movePathBuffer") {
+            let eval = names[..i].iter().rposition(|n| *n == "pathBufferEval").unwrap();
+            let between = &names[eval..i];
+            assert_eq!(between.iter().filter(|n| **n == "pathBufferValid").count(), 2, "{between:?}");
+            let k = between.iter().position(|n| *n == "getExecId").unwrap();
+            assert!(between[k..].contains(&"getJointPositions") && between.contains(&"sleep"), "{between:?}");
+            let free = names[i..].iter().position(|n| *n == "pathBufferFree").unwrap();
+            assert!(names[i..i + free].contains(&"getExecId"), "{:?}", &names[i..i + free]);
+        }
+    }
+}
+
+#[test]
+fn lua_path_buffer_exports_move_nothing_on_another_arm() {
+    if !have_lua() {
+        return skipped("lua_path_buffer_exports_move_nothing_on_another_arm", NO_LUA);
+    }
+    let cfg = config(None);
+    let p = program(&cfg);
+    let script = aubo_lua_path_buffer(&p, &DhParams::AUBO_I5, &cfg, "十").unwrap();
+    let moved = |calls: &[Call]| {
+        calls.iter().any(|c| matches!(c.name.as_str(), "moveLine" | "moveJoint" | "movePathBuffer" | "setTcpOffset"))
+    };
+    // An upper arm 20 mm longer (within 2 µm, or with a calibrated beta, it would run).
+    let longer = DhParams { a_m: [0.0, 0.0, 0.428, 0.376, 0.0, 0.0], ..DhParams::AUBO_I5 };
+    let close_by = DhParams { a_m: [0.0, 0.0, 0.408 + 5e-7, 0.376, 0.0, 0.0], ..DhParams::AUBO_I5 };
+    let nominal = kin_table(&DhParams::AUBO_I5, "");
+    let cases = [
+        (kin_table(&longer, ""), "differ from those the joint waypoints were computed with"),
+        (kin_table(&DhParams::AUBO_I5, ", beta = {0, 0.001, 0, 0, 0, 0}"), "a beta that maobi does not model"),
+        (kin_table(&DhParams::AUBO_I5, "").replacen("a = {0.0,", "a = {0/0,", 1), "(a) differ"),
+        ("{a = {0, 0, 0.408, 0.376, 0, 0}}".to_string(), "lack six values of alpha"),
+        ("nil".to_string(), "gave no table"),
+    ];
+    for (kin, needle) in &cases {
+        let ran = run_lua_arm(&script, "status", kin, "follows", true);
+        assert!(!ran.status.success() && ran.stderr.contains(needle), "{needle}: {}", ran.stderr);
+        let calls = parse_calls(&ran.stdout);
+        assert!(!moved(&calls), "{needle}: {calls:?}");
+        assert_eq!(calls.iter().filter(|c| c.name == "getKinematicsParam").count(), 1, "{needle}");
+    }
+    for kin in [kin_table(&close_by, ""), kin_table(&DhParams::AUBO_I5, ", beta = {0, 0, 0, 0, 0, 0}")] {
+        let ran = run_lua_arm(&script, "status", &kin, "follows", true);
+        assert!(ran.status.success(), "{kin}: {}", ran.stderr);
+    }
+    // No sched.sleep: stopped before anything moved.
+    let ran = run_lua_arm(&script, "status", &nominal, "follows", false);
+    assert!(!ran.status.success() && ran.stderr.contains("no sched.sleep"), "{}", ran.stderr);
+    assert!(!moved(&parse_calls(&ran.stdout)));
+    // The arm not at the first waypoint (the controller chose another branch): the start and
+    // the approach ran, no path buffer moved.
+    let ran = run_lua_arm(&script, "status", &nominal, "stays", true);
+    assert!(!ran.status.success() && ran.stderr.contains("not at the path buffer's first waypoint"), "{}", ran.stderr);
+    let calls = parse_calls(&ran.stdout);
+    assert!(calls.iter().any(|c| c.name == "moveLine") && !calls.iter().any(|c| c.name == "movePathBuffer"));
+}
+
 // ---------------------------------------------------------------------------------------------
 // G-code through gcodeparser (PyPI)
 
@@ -534,10 +746,21 @@ fn parse_gcode_external(texts: &[String]) -> Vec<Vec<GCommand>> {
 
 /// What the G-code of `track` must be, as the external parser reads it: only `G21`, `G90`,
 /// `G0`, `G1`, `M2` (the first two first, `M2` last); each command's words from its own set;
-/// one `G1` per track point, at the point (X, Y, Z = −h) in track order, plus `dip_g1` per ink
-/// dip (down, and the soak when there is a dwell); Z never below −`h_max_mm` except over the
-/// ink pot. `Err` names the line and what is wrong.
-fn check_gcode(commands: &[GCommand], track: &Track, dips: usize, dip_g1: usize, h_max_mm: f64) -> Result<(), String> {
+/// per stroke a `G0` to its first point, a `G1` descent onto it at the write speed, then `G1`
+/// moves to some of its points in order, each point left out within the merge tolerance of its
+/// move, each feed rate F the move's length over the time `times` gives it (mm/min), never
+/// above the write speed; plus `dip_g1` `G1`s per ink dip (down, and the soak when there is a
+/// dwell); Z never below −`h_max_mm` except over the ink pot. Returns the number of pressed
+/// `G1` moves (descents aside). `Err` names the line and what is wrong.
+fn check_gcode(
+    commands: &[GCommand],
+    track: &Track,
+    times: &PointTimes,
+    cfg: &RobotConfig,
+    dips: usize,
+    dip_g1: usize,
+    h_max_mm: f64,
+) -> Result<usize, String> {
     let at = |c: &GCommand, what: String| Err(format!("line {}: `{}` {:?}: {what}", c.line, c.cmd, c.params));
     let names: Vec<&str> = commands.iter().map(|c| c.cmd.as_str()).collect();
     if names.len() < 3 || names[..2] != ["G21", "G90"] || names.last() != Some(&"M2") {
@@ -546,10 +769,25 @@ fn check_gcode(commands: &[GCommand], track: &Track, dips: usize, dip_g1: usize,
     if names.iter().filter(|n| **n == "M2").count() != 1 {
         return Err(format!("more than one M2: {names:?}"));
     }
-    let points: Vec<&TrackPoint> = track.points().collect();
-    let mut pressed = 0;
-    let mut g1 = 0;
+    let write_f = cfg.write_speed_m_s * 60_000.0;
+    let xyz = |p: &TrackPoint| [p.x_mm, p.y_mm, -p.h_mm];
+    // The stroke being written and the last of its points reached.
+    let mut stroke: Option<usize> = None;
+    let mut reached: Option<usize> = None;
+    let mut strokes_done = 0;
+    let (mut g1, mut moves) = (0, 0);
     let (mut x, mut y) = (None::<f64>, None::<f64>);
+    let over_pot = |x: Option<f64>, y: Option<f64>| {
+        x.is_some_and(|x| close(x, POT_MM[0])) && y.is_some_and(|y| close(y, POT_MM[1]))
+    };
+    let finish = |stroke: Option<usize>, reached: Option<usize>| -> Result<(), String> {
+        match stroke {
+            Some(s) if reached != Some(track.strokes[s].points.len() - 1) => {
+                Err(format!("stroke {} ends at point {reached:?}, not its last", s + 1))
+            }
+            _ => Ok(()),
+        }
+    };
     for c in commands {
         let allowed: &[&str] = match c.cmd.as_str() {
             "G21" | "G90" | "M2" => &[],
@@ -561,32 +799,74 @@ fn check_gcode(commands: &[GCommand], track: &Track, dips: usize, dip_g1: usize,
         }
         x = c.get("X").or(x);
         y = c.get("Y").or(y);
+        if c.cmd == "G0" && c.get("X").is_some() && !over_pot(x, y) {
+            // Travel to the next stroke's first point.
+            finish(stroke, reached)?;
+            let next = stroke.map_or(0, |s| s + 1);
+            let Some(st) = track.strokes.get(next) else { return at(c, "travel after the last stroke".into()) };
+            let p = xyz(&st.points[0]);
+            if !(close(x.unwrap(), p[0]) && close(y.unwrap(), p[1])) {
+                return at(c, format!("stroke {} starts at {p:?}", next + 1));
+            }
+            (stroke, reached) = (Some(next), None);
+            strokes_done += 1;
+        }
         if c.cmd == "G1" {
             g1 += 1;
             if c.get("X").is_some() {
-                let Some(p) = points.get(pressed) else { return at(c, "more pressed moves than track points".into()) };
-                let want = [p.x_mm, p.y_mm, -p.h_mm];
+                let Some(s) = stroke else { return at(c, "a pressed move before any stroke".into()) };
+                let pts: Vec<[f64; 3]> = track.strokes[s].points.iter().map(xyz).collect();
                 let read = [c.get("X").unwrap(), c.get("Y").unwrap_or(f64::NAN), c.get("Z").unwrap_or(f64::NAN)];
-                if !read.iter().zip(want).all(|(r, w)| close(*r, w)) {
-                    return at(c, format!("track point {} is {want:?}", pressed + 1));
+                let f = c.get("F").unwrap_or(f64::NAN);
+                let same = |j: usize| read.iter().zip(pts[j]).all(|(r, w)| close(*r, w));
+                match reached {
+                    None => {
+                        if !same(0) || !close(f, write_f) {
+                            return at(c, format!("the descent onto {:?} at F{write_f}", pts[0]));
+                        }
+                        reached = Some(0);
+                    }
+                    Some(a) => {
+                        let Some(b) = (a + 1..pts.len()).find(|&j| same(j)) else {
+                            return at(c, format!("no point of stroke {} after point {}", s + 1, a + 1));
+                        };
+                        let v = |j: usize| nalgebra::Vector3::from(pts[j]);
+                        let ab = v(b) - v(a);
+                        for i in a + 1..b {
+                            let t = ((v(i) - v(a)).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+                            let off = (v(a) + ab * t - v(i)).norm();
+                            if off > GCODE_MERGE_TOLERANCE_MM + 1e-9 {
+                                return at(c, format!("point {} left out lies {off} mm from the move", i + 1));
+                            }
+                        }
+                        let want = match &times.strokes[s] {
+                            Some(t) => 60.0 * ab.norm() / (t[b] - t[a]),
+                            None => write_f,
+                        };
+                        if !((f - want).abs() <= 1e-9 * want) || !(f > 0.0 && f <= write_f * (1.0 + 1e-9)) {
+                            return at(c, format!("feed rate F{f} where the timing gives {want} (at most {write_f})"));
+                        }
+                        reached = Some(b);
+                        moves += 1;
+                    }
                 }
-                pressed += 1;
             }
         }
-        if let Some(z) = c.get("Z") {
-            let over_pot = x.is_some_and(|x| close(x, POT_MM[0])) && y.is_some_and(|y| close(y, POT_MM[1]));
-            if z < -h_max_mm && !over_pot {
-                return at(c, format!("Z below -{h_max_mm} mm away from the ink pot"));
-            }
+        if let Some(z) = c.get("Z")
+            && z < -h_max_mm
+            && !over_pot(x, y)
+        {
+            return at(c, format!("Z below -{h_max_mm} mm away from the ink pot"));
         }
     }
-    if pressed != points.len() || g1 != points.len() + dips * dip_g1 {
+    finish(stroke, reached)?;
+    if strokes_done != track.strokes.len() || g1 != strokes_done + moves + dips * dip_g1 {
         return Err(format!(
-            "{g1} G1 moves ({pressed} with X) where the track has {} points and {dips} dips of {dip_g1}",
-            points.len()
+            "{g1} G1 moves over {strokes_done} strokes ({moves} pressed) where the track has {} strokes and {dips} dips of {dip_g1}",
+            track.strokes.len()
         ));
     }
-    Ok(())
+    Ok(moves)
 }
 
 #[test]
@@ -598,12 +878,18 @@ fn gcode_exports_read_by_gcodeparser_match_the_track() {
     let h_max_mm = pen1().ranges.h_mm.max;
     // (settings, dips, G1 per dip: down, and the soak when there is a dwell)
     let cases = [(config(Some(0.5)), 2, 2), (config(Some(0.0)), 2, 1), (config(None), 0, 0)];
-    let texts: Vec<String> = cases.iter().map(|(cfg, ..)| gcode(&track, cfg, "十").unwrap().0).collect();
-    for (((_, dips, dip_g1), text), commands) in cases.iter().zip(&texts).zip(parse_gcode_external(&texts)) {
+    let texts: Vec<String> = cases.iter().map(|(cfg, ..)| gcode(&track, &times(cfg), cfg, "十").unwrap().0).collect();
+    for (((cfg, dips, dip_g1), text), commands) in cases.iter().zip(&texts).zip(parse_gcode_external(&texts)) {
         let (dips, dip_g1) = (*dips, *dip_g1);
-        if let Err(e) = check_gcode(&commands, &track, dips, dip_g1, h_max_mm) {
-            panic!("{e}\n{text}");
+        match check_gcode(&commands, &track, &times(cfg), cfg, dips, dip_g1, h_max_mm) {
+            // (60, 61, 18) lies 0.1 mm off its neighbours' line: no point is left out.
+            Ok(moves) => assert_eq!(moves, track.point_count() - track.strokes.len(), "{text}"),
+            Err(e) => panic!("{e}\n{text}"),
         }
+        // The feed rates come from the timing: slower than the write speed where it slows.
+        let feeds: Vec<f64> =
+            commands.iter().filter(|c| c.cmd == "G1" && c.get("X").is_some()).filter_map(|c| c.get("F")).collect();
+        assert!(feeds.iter().any(|f| *f < 0.9 * cfg.write_speed_m_s * 60_000.0), "{feeds:?}");
         // Below the brush's deepest press only in the pot: the check above is not vacuous.
         let deepest = commands.iter().filter_map(|c| c.get("Z")).fold(f64::INFINITY, f64::min);
         assert_eq!(deepest < -h_max_mm, dips > 0, "{deepest}");
@@ -617,8 +903,10 @@ fn hostile_titles_add_no_gcode_command() {
     }
     let track = small_track();
     let cfg = config(Some(0.5));
-    let texts: Vec<String> =
-        std::iter::once(&"t").chain(HOSTILE_TITLES).map(|title| gcode(&track, &cfg, title).unwrap().0).collect();
+    let texts: Vec<String> = std::iter::once(&"t")
+        .chain(HOSTILE_TITLES)
+        .map(|title| gcode(&track, &times(&cfg), &cfg, title).unwrap().0)
+        .collect();
     let read = parse_gcode_external(&texts);
     assert!(!read[0].is_empty());
     for ((title, text), commands) in HOSTILE_TITLES.iter().zip(&texts[1..]).zip(&read[1..]) {
@@ -637,7 +925,7 @@ fn gcode_harness_catches_injected_commands() {
     let track = small_track();
     let cfg = config(Some(0.5));
     let h_max_mm = pen1().ranges.h_mm.max;
-    let text = gcode(&track, &cfg, "t").unwrap().0;
+    let text = gcode(&track, &times(&cfg), &cfg, "t").unwrap().0;
     let (first, rest) = text.split_once('\n').unwrap();
     let cases = [
         (format!("{first}\nG1 Z-40 F3000\n{rest}"), "G21, G90 first"),
@@ -645,15 +933,24 @@ fn gcode_harness_catches_injected_commands() {
         (format!("{first}\n(G1 Z-40)\n{rest}"), "G21, G90 first"),
         (text.replacen("G21 ; millimetres", "G21 (M3 S1000) ; millimetres", 1), "M3"),
         (text.replacen("M2", "M2\nG0 Z20", 1), "M2 last"),
-        (text.replacen("X50.000000", "X51.000000", 1), "track point 2"),
+        (text.replacen("X50.000000", "X51.000000", 1), "no point of stroke 1 after point 1"),
+        (
+            {
+                let line = text.lines().find(|l| l.starts_with("G1 X50.000000")).unwrap();
+                let slow = format!("{} F1.000000", line.split(" F").next().unwrap());
+                text.replacen(line, &slow, 1)
+            },
+            "feed rate F1 where the timing gives",
+        ),
         (text.replacen("X50.000000 Y60.000000 Z-16.500000", "X50.000000 Y60.000000 Z-16.500000 E5", 1), "word E"),
     ];
     let texts: Vec<String> = std::iter::once(text.clone()).chain(cases.iter().map(|c| c.0.clone())).collect();
     let read = parse_gcode_external(&texts);
-    assert_eq!(check_gcode(&read[0], &track, 2, 2, h_max_mm), Ok(()));
+    let t = times(&cfg);
+    assert!(check_gcode(&read[0], &track, &t, &cfg, 2, 2, h_max_mm).is_ok());
     for ((bad, needle), commands) in cases.iter().zip(&read[1..]) {
         assert_ne!(bad, &text, "{needle}");
-        let e = check_gcode(commands, &track, 2, 2, h_max_mm).unwrap_err();
+        let e = check_gcode(commands, &track, &t, &cfg, 2, 2, h_max_mm).unwrap_err();
         assert!(e.contains(needle), "{needle}: {e}");
     }
 }

@@ -155,20 +155,22 @@ fn exports_carry_the_dips() {
     let c = cfg(Reload::EveryStrokes(2));
     let (prog, _) = build_program(&t, &pen1(), &f, &c).unwrap();
     let lua = robot_io::export::aubo_lua(&prog, "t").unwrap();
-    let ur = robot_io::export::urscript(&prog, "t").unwrap();
+    let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &c).unwrap();
+    let ur = robot_io::export::urscript(&prog, &timing, &c, "t").unwrap();
+    let times = robot_io::export::point_times(&prog, &timing).unwrap();
     assert_eq!(lua.matches("-- ink dip before stroke").count(), 2);
     assert!(lua.contains("-- ink dip before stroke 3"));
     assert_eq!(ur.matches("# ink dip before stroke").count(), 2);
     // Each dip is four line moves at the station's position.
     assert_eq!(ur.matches("movel(p[0.630000, 0.100000").count(), 2 * 4 - 2 * 2 + 2 * 2, "{ur}");
-    let (g, warnings) = robot_io::export::gcode(&t, &c, "t").unwrap();
+    let (g, warnings) = robot_io::export::gcode(&t, &times, &c, "t").unwrap();
     assert_eq!(g.matches("; ink dip before stroke").count(), 2);
     assert!(g.contains("G0 X330.000000 Y150.000000") && g.contains("G1 Z-25.000000") && g.contains("; dwell 0.5 s"));
     assert!(!warnings.iter().any(|w| w.contains("ink")), "{warnings:?}");
     // Without paper_mm the plotter cannot find the pot: said, not guessed.
     let mut no_pot = c.clone();
     no_pot.ink.as_mut().unwrap().paper_mm = None;
-    let (g, warnings) = robot_io::export::gcode(&t, &no_pot, "t").unwrap();
+    let (g, warnings) = robot_io::export::gcode(&t, &times, &no_pot, "t").unwrap();
     assert!(!g.contains("ink dip"));
     assert!(warnings.iter().any(|w| w.contains("ink.paper_mm")), "{warnings:?}");
 }

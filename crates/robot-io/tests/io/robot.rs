@@ -194,14 +194,16 @@ fn exports_follow_the_documented_forms() {
     assert!(lua.contains("return function(api)") && lua.trim_end().ends_with("end"));
     assert!(lua.contains("setTcpOffset({0, 0, 0.048000, 0, 0, 0})") && lua.contains("mc:setSpeedFraction(1.000000)"));
     assert_eq!(lua.matches("mc:moveLine(").count() + lua.matches("mc:moveJoint(").count(), prog.move_count());
-    let ur = urscript(&prog, "test").unwrap();
+    let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &sparse()).unwrap();
+    let ur = urscript(&prog, &timing, &sparse(), "test").unwrap();
     assert!(ur.starts_with("# maobi") && ur.contains("def maobi_write():") && ur.trim_end().ends_with("maobi_write()"));
     let movel = ur.lines().find(|l| l.trim_start().starts_with("movel(")).unwrap();
     let inside = movel.trim().trim_start_matches("movel(p[").split(']').next().unwrap();
     assert_eq!(inside.split(", ").count(), 6, "{movel}");
     assert!(movel.contains("a=") && movel.contains("v=") && movel.contains("r="));
     // The level paper's upright brush is Rx(π): rotation vector (π, 0, 0) up to sign.
-    let (g, warnings) = gcode(&small_track(), &sparse(), "test").unwrap();
+    let times = robot_io::export::point_times(&prog, &timing).unwrap();
+    let (g, warnings) = gcode(&small_track(), &times, &sparse(), "test").unwrap();
     assert!(g.contains("G21") && g.contains("G90") && g.trim_end().ends_with("M2"));
     assert!(g.contains("G1 X40.000000 Y60.000000 Z-15.000000 F1200.000000"), "{g}");
     assert!(warnings.iter().any(|w| w.contains("α")) && warnings.iter().any(|w| w.contains("β")));
