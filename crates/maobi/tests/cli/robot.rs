@@ -307,3 +307,37 @@ fn lua_path_buffers_use_the_kinematics_read_from_the_controller() {
     std::fs::write(&arm, bad.to_string()).unwrap();
     fails(&export(&["--kinematics", s(&arm)]), "arm.json: kinematics: d[1]");
 }
+
+/// `永` at the defaults (3,308 points): the G-code's merged moves, read by `gcodeparser` (PyPI;
+/// skipped, saying so, where python3 cannot import it), are at least 5× fewer than one move per
+/// point, and every feed rate is positive and at most the write speed (20 mm/s: 1200 mm/min).
+#[test]
+fn yong_gcode_is_merged_five_times_shorter_with_feeds_from_the_timing() {
+    let have = std::process::Command::new("python3")
+        .args(["-c", "import gcodeparser"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !have {
+        eprintln!("SKIPPED yong_gcode_is_merged_five_times_shorter_with_feeds_from_the_timing: no gcodeparser");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("yong");
+    ok(&maobi(&["write", "永", "--out", s(&out)]));
+    let track = out.join("track.json");
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&track).unwrap()).unwrap();
+    let points: usize = t["strokes"].as_array().unwrap().iter().map(|st| st.as_array().unwrap().len()).sum();
+    let g = dir.path().join("yong.gcode");
+    ok(&maobi(&["robot", "export", s(&track), "--paper", s(&paper()), "--format", "gcode", "-o", s(&g)]));
+    let script = "import json, sys\nfrom gcodeparser import parse_gcode_lines\n\
+                  print(json.dumps([[l.command_str, l.params] for l in parse_gcode_lines(open(sys.argv[1]).read())]))";
+    let o = std::process::Command::new("python3").args(["-c", script, s(&g)]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let commands: Vec<(String, serde_json::Value)> = serde_json::from_slice(&o.stdout).unwrap();
+    let g1: Vec<&serde_json::Value> = commands.iter().filter(|(c, _)| c == "G1").map(|(_, p)| p).collect();
+    assert!(points >= 3000 && g1.len() * 5 <= points, "{} G1 moves for {points} points", g1.len());
+    let feeds: Vec<f64> = g1.iter().map(|p| p["F"].as_f64().unwrap()).collect();
+    assert!(feeds.iter().all(|f| *f > 0.0 && *f <= 1200.0 * (1.0 + 1e-9)), "{feeds:?}");
+    // From the timing: most moves slower than the write speed (turns, depth changes, ends).
+    assert!(feeds.iter().filter(|f| **f < 1000.0).count() * 2 > feeds.len(), "{feeds:?}");
+}

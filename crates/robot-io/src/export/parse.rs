@@ -282,10 +282,16 @@ fn after_header<'a>(
 /// The Lua error a joint move to a pose raises when the controller cannot solve it.
 pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller cannot reach the first pose";
 
-/// Reads back an ARCS Lua program as [`super::aubo_lua`] writes it: header comments
-/// (`-- text`), `return function(api)`, the robot and motion-control lookups,
-/// `setTcpOffset({0, 0, z, 0, 0, 0})`, `setSpeedFraction(f)`, then moves and `  -- text`
-/// comments, `end`. Numbers are `-?d+.d{6,20}`; comment text must be inert (see
+/// Reads back an ARCS Lua program as [`super::aubo_lua`] or [`super::aubo_lua_path_buffer`]
+/// writes it: header comments (`-- text`), `return function(api)`, the robot lookups, for a
+/// path-buffer program the `sleep` binding and the kinematics check (`local want = {a = {…},
+/// alpha = {…}, d = {…}, theta = {…}}` and its fixed lines), `setTcpOffset({0, 0, z, 0, 0,
+/// 0})`, the motion-control lookup, `setSpeedFraction(f)`, then moves, path-buffer blocks
+/// (`do`, `local name = "maobi_stroke_N"`, `pathBufferAlloc(name, 2, n)`, `pathBufferAppend`
+/// pieces of at most 1,000 waypoints, `pathBufferEval`, the waits, `local q0 = {…}` and the
+/// joints check, `movePathBuffer`, the lift `moveLine`, the wait, `pathBufferFree`, `end`;
+/// only after the kinematics check) and `  -- text` comments, `end`. Numbers are
+/// `-?d+.d{6,20}` (sizes and stroke numbers whole); comment text must be inert (see
 /// [`super::text::comment_text`]).
 ///
 /// # Errors
@@ -550,8 +556,8 @@ fn read_path_buffer<'a>(
 
 /// Reads back a URScript program as [`super::urscript`] writes it: header comments
 /// (`# text`), `def maobi_write():`, `set_tcp(p[0, 0, z, 0, 0, 0])`, then `movej([q], a=, v=)`,
-/// `movej(p[...], a=, v=)`, `movel(p[...], a=, v=, r=)` and `  # text` comments, `end`,
-/// `maobi_write()`.
+/// `movej(p[...], a=, v=)`, `movel(p[...], a=, v=, r=)`, `movep(p[...], a=, v=, r=)` and
+/// `  # text` comments, `end`, `maobi_write()`.
 ///
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.

@@ -287,3 +287,68 @@ fn numbers_that_would_print_as_something_else_refuse_the_export() {
         }
     }
 }
+
+#[test]
+fn tampered_path_buffer_lua_is_refused() {
+    use robot_io::export::{aubo_lua_path_buffer, verify_lua_path_buffer};
+    let cfg = inked();
+    let p = program(&cfg);
+    let kin = DhParams::AUBO_I5;
+    let lua = aubo_lua_path_buffer(&p, &kin, &cfg, "十").unwrap();
+    verify_lua_path_buffer(&lua, &p, &kin, &cfg).unwrap();
+    let read = read_lua(&lua).unwrap();
+    // The parameters as printed: within 1e-9 relative (the script's check allows 1e-6).
+    let k = read.kinematics.unwrap();
+    let rows = [(k.a_m, kin.a_m), (k.alpha_rad, kin.alpha_rad), (k.d_m, kin.d_m), (k.theta_rad, kin.theta_rad)];
+    for (r, w) in rows {
+        assert!(r.iter().zip(w).all(|(r, w)| (r - w).abs() <= 1e-9 * w.abs()), "{r:?} {w:?}");
+    }
+    assert_eq!(read.path_buffers.len(), p.strokes.len());
+    let t = timing(&p, &cfg);
+    for (b, t) in read.path_buffers.iter().zip(&t.strokes) {
+        assert_eq!((b.size, b.waypoints.len(), b.interval_s), (t.joints.len(), t.joints.len(), 0.01));
+        assert_eq!(b.name, format!("maobi_stroke_{}", t.stroke + 1));
+    }
+    // A move-per-point check of a path-buffer text, and the reverse, are refused.
+    let e = verify_lua(&lua, &p).unwrap_err().to_string();
+    assert!(e.contains("checks the controller's kinematics where the plan does not"), "{e}");
+    let e = verify_lua_path_buffer(&aubo_lua(&p, "十").unwrap(), &p, &kin, &cfg).unwrap_err().to_string();
+    assert!(e.contains("does not check the controller's kinematics"), "{e}");
+    // Another arm's parameters: its own program, which this text is not.
+    let longer = DhParams { a_m: [0.0, 0.0, 0.41, 0.376, 0.0, 0.0], ..kin };
+    let e = verify_lua_path_buffer(&lua, &p, &longer, &cfg).unwrap_err().to_string();
+    assert!(e.contains("the kinematics checked: a[2] reads 0.408 where it is 0.41"), "{e}");
+    let bad = DhParams { d_m: [f64::NAN, 0.1215, 0.0, 0.0, 0.1025, 0.094], ..kin };
+    let e = aubo_lua_path_buffer(&p, &bad, &cfg, "十").unwrap_err().to_string();
+    assert!(e.contains("the arm's kinematics: d[0]"), "{e}");
+    let waypoint = lua.lines().find(|l| l.starts_with("      {")).unwrap();
+    let mut changed: Vec<String> = waypoint.split(", ").map(String::from).collect();
+    changed[1] = "1.000000".into();
+    let q0 = lua.lines().find(|l| l.starts_with("    local q0 = {")).unwrap();
+    let want = lua.lines().find(|l| l.starts_with("    local want = {")).unwrap();
+    let eval = lua.lines().find(|l| l.starts_with("    mc:pathBufferEval(")).unwrap();
+    let kin_block_start = lua.find("  local maobi_sched = sched\n").unwrap();
+    let kin_block_end = lua.find("  robot:getRobotConfig():setTcpOffset").unwrap();
+    let cases: Vec<(String, &str)> = vec![
+        (lua.replacen(waypoint, &changed.join(", "), 1), "waypoint 0, joint 2 reads 1"),
+        (lua.replacen(waypoint, &format!("{waypoint}\n{waypoint}"), 1), "more waypoints than the"),
+        (lua.replacen(q0, &q0.replacen("{", "{1.000000, ", 1), 1), "expected `    local q0"),
+        (lua.replacen(q0, &q0.replace("local q0 = {", "local q0 = {1"), 1), "the first waypoint checked, joint 1"),
+        (lua.replacen(want, &want.replacen("0.408000", "0.428000", 1), 1), "a[2] reads 0.428"),
+        (lua.replacen(eval, &eval.replacen("3.000000", "30.000000", 1), 1), "the joint acceleration limit"),
+        (lua.replacen("<= 0.000001)", "<= 0.100000)", 1), "expected `        if type(got[i])"),
+        (lua.replacen("if polls > 500 then", "if polls > 5000000 then", 1), "expected `      if polls > 500"),
+        (lua.replacen("<= 0.005000)", "<= 6.000000)", 1), "expected `      if type(q) ~= \"table\""),
+        (lua.replacen("    mc:pathBufferFree(name)\n", "", 1), "expected `    mc:pathBufferFree(name)`"),
+        (lua.replacen("maobi_stroke_1\"", "maobi_stroke_2\"", 1), "named `maobi_stroke_2`"),
+        (
+            format!("{}{}", &lua[..kin_block_start], &lua[kin_block_end..]),
+            "does not check the controller's kinematics first",
+        ),
+    ];
+    for (text, needle) in cases {
+        assert_ne!(text, lua, "{needle}");
+        let e = verify_lua_path_buffer(&text, &p, &kin, &cfg).expect_err(needle).to_string();
+        assert!(e.contains(needle), "{needle}: {e}");
+    }
+}

@@ -843,7 +843,7 @@ fn check_gcode(
                             Some(t) => 60.0 * ab.norm() / (t[b] - t[a]),
                             None => write_f,
                         };
-                        if !((f - want).abs() <= 1e-9 * want) || !(f > 0.0 && f <= write_f * (1.0 + 1e-9)) {
+                        if !((f - want).abs() <= 1e-9 * want && f > 0.0 && f <= write_f * (1.0 + 1e-9)) {
                             return at(c, format!("feed rate F{f} where the timing gives {want} (at most {write_f})"));
                         }
                         reached = Some(b);
