@@ -189,6 +189,7 @@ fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
             "64",
             "-o",
             s(&img),
+            "--force",
         ])
     };
     let whole = dir.path().join("whole.jsonl");

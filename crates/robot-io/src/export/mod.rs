@@ -382,9 +382,9 @@ pub fn verify_lua_path_buffer(
     compare_arm(Target::Lua, &parse::read_lua(text)?, &path_buffer_plan(program, kin, cfg)?)
 }
 
-/// The slowest tool speed a URScript process move is given, m/s (a move that only turns the
-/// brush has no length to divide).
-const MIN_PROCESS_SPEED_M_S: f64 = 1e-3;
+/// The tool speed of a URScript process move shorter than [`IN_PLACE_MM`] (one that only
+/// turns the brush: no length to divide by its time), m/s.
+const TURN_PROCESS_SPEED_M_S: f64 = 1e-3;
 
 /// The plan of a URScript program: each stroke's pressed moves compacted
 /// ([`crate::program::compact_program`], blends checked), each a `movep` at the timed
@@ -417,7 +417,13 @@ fn urscript_plan(program: &Program, timing: &ProgramTiming, cfg: &RobotConfig) -
                 Some(t) => {
                     let d = (Vector3::from(path[at].position()) - Vector3::from(path[from].position())).norm();
                     let dt = t[at] - t[from];
-                    if dt > 0.0 { (d / dt).max(MIN_PROCESS_SPEED_M_S).min(v) } else { v }
+                    if d * 1000.0 < IN_PLACE_MM {
+                        TURN_PROCESS_SPEED_M_S.min(v)
+                    } else if dt > 0.0 {
+                        (d / dt).min(v)
+                    } else {
+                        v
+                    }
                 }
                 None => v,
             };
