@@ -352,3 +352,34 @@ fn tampered_path_buffer_lua_is_refused() {
         assert!(e.contains(needle), "{needle}: {e}");
     }
 }
+
+/// The times the URScript speeds and G-code feeds come from: each stroke starts at 0 and
+/// reaches its last point when its timing ends, never faster between two points than the
+/// timed stroke's peak speed; a timing of another program is refused.
+#[test]
+fn point_times_follow_the_timed_strokes() {
+    let cfg = inked();
+    let p = program(&cfg);
+    let t = timing(&p, &cfg);
+    let times = point_times(&p, &t).unwrap();
+    assert_eq!(times.strokes.len(), 2);
+    for (st, ts) in p.strokes.iter().zip(&t.strokes) {
+        let at = times.strokes[st.index].as_ref().unwrap();
+        let path = robot_io::timing::pressed_path(st);
+        assert_eq!(at.len(), path.len());
+        assert_eq!(at[0], 0.0);
+        // The last point is first reached within one waypoint interval of the end, at rest.
+        assert!((ts.duration_s - at[at.len() - 1]).abs() <= ts.interval_s + 1e-9, "{at:?} {}", ts.duration_s);
+        for (k, w) in at.windows(2).enumerate() {
+            let d =
+                (nalgebra::Vector3::from(path[k + 1].position()) - nalgebra::Vector3::from(path[k].position())).norm();
+            assert!(w[1] > w[0] && d / (w[1] - w[0]) <= ts.peak_speed_m_s * (1.0 + 1e-6), "point {k}: {w:?}, {d} m");
+        }
+    }
+    // The timing of the track moved 1 mm is not this program's.
+    let mut moved = small_track();
+    moved.strokes.iter_mut().flat_map(|s| s.points.iter_mut()).for_each(|q| q.x_mm += 1.0);
+    let other = build_program(&moved, &pen1(), &paper(), &cfg).unwrap().0;
+    let e = point_times(&p, &timing(&other, &cfg)).unwrap_err().to_string();
+    assert!(e.contains("does not lie on the stroke's pressed path"), "{e}");
+}

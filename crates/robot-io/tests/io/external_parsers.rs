@@ -1,7 +1,9 @@
 //! Every export format read by a parser that is not ours (issue 26: "an external parser for
-//! every export format"). The ARCS Lua script is compiled by the real Lua compiler
-//! (`luac5.4 -p`) and run by the real interpreter (`lua5.4`) against a stub of the ARCS `api`
-//! object that records every call; the G-code is parsed by the `gcodeparser` package from PyPI.
+//! every export format"). The ARCS Lua script (a move per point, or a path buffer per stroke:
+//! issue 27) is compiled by the real Lua compiler (`luac5.4 -p`) and run by the real
+//! interpreter (`lua5.4`) against a stub of the ARCS `api` object that records every call (its
+//! kinematics, the arm's joints and `sched.sleep` set per case); the G-code (merged moves, feed
+//! rates from the timing) is parsed by the `gcodeparser` package from PyPI.
 //! Without a tool a test prints `SKIPPED <name>: <why>` and returns (`.ci/run` installs them).
 //! URScript has no offline parser outside a UR controller or URSim (docs/robot.md says so).
 //!
