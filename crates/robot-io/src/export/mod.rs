@@ -95,6 +95,8 @@ struct ArmPlan {
     kinematics: Option<DhParams>,
     /// `pathBufferEval`'s joint acceleration and speed limits, rad/s², rad/s.
     eval_acc_speed: (f64, f64),
+    /// The joints the controller solves the start pose near (Lua; `None`: where the arm is).
+    start_qnear: Option<[f64; 6]>,
     entries: Vec<Entry>,
 }
 
@@ -131,6 +133,7 @@ fn arm_plan(
         speed_fraction: program.speed_fraction,
         kinematics: None,
         eval_acc_speed: (0.0, 0.0),
+        start_qnear: None,
         entries,
     })
 }
@@ -140,14 +143,16 @@ fn moves_plan(program: &Program) -> ArmPlan {
     arm_plan(program, |st| Ok(st.press.iter().map(|m| Want::Move(*m)).collect())).expect("no step can fail")
 }
 
-/// A move as a Lua statement after `indent`.
-fn lua_move_text(m: &Move, indent: &str) -> String {
+/// A move as a Lua statement after `indent`; a joint move to a pose is solved near `qnear`
+/// (rad), or near the joints the arm reports.
+fn lua_move_text(m: &Move, indent: &str, qnear: Option<&[f64; 6]>) -> String {
+    let near = qnear.map_or("robot:getRobotState():getJointPositions()".to_string(), |q| format!("{{{}}}", lens(q)));
     match m {
         Move::Joint { q, a, v } => format!("{indent}mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", lens(q), rate(*a), rate(*v)),
         // The controller solves the joints from where the arm is, and the script stops
         // (`error`) rather than move when it cannot; `do ... end` keeps `q` and `ret` local.
         Move::JointPose { pose, a, v } => format!(
-            "{indent}do\n{indent}  local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {{{}}})\n{indent}  if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end\n{indent}  mc:moveJoint(q, {}, {}, 0, 0)\n{indent}end\n",
+            "{indent}do\n{indent}  local q, ret = robot:getRobotAlgorithm():inverseKinematics({near}, {{{}}})\n{indent}  if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end\n{indent}  mc:moveJoint(q, {}, {}, 0, 0)\n{indent}end\n",
             lens(&pose.0),
             rate(*a),
             rate(*v)
@@ -196,11 +201,11 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
         match e {
             Entry::Comment(c) => s.push_str(&format!("  -- {c}\n")),
             Entry::Step(_, Want::Move(m)) if open_block => {
-                s.push_str(&lua_move_text(m, "    "));
+                s.push_str(&lua_move_text(m, "    ", None));
                 lines(&mut s, lua::free_lines());
                 open_block = false;
             }
-            Entry::Step(_, Want::Move(m)) => s.push_str(&lua_move_text(m, "  ")),
+            Entry::Step(_, Want::Move(m)) => s.push_str(&lua_move_text(m, "  ", plan.start_qnear.as_ref())),
             Entry::Step(_, Want::PathBuffer(t)) => {
                 let (acc, speed) = plan.eval_acc_speed;
                 s.push_str("  do\n");
@@ -310,6 +315,9 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
     })?;
     plan.kinematics = Some(*kin);
     plan.eval_acc_speed = (cfg.limits.max_joint_acc_rad_s2, cfg.limits.max_joint_speed_rad_s);
+    // The controller solves the start near the first waypoint, so the arm reaches the first
+    // stroke on the branch its waypoints were computed on.
+    plan.start_qnear = timing.strokes.first().map(|t| t.joints[0]);
     Ok(plan)
 }
 
@@ -603,7 +611,21 @@ fn compare_step(
             same("the acceleration", *a, *wa, 0.0)?;
             same("the speed", *v, *wv, 0.0)
         }
-        (ReadMove::JointPose { target: t, a, v }, Want::Move(Move::JointPose { pose, a: wa, v: wv })) => {
+        (ReadMove::JointPose { target: t, a, v, qnear }, Want::Move(Move::JointPose { pose, a: wa, v: wv })) => {
+            match (qnear, plan.start_qnear) {
+                (None, None) => {}
+                (Some(r), Some(w)) => {
+                    for j in 0..6 {
+                        same(
+                            &format!("the joints the start is solved near, joint {}", j + 1),
+                            r[j],
+                            w[j],
+                            LENGTH_FLOOR,
+                        )?;
+                    }
+                }
+                _ => return Err("the start is solved near other joints than the plan's".into()),
+            }
             same_pose(target, t, pose)?;
             same("the acceleration", *a, *wa, 0.0)?;
             same("the speed", *v, *wv, 0.0)

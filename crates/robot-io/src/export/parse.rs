@@ -32,6 +32,10 @@ pub enum ReadMove {
         a: f64,
         /// Joint speed, rad/s.
         v: f64,
+        /// Lua: the joints the controller's solution is sought near, when the program gives
+        /// them (a path-buffer program: the first waypoint, so the arm starts on the
+        /// waypoints' branch); `None`: the joints the arm reports.
+        qnear: Option<[f64; 6]>,
     },
     /// A linear TCP move: Lua `mc:moveLine({pose}, a, v, blend, 0)`, URScript
     /// `movel(p[...], a=a, v=v, r=blend)`.
@@ -386,13 +390,22 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
                 moves.push(lift);
                 continue;
             }
-            let pose = whole(l, |c| {
-                c.lit("    local q, ret = robot:getRobotAlgorithm():inverseKinematics(robot:getRobotState():getJointPositions(), {")?;
+            let (qnear, pose) = whole(l, |c| {
+                c.lit("    local q, ret = robot:getRobotAlgorithm():inverseKinematics(")?;
+                let qnear = if c.lit("robot:getRobotState():getJointPositions()").is_some() {
+                    None
+                } else {
+                    c.lit("{")?;
+                    let q = c.nums::<6>()?;
+                    c.lit("}")?;
+                    Some(q)
+                };
+                c.lit(", {")?;
                 let p = c.nums::<6>()?;
                 c.lit("})")?;
-                Some(p)
+                Some((qnear, p))
             })
-            .ok_or_else(|| unexpected(m, l, "`    local q, ret = ...inverseKinematics(..., {pose})`"))?;
+            .ok_or_else(|| unexpected(m, l, "`    local q, ret = ...inverseKinematics(qnear, {pose})`"))?;
             expect(
                 &mut it,
                 &format!(
@@ -409,7 +422,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
             })
             .ok_or_else(|| unexpected(m, l, "`    mc:moveJoint(q, a, v, 0, 0)`"))?;
             expect(&mut it, "  end", last)?;
-            ReadMove::JointPose { target: pose, a, v }
+            ReadMove::JointPose { target: pose, a, v, qnear }
         } else {
             lua_move(l, "  ").ok_or_else(|| {
                 unexpected(n, l, "a move (`mc:moveLine`, `mc:moveJoint`, `do`), a `--` comment or `end`")
@@ -606,7 +619,7 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
                 c.lit(", v=")?;
                 let v = c.num()?;
                 c.lit(")")?;
-                Some(ReadMove::JointPose { target, a, v })
+                Some(ReadMove::JointPose { target, a, v, qnear: None })
             } else {
                 let process = if c.lit("  movep(p[").is_some() {
                     true

@@ -327,6 +327,10 @@ fn tampered_path_buffer_lua_is_refused() {
     let q0 = lua.lines().find(|l| l.starts_with("    local q0 = {")).unwrap();
     let want = lua.lines().find(|l| l.starts_with("    local want = {")).unwrap();
     let eval = lua.lines().find(|l| l.starts_with("    mc:pathBufferEval(")).unwrap();
+    // The start solved near the first waypoint; the form that asks the arm's joints instead.
+    let ik = lua.lines().find(|l| l.contains("inverseKinematics(")).unwrap();
+    let (start, near_end) = (ik.find("inverseKinematics(").unwrap() + 18, ik.find("}, {").unwrap());
+    let from_arm = format!("{}robot:getRobotState():getJointPositions(){}", &ik[..start], &ik[near_end + 1..]);
     let kin_block_start = lua.find("  local maobi_sched = sched\n").unwrap();
     let kin_block_end = lua.find("  robot:getRobotConfig():setTcpOffset").unwrap();
     let cases: Vec<(String, &str)> = vec![
@@ -341,6 +345,8 @@ fn tampered_path_buffer_lua_is_refused() {
         (lua.replacen("<= 0.005000)", "<= 6.000000)", 1), "expected `      if type(q) ~= \"table\""),
         (lua.replacen("    mc:pathBufferFree(name)\n", "", 1), "expected `    mc:pathBufferFree(name)`"),
         (lua.replacen("maobi_stroke_1\"", "maobi_stroke_2\"", 1), "named `maobi_stroke_2`"),
+        (lua.replacen(ik, &ik.replacen("inverseKinematics({", "inverseKinematics({1", 1), 1), "solved near, joint 1"),
+        (lua.replacen(ik, &from_arm, 1), "solved near other joints than the plan's"),
         (
             format!("{}{}", &lua[..kin_block_start], &lua[kin_block_end..]),
             "does not check the controller's kinematics first",

@@ -540,7 +540,8 @@ fn lua_harness_catches_injected_code() {
 
 /// The calls a path-buffer program makes that read the arm's parameters or change the arm or
 /// its settings, as `program` timed on `kin` makes them: the kinematics read, the tool offset,
-/// the speed fraction, the start (inverse kinematics, joint move), then per stroke its dip and
+/// the speed fraction, the start (inverse kinematics near the first waypoint, joint move), then
+/// per stroke its dip and
 /// approach `moveLine`s, its path buffer (allocated, appended in pieces of 1,000 waypoints,
 /// evaluated with the joint limits and the interval, moved), its lift and the buffer freed.
 fn expected_path_buffer_calls(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Vec<Call> {
@@ -555,7 +556,8 @@ fn expected_path_buffer_calls(program: &Program, kin: &DhParams, cfg: &RobotConf
         call("getKinematicsParam", vec![Arg::Bool(true)]),
         call("setTcpOffset", vec![Arg::List(vec![0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0])]),
         call("setSpeedFraction", vec![Arg::Num(program.speed_fraction)]),
-        call("inverseKinematics", vec![Arg::List(HOME_Q.to_vec()), Arg::List(pose.0.to_vec())]),
+        // Solved near the first waypoint, not where the arm is.
+        call("inverseKinematics", vec![Arg::List(timing.strokes[0].joints[0].to_vec()), Arg::List(pose.0.to_vec())]),
         call("moveJoint", vec![Arg::List(IK_Q.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(0.0), Arg::Num(0.0)]),
     ];
     let lim = cfg.limits;
