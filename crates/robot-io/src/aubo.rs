@@ -385,6 +385,9 @@ impl AuboClient {
                 chunk.truncate(n);
                 Ok(chunk)
             }
+            // A signal (Ctrl-C: the runner stops at its next safe point) cut the wait short:
+            // nothing was read; the caller waits again until its deadline.
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => Ok(Vec::new()),
             Err(e) => Err(io_err(method, e)),
         }
     }
