@@ -59,7 +59,7 @@ pub use config::SettingError;
 pub use exec::{
     TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
 };
-pub use export::{aubo_lua, gcode, gcode_chars, urscript};
+pub use export::{ArmKinematics, aubo_lua, aubo_lua_path_buffer, gcode, gcode_chars, urscript};
 pub use frame::{PaperFile, PaperFrame, TouchPoint};
 pub use pose::{Pose, brush_pose};
 pub use program::{
