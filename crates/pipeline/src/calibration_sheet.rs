@@ -145,16 +145,19 @@ fn levels(r: Range, n: usize) -> Vec<f64> {
     (0..n).map(|i| r.lerp(i as f64 / (n - 1) as f64)).collect()
 }
 
-/// The smallest step `k ≥ 5` coprime with `n`: positions visit the presses in the order
-/// `(i · k) mod n`, so neighbouring cells differ in every variable.
-fn stride(n: usize) -> usize {
-    let gcd = |mut a: usize, mut b: usize| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    (5..).find(|&k| gcd(k, n) == 1).unwrap_or(1)
+/// The seed of the order presses are laid out in.
+const ORDER_SEED: u64 = 28;
+
+/// `0..n` shuffled (Fisher–Yates on a SplitMix64 stream from [`ORDER_SEED`]): the same order
+/// every time, unrelated to the grid's rows and columns.
+fn shuffled(n: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut rng = numerics::SplitMix64(ORDER_SEED);
+    for i in (1..n).rev() {
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+        order.swap(i, j);
+    }
+    order
 }
 
 /// The three track points of a press (see the module doc).
@@ -173,8 +176,8 @@ pub fn press_stroke(p: &CalibrationPress, profile: &BrushProfile) -> Stroke {
 /// [`PRESS_H_LEVELS`] × [`PRESS_ALPHA_LEVELS`] × [`PRESS_BETA_LEVELS`] presses over the
 /// profile's calibrated ranges, each in its own cell (room for a brush [`CELL_GROWTH`] times
 /// larger than the profile says, [`CELL_GAP_MM`] between cells), the cells centred inside
-/// `margin_mm` and filled row by row in a scrambled order (so a press's place on the sheet says
-/// nothing of its depth or tilt), the registration marks in the margin; the track's program is
+/// `margin_mm` and filled row by row in a fixed shuffled order (so a press's place on the sheet,
+/// and the light there in a photo, is unrelated to its depth or tilt), the registration marks in the margin; the track's program is
 /// built and checked on a level sheet in front of the arm with the default `robot.json`.
 ///
 /// # Errors
@@ -243,10 +246,10 @@ pub fn calibration_sheet(
     }
     let used_rows = n.div_ceil(cols);
     let (x0, y0) = (margin_mm + (uw - cols as f64 * cell_w) / 2.0, margin_mm + (uh - used_rows as f64 * cell_h) / 2.0);
-    let k = stride(n);
+    let order = shuffled(n);
     let mut placed = Vec::with_capacity(n);
     for pos in 0..n {
-        let press = presses[(pos * k) % n];
+        let press = presses[order[pos]];
         let (col, row) = (pos % cols, pos / cols);
         let cell = [
             x0 + col as f64 * cell_w,
@@ -385,8 +388,18 @@ mod tests {
                 assert!(q[0] > c[0] && q[0] < c[2] && q[1] > c[1] && q[1] < c[3], "{a:?}");
             }
         }
-        // Neighbours differ in depth (the order is scrambled).
-        assert!(p.windows(2).all(|w| w[0].h_mm != w[1].h_mm));
+        // The order is shuffled: no column holds one depth only.
+        let cols: Vec<f64> = {
+            let mut x: Vec<f64> = p.iter().map(|q| q.cell_mm[0]).collect();
+            x.sort_by(f64::total_cmp);
+            x.dedup();
+            x
+        };
+        for x in cols {
+            let mut hs: Vec<f64> = p.iter().filter(|q| q.cell_mm[0] == x).map(|q| q.h_mm).collect();
+            hs.dedup();
+            assert!(hs.len() > 1, "column at x = {x} mm presses one depth only");
+        }
         // The forward model leaves each press's own footprint, at its root, along β.
         let model = ForwardModel::default();
         for (a, s) in p.iter().zip(&cal.track.strokes[cal.track.mark_strokes..]) {

@@ -81,9 +81,10 @@ pub fn run(args: Args) -> Result<()> {
         args.output.display()
     )?;
     crate::outln!(
-        "next: `maobi robot send {}` (or export it), photograph the sheet, then `maobi calibrate --sheet-photo PHOTO --layout {} -o brush.json`",
+        "next: `maobi robot send {} --paper paper.json --host …` (or `robot export` it), photograph the sheet, then `maobi calibrate --sheet-photo PHOTO --layout {} --brush {} -o brush.json`",
         args.output.join("track.json").display(),
-        args.output.display()
+        args.output.display(),
+        args.brush
     )?;
     Ok(())
 }

@@ -63,10 +63,41 @@ fn one_photo_of_a_calibration_sheet_calibrates_a_brush_unlike_its_profile() {
     }
     let csv = std::fs::read_to_string(out.with_file_name("measurements.csv")).unwrap();
     assert_eq!(csv.lines().filter(|l| l.ends_with(",true")).count(), 24, "{csv}");
+    // Each press as measured against the world's footprint (figures for docs/closed-loop.md).
+    let mut spread = [[f64::INFINITY, f64::NEG_INFINITY]; 4];
+    for l in csv.lines().skip(1) {
+        let v: Vec<f64> = l.split(',').skip(1).take(7).map(|x| x.parse().unwrap()).collect();
+        let w = world_footprint(v[0], v[1].to_radians(), v[2].to_radians());
+        let errs = [(v[3] - w.lt_mm) / w.lt_mm, (v[4] - w.lh_mm) / w.lh_mm, (v[5] - w.lr_mm) / w.lr_mm, v[6]];
+        for (s, e) in spread.iter_mut().zip(errs) {
+            *s = [s[0].min(e), s[1].max(e)];
+        }
+    }
+    eprintln!(
+        "per press, measured vs world: lt {:+.2} … {:+.2} %, lh {:+.2} … {:+.2} %, lr {:+.2} … {:+.2} %; fit IoU {:.3}–{:.3}",
+        100.0 * spread[0][0],
+        100.0 * spread[0][1],
+        100.0 * spread[1][0],
+        100.0 * spread[1][1],
+        100.0 * spread[2][0],
+        100.0 * spread[2][1],
+        spread[3][0],
+        spread[3][1]
+    );
     let profile = BrushProfile::load(&out).unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     assert_eq!(profile.ranges, pen1.ranges, "the presses span pen1's whole range");
     assert!(profile.fit.is_some());
+    let m = &profile.model;
+    for (name, t) in [("lt", &m.lt_mm), ("lh", &m.lh_mm), ("lr", &m.lr_mm)] {
+        eprintln!(
+            "fitted {name} = {:.3} + {:.4}·h + {:.3}·α + {:.3}·β",
+            t.intercept,
+            t.h_mm.unwrap_or(0.0),
+            t.alpha_rad.unwrap_or(0.0),
+            t.beta_rad.unwrap_or(0.0)
+        );
+    }
 
     // The fitted profile against the world's footprints over the calibrated range.
     let r = profile.ranges;
