@@ -12,7 +12,8 @@
 
 use bezier_raster::{Coverage, ModelKind};
 use brush_model::{
-    BrushProfile, Extrapolation, Footprint, ForwardModel, PointMm, Press, PressRanges, Range, Stroke, Track, TrackPoint,
+    Brush, BrushProfile, Extrapolation, Footprint, ForwardModel, PointMm, Press, PressRanges, Range, Stroke, Track,
+    TrackPoint,
 };
 use robot_io::program::{RobotConfig, build_program_chars};
 use serde::{Deserialize, Serialize};
@@ -120,6 +121,9 @@ pub struct CalibrationLayout {
     pub margin_mm: f64,
     /// The profile the sheet was made with (its name; its ranges are what the presses span).
     pub brush: String,
+    /// That profile's brush (length and radius, mm): what a profile calibrated from the sheet
+    /// records.
+    pub brush_size: Brush,
     /// The ranges the presses span.
     pub ranges: PressRanges,
     /// The registration marks.
@@ -299,6 +303,7 @@ pub fn calibration_sheet(
         sheet: sheet.clone(),
         margin_mm,
         brush: profile.name.clone(),
+        brush_size: profile.brush,
         ranges: r,
         marks,
         presses: placed,

@@ -36,9 +36,10 @@ pub struct Args {
     /// Write the calibrated profile (JSON) here.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON.
-    #[arg(long, default_value = "pen1")]
-    brush: String,
+    /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON
+    /// (default: with --sheet-photo the brush the sheet was made for, otherwise pen1).
+    #[arg(long)]
+    brush: Option<String>,
     /// Name of the new profile (default: the output file's stem, e.g. `pen1-cal` for
     /// `-o pen1-cal.json`).
     #[arg(long)]
@@ -71,6 +72,7 @@ pub fn run(args: Args) -> Result<()> {
     // The sheet photo's measurements.csv is written once the fit is accepted (a refused photo
     // writes nothing).
     let mut sheet_csv = None;
+    let mut sheet_brush = None;
     let (rows, source) = match (&args.measurements, &args.images) {
         (Some(m), _) => (load_measurements(m)?, m.clone()),
         (None, None) if args.sheet_photo.is_some() => {
@@ -78,8 +80,9 @@ pub fn run(args: Args) -> Result<()> {
             args.output
                 .as_ref()
                 .context("--sheet-photo needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
-            let (rows, csv) = crate::cmd::calibrate_sheet::measure(photo, cal, args.min_iou)?;
+            let (rows, csv, brush) = crate::cmd::calibrate_sheet::measure(photo, cal, args.min_iou)?;
             sheet_csv = Some(csv);
+            sheet_brush = Some(brush);
             (rows, photo.clone())
         }
         (None, Some(dir)) => {
@@ -105,7 +108,11 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
-    let brush = load_brush(&args.brush)?.brush;
+    let brush = match (&args.brush, sheet_brush) {
+        (Some(b), _) => load_brush(b)?.brush,
+        (None, Some(b)) => b,
+        (None, None) => load_brush("pen1")?.brush,
+    };
     let span = |f: fn(&brush_model::Measurement) -> f64| {
         let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
         let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use brush_model::{Footprint, Measurement};
+use brush_model::{Brush, Footprint, Measurement};
 use observe::{KnownMark, Photo, ink_map, measure_footprint, register};
 use pipeline::{CalibrationLayout, MarkRole, calibration_sheet, calibration_sheet_image, parse_sheet};
 use rayon::prelude::*;
@@ -81,10 +81,9 @@ pub fn run(args: Args) -> Result<()> {
         args.output.display()
     )?;
     crate::outln!(
-        "next: `maobi robot send {} --paper paper.json --host …` (or `robot export` it), photograph the sheet, then `maobi calibrate --sheet-photo PHOTO --layout {} --brush {} -o brush.json`",
+        "next: `maobi robot send {} --paper paper.json --host …` (or `robot export` it), photograph the sheet, then `maobi calibrate --sheet-photo PHOTO --layout {} -o brush.json`",
         args.output.join("track.json").display(),
-        args.output.display(),
-        args.brush
+        args.output.display()
     )?;
     Ok(())
 }
@@ -147,9 +146,9 @@ fn known_marks(layout: &CalibrationLayout, path: &Path) -> Result<Vec<KnownMark>
 /// The sheet photo measured: the marks found, every press's footprint fitted on the paper; the
 /// presses that could not be measured, or whose fit is poor (IoU under `min_iou`), points the
 /// wrong way or lies away from its press point, are listed and left out; fewer than three
-/// quarters measured refuses the photo. Returns the measurements and `measurements.csv`'s text
-/// (written by the caller once the fit is accepted).
-pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measurement>, String)> {
+/// quarters measured refuses the photo. Returns the measurements, `measurements.csv`'s text
+/// (written by the caller once the fit is accepted) and the brush the sheet was made for.
+pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measurement>, String, Brush)> {
     let (path, layout) = load_layout(cal)?;
     let marks = known_marks(&layout, &path)?;
     let what = || format!("--sheet-photo {}", photo_path.display());
@@ -228,5 +227,5 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         eprintln!("left out {} press(es): {}", left_out.len(), left_out.join("; "));
     }
     eprintln!("measured {} press(es), {} used", n, rows.len());
-    Ok((rows, csv))
+    Ok((rows, csv, layout.brush_size))
 }

@@ -87,6 +87,7 @@ fn one_photo_of_a_calibration_sheet_calibrates_a_brush_unlike_its_profile() {
     let profile = BrushProfile::load(&out).unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     assert_eq!(profile.ranges, pen1.ranges, "the presses span pen1's whole range");
+    assert_eq!(profile.brush, pen1.brush, "the brush the sheet was made for");
     assert!(profile.fit.is_some());
     let m = &profile.model;
     for (name, t) in [("lt", &m.lt_mm), ("lh", &m.lh_mm), ("lr", &m.lr_mm)] {
