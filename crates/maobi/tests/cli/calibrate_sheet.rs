@@ -52,104 +52,109 @@ fn one_photo_of_a_calibration_sheet_calibrates_a_brush_unlike_its_profile() {
     // The world presses the sheet; the camera photographs it.
     let stamps = calib_world_stamps(&strokes);
     let mut rng = Rng(2028);
-    let cam = random_camera(&mut rng, 0.0);
-    let (jpeg, _) = photograph(&stamps, A4_MM, &cam, 11);
-    let photo = dir.path().join("sheet.jpg");
-    std::fs::write(&photo, &jpeg).unwrap();
-    let out = dir.path().join("fit").join("brush.json");
-    ok(&maobi(&["calibrate", "--sheet-photo", s(&photo), "--layout", s(&cal), "-o", s(&out)]));
-    for f in ["measurements.csv", "regression.png"] {
-        assert!(out.with_file_name(f).is_file(), "{f} missing");
-    }
-    let csv = std::fs::read_to_string(out.with_file_name("measurements.csv")).unwrap();
-    assert_eq!(csv.lines().filter(|l| l.ends_with(",true")).count(), 24, "{csv}");
-    // Each press as measured against the world's footprint (figures for docs/closed-loop.md).
-    let mut spread = [[f64::INFINITY, f64::NEG_INFINITY]; 4];
-    for l in csv.lines().skip(1) {
-        let v: Vec<f64> = l.split(',').skip(1).take(7).map(|x| x.parse().unwrap()).collect();
-        let w = world_footprint(v[0], v[1].to_radians(), v[2].to_radians());
-        let errs = [(v[3] - w.lt_mm) / w.lt_mm, (v[4] - w.lh_mm) / w.lh_mm, (v[5] - w.lr_mm) / w.lr_mm, v[6]];
-        for (s, e) in spread.iter_mut().zip(errs) {
-            *s = [s[0].min(e), s[1].max(e)];
+    // Roughly upright, and the sheet upside down in the photo.
+    for (k, yaw) in [0.0, 180.0].into_iter().enumerate() {
+        let cam = random_camera(&mut rng, yaw);
+        let (jpeg, _) = photograph(&stamps, A4_MM, &cam, 11 + k as u64);
+        let photo = dir.path().join(format!("sheet{k}.jpg"));
+        std::fs::write(&photo, &jpeg).unwrap();
+        let out = dir.path().join(format!("fit{k}")).join("brush.json");
+        ok(&maobi(&["calibrate", "--sheet-photo", s(&photo), "--layout", s(&cal), "-o", s(&out)]));
+        for f in ["measurements.csv", "regression.png"] {
+            assert!(out.with_file_name(f).is_file(), "{f} missing");
         }
-    }
-    eprintln!(
-        "per press, measured vs world: lt {:+.2} … {:+.2} %, lh {:+.2} … {:+.2} %, lr {:+.2} … {:+.2} %; fit IoU {:.3}–{:.3}",
-        100.0 * spread[0][0],
-        100.0 * spread[0][1],
-        100.0 * spread[1][0],
-        100.0 * spread[1][1],
-        100.0 * spread[2][0],
-        100.0 * spread[2][1],
-        spread[3][0],
-        spread[3][1]
-    );
-    let profile = BrushProfile::load(&out).unwrap();
-    let pen1 = BrushProfile::builtin("pen1").unwrap();
-    assert_eq!(profile.ranges, pen1.ranges, "the presses span pen1's whole range");
-    assert_eq!(profile.brush, pen1.brush, "the brush the sheet was made for");
-    assert!(profile.fit.is_some());
-    let m = &profile.model;
-    for (name, t) in [("lt", &m.lt_mm), ("lh", &m.lh_mm), ("lr", &m.lr_mm)] {
+        let csv = std::fs::read_to_string(out.with_file_name("measurements.csv")).unwrap();
+        assert_eq!(csv.lines().filter(|l| l.ends_with(",true")).count(), 24, "{csv}");
+        // Each press as measured against the world's footprint (figures for docs/closed-loop.md).
+        let mut spread = [[f64::INFINITY, f64::NEG_INFINITY]; 4];
+        for l in csv.lines().skip(1) {
+            let v: Vec<f64> = l.split(',').skip(1).take(7).map(|x| x.parse().unwrap()).collect();
+            let w = world_footprint(v[0], v[1].to_radians(), v[2].to_radians());
+            let errs = [(v[3] - w.lt_mm) / w.lt_mm, (v[4] - w.lh_mm) / w.lh_mm, (v[5] - w.lr_mm) / w.lr_mm, v[6]];
+            for (s, e) in spread.iter_mut().zip(errs) {
+                *s = [s[0].min(e), s[1].max(e)];
+            }
+        }
         eprintln!(
-            "fitted {name} = {:.3} + {:.4}·h + {:.3}·α + {:.3}·β",
-            t.intercept,
-            t.h_mm.unwrap_or(0.0),
-            t.alpha_rad.unwrap_or(0.0),
-            t.beta_rad.unwrap_or(0.0)
+            "per press, measured vs world: lt {:+.2} … {:+.2} %, lh {:+.2} … {:+.2} %, lr {:+.2} … {:+.2} %; fit IoU {:.3}–{:.3}",
+            100.0 * spread[0][0],
+            100.0 * spread[0][1],
+            100.0 * spread[1][0],
+            100.0 * spread[1][1],
+            100.0 * spread[2][0],
+            100.0 * spread[2][1],
+            spread[3][0],
+            spread[3][1]
         );
-    }
+        let profile = BrushProfile::load(&out).unwrap();
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        assert_eq!(profile.ranges, pen1.ranges, "the presses span pen1's whole range");
+        assert_eq!(profile.brush, pen1.brush, "the brush the sheet was made for");
+        assert!(profile.fit.is_some());
+        let m = &profile.model;
+        for (name, t) in [("lt", &m.lt_mm), ("lh", &m.lh_mm), ("lr", &m.lr_mm)] {
+            eprintln!(
+                "fitted {name} = {:.3} + {:.4}·h + {:.3}·α + {:.3}·β",
+                t.intercept,
+                t.h_mm.unwrap_or(0.0),
+                t.alpha_rad.unwrap_or(0.0),
+                t.beta_rad.unwrap_or(0.0)
+            );
+        }
 
-    // The fitted profile against the world's footprints over the calibrated range.
-    let r = profile.ranges;
-    let mut worst = [0.0f64; 3];
-    for i in 0..=6 {
-        for j in 0..=4 {
-            for k in 0..=2 {
-                let p = Press::new(
-                    r.h_mm.lerp(i as f64 / 6.0),
-                    r.alpha_rad.lerp(j as f64 / 4.0),
-                    r.beta_rad.lerp(k as f64 / 2.0),
-                );
-                let fit = profile.predict(&p, Extrapolation::Refuse).unwrap();
-                let truth = world_footprint(p.h_mm, p.alpha_rad, p.beta_rad);
-                for (w, (a, b)) in
-                    worst.iter_mut().zip([(fit.lt_mm, truth.lt_mm), (fit.lh_mm, truth.lh_mm), (fit.lr_mm, truth.lr_mm)])
-                {
-                    *w = w.max((a - b).abs() / b);
+        // The fitted profile against the world's footprints over the calibrated range.
+        let r = profile.ranges;
+        let mut worst = [0.0f64; 3];
+        for i in 0..=6 {
+            for j in 0..=4 {
+                for k in 0..=2 {
+                    let p = Press::new(
+                        r.h_mm.lerp(i as f64 / 6.0),
+                        r.alpha_rad.lerp(j as f64 / 4.0),
+                        r.beta_rad.lerp(k as f64 / 2.0),
+                    );
+                    let fit = profile.predict(&p, Extrapolation::Refuse).unwrap();
+                    let truth = world_footprint(p.h_mm, p.alpha_rad, p.beta_rad);
+                    for (w, (a, b)) in worst.iter_mut().zip([
+                        (fit.lt_mm, truth.lt_mm),
+                        (fit.lh_mm, truth.lh_mm),
+                        (fit.lr_mm, truth.lr_mm),
+                    ]) {
+                        *w = w.max((a - b).abs() / b);
+                    }
                 }
             }
         }
-    }
-    // What pen1's own (nominal) model would have said of this brush.
-    let mut nominal = [0.0f64; 3];
-    for c in r.corners() {
-        let (a, b) =
-            (pen1.predict(&c, Extrapolation::Refuse).unwrap(), world_footprint(c.h_mm, c.alpha_rad, c.beta_rad));
-        for (w, (x, y)) in nominal.iter_mut().zip([(a.lt_mm, b.lt_mm), (a.lh_mm, b.lh_mm), (a.lr_mm, b.lr_mm)]) {
-            *w = w.max((x - y).abs() / y);
+        // What pen1's own (nominal) model would have said of this brush.
+        let mut nominal = [0.0f64; 3];
+        for c in r.corners() {
+            let (a, b) =
+                (pen1.predict(&c, Extrapolation::Refuse).unwrap(), world_footprint(c.h_mm, c.alpha_rad, c.beta_rad));
+            for (w, (x, y)) in nominal.iter_mut().zip([(a.lt_mm, b.lt_mm), (a.lh_mm, b.lh_mm), (a.lr_mm, b.lr_mm)]) {
+                *w = w.max((x - y).abs() / y);
+            }
         }
+        eprintln!(
+            "photo {k}: camera tilt {:.1}° about x, {:.1}° about y, turn {:.1}°, blur {} px, noise {}, JPEG {}: fitted vs world, max error over the range: lt {:.2} %, lh {:.2} %, lr {:.2} % (pen1's nominal model: lt {:.1} %, lh {:.1} %, lr {:.1} %)",
+            cam.tilt_deg[0],
+            cam.tilt_deg[1],
+            cam.yaw_deg,
+            cam.blur_px,
+            cam.noise,
+            cam.quality,
+            100.0 * worst[0],
+            100.0 * worst[1],
+            100.0 * worst[2],
+            100.0 * nominal[0],
+            100.0 * nominal[1],
+            100.0 * nominal[2]
+        );
+        for (name, w) in ["lt", "lh", "lr"].iter().zip(worst) {
+            assert!(w <= 0.03, "{name}: the fitted profile is {:.2} % off the world's footprints", 100.0 * w);
+        }
+        // The world really is unlike pen1 (else the test proves nothing).
+        assert!(nominal.iter().any(|&w| w > 0.1), "{nominal:?}");
     }
-    eprintln!(
-        "camera tilt {:.1}° about x, {:.1}° about y, turn {:.1}°, blur {} px, noise {}, JPEG {}: fitted vs world, max error over the range: lt {:.2} %, lh {:.2} %, lr {:.2} % (pen1's nominal model: lt {:.1} %, lh {:.1} %, lr {:.1} %)",
-        cam.tilt_deg[0],
-        cam.tilt_deg[1],
-        cam.yaw_deg,
-        cam.blur_px,
-        cam.noise,
-        cam.quality,
-        100.0 * worst[0],
-        100.0 * worst[1],
-        100.0 * worst[2],
-        100.0 * nominal[0],
-        100.0 * nominal[1],
-        100.0 * nominal[2]
-    );
-    for (name, w) in ["lt", "lh", "lr"].iter().zip(worst) {
-        assert!(w <= 0.03, "{name}: the fitted profile is {:.2} % off the world's footprints", 100.0 * w);
-    }
-    // The world really is unlike pen1 (else the test proves nothing).
-    assert!(nominal.iter().any(|&w| w > 0.1), "{nominal:?}");
 }
 
 #[test]
