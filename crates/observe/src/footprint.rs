@@ -7,8 +7,12 @@ use stroke_fit::{InkMask, fit_footprint};
 
 use crate::{Frame, InkMap, ObserveError, Registration, rectify};
 
-/// The scale a footprint's window is rectified at, px per paper mm.
-pub const FOOTPRINT_PX_PER_MM: f64 = 8.0;
+/// The finest scale a footprint's window is rectified at, px per paper mm (finer costs fitting
+/// time for little).
+pub const FOOTPRINT_MAX_PX_PER_MM: f64 = 10.0;
+
+/// The coarsest scale a footprint's window is rectified at, px per paper mm.
+pub const FOOTPRINT_MIN_PX_PER_MM: f64 = 4.0;
 
 /// A blob of ink at least this share of the largest one in a window makes the window hold
 /// several footprints.
@@ -36,7 +40,9 @@ pub struct FootprintMeasure {
 }
 
 /// Measures the one footprint inside the paper box `window_mm` (`[x0, y0, x1, y1]`, mm): the
-/// ink there is rectified at [`FOOTPRINT_PX_PER_MM`] through the registration, thresholded at
+/// ink there is rectified through the registration at the photo's own scale
+/// ([`Registration::px_per_mm`], kept within [`FOOTPRINT_MIN_PX_PER_MM`] and
+/// [`FOOTPRINT_MAX_PX_PER_MM`]), thresholded at
 /// ½ coverage, its largest blob kept, and the B-BSM outline fitted to it
 /// (`stroke_fit::fit_footprint`: moments start, both ends tried as the root, Nelder–Mead on
 /// soft IoU), so which end is the tip is decided by the shape.
@@ -78,12 +84,14 @@ pub fn measure_footprint(
     window_mm: [f64; 4],
 ) -> Result<FootprintMeasure, ObserveError> {
     let [x0, y0, x1, y1] = window_mm;
+    let scale = if reg.px_per_mm.is_finite() { reg.px_per_mm } else { FOOTPRINT_MIN_PX_PER_MM }
+        .clamp(FOOTPRINT_MIN_PX_PER_MM, FOOTPRINT_MAX_PX_PER_MM);
     let frame = Frame {
         x0_mm: x0,
         y0_mm: y0,
-        px_per_mm: FOOTPRINT_PX_PER_MM,
-        width: ((x1 - x0) * FOOTPRINT_PX_PER_MM).ceil().max(1.0) as u32,
-        height: ((y1 - y0) * FOOTPRINT_PX_PER_MM).ceil().max(1.0) as u32,
+        px_per_mm: scale,
+        width: ((x1 - x0) * scale).ceil().max(1.0) as u32,
+        height: ((y1 - y0) * scale).ceil().max(1.0) as u32,
     };
     let cov = rectify(ink, reg, &frame);
     let (w, h) = (frame.width as usize, frame.height as usize);
@@ -100,8 +108,8 @@ pub fn measure_footprint(
     }
     let keep: Vec<bool> = label.iter().map(|&l| l as usize == big).collect();
     let gray: Vec<f32> = cov.data().iter().map(|c| 1.0 - c).collect();
-    let area_mm2 = sizes[big] as f64 / (FOOTPRINT_PX_PER_MM * FOOTPRINT_PX_PER_MM);
-    let fit = fit_footprint(&InkMask { width: w, height: h, ink: keep, gray }, FOOTPRINT_PX_PER_MM);
+    let area_mm2 = sizes[big] as f64 / (scale * scale);
+    let fit = fit_footprint(&InkMask { width: w, height: h, ink: keep, gray }, scale);
     Ok(FootprintMeasure {
         lt_mm: fit.lt_mm,
         lh_mm: fit.lh_mm,

@@ -39,7 +39,7 @@ mod register;
 
 pub use diagnose::{Diagnosis, StrokeDiagnosis, diagnose};
 pub use error::ObserveError;
-pub use footprint::{FOOTPRINT_PX_PER_MM, FootprintMeasure, measure_footprint};
+pub use footprint::{FOOTPRINT_MAX_PX_PER_MM, FOOTPRINT_MIN_PX_PER_MM, FootprintMeasure, measure_footprint};
 pub use homography::Homography;
 pub use photo::{InkMap, MAX_PHOTO_SIDE, Photo, ink_map};
 pub use rectify::{Frame, rectify};
