@@ -181,8 +181,9 @@ pub fn press_stroke(p: &CalibrationPress, profile: &BrushProfile) -> Stroke {
 /// profile's calibrated ranges, each in its own cell (room for a brush [`CELL_GROWTH`] times
 /// larger than the profile says, [`CELL_GAP_MM`] between cells), the cells centred inside
 /// `margin_mm` and filled row by row in a fixed shuffled order (so a press's place on the sheet,
-/// and the light there in a photo, is unrelated to its depth or tilt), the registration marks in the margin; the track's program is
-/// built and checked on a level sheet in front of the arm with the default `robot.json`.
+/// and the light there in a photo, is unrelated to its depth or tilt), the registration marks
+/// in the margin; the track's program is built and checked on a level sheet in front of the arm
+/// with the default `robot.json`.
 ///
 /// # Errors
 /// [`CalibrationSheetError::NoRoom`] when the cells do not fit, [`CalibrationSheetError::Marks`]
