@@ -33,6 +33,8 @@ struct Cli {
 enum Command {
     /// Fit a brush profile from footprint measurements (CSV) or from stroke photos.
     Calibrate(cmd::calibrate::Args),
+    /// A calibration sheet: a robot program pressing a grid of single footprints over a brush's range, with marks.
+    CalibrateSheet(cmd::calibrate_sheet::Args),
     /// Fit a B-BSM footprint to one stroke photo.
     FitStroke(cmd::fit_stroke::Args),
     /// Predict the footprint a press leaves.
@@ -104,6 +106,7 @@ fn main() -> ExitCode {
     }
     let result = match cli.command {
         Command::Calibrate(a) => cmd::calibrate::run(a),
+        Command::CalibrateSheet(a) => cmd::calibrate_sheet::run(a),
         Command::Footprint(a) => cmd::footprint::run(a),
         Command::FitStroke(a) => cmd::fit_stroke::run(a),
         Command::Stroke(a) => cmd::stroke::run(a),

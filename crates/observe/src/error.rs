@@ -78,4 +78,24 @@ pub enum ObserveError {
     /// The homography could not be fitted (the marks lie on a line).
     #[error("the registration marks give no homography (they lie on one line in the photo)")]
     Degenerate,
+    /// A calibration press's window holds no ink.
+    #[error(
+        "found no footprint in the paper box ({:.1}, {:.1})–({:.1}, {:.1}) mm where a press should be",
+        window_mm[0], window_mm[1], window_mm[2], window_mm[3]
+    )]
+    NoFootprint {
+        /// The window searched, `[x0, y0, x1, y1]` paper mm.
+        window_mm: [f64; 4],
+    },
+    /// A calibration press's window holds more than one blob of ink.
+    #[error(
+        "the paper box ({:.1}, {:.1})–({:.1}, {:.1}) mm holds several blobs of ink (the second is {:.0} % of the largest), not one footprint",
+        window_mm[0], window_mm[1], window_mm[2], window_mm[3], 100.0 * share
+    )]
+    SeveralFootprints {
+        /// The window searched, `[x0, y0, x1, y1]` paper mm.
+        window_mm: [f64; 4],
+        /// The second blob's size over the largest's.
+        share: f64,
+    },
 }

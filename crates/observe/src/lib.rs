@@ -11,6 +11,8 @@
 //!   distortion is not modelled: a straight line on the paper is taken to be straight in the
 //!   photo;
 //! - [`rectify`]: the ink resampled into a [`Frame`] of the paper (a character's image);
+//! - [`measure_footprint`]: a single press's footprint (a calibration sheet's) measured on the
+//!   paper: its ink rectified and the B-BSM outline fitted, giving `lt`, `lh`, `lr`;
 //! - [`diagnose`]: observed against planned strokes: width ratio, ink beyond the ends, lateral
 //!   offset, and a one-line verdict.
 //!
@@ -29,6 +31,7 @@
 
 mod diagnose;
 mod error;
+mod footprint;
 mod homography;
 mod photo;
 mod rectify;
@@ -36,6 +39,7 @@ mod register;
 
 pub use diagnose::{Diagnosis, StrokeDiagnosis, diagnose};
 pub use error::ObserveError;
+pub use footprint::{FOOTPRINT_MAX_PX_PER_MM, FOOTPRINT_MIN_PX_PER_MM, FootprintMeasure, measure_footprint};
 pub use homography::Homography;
 pub use photo::{InkMap, MAX_PHOTO_SIDE, Photo, ink_map};
 pub use rectify::{Frame, rectify};

@@ -22,6 +22,7 @@
 //! ```
 
 mod brush_choice;
+mod calibration_sheet;
 mod error;
 mod glyphs;
 mod marks;
@@ -32,6 +33,11 @@ mod text;
 mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
+pub use calibration_sheet::{
+    CALIBRATION_LAYOUT_VERSION, CELL_GAP_MM, CELL_GROWTH, CalibrationLayout, CalibrationPress, CalibrationSheet,
+    CalibrationSheetError, PRESS_ALPHA_LEVELS, PRESS_BETA_LEVELS, PRESS_H_LEVELS, PRESS_SLIDE_MM, PRESS_TOUCH_FRACTION,
+    calibration_sheet, calibration_sheet_image, press_stroke,
+};
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{

@@ -11,17 +11,24 @@ use crate::common::{check_output_file, check_range, load_brush, print_json, writ
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Measurements CSV with columns h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm (any order).
-    #[arg(required_unless_present = "images", conflicts_with = "images")]
+    #[arg(required_unless_present_any = ["images", "sheet_photo"], conflicts_with_all = ["images", "sheet_photo"])]
     measurements: Option<PathBuf>,
     /// Calibrate from stroke photos in this folder instead (see --labels).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sheet_photo")]
     images: Option<PathBuf>,
+    /// Calibrate from one photo of a calibration sheet (`maobi calibrate-sheet`) pressed by the
+    /// robot; needs --layout and -o (measurements.csv and regression.png go beside the profile).
+    #[arg(long, value_name = "PHOTO", requires = "layout")]
+    sheet_photo: Option<PathBuf>,
+    /// The calibration sheet's folder (or its layout.json) the photo shows.
+    #[arg(long, value_name = "CAL", requires = "sheet_photo")]
+    layout: Option<PathBuf>,
     /// Labels of the photos: `file,h_mm,alpha_deg,beta_deg` (optional `px_per_mm`); default
     /// `<images>/labels.csv`.
     #[arg(long, requires = "images")]
     labels: Option<PathBuf>,
-    /// Photos whose fit IoU is below this are listed and left out.
-    #[arg(long, default_value_t = 0.9, requires = "images")]
+    /// Photos (or sheet presses) whose fit IoU is below this are listed and left out.
+    #[arg(long, default_value_t = 0.9)]
     min_iou: f64,
     /// Regression form: `general` (Eq. 6, one model per length) or `paper` (Eq. 1–5).
     #[arg(long, value_enum, default_value_t = FormArg::General)]
@@ -29,9 +36,10 @@ pub struct Args {
     /// Write the calibrated profile (JSON) here.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON.
-    #[arg(long, default_value = "pen1")]
-    brush: String,
+    /// Brush whose length and radius the profile records: pen1, pen2 or a profile JSON
+    /// (default: with --sheet-photo the brush the sheet was made for, otherwise pen1).
+    #[arg(long)]
+    brush: Option<String>,
     /// Name of the new profile (default: the output file's stem, e.g. `pen1-cal` for
     /// `-o pen1-cal.json`).
     #[arg(long)]
@@ -55,14 +63,28 @@ pub fn run(args: Args) -> Result<()> {
     check_range("--min-iou", args.min_iou, 0.0, 1.0, "")?;
     if let Some(out) = &args.output {
         check_output_file("-o", out, args.force)?;
-        if args.images.is_some() {
+        if args.images.is_some() || args.sheet_photo.is_some() {
             for beside in ["measurements.csv", "regression.png"] {
                 check_output_file("-o (beside it)", &out.with_file_name(beside), args.force)?;
             }
         }
     }
+    // The sheet photo's measurements.csv is written once the fit is accepted (a refused photo
+    // writes nothing).
+    let mut sheet_csv = None;
+    let mut sheet_brush = None;
     let (rows, source) = match (&args.measurements, &args.images) {
         (Some(m), _) => (load_measurements(m)?, m.clone()),
+        (None, None) if args.sheet_photo.is_some() => {
+            let (photo, cal) = (args.sheet_photo.as_ref().expect("matched"), args.layout.as_ref().expect("clap"));
+            args.output
+                .as_ref()
+                .context("--sheet-photo needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
+            let (rows, csv, brush) = crate::cmd::calibrate_sheet::measure(photo, cal, args.min_iou)?;
+            sheet_csv = Some(csv);
+            sheet_brush = Some(brush);
+            (rows, photo.clone())
+        }
         (None, Some(dir)) => {
             let out = args
                 .output
@@ -70,7 +92,7 @@ pub fn run(args: Args) -> Result<()> {
                 .context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
             (crate::cmd::calibrate_photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone())
         }
-        (None, None) => bail!("give a measurements CSV or --images DIR"),
+        (None, None) => bail!("give a measurements CSV, --images DIR or --sheet-photo PHOTO --layout CAL"),
     };
     let form = match args.form {
         FormArg::General => Form::General,
@@ -86,7 +108,11 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
-    let brush = load_brush(&args.brush)?.brush;
+    let brush = match (&args.brush, sheet_brush) {
+        (Some(b), _) => load_brush(b)?.brush,
+        (None, Some(b)) => b,
+        (None, None) => load_brush("pen1")?.brush,
+    };
     let span = |f: fn(&brush_model::Measurement) -> f64| {
         let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
         let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
@@ -112,10 +138,17 @@ pub fn run(args: Args) -> Result<()> {
         profile
             .validate(&format!("the profile fitted from {}", source.display()))
             .with_context(|| format!("not writing {}: the fitted model is not a usable profile", out.display()))?;
+        // Every file's bytes first: a failure writes nothing.
+        let plot = (args.images.is_some() || sheet_csv.is_some())
+            .then(|| crate::plot::regression_png(&rows, &profile))
+            .transpose()?;
+        if let Some(csv) = &sheet_csv {
+            write_atomic(&out.with_file_name("measurements.csv"), csv.as_bytes())?;
+        }
         write_atomic(out, profile.to_json().as_bytes())?;
-        if args.images.is_some() {
+        if let Some(png) = plot {
             let plot = out.with_file_name("regression.png");
-            write_atomic(&plot, &crate::plot::regression_png(&rows, &profile)?)?;
+            write_atomic(&plot, &png)?;
             eprintln!("wrote {} and {}", out.with_file_name("measurements.csv").display(), plot.display());
         }
     }

@@ -2,6 +2,7 @@
 
 pub mod calibrate;
 pub mod calibrate_photos;
+pub mod calibrate_sheet;
 pub mod compare;
 pub mod dataset;
 pub mod eval_generator;

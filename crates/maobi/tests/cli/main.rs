@@ -7,6 +7,7 @@
 mod common;
 
 mod brush;
+mod calibrate_sheet;
 mod neural;
 mod newcomer;
 mod observe;

@@ -2,6 +2,7 @@
 
 #![allow(dead_code)]
 
+pub mod calib_world;
 pub mod world;
 
 use std::path::Path;

@@ -1,0 +1,231 @@
+//! `maobi calibrate-sheet`: a robot program that presses a grid of single footprints over a
+//! brush's calibrated range, with registration marks; and the photo path of `maobi calibrate
+//! --sheet-photo`: those footprints measured on one photo of the sheet (docs/closed-loop.md,
+//! "Calibration sheet").
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use brush_model::{Brush, Footprint, Measurement};
+use observe::{KnownMark, Photo, ink_map, measure_footprint, register};
+use pipeline::{CalibrationLayout, MarkRole, calibration_sheet, calibration_sheet_image, parse_sheet};
+use rayon::prelude::*;
+
+use crate::common::{
+    OutputLock, Stage, check_output_folder, check_range, load_brush, progress, recover_leftovers, write_atomic,
+};
+
+/// Scale of `layout.png`, px per mm.
+const LAYOUT_PX_PER_MM: f64 = 4.0;
+
+/// How far (degrees) a measured footprint may point from its press's direction.
+const MAX_DIRECTION_DEG: f64 = 20.0;
+
+/// How far (mm) a measured footprint's root may lie from its press point.
+const MAX_ROOT_MM: f64 = 5.0;
+
+/// Below this share of the presses measured the photo is refused as not of the sheet.
+const MIN_MEASURED_SHARE: f64 = 0.75;
+
+/// Arguments of `maobi calibrate-sheet`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The brush to calibrate (its profile's ranges are what the presses span): pen1, pen2 or a
+    /// profile JSON.
+    #[arg(long, default_value = "pen1")]
+    brush: String,
+    /// The paper: A0–A6, B3–B5 (A4L for landscape), WxH in mm, or a paper.json.
+    #[arg(long, default_value = "A4")]
+    sheet: String,
+    /// Margin kept free on every side (the registration marks sit in it), mm.
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
+    margin_mm: f64,
+    /// Output folder: track.json (the robot program's track, marks first), layout.json (each
+    /// press's paper position, h, α, β) and layout.png (the planned ink, cells outlined).
+    #[arg(short, long, visible_alias = "out", value_name = "CAL")]
+    output: PathBuf,
+    /// Replace an existing output folder that maobi wrote.
+    #[arg(long)]
+    force: bool,
+}
+
+/// Runs `maobi calibrate-sheet`.
+pub fn run(args: Args) -> Result<()> {
+    check_range("--margin-mm", args.margin_mm, 0.0, 500.0, "mm")?;
+    let profile = load_brush(&args.brush)?;
+    let sheet = parse_sheet(&args.sheet).with_context(|| format!("--sheet {}", args.sheet))?;
+    let cal = calibration_sheet(&sheet, args.margin_mm, &profile)
+        .with_context(|| format!("--sheet {} --margin-mm {} --brush {}", args.sheet, args.margin_mm, args.brush))?;
+    let img = calibration_sheet_image(&cal, &profile, LAYOUT_PX_PER_MM);
+    let _lock = OutputLock::acquire("--output", &args.output)?;
+    recover_leftovers(&args.output)?;
+    check_output_folder("--output", &args.output, args.force)?;
+    let stage = Stage::new(&args.output)?;
+    write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&cal.track)?.as_bytes())?;
+    write_atomic(&stage.path().join("layout.json"), serde_json::to_string_pretty(&cal.layout)?.as_bytes())?;
+    write_atomic(&stage.path().join("layout.png"), &img.encode_png()?)?;
+    stage.install("--output", &args.output, args.force)?;
+    let r = &cal.layout.ranges;
+    crate::outln!(
+        "{} presses of {} (h {}–{} mm, α {:.1}–{:.1}°, β {:.1}–{:.1}°) on the {} sheet with {} registration marks; outputs in {}",
+        cal.layout.presses.len(),
+        profile.name,
+        r.h_mm.min,
+        r.h_mm.max,
+        r.alpha_rad.min.to_degrees(),
+        r.alpha_rad.max.to_degrees(),
+        r.beta_rad.min.to_degrees(),
+        r.beta_rad.max.to_degrees(),
+        sheet.name,
+        cal.layout.marks.len(),
+        args.output.display()
+    )?;
+    crate::outln!(
+        "next: `maobi robot send {} --paper paper.json --host …` (or `robot export` it), photograph the sheet, then `maobi calibrate --sheet-photo PHOTO --layout {} -o brush.json`",
+        args.output.join("track.json").display(),
+        args.output.display()
+    )?;
+    Ok(())
+}
+
+fn role_name(r: MarkRole) -> &'static str {
+    match r {
+        MarkRole::TopLeft => "top-left",
+        MarkRole::TopRight => "top-right",
+        MarkRole::BottomRight => "bottom-right",
+        MarkRole::BottomLeft => "bottom-left",
+        MarkRole::Key => "key (beside the top-left)",
+        MarkRole::BottomMiddle => "bottom-middle",
+    }
+}
+
+/// Reads `CAL/layout.json` (or the file itself).
+fn load_layout(cal: &Path) -> Result<(PathBuf, CalibrationLayout)> {
+    let path = if cal.is_dir() { cal.join("layout.json") } else { cal.to_path_buf() };
+    let text = std::fs::read_to_string(&path).with_context(|| format!("--layout: cannot read {}", path.display()))?;
+    let layout: CalibrationLayout = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "--layout: {} is not a calibration sheet's layout.json (written by `maobi calibrate-sheet`)",
+            path.display()
+        )
+    })?;
+    if layout.kind != "calibration-sheet" || layout.version != pipeline::CALIBRATION_LAYOUT_VERSION {
+        bail!(
+            "--layout: {} is a `{}` layout of version {}; expected a calibration-sheet layout of version {}",
+            path.display(),
+            layout.kind,
+            layout.version,
+            pipeline::CALIBRATION_LAYOUT_VERSION
+        );
+    }
+    if layout.presses.is_empty() {
+        bail!("--layout: {} lists no presses", path.display());
+    }
+    Ok((path, layout))
+}
+
+/// The marks in the order `observe::register` takes them: the four corners, then the others.
+fn known_marks(layout: &CalibrationLayout, path: &Path) -> Result<Vec<KnownMark>> {
+    let order = [MarkRole::TopLeft, MarkRole::TopRight, MarkRole::BottomRight, MarkRole::BottomLeft];
+    let mut marks: Vec<_> = order.iter().filter_map(|r| layout.marks.iter().find(|m| m.role == *r)).collect();
+    if marks.len() != 4 || layout.marks.len() < 5 {
+        bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display());
+    }
+    marks.extend(layout.marks.iter().filter(|m| !order.contains(&m.role)));
+    Ok(marks
+        .iter()
+        .map(|m| KnownMark {
+            role: role_name(m.role).into(),
+            centre_mm: m.centre_mm,
+            half_length_mm: m.half_length_mm,
+            half_width_mm: m.half_width_mm,
+        })
+        .collect())
+}
+
+/// The sheet photo measured: the marks found, every press's footprint fitted on the paper; the
+/// presses that could not be measured, or whose fit is poor (IoU under `min_iou`), points the
+/// wrong way or lies away from its press point, are listed and left out; fewer than three
+/// quarters measured refuses the photo. Returns the measurements, `measurements.csv`'s text
+/// (written by the caller once the fit is accepted) and the brush the sheet was made for.
+pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measurement>, String, Brush)> {
+    let (path, layout) = load_layout(cal)?;
+    let marks = known_marks(&layout, &path)?;
+    let what = || format!("--sheet-photo {}", photo_path.display());
+    let img = bezier_raster::coverage::decode_image(photo_path).with_context(what)?;
+    let photo = Photo::from_image(&img).with_context(what)?;
+    let ink = ink_map(&photo).with_context(what)?;
+    let reg = register(&ink, &marks).with_context(what)?;
+    let pb = progress(layout.presses.len() as u64, "measuring");
+    let results: Vec<_> = layout
+        .presses
+        .par_iter()
+        .map(|p| {
+            let r = measure_footprint(&ink, &reg, p.cell_mm);
+            pb.inc(1);
+            r
+        })
+        .collect();
+    pb.finish_and_clear();
+    let mut csv = String::from("press,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,iou,used\n");
+    let mut rows = Vec::new();
+    let mut left_out = Vec::new();
+    for (p, r) in layout.presses.iter().zip(results) {
+        let label = format!("P{:02}", p.number);
+        let m = match r {
+            Ok(m) => m,
+            Err(e) => {
+                left_out.push(format!("{label}: {e}"));
+                continue;
+            }
+        };
+        let turn = brush_model::wrap_angle_rad(m.beta_rad - p.beta_rad).abs().to_degrees();
+        let off = (m.root_mm[0] - p.root_mm[0]).hypot(m.root_mm[1] - p.root_mm[1]);
+        let why = if m.iou < min_iou {
+            Some(format!("fit IoU {:.3} below --min-iou {min_iou}", m.iou))
+        } else if turn > MAX_DIRECTION_DEG {
+            Some(format!("points {turn:.0}° away from the press's direction"))
+        } else if off > MAX_ROOT_MM {
+            Some(format!("its root end lies {off:.1} mm from the press point"))
+        } else {
+            None
+        };
+        csv.push_str(&format!(
+            "{label},{},{},{},{:.4},{:.4},{:.4},{:.4},{}\n",
+            p.h_mm,
+            p.alpha_rad.to_degrees(),
+            p.beta_rad.to_degrees(),
+            m.lt_mm,
+            m.lh_mm,
+            m.lr_mm,
+            m.iou,
+            why.is_none()
+        ));
+        match why {
+            Some(w) => left_out.push(format!("{label}: {w}")),
+            None => rows.push(Measurement {
+                press: p.press(),
+                footprint: Footprint { lt_mm: m.lt_mm, lh_mm: m.lh_mm, lr_mm: m.lr_mm },
+            }),
+        }
+    }
+    let n = layout.presses.len();
+    if (rows.len() as f64) < MIN_MEASURED_SHARE * n as f64 {
+        bail!(
+            "{}: only {} of the {n} presses of {} were found as single footprints (first: {}): a photo of another sheet?",
+            what(),
+            rows.len(),
+            path.display(),
+            left_out.first().map_or("", String::as_str)
+        );
+    }
+    eprintln!(
+        "marks: residual {:.2} mm RMS, {:.2} mm max; photo {:.1} px/mm, edges {:.2} mm",
+        reg.residual_rms_mm, reg.residual_max_mm, reg.px_per_mm, reg.edge_mm
+    );
+    if !left_out.is_empty() {
+        eprintln!("left out {} press(es): {}", left_out.len(), left_out.join("; "));
+    }
+    eprintln!("measured {} press(es), {} used", n, rows.len());
+    Ok((rows, csv, layout.brush_size))
+}
