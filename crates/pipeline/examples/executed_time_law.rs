@@ -1,7 +1,8 @@
 //! The executed figure on the controller's time law: for each character, executed CSIM against
 //! the glyph with the plain executor (what `maobi write` reports), with the program sent as path
-//! buffers, and sent as compacted blended moves (`robot send --motion moves`), both as the
-//! simulator server runs them; prints each and the means.
+//! buffers, sent as compacted blended moves (`robot send --motion moves`), and as compacted
+//! moves without blends (`blend_mm` 0: what compaction and ramps alone cost), as the simulator
+//! server runs them; prints each and the means.
 //!
 //! ```sh
 //! cargo run -p pipeline --example executed_time_law -- HANZI_DIR SET_FILE FIRST LAST [SIZE]
@@ -40,10 +41,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let pen1 = BrushProfile::builtin("pen1")?;
     let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
     let cfg = RobotConfig::default();
-    let mut sums = [0.0f64; 3];
-    let mut worst_drop = [0.0f64; 2];
+    // Moves without blends: what the compaction and the ramps alone cost.
+    let stops = RobotConfig { blend_mm: 0.0, ..RobotConfig::default() };
+    let mut sums = [0.0f64; 4];
+    let mut worst_drop = [0.0f64; 3];
     let mut n = 0usize;
-    println!("char\tplain\tpath_buffer\tmoves");
+    println!("char\tplain\tpath_buffer\tmoves\tmoves_without_blends");
     for ch in chars {
         let p = match input.prepare(ch, None) {
             Ok(p) => p,
@@ -55,29 +58,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
         let plain = r.report.executed.ok_or("not executed")?.csim;
         let frame = level_frame_for(&r.char_box);
-        let mut scores = [plain, 0.0, 0.0];
-        for (k, how) in [(1, Execution::PathBuffer), (2, Execution::Moves)] {
-            let states = execute_track_with(&r.track, &pen1, &frame, &cfg, how)?;
+        let mut scores = [plain, 0.0, 0.0, 0.0];
+        for (k, how, c) in
+            [(1, Execution::PathBuffer, &cfg), (2, Execution::Moves, &cfg), (3, Execution::Moves, &stops)]
+        {
+            let states = execute_track_with(&r.track, &pen1, &frame, c, how)?;
             let img = render_states(&states, &pen1, opts.model, brush_model::Extrapolation::Refuse, &r.char_box, size);
             scores[k] = similarity(&r.reference, &img)?.csim;
             worst_drop[k - 1] = worst_drop[k - 1].max(plain - scores[k]);
         }
-        println!("{ch}\t{:.5}\t{:.5}\t{:.5}", scores[0], scores[1], scores[2]);
-        for k in 0..3 {
+        println!("{ch}\t{:.5}\t{:.5}\t{:.5}\t{:.5}", scores[0], scores[1], scores[2], scores[3]);
+        for k in 0..4 {
             sums[k] += scores[k];
         }
         n += 1;
     }
     let m = n.max(1) as f64;
     println!(
-        "mean over {n}: plain {:.5}, path buffer {:.5} ({:+.5}; largest drop {:.5}), moves {:.5} ({:+.5}; largest drop {:.5})",
+        "mean over {n}: plain {:.5}, path buffer {:.5} ({:+.5}; largest drop {:.5}), moves {:.5} ({:+.5}; largest drop {:.5}), moves without blends {:.5} ({:+.5}; largest drop {:.5})",
         sums[0] / m,
         sums[1] / m,
         (sums[1] - sums[0]) / m,
         worst_drop[0],
         sums[2] / m,
         (sums[2] - sums[0]) / m,
-        worst_drop[1]
+        worst_drop[1],
+        sums[3] / m,
+        (sums[3] - sums[0]) / m,
+        worst_drop[2]
     );
     Ok(())
 }

@@ -21,7 +21,7 @@ mod replay;
 mod server;
 mod session;
 
-pub use replay::{SendMotion, execute_as_sent};
+pub use replay::{SendMotion, execute_as_sent, execute_as_sent_tagged};
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -4,7 +4,7 @@
 //! waypoints on their timing.
 
 use crate::RobotError;
-use crate::exec::{HOME_JOINTS, TraceEntry};
+use crate::exec::{HOME_JOINTS, TaggedEntry, TraceEntry};
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{Move, Program, check_blends};
@@ -60,6 +60,20 @@ pub fn execute_as_sent(
     dh: &DhParams,
     motion: SendMotion<'_>,
 ) -> Result<Vec<TraceEntry>, RobotError> {
+    Ok(execute_as_sent_tagged(program, dh, motion)?.into_iter().map(|e| e.entry).collect())
+}
+
+/// [`execute_as_sent`] with each sample tagged with its stroke (its position in the program)
+/// and whether its move is part of that stroke's ink dip, as
+/// [`crate::exec::execute_program_tagged`] tags them.
+///
+/// # Errors
+/// As [`execute_as_sent`].
+pub fn execute_as_sent_tagged(
+    program: &Program,
+    dh: &DhParams,
+    motion: SendMotion<'_>,
+) -> Result<Vec<TaggedEntry>, RobotError> {
     if matches!(motion, SendMotion::Moves) {
         check_blends(program)?;
     }
@@ -73,6 +87,7 @@ pub fn execute_as_sent(
         t: 0.0,
         out: Vec::new(),
         chain: Vec::new(),
+        tag: (None, false),
     };
     let unreachable = |stroke: Option<usize>, pose: &Pose| RobotError::Unsafe {
         stroke,
@@ -102,14 +117,16 @@ pub fn execute_as_sent(
         Ok(())
     };
     run(&mut arm, &program.start, None)?;
-    for st in &program.strokes {
+    for (k, st) in program.strokes.iter().enumerate() {
         let timed = match motion {
             SendMotion::PathBuffer(t) => t.strokes.iter().find(|t| t.stroke == st.index),
             SendMotion::Moves => None,
         };
-        for m in st.dip.iter().chain(&st.approach) {
+        for (i, m) in st.dip.iter().chain(&st.approach).enumerate() {
+            arm.tag_as(Some(k), i < st.dip.len());
             run(&mut arm, m, Some(st.index))?;
         }
+        arm.tag_as(Some(k), false);
         match timed {
             Some(t) => {
                 arm.flush();
@@ -136,8 +153,10 @@ struct Arm<'a> {
     q: [f64; 6],
     pose: Pose,
     t: f64,
-    out: Vec<TraceEntry>,
+    out: Vec<TaggedEntry>,
     chain: Vec<(BlendMove, [f64; 6])>,
+    /// The stroke (position in the program) and whether in its dip, of the moves now running.
+    tag: (Option<usize>, bool),
 }
 
 impl Arm<'_> {
@@ -148,7 +167,17 @@ impl Arm<'_> {
             self.pose = last.pose;
         }
         self.q = q;
-        self.out.extend(samples);
+        let (stroke, dip) = self.tag;
+        self.out.extend(samples.into_iter().map(|entry| TaggedEntry { entry, stroke, dip }));
+    }
+
+    /// The moves from here on belong to `stroke` (its dip when `dip`): the waiting ones run
+    /// first when that changes (a blend never joins two parts).
+    fn tag_as(&mut self, stroke: Option<usize>, dip: bool) {
+        if self.tag != (stroke, dip) {
+            self.flush();
+            self.tag = (stroke, dip);
+        }
     }
 
     fn joint(&mut self, q: [f64; 6], v: f64, a: f64) {
