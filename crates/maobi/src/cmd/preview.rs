@@ -209,9 +209,24 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
             let tagged = robot_io::sim::execute_as_sent_tagged(&p, &kin, motion)?;
             Ok((r, timing, tagged))
         });
-    let (samples, verdict, safe, dips) = match built {
+    let (samples, verdict, safe, dips, strokes_s) = match built {
         Ok((report, timing, tagged)) => {
             let s = execute_tagged(&tagged, frame);
+            // When each stroke's path buffer runs on the timeline: [start, end], s.
+            // (The timeline starts where the start move ends, as in `execute_tagged`.)
+            let t0 = tagged.iter().take_while(|e| e.stroke.is_none()).last().map_or(0.0, |e| e.entry.t_s);
+            let mut strokes_s: Vec<[f64; 2]> = Vec::new();
+            let mut current = None;
+            for e in tagged.iter().filter(|e| e.entry.kind == robot_io::TraceKind::PathBuffer) {
+                let at = r2(e.entry.t_s - t0);
+                match strokes_s.last_mut() {
+                    Some(span) if current == e.stroke => span[1] = at,
+                    _ => {
+                        strokes_s.push([at, at]);
+                        current = e.stroke;
+                    }
+                }
+            }
             // Ink is off unless the robot configuration names an ink pot: say so, not "0 dips".
             let dips = if cfg.ink.is_none() {
                 "ink dipping off (no \"ink\" in robot.json: see fixtures/robot/robot-ink.json)".to_string()
@@ -229,7 +244,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
                 timing.writing_s,
                 timing.strokes.iter().map(|t| t.duration_s).fold(0.0, f64::max)
             );
-            (s, v, true, report.dips)
+            (s, v, true, report.dips, strokes_s)
         }
         Err(e) => {
             // The planned track, pen-down paths at the write speed, a second of travel between.
@@ -246,7 +261,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
                 }
                 t += 1.0;
             }
-            (out, format!("refused ({where_}): {e}"), false, 0)
+            (out, format!("refused ({where_}): {e}"), false, 0, Vec::new())
         }
     };
     // Footprints: the forward model over each contact (a run of pressed samples), each stamp
@@ -338,6 +353,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
         "safe": safe,
         "dips": dips,
         "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
+        "strokes_s": strokes_s,
         "duration_s": samples.last().map_or(0.0, |s| s.t),
         "path": path,
         "feet": feet,

@@ -77,6 +77,12 @@ fn the_page_is_self_contained_and_offline() {
     let shown_s: f64 = shown.rsplit(", ").next().unwrap().parse().unwrap();
     // The check prints two decimals, the preview one.
     assert!((shown_s - writing_s).abs() <= 0.051, "preview {shown_s} s, check {writing_s} s");
+    // Each timed stroke's span on the timeline, as many as `robot check` times.
+    let timed = check.lines().filter(|l| l.starts_with("stroke ")).count();
+    let data = &page[page.find("\"strokes_s\":").expect("stroke spans") + 12..];
+    let spans: Vec<[f64; 2]> = serde_json::from_str(&data[..data.find("]]").unwrap() + 2]).unwrap();
+    assert_eq!(spans.len(), timed, "{check}");
+    assert!(spans.windows(2).all(|w| w[0][1] <= w[1][0] && w[0][0] < w[0][1]), "{spans:?}");
     // A track the robot check refuses is still previewed, with the refusal as the verdict.
     let small = dir.path().join("small.json");
     std::fs::write(
