@@ -58,8 +58,9 @@ pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;
 pub use write::{
-    BrushReport, CharReport, CharResult, PlanReport, RefineReport, Similarity, TimingMs, WriteOptions, execute_track,
-    level_frame_for, refine_target, render_char, render_states, side_by_side, similarity, write_char,
+    BrushReport, CharReport, CharResult, Execution, PlanReport, RefineReport, Similarity, TimingMs, WriteOptions,
+    execute_track, execute_track_with, level_frame_for, refine_target, render_char, render_states, side_by_side,
+    similarity, write_char,
 };
 
 // The README's example runs as a doctest.

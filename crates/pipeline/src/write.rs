@@ -258,6 +258,52 @@ pub fn execute_track(
     Ok(robot_io::exec::trace_to_states(&trace, frame))
 }
 
+/// How a program is executed for an executed figure.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Execution {
+    /// [`robot_io::exec::execute_program`]: every move at its commanded speed, straight
+    /// between the points, no ramps and no blends (the figure `write` reports).
+    #[default]
+    Plain,
+    /// As `robot send` sends it by default and the simulator server runs it: each pressed
+    /// stroke as one path buffer of its timed waypoints, the other moves on the trapezoidal
+    /// time law ([`robot_io::sim::execute_as_sent`]).
+    PathBuffer,
+    /// As `robot send --motion moves` sends it: the program compacted
+    /// ([`robot_io::program::compact_program`]) and run with its blends rounded, on the time law.
+    Moves,
+}
+
+/// [`execute_track`] executed as `how` says (the AUBO-i5's nominal kinematics, the simulator's
+/// arm; timing with `cfg`).
+///
+/// # Errors
+/// The check's error when the program fails it; the timing's when a stroke cannot be timed
+/// within the limits.
+pub fn execute_track_with(
+    track: &Track,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+    how: Execution,
+) -> Result<Vec<TrackPoint>, robot_io::RobotError> {
+    use robot_io::kinematics::DhParams;
+    use robot_io::sim::{SendMotion, execute_as_sent};
+    let (program, _) = build_program(track, profile, frame, cfg)?;
+    let trace = match how {
+        Execution::Plain => robot_io::exec::execute_program(&program),
+        Execution::PathBuffer => {
+            let timing = robot_io::time_program(&program, &DhParams::AUBO_I5, cfg)?;
+            execute_as_sent(&program, &DhParams::AUBO_I5, SendMotion::PathBuffer(&timing))?
+        }
+        Execution::Moves => {
+            let compact = robot_io::program::compact_program(&program, cfg);
+            execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?
+        }
+    };
+    Ok(robot_io::exec::trace_to_states(&trace, frame))
+}
+
 /// Renders brush states (an executed path) through the forward model over a char box onto a
 /// `size²` image of the box.
 pub fn render_states(

@@ -681,19 +681,41 @@ impl AuboClient {
         let m = robot_method(robot, "RobotConfig.getKinematicsParam")?;
         let p = self.params(json!({"real": real}), json!([real]));
         let r = self.call(&m, p)?;
-        let row = |k: &str| -> Result<[f64; 6], RobotError> {
-            let v: Vec<f64> = serde_json::from_value(r.get(k).cloned().unwrap_or(Value::Null))
-                .map_err(|e| bad_json(&m, &format!("expected `{k}`: six numbers"), e))?;
-            v.try_into().map_err(|_| RobotError::Protocol(format!("{m}: `{k}` is not six numbers")))
+        dh_rows(&m, &r)
+    }
+
+    /// `<robot>.RobotConfig.getKinematicsCompensate(ref_temperature)`: the compensation the
+    /// controller adds to its nominal modified-DH parameters at `ref_temperature_c` (°C), as
+    /// four arrays of increments `a`, `alpha`, `d`, `theta` (m, rad; a `beta` array, which
+    /// maobi's model has no place for, must be zero). `Ok(None)` when the controller does not
+    /// have the method (JSON-RPC −32601). Named params `{"ref_temperature"}` (checked with
+    /// `pyaubo_sdk` 0.24.1).
+    ///
+    /// # Errors
+    /// As [`AuboClient::call`]; [`RobotError::Protocol`] for an answer that is not four arrays
+    /// of six finite numbers within ±2 m / ±2π, or a non-zero `beta`.
+    pub fn kinematics_compensate(
+        &mut self,
+        robot: &str,
+        ref_temperature_c: f64,
+    ) -> Result<Option<crate::kinematics::DhParams>, RobotError> {
+        let m = robot_method(robot, "RobotConfig.getKinematicsCompensate")?;
+        let p = self.params(json!({"ref_temperature": ref_temperature_c}), json!([ref_temperature_c]));
+        let r = match self.call(&m, p) {
+            Ok(r) => r,
+            Err(RobotError::Rpc { code: METHOD_NOT_FOUND, .. }) => return Ok(None),
+            Err(e) => return Err(e),
         };
-        let k = crate::kinematics::DhParams {
-            a_m: row("a")?,
-            alpha_rad: row("alpha")?,
-            d_m: row("d")?,
-            theta_rad: row("theta")?,
-        };
-        k.validate().map_err(|why| RobotError::Protocol(format!("{m}: {why}")))?;
-        Ok(k)
+        if let Some(beta) = r.get("beta") {
+            let beta: Vec<f64> =
+                serde_json::from_value(beta.clone()).map_err(|e| bad_json(&m, "expected `beta`: six numbers", e))?;
+            if beta.iter().any(|b| *b != 0.0) {
+                return Err(RobotError::Protocol(format!(
+                    "{m}: `beta` = {beta:?} is not zero (a twist about the y axis that maobi's kinematics do not model)"
+                )));
+            }
+        }
+        Ok(Some(dh_rows(&m, &r)?))
     }
 
     /// `<robot>.RobotAlgorithm.forwardKinematics(q)`: the TCP pose the controller computes for
@@ -870,6 +892,27 @@ pub(crate) fn io_at(context: &str, source: std::io::Error) -> RobotError {
     RobotError::Io { context: context.to_string(), source }
 }
 
+/// JSON-RPC's code for a method the server does not have.
+pub const METHOD_NOT_FOUND: i64 = -32601;
+
+/// The modified-DH arrays `a`, `alpha`, `d`, `theta` of `method`'s answer `r` (extra keys
+/// ignored), validated.
+fn dh_rows(method: &str, r: &Value) -> Result<crate::kinematics::DhParams, RobotError> {
+    let row = |k: &str| -> Result<[f64; 6], RobotError> {
+        let v: Vec<f64> = serde_json::from_value(r.get(k).cloned().unwrap_or(Value::Null))
+            .map_err(|e| bad_json(method, &format!("expected `{k}`: six numbers"), e))?;
+        v.try_into().map_err(|_| RobotError::Protocol(format!("{method}: `{k}` is not six numbers")))
+    };
+    let k = crate::kinematics::DhParams {
+        a_m: row("a")?,
+        alpha_rad: row("alpha")?,
+        d_m: row("d")?,
+        theta_rad: row("theta")?,
+    };
+    k.validate().map_err(|why| RobotError::Protocol(format!("{method}: {why}")))?;
+    Ok(k)
+}
+
 /// [`RobotError::BadJson`]: `method`'s answer, and what was wrong with it.
 fn bad_json(method: &str, what: &str, source: serde_json::Error) -> RobotError {
     RobotError::BadJson { context: format!("{method}: {what}"), source }
@@ -890,7 +933,7 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
 
 pub use crate::run::{
     CONTROLLER_FK_TOLERANCE_M, CONTROLLER_FK_TOLERANCE_RAD, MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD,
-    PATH_VALID_WAIT, POSE_TOLERANCE_M, RunOptions, RunReport, run_program,
+    PATH_VALID_WAIT, POSE_TOLERANCE_M, REF_TEMPERATURE_C, RunOptions, RunReport, run_program,
 };
 
 /// Refuses a script the script port would not take as one script: one containing the

@@ -195,6 +195,16 @@ pub enum RobotError {
     /// The run was stopped on request (Ctrl-C).
     #[error("interrupted (Ctrl-C)")]
     Interrupted,
+    /// Path-buffer waypoints would be computed from maobi's nominal AUBO-i5 parameters (the
+    /// controller does not report its own, or nominal ones were asked for) and the caller did
+    /// not accept that ([`RunOptions::accept_nominal_kinematics`]); nothing was moved.
+    #[error(
+        "refused: the joint waypoints would be computed from maobi's nominal AUBO-i5 parameters, not the arm's own ({reason}); nothing was moved"
+    )]
+    NominalKinematics {
+        /// Why the nominal parameters would be used.
+        reason: String,
+    },
     /// The link kept failing: the retry budget per stroke or for the whole run is spent, or
     /// reconnecting failed `reconnect_attempts` times. The last fault is the source.
     #[error(

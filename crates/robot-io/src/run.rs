@@ -73,6 +73,14 @@ pub struct RunOptions<'a> {
     /// waypoints, timed with `cfg` ([`crate::timing`]) on the controller's own kinematics
     /// (`getKinematicsParam`), checked before anything moves; `None`: a `moveLine` per point.
     pub path_buffer: Option<crate::program::RobotConfig>,
+    /// Time the path buffers on maobi's nominal AUBO-i5 parameters
+    /// ([`DhParams::AUBO_I5`](crate::kinematics::DhParams::AUBO_I5)) instead of the ones the
+    /// controller reports; refused unless `accept_nominal_kinematics`.
+    pub nominal_kinematics: bool,
+    /// Accept path-buffer waypoints computed from the nominal parameters (when asked for, or
+    /// when the controller does not answer `getKinematicsParam`); the controller's own forward
+    /// kinematics must still agree with them before anything moves.
+    pub accept_nominal_kinematics: bool,
     /// Set (for example by Ctrl-C) to stop: the runner sends no further stroke, waits for the
     /// controller to finish what it queued, lifts the brush and returns
     /// [`RobotError::Interrupted`] inside [`RobotError::RunStopped`].
@@ -97,6 +105,8 @@ impl<'a> RunOptions<'a> {
             lift_m: 0.02,
             link: Link::default(),
             path_buffer: None,
+            nominal_kinematics: false,
+            accept_nominal_kinematics: false,
             stop,
         }
     }
@@ -119,6 +129,11 @@ pub struct RunReport {
     pub calls: u64,
     /// Strokes sent as path buffers.
     pub path_buffers: usize,
+    /// Whether the path buffers were timed on maobi's nominal parameters (accepted).
+    pub nominal_kinematics: bool,
+    /// Whether the controller reported a kinematics compensation (`getKinematicsCompensate`)
+    /// and its nominal parameters plus it were checked against its forward kinematics.
+    pub compensation_checked: bool,
 }
 
 struct Session {
@@ -428,7 +443,9 @@ fn check_pose(
 /// so a flaky link ends in bounded time.
 ///
 /// # Errors
-/// Before anything moved (connecting, the robot name, setting the tool, motion or a pose the
+/// Without `opts.path_buffer`, a program whose pressed moves a blending controller refuses
+/// ([`crate::program::check_blends`]: a zero-length move, a blend more than half a
+/// neighbouring move), before connecting. Before anything moved (connecting, the robot name, setting the tool, motion or a pose the
 /// controller should not report, the controller's kinematics refusing the start pose): the
 /// error as it is. After that, any error (a controller error code, a JSON-RPC error, a spent
 /// retry budget, [`RobotError::GaveUp`]; a reported state that disagrees with what was
@@ -445,6 +462,10 @@ pub fn run_program(
     opts: &RunOptions<'_>,
     mut progress: impl FnMut(&RunReport),
 ) -> Result<RunReport, RobotError> {
+    if opts.path_buffer.is_none() {
+        // A move per point: the blends must be ones a controller accepts.
+        crate::program::check_blends(program)?;
+    }
     let report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
     let session = open(addr, program, opts, robot_name)?;
     let mut run = Runner {
@@ -499,6 +520,20 @@ struct Runner<'a, 'o> {
     confirmed: usize,
 }
 
+/// The temperature the kinematics compensation is read at, °C (the SDK's default).
+pub const REF_TEMPERATURE_C: f64 = 20.0;
+
+/// The parameters `a` with the increments `b` added, array by array.
+fn plus(a: &crate::kinematics::DhParams, b: &crate::kinematics::DhParams) -> crate::kinematics::DhParams {
+    let add = |x: &[f64; 6], y: &[f64; 6]| -> [f64; 6] { std::array::from_fn(|i| x[i] + y[i]) };
+    crate::kinematics::DhParams {
+        a_m: add(&a.a_m, &b.a_m),
+        alpha_rad: add(&a.alpha_rad, &b.alpha_rad),
+        d_m: add(&a.d_m, &b.d_m),
+        theta_rad: add(&a.theta_rad, &b.theta_rad),
+    }
+}
+
 /// The fault budget of the stroke being written.
 struct StrokeFaults {
     /// Faults on this stroke.
@@ -526,8 +561,30 @@ impl Runner<'_, '_> {
     fn plan_path_buffers(&mut self, seed: Option<&[f64; 6]>) -> Result<(), RobotError> {
         let Some(cfg) = &self.opts.path_buffer else { return Ok(()) };
         let program = self.program;
+        let opts = self.opts;
         let s = self.session.as_mut().expect("connected");
-        let kin = s.client.kinematics_params(&s.robot, true)?;
+        let reported = if opts.nominal_kinematics {
+            Err("nominal parameters were asked for".to_string())
+        } else {
+            match s.client.kinematics_params(&s.robot, true) {
+                Ok(k) => Ok(k),
+                Err(RobotError::Rpc { code: crate::aubo::METHOD_NOT_FOUND, method, message }) => {
+                    Err(format!("the controller does not answer {method}: {message}"))
+                }
+                Err(e) => return Err(e),
+            }
+        };
+        // Where the controller reports a compensation, its nominal parameters plus it must
+        // describe the same arm as its calibrated ones and its own forward kinematics.
+        let nominal = reported.is_err();
+        let (kin, compensated) = match reported {
+            Ok(k) => match s.client.kinematics_compensate(&s.robot, REF_TEMPERATURE_C)? {
+                Some(c) => (k, Some(plus(&s.client.kinematics_params(&s.robot, false)?, &c))),
+                None => (k, None),
+            },
+            Err(_) if opts.accept_nominal_kinematics => (crate::kinematics::DhParams::AUBO_I5, None),
+            Err(reason) => return Err(RobotError::NominalKinematics { reason }),
+        };
         let timing = crate::timing::time_program_from(program, &kin, cfg, seed)?;
         let tcp = program.tcp();
         let mut probes = Vec::new();
@@ -544,6 +601,20 @@ impl Runner<'_, '_> {
             };
             let (dm, dr) = d(&theirs, &ours);
             let (pm, pr) = d(&ours, &want);
+            if let Some(kc) = &compensated {
+                let (cm, cr) = d(&theirs, &kc.forward(&q, &tcp));
+                if cm > CONTROLLER_FK_TOLERANCE_M || cr > CONTROLLER_FK_TOLERANCE_RAD {
+                    return Err(RobotError::Unsafe {
+                        stroke: Some(t.stroke),
+                        point: None,
+                        reason: format!(
+                            "waypoint {k} of the path buffer: the controller's nominal parameters plus its compensation at {REF_TEMPERATURE_C} °C (getKinematicsCompensate) put the TCP {:.4} mm and {cr:.5} rad from its own forward kinematics (at most {} mm, {CONTROLLER_FK_TOLERANCE_RAD} rad): its reported parameters do not describe one arm; nothing was moved",
+                            cm * 1e3,
+                            CONTROLLER_FK_TOLERANCE_M * 1e3
+                        ),
+                    });
+                }
+            }
             if dm > CONTROLLER_FK_TOLERANCE_M
                 || dr > CONTROLLER_FK_TOLERANCE_RAD
                 || pm > PATH_TOLERANCE_M
@@ -563,6 +634,8 @@ impl Runner<'_, '_> {
             }
         }
         self.timing = timing.strokes;
+        self.report.nominal_kinematics = nominal;
+        self.report.compensation_checked = compensated.is_some();
         Ok(())
     }
 

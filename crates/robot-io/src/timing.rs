@@ -494,6 +494,18 @@ impl Piece<'_> {
     /// The path length at each waypoint (`dt` apart; the first and last at the ends, at rest)
     /// and the reference duration (time-optimal without the jerk limit), s.
     fn time(&self, lim: &Limits1, dt: f64, window: usize) -> (Vec<f64>, f64) {
+        if self.vlim.len() == 2 {
+            // One segment from rest to rest (a stop just before the stroke's end, or two stops
+            // one point apart): the passes need a point inside it to reach any speed, or the
+            // segment would take no time and its waypoints jump across it.
+            let mid = |a: &[f64; 6], b: &[f64; 6]| -> [f64; 6] { std::array::from_fn(|j| 0.5 * (a[j] + b[j])) };
+            let vlim = [self.vlim[0], self.vlim[0].max(self.vlim[1]), self.vlim[1]];
+            let ds = [0.5 * self.ds[0]; 2];
+            let qs = [self.qs[0]; 2];
+            let qss = [self.qss[0], mid(&self.qss[0], &self.qss[1]), self.qss[1]];
+            let s = [self.s[0], 0.5 * (self.s[0] + self.s[1]), self.s[1]];
+            return Piece { vlim: &vlim, ds: &ds, qs: &qs, qss: &qss, s: &s }.time(lim, dt, window);
+        }
         let n = self.vlim.len();
         let v_ref = passes(self.vlim, self.ds, self.qs, self.qss, lim);
         let reference = times(&v_ref, self.ds)[n - 1];
@@ -747,5 +759,24 @@ mod tests {
         assert!(t.duration_s > 2.5 && t.reference_s > 2.5 && t.reference_s <= t.duration_s, "{t:?}");
         assert!(t.peak_speed_m_s <= 0.02 + 1e-9 && t.peak_speed_m_s > 0.019, "{}", t.peak_speed_m_s);
         assert!(t.peak_acc_m_s2 <= 0.3 + 1e-6, "{}", t.peak_acc_m_s2);
+    }
+
+    #[test]
+    fn a_stop_one_short_segment_before_the_end_is_timed_not_jumped() {
+        // 10 mm along y, then 0.25 mm back: the brush stops at the turn, and the last piece is
+        // one segment from rest to rest (it once took no time: one waypoint step of 0.25 mm).
+        let tcp = Isometry3::from_parts(nalgebra::Translation3::new(0.0, 0.0, 0.2), UnitQuaternion::identity());
+        let at = |y: f64| Pose([0.5, y, 0.1, std::f64::consts::PI, 0.0, 0.0]);
+        let (a, b, c) = (at(-0.1), at(-0.09), at(-0.09025));
+        let cfg = RobotConfig::default();
+        let t = time_stroke(0, &[a, b, c], &[1.0; 3], &DhParams::AUBO_I5, &tcp, None, &cfg).unwrap().unwrap();
+        let last = t.poses.last().unwrap().position();
+        assert!((0..3).all(|k| (last[k] - c.0[k]).abs() < 1e-12), "{last:?}");
+        assert!(t.peak_speed_m_s <= cfg.write_speed_m_s + 1e-9, "{}", t.peak_speed_m_s);
+        assert!(t.peak_acc_m_s2 <= cfg.write_acc_m_s2 * 1.5, "{}", t.peak_acc_m_s2);
+        // The short piece takes several waypoints (0.25 mm from rest to rest).
+        let back = t.poses.iter().filter(|p| p.position()[1] < -0.09 - 1e-9 && p.position()[1] > -0.09025 + 1e-9);
+        assert!(back.count() >= 2);
+        check_stroke(&t, &cfg).unwrap();
     }
 }

@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, Track, TrackPoint};
 use pipeline::{Grid, SheetTrack, parse_sheet};
 use robot_io::TrackFile;
-use robot_io::exec::{TraceEntry, execute_program_tagged, level_frame_in_front, trace_to_states};
+use robot_io::exec::{TaggedEntry, TraceEntry, level_frame_in_front, trace_to_states};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program_chars};
 use serde_json::{Value, json};
@@ -171,12 +171,12 @@ struct Sample {
     dip: bool,
 }
 
-/// Executes the program as the simulator does ([`robot_io::exec::execute_program_tagged`]),
-/// tagging each sample with whether its move is part of an ink dip. The first joint move from the
-/// controller's home pose is left out: the timeline starts (t = 0) with the brush at the safe
-/// height above the first stroke.
-fn execute_tagged(program: &robot_io::program::Program, frame: &PaperFrame) -> Vec<Sample> {
-    let tagged = execute_program_tagged(program);
+/// The program's samples as `robot send` runs it on the simulator
+/// ([`robot_io::sim::execute_as_sent_tagged`]: each pressed stroke one path buffer on its
+/// timing, the other moves on the controller's time law), tagged with whether each move is part
+/// of an ink dip. The first joint move from the controller's home pose is left out: the timeline
+/// starts (t = 0) with the brush at the safe height above the first stroke.
+fn execute_tagged(tagged: &[TaggedEntry], frame: &PaperFrame) -> Vec<Sample> {
     let start = tagged.iter().take_while(|e| e.stroke.is_none()).count();
     let t0 = if start > 0 { tagged[start - 1].entry.t_s } else { 0.0 };
     let (entries, dips): (Vec<TraceEntry>, Vec<bool>) = tagged[start..].iter().map(|e| (e.entry, e.dip)).unzip();
@@ -198,10 +198,35 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     let level = level_frame(input.sheet_mm);
     let frame = paper.unwrap_or(&level);
     let where_ = if paper.is_some() { "on the given paper.json" } else { "on a level sheet in front of the AUBO-i5" };
-    let built = build_program_chars(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg);
-    let (samples, verdict, safe, dips) = match built {
-        Ok((program, report)) => {
-            let s = execute_tagged(&program, frame);
+    // Checked and timed as `robot check` does it (the nominal i5, the simulator's arm) and
+    // played as `robot send` sends it: the timeline's pressed time is the timing's. A timing
+    // beyond a limit is a refusal like the check's.
+    let built =
+        build_program_chars(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg).and_then(|(p, r)| {
+            let kin = robot_io::kinematics::DhParams::AUBO_I5;
+            let timing = robot_io::time_program(&p, &kin, cfg)?;
+            let motion = robot_io::sim::SendMotion::PathBuffer(&timing);
+            let tagged = robot_io::sim::execute_as_sent_tagged(&p, &kin, motion)?;
+            Ok((r, timing, tagged))
+        });
+    let (samples, verdict, safe, dips, strokes_s) = match built {
+        Ok((report, timing, tagged)) => {
+            let s = execute_tagged(&tagged, frame);
+            // When each stroke's path buffer runs on the timeline: [start, end], s.
+            // (The timeline starts where the start move ends, as in `execute_tagged`.)
+            let t0 = tagged.iter().take_while(|e| e.stroke.is_none()).last().map_or(0.0, |e| e.entry.t_s);
+            let mut strokes_s: Vec<[f64; 2]> = Vec::new();
+            let mut current = None;
+            for e in tagged.iter().filter(|e| e.entry.kind == robot_io::TraceKind::PathBuffer) {
+                let at = r2(e.entry.t_s - t0);
+                match strokes_s.last_mut() {
+                    Some(span) if current == e.stroke => span[1] = at,
+                    _ => {
+                        strokes_s.push([at, at]);
+                        current = e.stroke;
+                    }
+                }
+            }
             // Ink is off unless the robot configuration names an ink pot: say so, not "0 dips".
             let dips = if cfg.ink.is_none() {
                 "ink dipping off (no \"ink\" in robot.json: see fixtures/robot/robot-ink.json)".to_string()
@@ -211,10 +236,15 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
             // One time: the program as the simulator runs it (what the timeline plays).
             let run_s = s.last().map_or(0.0, |x| x.t);
             let v = format!(
-                "safe ({where_}): {} strokes, {} points, {} moves, {dips}; deepest press {:.2} mm; {run_s:.1} s to write",
-                report.strokes, report.points, report.moves, report.max_press_mm
+                "safe ({where_}): {} strokes, {} points, {} moves, {dips}; deepest press {:.2} mm; {run_s:.1} s to write, {:.1} s of it on the paper (the strokes' timing; the longest stroke {:.1} s)",
+                report.strokes,
+                report.points,
+                report.moves,
+                report.max_press_mm,
+                timing.writing_s,
+                timing.strokes.iter().map(|t| t.duration_s).fold(0.0, f64::max)
             );
-            (s, v, true, report.dips)
+            (s, v, true, report.dips, strokes_s)
         }
         Err(e) => {
             // The planned track, pen-down paths at the write speed, a second of travel between.
@@ -231,7 +261,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
                 }
                 t += 1.0;
             }
-            (out, format!("refused ({where_}): {e}"), false, 0)
+            (out, format!("refused ({where_}): {e}"), false, 0, Vec::new())
         }
     };
     // Footprints: the forward model over each contact (a run of pressed samples), each stamp
@@ -323,6 +353,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
         "safe": safe,
         "dips": dips,
         "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
+        "strokes_s": strokes_s,
         "duration_s": samples.last().map_or(0.0, |s| s.t),
         "path": path,
         "feet": feet,

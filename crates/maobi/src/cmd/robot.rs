@@ -180,6 +180,15 @@ pub struct SendArgs {
     /// point of the compacted track, blends at most half the shorter neighbouring move).
     #[arg(long, default_value = "path-buffer", value_parser = ["path-buffer", "moves"])]
     motion: String,
+    /// Time the path buffers on maobi's nominal AUBO-i5 parameters instead of the ones the
+    /// controller reports (getKinematicsParam); needs --accept-nominal-kinematics.
+    #[arg(long)]
+    nominal_kinematics: bool,
+    /// Accept path-buffer joint waypoints computed from maobi's nominal AUBO-i5 parameters
+    /// (when --nominal-kinematics asks for them, or the controller does not report its own);
+    /// its forward kinematics must still agree with them before anything moves.
+    #[arg(long)]
+    accept_nominal_kinematics: bool,
 }
 
 /// Arguments of `maobi robot sim`.
@@ -222,6 +231,10 @@ pub struct SimArgs {
     /// Close a connection that sends nothing for this many seconds (1 to 86400).
     #[arg(long, default_value_t = 60)]
     idle_timeout_s: u64,
+    /// Answer getKinematicsParam and getKinematicsCompensate with "method not found", as a
+    /// controller without them would.
+    #[arg(long)]
+    no_kinematics_param: bool,
 }
 
 /// Runs a `maobi robot` subcommand.
@@ -449,6 +462,8 @@ fn send(a: SendArgs) -> Result<()> {
         lift_m: l.cfg.lift_mm / 1000.0,
         link: Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() },
         path_buffer: (!by_moves).then(|| l.cfg.clone()),
+        nominal_kinematics: a.nominal_kinematics,
+        accept_nominal_kinematics: a.accept_nominal_kinematics,
         ..RunOptions::new(&stop)
     };
     let addr = format!("{}:{port}", a.host);
@@ -464,6 +479,14 @@ fn send(a: SendArgs) -> Result<()> {
             eprintln!("error: running on {addr}: {}; {e}", RobotError::Interrupted);
             std::process::exit(130);
         }
+        Err(e @ RobotError::NominalKinematics { .. }) => {
+            return Err(e).with_context(|| {
+                format!(
+                    "running on {addr} ({}): the path buffers need the arm's own kinematics; pass --accept-nominal-kinematics to write with maobi's nominal ones anyway (the controller's forward kinematics still checks them), or --motion moves",
+                    a.transport
+                )
+            });
+        }
         Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", a.transport)),
     };
     println!(
@@ -475,6 +498,16 @@ fn send(a: SendArgs) -> Result<()> {
         r.calls,
         r.path_buffers,
     );
+    if r.nominal_kinematics {
+        println!(
+            "the path buffers were timed on maobi's nominal AUBO-i5 parameters (accepted), checked by the controller's forward kinematics"
+        );
+    } else if r.path_buffers > 0 {
+        println!(
+            "the path buffers were timed on the controller's kinematics (getKinematicsParam{})",
+            if r.compensation_checked { ", its compensation checked" } else { "" }
+        );
+    }
     Ok(())
 }
 
@@ -511,6 +544,7 @@ fn sim(a: SimArgs) -> Result<()> {
         max_connections: a.max_connections,
         idle_timeout: Duration::from_secs(a.idle_timeout_s),
         trace_path: a.trace.clone(),
+        kinematics_param: !a.no_kinematics_param,
         ..SimOptions::default()
     };
     // The trace file is created before anything listens: a folder or an unwritable path fails now.

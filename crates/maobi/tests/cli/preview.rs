@@ -60,6 +60,29 @@ fn the_page_is_self_contained_and_offline() {
     let page = std::fs::read_to_string(&p).unwrap();
     assert!(page.contains("\"sheet_mm\":[210.0,297.0]") && page.contains("safe (on the given paper.json)"));
     assert!(page.contains("1 ink dip(s)") && page.contains("\"dip_spans\":[["), "the dip is shown");
+    // One writing time, from the timing: the one `robot check` reports for the same program.
+    let check = ok(&maobi(&[
+        "robot",
+        "check",
+        s(&out.join("track.json")),
+        "--paper",
+        s(&fixture("paper.json")),
+        "--robot",
+        s(&fixture("robot-ink.json")),
+    ]));
+    let after = &check[check.find("writing time ").expect("check reports the writing time") + 13..];
+    let writing_s: f64 = after.split_whitespace().next().unwrap().parse().unwrap();
+    assert!(writing_s > 1.0, "{check}");
+    let shown = page.split(" s of it on the paper (the strokes' timing").next().unwrap();
+    let shown_s: f64 = shown.rsplit(", ").next().unwrap().parse().unwrap();
+    // The check prints two decimals, the preview one.
+    assert!((shown_s - writing_s).abs() <= 0.051, "preview {shown_s} s, check {writing_s} s");
+    // Each timed stroke's span on the timeline, as many as `robot check` times.
+    let timed = check.lines().filter(|l| l.starts_with("stroke ")).count();
+    let data = &page[page.find("\"strokes_s\":").expect("stroke spans") + 12..];
+    let spans: Vec<[f64; 2]> = serde_json::from_str(&data[..data.find("]]").unwrap() + 2]).unwrap();
+    assert_eq!(spans.len(), timed, "{check}");
+    assert!(spans.windows(2).all(|w| w[0][1] <= w[1][0] && w[0][0] < w[0][1]), "{spans:?}");
     // A track the robot check refuses is still previewed, with the refusal as the verdict.
     let small = dir.path().join("small.json");
     std::fs::write(

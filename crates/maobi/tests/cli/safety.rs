@@ -85,7 +85,13 @@ fn ctrl_c_during_send_lifts_the_brush_and_exits_non_zero() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
+    // Ctrl-C once the first stroke's path buffer has run (the run is then under way, whatever
+    // the machine's load; a fixed wait could fall before the handler is installed), at most 60 s.
+    let begun = Instant::now();
+    while !std::fs::read_to_string(&trace).is_ok_and(|t| t.contains("path_buffer")) {
+        assert!(begun.elapsed() < Duration::from_secs(60), "send wrote no path buffer in 60 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
     let sent = Command::new("kill").args(["-INT", &send.id().to_string()]).status().unwrap();
     assert!(sent.success());
     let start = Instant::now();

@@ -249,6 +249,8 @@ out["fk"] = alg.forwardKinematics(list(out["ik"][0]))
 out["ik_target"] = ik_target
 out["ik_far"] = alg.inverseKinematics(out["getJointPositions"], [3.0, 0.0, 0.1, 3.14, 0.0, 0.0])
 out["kinematics"] = r.getRobotConfig().getKinematicsParam(True)
+out["nominal"] = r.getRobotConfig().getKinematicsParam(False)
+out["compensate"] = r.getRobotConfig().getKinematicsCompensate(20.0)
 try:
     rs.getJointSpeeds()
 except Exception as e:
@@ -324,6 +326,14 @@ fn the_official_sdk_client_drives_the_simulator() {
         let got: Vec<f64> = serde_json::from_value(j["kinematics"][name].clone()).unwrap();
         assert_eq!(got, want, "{name}");
     }
+    // The nominal parameters and the compensation (the SDK's getKinematicsCompensate(20.0)
+    // reaches the simulator with its params and reads its answer as a dict): the simulator's arm
+    // is the nominal one, so every increment is zero.
+    for name in ["a", "alpha", "d", "theta", "beta"] {
+        let got: Vec<f64> = serde_json::from_value(j["compensate"][name].clone()).unwrap();
+        assert_eq!(got, vec![0.0; 6], "{name}: {j}");
+    }
+    assert_eq!(j["nominal"]["a"], j["kinematics"]["a"]);
     // A JSON-RPC error reaches the SDK as an exception naming the method, code and message.
     let e = j["unknown_method"].as_str().unwrap();
     assert!(e.contains("getJointSpeeds") && e.contains("-32601") && e.contains("method not found"), "{e}");
@@ -434,4 +444,86 @@ fn the_official_sdk_client_runs_a_path_buffer_on_the_simulator() {
         samples.iter().filter(|t| t["kind"] == "path_buffer").map(|t| t["t_s"].as_f64().unwrap()).collect();
     assert_eq!(path.len(), 201);
     assert!((path[200] - path[0] - 1.0).abs() < 1e-9, "{} .. {}", path[0], path[200]);
+}
+
+/// hanzi-writer-data files of three held-out characters (`tests/cli/data/heldout/README.md`).
+fn heldout() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/cli/data/heldout")
+}
+
+#[test]
+fn send_writes_held_out_characters_through_the_path_buffer_on_the_time_law() {
+    let dir = tempfile::tempdir().unwrap();
+    let paper_json = paper();
+    for ch in ["玉", "午", "肉"] {
+        let out = dir.path().join(ch);
+        ok(&maobi(&["write", ch, "--hanzi-data", s(&heldout()), "--size", "128", "--out", s(&out)]));
+        let track = out.join("track.json");
+        // `robot check` reports the timing: each stroke's duration and peaks, and the writing time.
+        let check = ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper_json)]));
+        let strokes = number_before(&check, "strokes,");
+        assert!(check.contains("stroke 1: ") && check.contains("writing time"), "{check}");
+        let (port, trace) = (free_port(), dir.path().join(format!("{ch}.jsonl")));
+        let sim = Sim::start(port, &["--trace", s(&trace)]);
+        let sent = ok(&maobi(&[
+            "robot",
+            "send",
+            s(&track),
+            "--paper",
+            s(&paper_json),
+            "--host",
+            "127.0.0.1",
+            "--port",
+            &port.to_string(),
+        ]));
+        drop(sim);
+        assert!(sent.contains(&format!("{strokes} of {strokes} strokes completed")), "{ch}: {sent}");
+        assert!(sent.contains(&format!("{strokes} path buffer(s)")), "{ch}: {sent}");
+        assert!(
+            sent.contains("on the controller's kinematics (getKinematicsParam, its compensation checked)"),
+            "{sent}"
+        );
+        // What the simulator executed renders back to the plan.
+        let img = dir.path().join(format!("{ch}.png"));
+        let size = ["--size", "128"];
+        let mut args = vec!["robot", "render-trace", s(&trace), "--track", s(&track), "--paper", s(&paper_json)];
+        args.extend_from_slice(&size);
+        args.extend_from_slice(&["-o", s(&img)]);
+        ok(&maobi(&args));
+        let j: serde_json::Value =
+            serde_json::from_str(&ok(&maobi(&["compare", s(&out.join("render.png")), s(&img), "--json"]))).unwrap();
+        assert!(j["csim"].as_f64().unwrap() > 0.95, "{ch}: {j}");
+    }
+}
+
+#[test]
+fn send_refuses_nominal_kinematics_unless_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let track = one_stroke_track(dir.path());
+    let (old, new) = (free_port(), free_port());
+    let _old = Sim::start(old, &["--no-kinematics-param"]);
+    let _new = Sim::start(new, &[]);
+    let paper_json = paper();
+    let send = |port: u16, extra: &[&str]| {
+        let p = port.to_string();
+        let mut args =
+            vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1", "--port", p.as_str()];
+        args.extend_from_slice(extra);
+        maobi(&args)
+    };
+    // A controller that does not report its parameters: refused, nothing moved, the flag named.
+    let o = send(old, &[]);
+    fails(&o, "computed from maobi's nominal AUBO-i5 parameters");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--accept-nominal-kinematics") && e.contains("nothing was moved"), "{e}");
+    // Accepted: written, and said so.
+    let o = ok(&send(old, &["--accept-nominal-kinematics"]));
+    assert!(o.contains("1 of 1 strokes completed") && o.contains("nominal AUBO-i5 parameters (accepted)"), "{o}");
+    // Asked for on a controller that reports its own: refused unless accepted.
+    fails(&send(new, &["--nominal-kinematics"]), "nominal parameters were asked for");
+    let o = ok(&send(new, &["--nominal-kinematics", "--accept-nominal-kinematics"]));
+    assert!(o.contains("nominal AUBO-i5 parameters (accepted)"), "{o}");
+    // By default its own, its compensation checked.
+    let o = ok(&send(new, &[]));
+    assert!(o.contains("on the controller's kinematics (getKinematicsParam, its compensation checked)"), "{o}");
 }

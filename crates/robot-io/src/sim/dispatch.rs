@@ -10,6 +10,7 @@ use std::sync::{Condvar, Mutex, MutexGuard, PoisonError};
 use nalgebra::Isometry3;
 use serde_json::{Value, json};
 
+use super::blend::{BlendMove, blended_line_motion, check_blend};
 use super::{MIN_MOVE_SPEED, MIN_SPEED_FRACTION, MOTION_OWNED, SIM_ROBOT, SimOptions};
 use crate::RobotError;
 use crate::exec::{TraceEntry, joint_motion_dh, line_motion};
@@ -39,7 +40,23 @@ struct State {
     trace_error: Option<String>,
     /// The path buffers by name.
     buffers: std::collections::BTreeMap<String, PathBuffer>,
+    /// Blended `moveLine`s accepted but not yet executed (a blend needs the next move): run by
+    /// [`Shared::flush`] when a move without a blend arrives, or any other request, or the
+    /// owner's connection closes. `pose`/`joints` stay where the chain starts until then.
+    chain: Vec<Pending>,
 }
+
+/// A `moveLine` waiting in the chain: the move and the joints it ends at.
+#[derive(Debug)]
+struct Pending {
+    m: BlendMove,
+    q: [f64; 6],
+}
+
+/// Most blended moves the simulator holds before it executes them (its look-ahead): a longer
+/// chain is executed up to there and the arm comes to rest (a bound on what a client can make
+/// it hold).
+pub const MAX_BLEND_CHAIN: usize = 500;
 
 /// A path buffer (`pathBufferAlloc`): joint waypoints, and once evaluated the interval and
 /// the limits they were checked against.
@@ -106,6 +123,7 @@ impl Shared {
                 recorded: 0,
                 trace_error: None,
                 buffers: std::collections::BTreeMap::new(),
+                chain: Vec::new(),
             }),
             owner_changed: Condvar::new(),
             trace_file: Mutex::new(trace_file),
@@ -133,6 +151,7 @@ impl Shared {
     /// Ends `session`: if it owned motion, motion is free (its moves have all been executed:
     /// the arm is idle).
     pub(super) fn release(&self, session: u64) {
+        self.flush();
         let mut st = self.lock();
         if st.owner == Some(session) {
             st.owner = None;
@@ -141,6 +160,7 @@ impl Shared {
     }
 
     pub(super) fn trace(&self) -> Vec<TraceEntry> {
+        self.flush();
         self.lock().window.iter().copied().collect()
     }
 
@@ -194,6 +214,32 @@ impl Shared {
                 Ok(st)
             }
         }
+    }
+
+    /// Executes the blended moves waiting in the chain (the last one ends at rest on its
+    /// target): the arm's pose and joints move to the chain's end at once (so every read
+    /// answered after this sees them), the samples are computed unlocked and recorded.
+    pub(super) fn flush(&self) {
+        let (from, chain, t0) = {
+            let mut st = self.lock();
+            if st.chain.is_empty() {
+                return;
+            }
+            let chain = std::mem::take(&mut st.chain);
+            let from = st.pose;
+            let last = chain.last().expect("not empty");
+            st.joints = last.q;
+            st.pose = last.m.pose;
+            (from, chain, st.time_s)
+        };
+        let moves: Vec<BlendMove> = chain.iter().map(|p| p.m).collect();
+        let samples = blended_line_motion(&from, &moves, t0);
+        if let Some(last) = samples.last() {
+            // Reserve the time at once, so a concurrent move starts after this chain.
+            let mut st = self.lock();
+            st.time_s = st.time_s.max(last.t_s);
+        }
+        self.record(&samples);
     }
 
     /// Records a move's samples: into the window, and to the trace file (a failed write stops
@@ -299,6 +345,8 @@ struct MoveArgs {
     v: f64,
     /// Acceleration, m/s² or rad/s².
     a: f64,
+    /// Blend radius, m.
+    blend: f64,
 }
 
 impl MoveArgs {
@@ -320,7 +368,7 @@ impl MoveArgs {
             return None;
         }
         let target = arg(params, target, 0).and_then(numbers::<6>)?;
-        Some(Self { joint, target, v, a })
+        Some(Self { joint, target, v, a, blend })
     }
 }
 
@@ -379,6 +427,32 @@ fn execute(shared: &Shared, m: &MoveArgs, v: f64) -> i64 {
         st.pose = to;
     }
     shared.record(&samples);
+    0
+}
+
+/// A `moveLine` that blends into the next move or ends a chain of blended moves: refused (−5)
+/// when its blend radius is more than half its length or the blend before it more than half
+/// of it ([`check_blend`]: a zero-length move cannot blend), [`UNREACHABLE`] when its target
+/// is; otherwise added to the chain, which runs ([`Shared::flush`]) when this move has no
+/// blend or the chain holds [`MAX_BLEND_CHAIN`] moves. Returns the status.
+fn chain_line(shared: &Shared, st: MutexGuard<'_, State>, m: &MoveArgs, v: f64) -> i64 {
+    let (from, q0, before) = st.chain.last().map_or((st.pose, st.joints, 0.0), |p| (p.m.pose, p.q, p.m.blend_m));
+    let tcp = st.tcp;
+    drop(st);
+    let to = Pose(m.target);
+    let len = (nalgebra::Vector3::from(to.position()) - nalgebra::Vector3::from(from.position())).norm();
+    if check_blend(m.blend, len, f64::INFINITY).is_err() || check_blend(before, f64::INFINITY, len).is_err() {
+        return INVALID_ARGUMENT;
+    }
+    let Some(q) = shared.options.kinematics.inverse(&to, &tcp, Some(&q0)) else { return UNREACHABLE };
+    let full = {
+        let mut st = shared.lock();
+        st.chain.push(Pending { m: BlendMove { pose: to, v_m_s: v, a_m_s2: m.a, blend_m: m.blend }, q });
+        m.blend <= 0.0 || st.chain.len() >= MAX_BLEND_CHAIN
+    };
+    if full {
+        shared.flush();
+    }
     0
 }
 
@@ -487,6 +561,11 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
         return err(&id, -32602, "params must be an array or an object");
     }
     let method = v["method"].as_str().unwrap_or_default();
+    // Blended moves wait for the next move; anything else runs them first (the arm is idle and
+    // steady between other requests).
+    if !method.ends_with(".MotionControl.moveLine") {
+        shared.flush();
+    }
     match method {
         "getRobotNames" => return ok(&id, json!([SIM_ROBOT])),
         "getAxisNames" => return ok(&id, json!([])),
@@ -530,13 +609,36 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
             }
             _ => ok(&id, json!([NO_VALUES, INVALID_ARGUMENT])),
         },
-        // `real`: the calibrated parameters (true) or the nominal ones; the simulator has one set.
+        "RobotConfig.getKinematicsParam" | "RobotConfig.getKinematicsCompensate"
+            if !shared.options.kinematics_param =>
+        {
+            err(&id, -32601, &format!("method not found: {method}"))
+        }
+        // `real`: the calibrated parameters (true: the simulator's arm) or the nominal ones (the
+        // i5's table); the compensation is their difference (at any temperature), `beta` zero.
         "RobotConfig.getKinematicsParam" => match arg(params, "real", 0) {
-            Some(Value::Bool(_)) if arity(params, &["real"], &[]) => {
-                let k = &shared.options.kinematics;
-                ok(&id, json!({"a": k.a_m, "alpha": k.alpha_rad, "d": k.d_m, "theta": k.theta_rad}))
+            Some(Value::Bool(real)) if arity(params, &["real"], &[]) => {
+                let k = if *real { &shared.options.kinematics } else { &kinematics::DhParams::AUBO_I5 };
+                ok(&id, json!({"a": k.a_m, "alpha": k.alpha_rad, "d": k.d_m, "theta": k.theta_rad, "beta": NO_VALUES}))
             }
             _ => err(&id, -32602, "getKinematicsParam takes one argument, `real` (a bool)"),
+        },
+        "RobotConfig.getKinematicsCompensate" => match arg(params, "ref_temperature", 0).and_then(Value::as_f64) {
+            Some(_) if arity(params, &["ref_temperature"], &[]) => {
+                let (k, n) = (&shared.options.kinematics, &kinematics::DhParams::AUBO_I5);
+                let diff = |x: &[f64; 6], y: &[f64; 6]| -> [f64; 6] { std::array::from_fn(|i| x[i] - y[i]) };
+                ok(
+                    &id,
+                    json!({
+                        "a": diff(&k.a_m, &n.a_m),
+                        "alpha": diff(&k.alpha_rad, &n.alpha_rad),
+                        "d": diff(&k.d_m, &n.d_m),
+                        "theta": diff(&k.theta_rad, &n.theta_rad),
+                        "beta": NO_VALUES,
+                    }),
+                )
+            }
+            _ => err(&id, -32602, "getKinematicsCompensate takes one argument, `ref_temperature` (°C, a number)"),
         },
         // What changes motion: for the session that owns it.
         "RobotConfig.setTcpOffset" => {
@@ -584,8 +686,11 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
             if v < MIN_MOVE_SPEED {
                 return ok(&id, json!(INVALID_ARGUMENT));
             }
-            drop(st);
-            ok(&id, json!(execute(shared, &m, v)))
+            if joint || (m.blend <= 0.0 && st.chain.is_empty()) {
+                drop(st);
+                return ok(&id, json!(execute(shared, &m, v)));
+            }
+            ok(&id, json!(chain_line(shared, st, &m, v)))
         }
         "MotionControl.pathBufferAlloc"
         | "MotionControl.pathBufferAppend"
@@ -754,7 +859,13 @@ fn path_within(w: &[[f64; 6]], v: &[f64; 6], a: &[f64; 6], t: f64) -> bool {
 /// The executed motion of a path buffer: the waypoints at their times (one sample each, `t`
 /// apart), and one more halfway between each pair on the cubic (Catmull-Rom) spline through
 /// them, so the trace is sampled by time at `t / 2`.
-fn path_motion(dh: &kinematics::DhParams, w: &[[f64; 6]], t: f64, tcp: &Isometry3<f64>, t0: f64) -> Vec<TraceEntry> {
+pub(super) fn path_motion(
+    dh: &kinematics::DhParams,
+    w: &[[f64; 6]],
+    t: f64,
+    tcp: &Isometry3<f64>,
+    t0: f64,
+) -> Vec<TraceEntry> {
     let at = |q: &[f64; 6], time: f64| TraceEntry {
         t_s: time,
         kind: crate::exec::TraceKind::PathBuffer,

@@ -9,14 +9,19 @@
 //! connections are bounded in number and idle time, every move's trace is bounded and streamed
 //! to the trace file, and no lock is held while a move is computed.
 
+mod blend;
 mod dispatch;
 
+pub use blend::{BlendMove, BlendRefused, blended_line_motion, check_blend};
 pub use dispatch::{
-    MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
+    MAX_BLEND_CHAIN, MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
     PATH_START_TOLERANCE_RAD, ramped_joint_motion, ramped_line_motion,
 };
+mod replay;
 mod server;
 mod session;
+
+pub use replay::{SendMotion, execute_as_sent, execute_as_sent_tagged};
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -88,13 +93,19 @@ pub struct SimOptions {
     /// answers `RobotAlgorithm.inverseKinematics`/`forwardKinematics` and reports
     /// `RobotConfig.getKinematicsParam` with them.
     pub kinematics: crate::kinematics::DhParams,
+    /// Whether `RobotConfig.getKinematicsParam` and `getKinematicsCompensate` are served
+    /// (`false`: answered with JSON-RPC −32601, method not found, as a controller without them
+    /// would). `getKinematicsParam(false)` reports [`crate::kinematics::DhParams::AUBO_I5`],
+    /// `(true)` [`SimOptions::kinematics`], and the compensation is their difference.
+    pub kinematics_param: bool,
 }
 
 impl Default for SimOptions {
     /// No faults; the controller's default user `aubo`, password `123456`; 16 connections,
     /// 60 s idle time-out; no trace file, the last 262 144 samples (16 MiB) kept in memory; a
     /// second session's motion request waits 1 s for the owner to go; the i5's nominal
-    /// kinematics ([`crate::kinematics::DhParams::AUBO_I5`]).
+    /// kinematics ([`crate::kinematics::DhParams::AUBO_I5`]), reported by
+    /// `getKinematicsParam`.
     fn default() -> Self {
         Self {
             faults: Faults::default(),
@@ -106,6 +117,7 @@ impl Default for SimOptions {
             trace_window: 1 << 18,
             owner_wait: Duration::from_secs(1),
             kinematics: crate::kinematics::DhParams::AUBO_I5,
+            kinematics_param: true,
         }
     }
 }

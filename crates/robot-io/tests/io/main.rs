@@ -3,6 +3,7 @@
 //! the AUBO wire format against the official SDK's captured frames, the runner under faults,
 //! the simulator server and its transports, timing and the path buffer.
 
+mod blends;
 mod common;
 mod exports;
 mod external_parsers;

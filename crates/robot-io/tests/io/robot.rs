@@ -27,6 +27,12 @@ fn sparse() -> RobotConfig {
     RobotConfig { limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() }, ..Default::default() }
 }
 
+/// [`sparse`] with every pressed move ending at rest on its point (no blend), so the trace
+/// passes through each point exactly.
+fn stops() -> RobotConfig {
+    RobotConfig { blend_mm: 0.0, ..sparse() }
+}
+
 fn same_rotation(a: &Pose, b: &Pose) -> bool {
     a.to_iso().rotation.angle_to(&b.to_iso().rotation) < 1e-9
 }
@@ -222,7 +228,7 @@ fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::a
 
 #[test]
 fn a_full_run_on_the_simulator_follows_the_track() {
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &stops()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults { queue_full_every: Some(4), ..Faults::default() }).unwrap();
     let report = run(&sim, &prog).unwrap();
     assert_eq!(report.strokes_completed, vec![0, 1]);
@@ -253,7 +259,7 @@ fn a_full_run_on_the_simulator_follows_the_track() {
 
 #[test]
 fn a_dropped_connection_mid_stroke_is_resumed_without_rewriting() {
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &stops()).unwrap();
     // Moves: 1 joint, stroke 1 = 2 approach + 3 press + 1 lift (moves 2–7); stroke 2 travels
     // (8), descends onto its first point (9), presses (10, 11, ...): the drop hits move 11, in
     // the middle of stroke 2.
@@ -347,7 +353,7 @@ fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kine
         d_m: [0.122, 0.12161, -1.145e-4, 1.145e-4, 0.10210, 0.094],
         theta_rad: DhParams::AUBO_I5.theta_rad,
     };
-    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
+    let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &stops()).unwrap();
     let Move::JointPose { pose: above, .. } = prog.start else { panic!("the start is {:?}", prog.start) };
     let sim = Simulator::start_with(
         &[Listen { bind: "127.0.0.1:0".into(), transports: vec![Transport::Framed] }],

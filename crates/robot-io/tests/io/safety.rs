@@ -27,6 +27,12 @@ fn pt(x: f64, y: f64, h: f64, alpha: f64, beta: f64) -> TrackPoint {
 }
 
 /// Horizontal strokes of `n` points 0.5 mm apart, pressed at 12 mm, one per 10 mm row.
+/// The defaults, each pressed move ending at rest on its point (no blend): the rows' points lie
+/// 0.5 mm apart, closer than twice the default blend, which a blending controller refuses.
+fn stops() -> RobotConfig {
+    RobotConfig { blend_mm: 0.0, ..RobotConfig::default() }
+}
+
 fn rows(strokes: usize, n: usize) -> Track {
     Track {
         strokes: (0..strokes)
@@ -541,10 +547,11 @@ fn stopped(e: RobotError) -> (RobotError, usize, bool, String) {
 fn a_controller_error_mid_stroke_lifts_the_brush_and_says_so() {
     let f = paper();
     let track = rows(2, 8);
-    let (mut prog, _) = build_program(&track, &pen1(), &f, &RobotConfig::default()).unwrap();
-    // Tamper after the check: the controller refuses the 4th pressed move of stroke 2 (−5).
-    let Move::Line { blend_m, .. } = &mut prog.strokes[1].press[3] else { panic!("line") };
-    *blend_m = 1.0;
+    let (mut prog, _) = build_program(&track, &pen1(), &f, &stops()).unwrap();
+    // Tamper after the check: the controller refuses the 4th pressed move of stroke 2 (−5: a
+    // speed beyond its range).
+    let Move::Line { v, .. } = &mut prog.strokes[1].press[3] else { panic!("line") };
+    *v = 10.0;
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     let stop = AtomicBool::new(false);
     let e = run_program(&sim.addr.to_string(), &prog, None, &opts(&stop), |_| {}).unwrap_err();
@@ -566,7 +573,7 @@ fn a_controller_error_mid_stroke_lifts_the_brush_and_says_so() {
 fn ctrl_c_mid_stroke_stops_lifts_and_is_an_error() {
     let f = paper();
     let track = rows(2, 30);
-    let (prog, _) = build_program(&track, &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&track, &pen1(), &f, &stops()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     // Requests: names, tool, speed, start move, exec id (5); stroke 1 is 2 + 29 + 1 moves and an
@@ -595,7 +602,7 @@ fn ctrl_c_mid_stroke_stops_lifts_and_is_an_error() {
 #[test]
 fn a_controller_that_stays_away_ends_in_gave_up_with_the_connection_error_as_cause() {
     let f = paper();
-    let (prog, _) = build_program(&rows(2, 30), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&rows(2, 30), &pen1(), &f, &stops()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     // One connection only, dropped after 20 requests (mid stroke 1); then nothing listens.
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -628,7 +635,7 @@ fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifte
     let f = paper();
     // Short strokes (about 20 requests each): every 50th request dropped, the run finishes;
     // each drop restarts at most the stroke it hit.
-    let (prog, _) = build_program(&rows(6, 12), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&rows(6, 12), &pen1(), &f, &stops()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     let proxy = Proxy::start(sim.addr, Some(50), None);
     let stop = AtomicBool::new(false);
@@ -641,7 +648,7 @@ fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifte
     drop(proxy);
     // A stroke that needs more than 50 requests can never finish: the runner gives up after
     // 3 tries of it (not for ever), lifts the brush and says why.
-    let (prog, _) = build_program(&rows(3, 70), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _) = build_program(&rows(3, 70), &pen1(), &f, &stops()).unwrap();
     let sim = Simulator::start("127.0.0.1:0", Faults::default()).unwrap();
     let proxy = Proxy::start(sim.addr, Some(50), None);
     let t0 = Instant::now();
@@ -670,7 +677,7 @@ fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifte
 #[test]
 fn program_helpers_measure_depth_along_the_paper_normal() {
     let f = paper();
-    let (prog, _): (Program, _) = build_program(&rows(1, 10), &pen1(), &f, &RobotConfig::default()).unwrap();
+    let (prog, _): (Program, _) = build_program(&rows(1, 10), &pen1(), &f, &stops()).unwrap();
     let p = robot_io::pose::brush_pose(&f, &pt(10.0, 20.0, 7.0, 0.1, 0.3));
     assert!((prog.depth_mm(p.position()) - 7.0).abs() < 1e-9);
     let up = prog.lifted_out(&p, 0.02);

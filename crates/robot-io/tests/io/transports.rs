@@ -24,8 +24,9 @@ fn program() -> (Program, PaperFrame) {
             Stroke { points: (0..6).map(|i| pt(50.0, 45.0 + 4.0 * i as f64)).collect() },
         ],
     };
-    let (p, _) =
-        build_program(&track, &BrushProfile::builtin("pen1").unwrap(), &paper, &RobotConfig::default()).unwrap();
+    // Each press ends at rest on its point (no blend), so the trace passes through it exactly.
+    let stops = RobotConfig { blend_mm: 0.0, ..RobotConfig::default() };
+    let (p, _) = build_program(&track, &BrushProfile::builtin("pen1").unwrap(), &paper, &stops).unwrap();
     (p, paper)
 }
 

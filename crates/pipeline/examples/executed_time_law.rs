@@ -1,0 +1,146 @@
+//! The executed figure on the controller's time law: for each character, executed CSIM against
+//! the glyph with the plain executor (what `maobi write` reports), with the program sent as path
+//! buffers, sent as compacted blended moves (`robot send --motion moves`), and as compacted
+//! moves without blends (`blend_mm` 0: what compaction and ramps alone cost), and as compacted
+//! moves without a blend where the path turns back (more than 90°), as the simulator server
+//! runs them; prints each and the means. A character whose program the timing refuses is
+//! named and left out of the means.
+//!
+//! ```sh
+//! cargo run -p pipeline --example executed_time_law -- HANZI_DIR SET_FILE FIRST LAST [SIZE]
+//! ```
+//!
+//! `HANZI_DIR` is an unpacked `npm pack hanzi-writer-data`; `SET_FILE` a character list, one
+//! per line, `#` comments (`fixtures/hanzi/heldout-2000.txt`); `FIRST`..`LAST` the lines
+//! (1-based, inclusive, comments not counted); `SIZE` the render side (default 512, as `maobi
+//! write`).
+
+use std::path::PathBuf;
+
+use brush_model::BrushProfile;
+use pipeline::{
+    BoxRule, Execution, GlyphInput, WriteOptions, execute_track_with, level_frame_for, render_states, similarity,
+    write_placed,
+};
+use robot_io::RobotConfig;
+
+/// The compacted program with no blend at a pressed point where the path turns back (its
+/// direction changes by more than 90°), executed as the simulator runs blended moves.
+fn stop_where_turning_back(
+    track: &brush_model::Track,
+    profile: &BrushProfile,
+    frame: &robot_io::PaperFrame,
+    cfg: &RobotConfig,
+) -> Result<Vec<brush_model::TrackPoint>, Box<dyn std::error::Error>> {
+    use robot_io::Move;
+    use robot_io::kinematics::DhParams;
+    let (program, _) = robot_io::build_program(track, profile, frame, cfg)?;
+    let mut compact = robot_io::program::compact_program(&program, cfg);
+    let at = |m: &Move| match m {
+        Move::Line { pose, .. } => Some(robot_io::nalgebra::Vector3::from(pose.position())),
+        _ => None,
+    };
+    for st in &mut compact.strokes {
+        let mut pts: Vec<_> = st.approach.last().and_then(at).into_iter().collect();
+        pts.extend(st.press.iter().filter_map(at));
+        for k in 0..st.press.len().saturating_sub(1) {
+            let (a, b, c) = (pts[k], pts[k + 1], pts[k + 2]);
+            if (b - a).dot(&(c - b)) < 0.0
+                && let Move::Line { blend_m, .. } = &mut st.press[k]
+            {
+                *blend_m = 0.0;
+            }
+        }
+    }
+    let trace = robot_io::sim::execute_as_sent(&compact, &DhParams::AUBO_I5, robot_io::sim::SendMotion::Moves)?;
+    Ok(robot_io::exec::trace_to_states(&trace, frame))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [dir, set, first, last, rest @ ..] = args.as_slice() else {
+        return Err("usage: executed_time_law HANZI_DIR SET_FILE FIRST LAST [SIZE]".into());
+    };
+    let (first, last): (usize, usize) = (first.parse()?, last.parse()?);
+    let size: u32 = rest.first().map_or(Ok(512), |s| s.parse())?;
+    let text = std::fs::read_to_string(set)?;
+    let chars: Vec<char> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .filter_map(|l| l.trim().chars().next())
+        .skip(first.saturating_sub(1))
+        .take(last + 1 - first.max(1))
+        .collect();
+    let input = GlyphInput::Hanzi(Some(PathBuf::from(dir)));
+    let pen1 = BrushProfile::builtin("pen1")?;
+    let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
+    let cfg = RobotConfig::default();
+    // Moves without blends: what the compaction and the ramps alone cost.
+    let stops = RobotConfig { blend_mm: 0.0, ..RobotConfig::default() };
+    let mut sums = [0.0f64; 5];
+    let mut worst_drop = [0.0f64; 4];
+    let mut n = 0usize;
+    println!("char\tplain\tpath_buffer\tmoves\tmoves_without_blends\tmoves_stopping_where_they_turn_back");
+    let mut refused = Vec::new();
+    'chars: for ch in chars {
+        let p = match input.prepare(ch, None) {
+            Ok(p) => p,
+            Err(e) => {
+                println!("{ch}\tskipped ({e})");
+                continue;
+            }
+        };
+        let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
+        let plain = r.report.executed.ok_or("not executed")?.csim;
+        let frame = level_frame_for(&r.char_box);
+        let mut scores = [plain, 0.0, 0.0, 0.0, 0.0];
+        for (k, how, c) in
+            [(1, Execution::PathBuffer, &cfg), (2, Execution::Moves, &cfg), (3, Execution::Moves, &stops)]
+        {
+            let states = match execute_track_with(&r.track, &pen1, &frame, c, how) {
+                Ok(s) => s,
+                Err(e) => {
+                    refused.push(format!("{ch} ({how:?}): {e}"));
+                    continue 'chars;
+                }
+            };
+            let img = render_states(&states, &pen1, opts.model, brush_model::Extrapolation::Refuse, &r.char_box, size);
+            scores[k] = similarity(&r.reference, &img)?.csim;
+            worst_drop[k - 1] = worst_drop[k - 1].max(plain - scores[k]);
+        }
+        // Moves whose blend is dropped where the path turns back (more than 90°).
+        let states = stop_where_turning_back(&r.track, &pen1, &frame, &cfg)?;
+        let img = render_states(&states, &pen1, opts.model, brush_model::Extrapolation::Refuse, &r.char_box, size);
+        scores[4] = similarity(&r.reference, &img)?.csim;
+        worst_drop[3] = worst_drop[3].max(plain - scores[4]);
+        println!("{ch}\t{:.5}\t{:.5}\t{:.5}\t{:.5}\t{:.5}", scores[0], scores[1], scores[2], scores[3], scores[4]);
+        for k in 0..5 {
+            sums[k] += scores[k];
+        }
+        n += 1;
+    }
+    for r in &refused {
+        println!("refused, left out of the means: {r}");
+    }
+    let m = n.max(1) as f64;
+    println!(
+        "mean over {n}: plain {:.5}, path buffer {:.5} ({:+.5}; largest drop {:.5}), moves {:.5} ({:+.5}; largest drop {:.5}), moves without blends {:.5} ({:+.5}; largest drop {:.5})",
+        sums[0] / m,
+        sums[1] / m,
+        (sums[1] - sums[0]) / m,
+        worst_drop[0],
+        sums[2] / m,
+        (sums[2] - sums[0]) / m,
+        worst_drop[1],
+        sums[3] / m,
+        (sums[3] - sums[0]) / m,
+        worst_drop[2]
+    );
+    println!(
+        "moves stopping where they turn back: {:.5} ({:+.5}; largest drop {:.5})",
+        sums[4] / m,
+        (sums[4] - sums[0]) / m,
+        worst_drop[3]
+    );
+    Ok(())
+}
