@@ -22,6 +22,7 @@
 //! ```
 
 mod brush_choice;
+mod closed_loop;
 mod error;
 mod glyphs;
 mod marks;
@@ -32,6 +33,10 @@ mod text;
 mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
+pub use closed_loop::{
+    BrushCorrection, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, Residual, SPREAD_RANGE_MM, fit_brush,
+    ilc_target, predict_attempt, refine_observed,
+};
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{

@@ -7,6 +7,7 @@
 mod common;
 
 mod brush;
+mod closed_loop;
 mod neural;
 mod newcomer;
 mod observe;
