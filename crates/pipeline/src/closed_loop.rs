@@ -28,6 +28,11 @@ pub const FACTOR_RANGE: [f64; 2] = [0.5, 2.0];
 /// The bounds of a fitted spread, mm.
 pub const SPREAD_RANGE_MM: [f64; 2] = [-1.0, 2.0];
 
+/// The least share of the profile's ink error a fitted correction must explain to be taken
+/// (below it the fit is within what the brush's lag and trail, the photo and the fit's own
+/// weakly determined directions leave, and the profile is kept).
+pub const MIN_CORRECTION_GAIN: f64 = 0.2;
+
 /// Nelder–Mead iterations of the brush fit.
 const FIT_ITERS: usize = 40;
 
@@ -124,6 +129,10 @@ pub struct BrushCorrection {
     pub ink_error_before: f64,
     /// The same through the corrected profile.
     pub ink_error_after: f64,
+    /// A correction that was fitted but not taken (it explained less than
+    /// [`MIN_CORRECTION_GAIN`] of the error; the factors above are then 1 and the spread 0):
+    /// `[width factor, length factor, spread mm, ink error]`.
+    pub not_taken: Option<[f64; 4]>,
 }
 
 impl BrushCorrection {
@@ -134,6 +143,7 @@ impl BrushCorrection {
         spread_mm: 0.0,
         ink_error_before: 0.0,
         ink_error_after: 0.0,
+        not_taken: None,
     };
 
     /// `profile` with this correction applied to its model (every coefficient of `lt` and
@@ -273,8 +283,9 @@ fn fit_render(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind, sid
 /// difference between each character's observed ink and its commanded strokes rendered through
 /// the corrected profile (both at up to [`FIT_PX`] px a side; the forward model sampled every
 /// 1 mm instead of 0.1 mm), within [`FACTOR_RANGE`] and
-/// [`SPREAD_RANGE_MM`]. Deterministic. When no correction beats the profile, the identity is
-/// returned.
+/// [`SPREAD_RANGE_MM`]. Deterministic. A correction that explains less than
+/// [`MIN_CORRECTION_GAIN`] of the profile's ink error is not taken: the identity is returned,
+/// with the fitted values in [`BrushCorrection::not_taken`].
 ///
 /// # Errors
 /// [`ClosedLoopError::Empty`], [`ClosedLoopError::NotSquare`], [`ClosedLoopError::NoStrokes`]
@@ -345,8 +356,13 @@ pub fn fit_brush(
     let before = loss(&[1.0, 1.0, 0.0]);
     let opts = NelderMead { min_spread: Some(1e-5), ..NelderMead::new([0.15, 0.15, 0.2], FIT_ITERS) };
     let (x, after) = nelder_mead(loss, [1.0, 1.0, 0.0], &opts);
-    if after >= before {
-        return Ok(BrushCorrection { ink_error_before: before, ink_error_after: before, ..BrushCorrection::IDENTITY });
+    if !(after < (1.0 - MIN_CORRECTION_GAIN) * before) {
+        return Ok(BrushCorrection {
+            ink_error_before: before,
+            ink_error_after: before,
+            not_taken: Some([x[0], x[1], x[2], after]),
+            ..BrushCorrection::IDENTITY
+        });
     }
     Ok(BrushCorrection {
         width_factor: x[0],
@@ -354,6 +370,7 @@ pub fn fit_brush(
         spread_mm: x[2],
         ink_error_before: before,
         ink_error_after: after,
+        not_taken: None,
     })
 }
 

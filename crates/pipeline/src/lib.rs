@@ -34,8 +34,8 @@ mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
 pub use closed_loop::{
-    BrushCorrection, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, Residual, SPREAD_RANGE_MM, fit_brush,
-    ilc_target, predict_attempt, refine_observed,
+    BrushCorrection, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, MIN_CORRECTION_GAIN, Residual,
+    SPREAD_RANGE_MM, fit_brush, ilc_target, predict_attempt, refine_observed,
 };
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};

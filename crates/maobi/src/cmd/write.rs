@@ -401,6 +401,22 @@ pub fn run(args: Args) -> Result<()> {
         );
         match (&choice, &correction) {
             (Some(c), _) => println!("brush (--brush auto): {}", c.reason),
+            (None, Some(c)) if c.not_taken.is_some() => println!(
+                "brush kept from the photo (--observed): {}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm) explains only {:.0} % of the ink error {:.4} (under {:.0} %); written to {}{}",
+                profile.name,
+                c.not_taken.map_or(1.0, |v| v[0]),
+                c.not_taken.map_or(1.0, |v| v[1]),
+                c.not_taken.map_or(0.0, |v| v[2]),
+                c.not_taken.map_or(0.0, |v| 100.0 * (1.0 - v[3] / c.ink_error_before)),
+                c.ink_error_before,
+                100.0 * pipeline::MIN_CORRECTION_GAIN,
+                args.output.join("brush.json").display(),
+                if refine.is_some() {
+                    "; tracks refined against the glyph shifted by the observed residual (ILC)"
+                } else {
+                    ""
+                }
+            ),
             (None, Some(c)) => println!(
                 "brush re-fitted from the photo (--observed): {} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (ink error {:.4} → {:.4}); written to {}{}",
                 profile.name,
@@ -741,7 +757,10 @@ impl ObservedRun {
         let c = pipeline::fit_brush(&self.attempts(), profile, model)
             .with_context(|| format!("--observed {}: re-fitting the brush", self.dir.display()))?;
         let root = profile.name.split('+').next().unwrap_or(&profile.name);
-        let name = format!("{root}+observed{}", self.earlier.len() + 1);
+        let name = match c.not_taken {
+            None => format!("{root}+observed{}", self.earlier.len() + 1),
+            Some(_) => profile.name.clone(),
+        };
         let corrected = c.apply(profile, &name).with_context(|| format!("--observed {}", self.dir.display()))?;
         Ok((c, corrected))
     }

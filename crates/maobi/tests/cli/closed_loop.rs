@@ -92,28 +92,22 @@ fn chain(dir: &Path, setup: &Setup<'_>, refine: bool, rounds: usize) -> Chain {
     let mut rng = Rng(2028);
     for k in 0..=rounds {
         let sheet = chain.sheets[k].clone();
-        let t0 = std::time::Instant::now();
         let per = world_csim(&sheet, &truth, &WORLD);
-        eprintln!("world csim {:.1} s", t0.elapsed().as_secs_f64());
         chain.csim.push(mean(&per));
         chain.per_char.push(per);
         if k == rounds {
             break;
         }
-        let t0 = std::time::Instant::now();
         let track = robot_io::TrackFile::load(&sheet.join("track.json")).unwrap();
         let stamps = world_stamps(&track.strokes, &truth);
         let cam = random_camera(&mut rng, 0.0);
         let (jpeg, _) = photograph_sized(&stamps, [210.0, 297.0], &cam, 40 + k as u64, setup.photo, setup.focal_px);
         let photo = dir.join(format!("{tag}-photo{k}.jpg"));
         std::fs::write(&photo, &jpeg).unwrap();
-        eprintln!("photo {:.1} s", t0.elapsed().as_secs_f64());
         let seen = dir.join(format!("{tag}-seen{k}"));
         ok(&maobi(&["observe", s(&photo), "--sheet", s(&sheet), "-o", s(&seen)]));
-        eprintln!("observe {:.1} s", t0.elapsed().as_secs_f64());
         let next = dir.join(format!("{tag}-{}", k + 1));
         write(&next, Some(&seen));
-        eprintln!("write {:.1} s", t0.elapsed().as_secs_f64());
         chain.observed.push(seen);
         chain.sheets.push(next);
     }
@@ -209,15 +203,40 @@ fn write_observed_refuses_another_sheet() {
 #[ignore = "slow: the full figures for docs/closed-loop.md"]
 fn closed_loop_figures() {
     let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    let dir = &std::env::var_os("MAOBI_LOOP_KEEP").map_or(dir.to_path_buf(), PathBuf::from);
     let full = Setup { chars: FULL_CHARS, size: 256, photo: [PHOTO_W, PHOTO_H], focal_px: FOCAL_PX };
     for refine in [false, true] {
-        let c = chain(dir.path(), &full, refine, 2);
+        let c = chain(dir, &full, refine, 2);
         let summary = json(&c.sheets[2].join("summary.json"));
         for r in summary["rounds"].as_array().unwrap() {
             eprintln!(
                 "round {}: observed CSIM vs glyph {}; correction {}",
                 r["round"], r["observed_vs_glyph_mean"]["csim"], r["correction"]
             );
+        }
+        // The corrected profiles' footprints against the world's over the press range.
+        let truth = robot_io::TrackFile::load(&c.sheets[0].join("track.json")).unwrap().brush;
+        for k in 1..=2 {
+            let fitted = brush_model::BrushProfile::load(&c.sheets[k].join("brush.json")).unwrap();
+            for f in [0.0, 0.5, 1.0] {
+                let h = truth.ranges.h_mm.lerp(f);
+                let press = brush_model::Press::new(h, 0.0, 0.0);
+                let t = truth.predict(&press, brush_model::Extrapolation::Refuse).unwrap();
+                let g = fitted.predict(&press, brush_model::Extrapolation::Refuse).unwrap();
+                eprintln!(
+                    "brush after round {k}, h {h:.2} mm: lt {:.2} (world {:.2}), lh {:.2} (world {:.2}), lr {:.2} (world {:.2}); profile {:.2}/{:.2}/{:.2} mm",
+                    g.lt_mm,
+                    WORLD_LENGTH * t.lt_mm + WORLD_SPREAD_MM,
+                    g.lh_mm,
+                    WORLD_LENGTH * t.lh_mm + WORLD_SPREAD_MM,
+                    g.lr_mm,
+                    WORLD_WIDTH * t.lr_mm + WORLD_SPREAD_MM,
+                    t.lt_mm,
+                    t.lh_mm,
+                    t.lr_mm
+                );
+            }
         }
         if let Some(out) = std::env::var_os("MAOBI_LOOP_IMAGES") {
             let out = PathBuf::from(out);
