@@ -90,11 +90,17 @@ pub enum ClosedLoopError {
         ch: String,
         /// Why.
         #[source]
-        source: track_refine::RefineError,
+        source: Box<track_refine::RefineError>,
     },
     /// Writing the next attempt failed.
     #[error(transparent)]
-    Pipeline(#[from] crate::Error),
+    Pipeline(Box<crate::Error>),
+}
+
+impl From<crate::Error> for ClosedLoopError {
+    fn from(e: crate::Error) -> Self {
+        ClosedLoopError::Pipeline(Box::new(e))
+    }
 }
 
 /// One character of the last attempt: where it sat, what was commanded and what the photo
@@ -435,7 +441,7 @@ pub fn ilc_target(
     let r = residual.resampled(px);
     let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - r).clamp(0.0, 1.0)).collect();
     Target::new(px, px, ink, PointMm::new(char_box.x0_mm, char_box.y0_mm), char_box.size_mm / px as f64)
-        .map_err(|source| ClosedLoopError::Target { ch: glyph.ch.to_string(), source })
+        .map_err(|source| ClosedLoopError::Target { ch: glyph.ch.to_string(), source: Box::new(source) })
 }
 
 /// Refines each written character's track against its ILC target ([`ilc_target`] with its
