@@ -258,6 +258,14 @@ pub fn run(args: Args) -> Result<()> {
         Some(o) => o.track.brush.clone(),
         None => load_brush(named)?,
     };
+    let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
+    // One run per output folder at a time; what a run that died left beside it is cleaned up
+    // (or the old folder put back) before deciding whether the folder may be replaced.
+    let _lock = OutputLock::acquire("--output", &args.output)?;
+    recover_leftovers(&args.output)?;
+    check_output_folder("--output", &args.output, args.force)?;
+    // The brush re-fitted to the observed ink (its calibrated ranges, and so the tilt check
+    // above, stay as they were).
     let correction = match &observed {
         Some(o) => {
             let (c, corrected) = o.correct_brush(&profile, args.model)?;
@@ -266,12 +274,6 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
-    // One run per output folder at a time; what a run that died left beside it is cleaned up
-    // (or the old folder put back) before deciding whether the folder may be replaced.
-    let _lock = OutputLock::acquire("--output", &args.output)?;
-    recover_leftovers(&args.output)?;
-    check_output_folder("--output", &args.output, args.force)?;
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
     let choice = match box_mm {
