@@ -23,6 +23,7 @@
 
 mod brush_choice;
 mod calibration_sheet;
+mod closed_loop;
 mod error;
 mod glyphs;
 mod marks;
@@ -37,6 +38,10 @@ pub use calibration_sheet::{
     CALIBRATION_LAYOUT_VERSION, CELL_GAP_MM, CELL_GROWTH, CalibrationLayout, CalibrationPress, CalibrationSheet,
     CalibrationSheetError, PRESS_ALPHA_LEVELS, PRESS_BETA_LEVELS, PRESS_H_LEVELS, PRESS_SLIDE_MM, PRESS_TOUCH_FRACTION,
     calibration_sheet, calibration_sheet_image, press_stroke,
+};
+pub use closed_loop::{
+    BrushCorrection, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, MIN_CORRECTION_GAIN, Residual,
+    SPREAD_RANGE_MM, fit_brush, ilc_target, predict_attempt, refine_observed,
 };
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};

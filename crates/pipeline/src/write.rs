@@ -400,7 +400,8 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let mut result =
         CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };
     if let Some(ro) = &opts.refine {
-        refine_result(&mut result, p, profile, opts, ro)?;
+        let target = refine_target(&p.glyph, &result.char_box, ro.analysis_px)?;
+        refine_result(&mut result, p, profile, opts, ro, &target)?;
     }
     Ok(result)
 }
@@ -430,23 +431,24 @@ pub fn refine_target(glyph: &Glyph, char_box: &CharBox, px: u32) -> Result<Targe
         .map_err(|source| Error::Refine { ch: glyph.ch, source })
 }
 
-/// Refines a written character's track against its glyph and replaces the result's track,
-/// renders and figures by the refined ones, keeping the built track's figures as "before".
+/// Refines a written character's track against `target` (its glyph, or the closed loop's
+/// shifted glyph) and replaces the result's track, renders and figures by the refined ones,
+/// keeping the built track's figures as "before"; every figure is scored against the glyph.
 /// A refined track that fails the robot check is not used (the report says why).
-fn refine_result(
+pub(crate) fn refine_result(
     r: &mut CharResult,
     p: &Prepared,
     profile: &BrushProfile,
     opts: &WriteOptions,
     ro: &RefineOptions,
+    target: &Target,
 ) -> Result<()> {
-    let target = refine_target(&p.glyph, &r.char_box, ro.analysis_px)?;
     let refined = match ro.gradients {
-        track_refine::Gradients::Analytic => track_refine::refine(&r.track, profile, &target, ro),
+        track_refine::Gradients::Analytic => track_refine::refine(&r.track, profile, target, ro),
         #[cfg(feature = "generator")]
         track_refine::Gradients::Generator => {
             let g = opts.generator.clone().ok_or(Error::NoGenerator)?;
-            track_refine::refine_with_generator(&r.track, profile, &target, ro, g)
+            track_refine::refine_with_generator(&r.track, profile, target, ro, g)
         }
         #[cfg(not(feature = "generator"))]
         track_refine::Gradients::Generator => return Err(Error::NoGenerator),

@@ -104,6 +104,15 @@ pub struct Args {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// Write the sheet again, corrected from a photo of the last attempt: OUT is the folder
+    /// `maobi observe` wrote for it (its summary.json names the sheet it observed; TEXT and the
+    /// layout flags must give the same sheet). The brush the sheet was written with is re-fitted
+    /// to the observed ink (width, length, spread; saved as brush.json in the output) and, with
+    /// --refine, each track is refined against the glyph shifted by what the photo showed beyond
+    /// the model (iterative learning control). summary.json gains every round's figures
+    /// (docs/closed-loop.md).
+    #[arg(long, value_name = "OUT", requires = "sheet", conflicts_with = "brush")]
+    observed: Option<PathBuf>,
     #[command(flatten)]
     renderer: RendererArgs,
     #[command(flatten)]
@@ -233,19 +242,38 @@ pub fn run(args: Args) -> Result<()> {
     // With a box size known before any glyph work (a sheet, --char-mm), `auto` (the default
     // then) picks the brush once the glyphs are loaded; every built-in has pen1's tilt range.
     let box_mm = sheet_layout.as_ref().map(|l| l.char_mm).or(args.char_mm);
+    // A corrected attempt is written with the brush the observed sheet was written with,
+    // re-fitted to its ink.
+    let observed = match &args.observed {
+        Some(dir) => Some(load_observed(dir, &chars, sheet_layout.as_ref())?),
+        None => None,
+    };
     let auto = match args.brush.as_deref() {
-        Some("auto") => true,
+        Some("auto") => observed.is_none(),
         Some(_) => false,
-        None => box_mm.is_some(),
+        None => box_mm.is_some() && observed.is_none(),
     };
     let named = if auto { "pen1" } else { args.brush.as_deref().unwrap_or("pen1") };
-    let mut profile = load_brush(named)?;
+    let mut profile = match &observed {
+        Some(o) => o.track.brush.clone(),
+        None => load_brush(named)?,
+    };
     let alpha_rad = checked_alpha_rad(args.alpha, &profile)?;
     // One run per output folder at a time; what a run that died left beside it is cleaned up
     // (or the old folder put back) before deciding whether the folder may be replaced.
     let _lock = OutputLock::acquire("--output", &args.output)?;
     recover_leftovers(&args.output)?;
     check_output_folder("--output", &args.output, args.force)?;
+    // The brush re-fitted to the observed ink (its calibrated ranges, and so the tilt check
+    // above, stay as they were).
+    let correction = match &observed {
+        Some(o) => {
+            let (c, corrected) = o.correct_brush(&profile, args.model)?;
+            profile = corrected;
+            Some(c)
+        }
+        None => None,
+    };
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
     let choice = match box_mm {
@@ -262,8 +290,16 @@ pub fn run(args: Args) -> Result<()> {
         Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
         _ => None,
     };
-    let opts =
-        WriteOptions { model: args.model, size: args.size, alpha_rad, refine, generator, ..WriteOptions::default() };
+    // With --observed the refinement runs after writing, against the ILC target.
+    let write_refine = if observed.is_some() { None } else { refine };
+    let mut opts = WriteOptions {
+        model: args.model,
+        size: args.size,
+        alpha_rad,
+        refine: write_refine,
+        generator,
+        ..WriteOptions::default()
+    };
     let text = TextOptions {
         layout: sheet_layout,
         char_mm: args.char_mm,
@@ -273,9 +309,16 @@ pub fn run(args: Args) -> Result<()> {
         mark_margin_mm: (args.marks && sheet.is_none()).then_some(pipeline::MARK_MARGIN_MM),
     };
     let pb = progress(chars.len() as u64, "write");
+    let kept = observed.as_ref().map(|_| prepared.clone());
     let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
+    if let (Some(o), Some(ro), Some(prepared)) = (&observed, refine, &kept) {
+        opts.refine = Some(ro);
+        let residuals = o.residuals(&profile, args.model)?;
+        pipeline::refine_observed(&mut results, prepared, &residuals, &profile, &opts, &ro)
+            .context("--observed with --refine")?;
+    }
     let char_mm = lay.char_mm;
     if args.renderer.neural() {
         let g = args.renderer.generator()?;
@@ -296,6 +339,12 @@ pub fn run(args: Args) -> Result<()> {
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
     let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
     summary["brush_choice"] = json!(choice);
+    if let (Some(o), Some(c)) = (&observed, &correction) {
+        let (this, rounds) = o.rounds(c, &profile, refine.is_some());
+        summary["observed"] = this;
+        summary["rounds"] = rounds;
+        write_atomic(&stage.path().join("brush.json"), profile.to_json().as_bytes())?;
+    }
     let mut sheet_track = SheetTrack::new(
         &lay,
         flow,
@@ -325,6 +374,10 @@ pub fn run(args: Args) -> Result<()> {
         // The marks make one character a sheet of one: its track.json is the sheet's.
         write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
     }
+    if single && observed.is_some() {
+        // The rounds live in summary.json.
+        write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    }
     if !single {
         let img = pipeline::sheet_image(&results, &profile, args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
@@ -348,9 +401,41 @@ pub fn run(args: Args) -> Result<()> {
             summary["brush_fit"]["note"].as_str().unwrap_or(""),
             args.output.display()
         );
-        match &choice {
-            Some(c) => println!("brush (--brush auto): {}", c.reason),
-            None => println!("brush: {}", profile.name),
+        match (&choice, &correction) {
+            (Some(c), _) => println!("brush (--brush auto): {}", c.reason),
+            (None, Some(c)) if c.not_taken.is_some() => println!(
+                "brush kept from the photo (--observed): {}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm) explains only {:.0} % of the ink error {:.4} (under {:.0} %); written to {}{}",
+                profile.name,
+                c.not_taken.map_or(1.0, |v| v[0]),
+                c.not_taken.map_or(1.0, |v| v[1]),
+                c.not_taken.map_or(0.0, |v| v[2]),
+                c.not_taken.map_or(0.0, |v| 100.0 * (1.0 - v[3] / c.ink_error_before)),
+                c.ink_error_before,
+                100.0 * pipeline::MIN_CORRECTION_GAIN,
+                args.output.join("brush.json").display(),
+                if refine.is_some() {
+                    "; tracks refined against the glyph shifted by the observed residual (ILC)"
+                } else {
+                    ""
+                }
+            ),
+            (None, Some(c)) => println!(
+                "brush re-fitted from the photo (--observed): {} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (ink error {:.4} → {:.4}); written to {}{}",
+                profile.name,
+                c.width_factor,
+                c.length_factor,
+                c.spread_mm,
+                observed.as_ref().map_or("", |o| o.track.brush.name.as_str()),
+                c.ink_error_before,
+                c.ink_error_after,
+                args.output.join("brush.json").display(),
+                if refine.is_some() {
+                    "; tracks refined against the glyph shifted by the observed residual (ILC)"
+                } else {
+                    ""
+                }
+            ),
+            (None, None) => println!("brush: {}", profile.name),
         }
     }
     Ok(())
@@ -537,4 +622,192 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
         write_atomic(&dir.join("refine.png"), &png)?;
     }
     Ok(())
+}
+
+/// The last attempt that `--observed OUT` names: `maobi observe`'s output, the sheet folder it
+/// observed, and each character's observed ink.
+struct ObservedRun {
+    /// `--observed`.
+    dir: PathBuf,
+    /// The sheet folder it observed.
+    sheet_dir: PathBuf,
+    /// Its summary.json.
+    summary: serde_json::Value,
+    /// The observed sheet's track.json.
+    track: SheetTrack,
+    /// Each character's observed.png, in the sheet's order.
+    observed: Vec<bezier_raster::Coverage>,
+    /// The rounds before this one (the observed sheet's summary.json `rounds`, when it was
+    /// itself a corrected attempt).
+    earlier: Vec<serde_json::Value>,
+}
+
+/// Reads `--observed DIR` and the sheet it observed; refuses when TEXT or the layout differ from
+/// that sheet's.
+fn load_observed(dir: &Path, chars: &[char], layout: Option<&Layout>) -> Result<ObservedRun> {
+    let read_json = |p: &Path, what: &str| -> Result<serde_json::Value> {
+        let text = std::fs::read_to_string(p).with_context(|| format!("--observed: cannot read {}", p.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("--observed: {} is not {what}", p.display()))
+    };
+    let sp = dir.join("summary.json");
+    let summary = read_json(&sp, "the summary.json of `maobi observe`")?;
+    let Some(sheet) = summary["sheet"].as_str() else {
+        bail!(
+            "--observed: {} names no sheet (field `sheet`): is {} an output of `maobi observe`?",
+            sp.display(),
+            dir.display()
+        );
+    };
+    let sheet_dir = PathBuf::from(sheet);
+    let tp = sheet_dir.join("track.json");
+    let text = std::fs::read_to_string(&tp).with_context(|| {
+        format!(
+            "--observed: {} observed the sheet {}, whose track.json cannot be read",
+            dir.display(),
+            sheet_dir.display()
+        )
+    })?;
+    let track: SheetTrack = serde_json::from_str(&text)
+        .with_context(|| format!("--observed: {} is not a sheet's track.json", tp.display()))?;
+    let text_now: String = chars.iter().collect();
+    let seen: String = track.chars.iter().map(|c| c.char.as_str()).collect();
+    if seen != text_now {
+        bail!(
+            "--observed: {} observed the sheet of {seen:?} ({}), not {text_now:?}: give the same characters",
+            dir.display(),
+            sheet_dir.display()
+        );
+    }
+    if let Some(lay) = layout {
+        let same = (track.sheet_mm[0] - lay.sheet.width_mm).abs() < 1e-6
+            && (track.sheet_mm[1] - lay.sheet.height_mm).abs() < 1e-6
+            && track.chars.iter().zip(&lay.boxes).all(|(c, b)| {
+                [b.x0_mm, b.y0_mm, b.size_mm].iter().zip(&c.char_box_mm).all(|(a, b)| (a - b).abs() < 1e-6)
+            });
+        if !same {
+            bail!(
+                "--observed: the sheet {} was laid out otherwise ({:.0}×{:.0} mm, {:.1} mm boxes; here {:.0}×{:.0} mm, {:.1} mm): give the same --sheet, --margin-mm, --per-line, --rows and --char-mm",
+                sheet_dir.display(),
+                track.sheet_mm[0],
+                track.sheet_mm[1],
+                track.char_mm,
+                lay.sheet.width_mm,
+                lay.sheet.height_mm,
+                lay.char_mm
+            );
+        }
+    }
+    let listed = summary["chars"].as_array().map_or(0, Vec::len);
+    if listed != track.chars.len() {
+        bail!(
+            "--observed: {} lists {listed} character(s), its sheet {} has {}",
+            sp.display(),
+            sheet_dir.display(),
+            track.chars.len()
+        );
+    }
+    let mut observed = Vec::new();
+    for (i, c) in track.chars.iter().enumerate() {
+        let p = dir.join(format!("{:02}-{}", i + 1, c.char)).join("observed.png");
+        let img =
+            bezier_raster::Coverage::load(&p).with_context(|| format!("--observed: cannot read {}", p.display()))?;
+        if img.width() != img.height() {
+            bail!(
+                "--observed: {} is {}×{} px, expected a square (the character's box)",
+                p.display(),
+                img.width(),
+                img.height()
+            );
+        }
+        observed.push(img);
+    }
+    let earlier = std::fs::read_to_string(sheet_dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["rounds"].as_array().cloned())
+        .unwrap_or_default();
+    Ok(ObservedRun { dir: dir.to_path_buf(), sheet_dir, summary, track, observed, earlier })
+}
+
+impl ObservedRun {
+    /// Each character's last attempt (its strokes in the observed sheet, its observed ink).
+    fn attempts(&self) -> Vec<pipeline::LastAttempt<'_>> {
+        self.track
+            .chars
+            .iter()
+            .zip(&self.observed)
+            .map(|(c, img)| pipeline::LastAttempt {
+                ch: &c.char,
+                char_box: trajectory::CharBox {
+                    x0_mm: c.char_box_mm[0],
+                    y0_mm: c.char_box_mm[1],
+                    size_mm: c.char_box_mm[2],
+                },
+                strokes: &self.track.strokes[c.strokes[0]..c.strokes[1]],
+                observed: img,
+            })
+            .collect()
+    }
+
+    /// The brush correction fitted to the observed ink, and `profile` corrected (named after the
+    /// round).
+    fn correct_brush(
+        &self,
+        profile: &BrushProfile,
+        model: ModelKind,
+    ) -> Result<(pipeline::BrushCorrection, BrushProfile)> {
+        let c = pipeline::fit_brush(&self.attempts(), profile, model)
+            .with_context(|| format!("--observed {}: re-fitting the brush", self.dir.display()))?;
+        let root = profile.name.split('+').next().unwrap_or(&profile.name);
+        let name = match c.not_taken {
+            None => format!("{root}+observed{}", self.earlier.len() + 1),
+            Some(_) => profile.name.clone(),
+        };
+        let corrected = c.apply(profile, &name).with_context(|| format!("--observed {}", self.dir.display()))?;
+        Ok((c, corrected))
+    }
+
+    /// Each character's residual: observed ink minus the last attempt through `profile`.
+    fn residuals(&self, profile: &BrushProfile, model: ModelKind) -> Result<Vec<pipeline::Residual>> {
+        self.attempts()
+            .iter()
+            .map(|a| pipeline::Residual::of(a, profile, model))
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("--observed {}", self.dir.display()))
+    }
+
+    /// This round's entry (what was observed, what was corrected) and every round so far.
+    fn rounds(
+        &self,
+        c: &pipeline::BrushCorrection,
+        corrected: &BrushProfile,
+        ilc: bool,
+    ) -> (serde_json::Value, serde_json::Value) {
+        let chars = self.summary["chars"].as_array().cloned().unwrap_or_default();
+        let mean = |k: &str| {
+            chars.iter().map(|c| c["vs_glyph"][k].as_f64().unwrap_or(f64::NAN)).sum::<f64>() / chars.len().max(1) as f64
+        };
+        let this = json!({
+            "round": self.earlier.len(),
+            "sheet": self.sheet_dir.display().to_string(),
+            "observed": self.dir.display().to_string(),
+            "brush": self.track.brush.name,
+            "observed_vs_glyph_mean": {"csim": mean("csim"), "ssim": mean("ssim"), "iou": mean("iou")},
+            "chars": chars.iter().map(|c| json!({
+                "char": c["char"],
+                "vs_glyph": c["vs_glyph"],
+                "vs_plan": c["vs_plan"],
+                "width_ratio": c["diagnosis"]["width_ratio"],
+                "end_beyond_mm": c["diagnosis"]["end_beyond_mm"],
+                "lateral_mm": c["diagnosis"]["lateral_mm"],
+                "verdict": c["verdict"],
+            })).collect::<Vec<_>>(),
+            "correction": c,
+            "brush_after": corrected.name,
+            "track": if ilc { "refined against the glyph shifted by the observed residual (ILC)" } else { "built with the corrected brush" },
+        });
+        let mut all = self.earlier.clone();
+        all.push(this.clone());
+        (this, json!(all))
+    }
 }

@@ -8,6 +8,7 @@ mod common;
 
 mod brush;
 mod calibrate_sheet;
+mod closed_loop;
 mod neural;
 mod newcomer;
 mod observe;

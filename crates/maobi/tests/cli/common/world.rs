@@ -29,8 +29,44 @@ pub const WORLD_SPREAD_MM: f64 = 0.3;
 /// The world's paper raster, px per mm.
 pub const WORLD_PX_PER_MM: f64 = 8.0;
 
+/// How a world's brush writes against the profile (the world above is [`WORLD`]).
+#[derive(Clone, Copy, Debug)]
+pub struct WorldBrush {
+    /// Belly half-width factor.
+    pub width: f64,
+    /// Tip and root length factor.
+    pub length: f64,
+    /// The root end's lag behind the commanded point along the path, mm.
+    pub lag_mm: f64,
+    /// An upright brush's tip lies on the path this fraction of a footprint length back.
+    pub trail_reach: f64,
+    /// Ink spread past the outline, mm.
+    pub spread_mm: f64,
+}
+
+/// The test world's brush (the constants above).
+pub const WORLD: WorldBrush = WorldBrush {
+    width: WORLD_WIDTH,
+    length: WORLD_LENGTH,
+    lag_mm: WORLD_LAG_MM,
+    trail_reach: WORLD_TRAIL_REACH,
+    spread_mm: WORLD_SPREAD_MM,
+};
+
+/// A world whose brush is the one the profile describes, written the forward model's way (tip
+/// half a footprint back, no lag, no spread): the "world equals the model" baseline.
+pub const MODEL_WORLD: WorldBrush =
+    WorldBrush { width: 1.0, length: 1.0, lag_mm: 0.0, trail_reach: 0.5, spread_mm: 0.0 };
+
 /// The world's footprints along `strokes` (paper mm).
 pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
+    world_stamps_with(strokes, profile, &WORLD)
+}
+
+/// The footprints of a world with brush `w` along `strokes` (paper mm).
+pub fn world_stamps_with(strokes: &[Stroke], profile: &BrushProfile, w: &WorldBrush) -> Vec<Stamp> {
+    let (world_width, world_length, world_lag_mm, world_trail_reach, world_spread_mm) =
+        (w.width, w.length, w.lag_mm, w.trail_reach, w.spread_mm);
     let mut out = Vec::new();
     for st in strokes {
         // Dense samples along the commanded path (0.1 mm), depth and tilt linear.
@@ -74,7 +110,7 @@ pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
             }
             let Ok(fp) = profile.predict(&Press::new(p[2], p[3], 0.0), Extrapolation::Allow) else { continue };
             // The root end lags along the path.
-            let target = c - WORLD_LAG_MM;
+            let target = c - world_lag_mm;
             let k = cum.partition_point(|&v| v < target).min(hist.len() - 1);
             let anchor = if target <= 0.0 || k == 0 {
                 hist[0]
@@ -83,7 +119,7 @@ pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
                 let f = if cb > ca { (target - ca) / (cb - ca) } else { 0.0 };
                 [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
             };
-            let len = WORLD_LENGTH * (fp.lt_mm + fp.lh_mm);
+            let len = world_length * (fp.lt_mm + fp.lh_mm);
             let dir = if p[3] >= 2f64.to_radians() {
                 Some(p[4])
             } else {
@@ -91,7 +127,7 @@ pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
                 let mut found = None;
                 for q in hist[..=k.min(hist.len() - 1)].iter().rev() {
                     let d = (q[0] - anchor[0]).hypot(q[1] - anchor[1]);
-                    if d >= WORLD_TRAIL_REACH * len {
+                    if d >= world_trail_reach * len {
                         found = Some((q[1] - anchor[1]).atan2(q[0] - anchor[0]));
                         break;
                     }
@@ -114,12 +150,12 @@ pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
             last = Some(beta);
             // Spread: the outline grown at both ends and both sides.
             let footprint = Footprint {
-                lt_mm: WORLD_LENGTH * fp.lt_mm + WORLD_SPREAD_MM,
-                lh_mm: WORLD_LENGTH * fp.lh_mm + WORLD_SPREAD_MM,
-                lr_mm: WORLD_WIDTH * fp.lr_mm + WORLD_SPREAD_MM,
+                lt_mm: world_length * fp.lt_mm + world_spread_mm,
+                lh_mm: world_length * fp.lh_mm + world_spread_mm,
+                lr_mm: world_width * fp.lr_mm + world_spread_mm,
             };
             let anchor =
-                PointMm::new(anchor[0] - WORLD_SPREAD_MM * beta.cos(), anchor[1] - WORLD_SPREAD_MM * beta.sin());
+                PointMm::new(anchor[0] - world_spread_mm * beta.cos(), anchor[1] - world_spread_mm * beta.sin());
             out.push(Stamp { footprint, anchor, beta_rad: beta });
         }
     }
@@ -194,12 +230,17 @@ pub fn apply(m: &M3, p: [f64; 2]) -> [f64; 2] {
 
 /// Paper mm → photo px for a camera `dist_mm` above the sheet's centre.
 pub fn camera_h(cam: &Camera, sheet_mm: [f64; 2], dist_mm: f64) -> M3 {
+    camera_h_sized(cam, sheet_mm, dist_mm, [PHOTO_W, PHOTO_H], FOCAL_PX)
+}
+
+/// As [`camera_h`] for a sensor of `size` px with focal length `focal_px`.
+pub fn camera_h_sized(cam: &Camera, sheet_mm: [f64; 2], dist_mm: f64, size: [usize; 2], focal_px: f64) -> M3 {
     let (tx, ty, yaw) = (cam.tilt_deg[0].to_radians(), cam.tilt_deg[1].to_radians(), cam.yaw_deg.to_radians());
     let rx = [[1.0, 0.0, 0.0], [0.0, tx.cos(), -tx.sin()], [0.0, tx.sin(), tx.cos()]];
     let ry = [[ty.cos(), 0.0, ty.sin()], [0.0, 1.0, 0.0], [-ty.sin(), 0.0, ty.cos()]];
     let rz = [[yaw.cos(), -yaw.sin(), 0.0], [yaw.sin(), yaw.cos(), 0.0], [0.0, 0.0, 1.0]];
     let r = mul(&rz, &mul(&rx, &ry));
-    let k = [[FOCAL_PX, 0.0, PHOTO_W as f64 / 2.0], [0.0, FOCAL_PX, PHOTO_H as f64 / 2.0], [0.0, 0.0, 1.0]];
+    let k = [[focal_px, 0.0, size[0] as f64 / 2.0], [0.0, focal_px, size[1] as f64 / 2.0], [0.0, 0.0, 1.0]];
     let rt = [[r[0][0], r[0][1], 0.0], [r[1][0], r[1][1], 0.0], [r[2][0], r[2][1], dist_mm]];
     let centre = [[1.0, 0.0, -sheet_mm[0] / 2.0], [0.0, 1.0, -sheet_mm[1] / 2.0], [0.0, 0.0, 1.0]];
     mul(&k, &mul(&rt, &centre))
@@ -229,6 +270,19 @@ pub fn gaussian_blur(img: &mut [f32], w: usize, h: usize, sigma: f64) {
 
 /// The world's sheet photographed: a JPEG, and the true paper mm → photo px map.
 pub fn photograph(stamps: &[Stamp], sheet_mm: [f64; 2], cam: &Camera, seed: u64) -> (Vec<u8>, M3) {
+    photograph_sized(stamps, sheet_mm, cam, seed, [PHOTO_W, PHOTO_H], FOCAL_PX)
+}
+
+/// As [`photograph`] with a sensor of `size` px and focal length `focal_px` (a smaller photo
+/// for the tests that take many).
+pub fn photograph_sized(
+    stamps: &[Stamp],
+    sheet_mm: [f64; 2],
+    cam: &Camera,
+    seed: u64,
+    size: [usize; 2],
+    focal_px: f64,
+) -> (Vec<u8>, M3) {
     let mut rng = Rng(seed);
     // The paper: reflectance with a faint texture, ink nearly black.
     let (pw, ph) = ((sheet_mm[0] * WORLD_PX_PER_MM) as u32, (sheet_mm[1] * WORLD_PX_PER_MM) as u32);
@@ -237,11 +291,11 @@ pub fn photograph(stamps: &[Stamp], sheet_mm: [f64; 2], cam: &Camera, seed: u64)
     // Far enough that the whole sheet is in view.
     let mut dist = 300.0;
     let h = loop {
-        let h = camera_h(cam, sheet_mm, dist);
+        let h = camera_h_sized(cam, sheet_mm, dist, size, focal_px);
         let inside =
             [[0.0, 0.0], [sheet_mm[0], 0.0], [sheet_mm[0], sheet_mm[1]], [0.0, sheet_mm[1]]].iter().all(|&p| {
                 let q = apply(&h, p);
-                q[0] > 60.0 && q[1] > 60.0 && q[0] < PHOTO_W as f64 - 60.0 && q[1] < PHOTO_H as f64 - 60.0
+                q[0] > 60.0 && q[1] > 60.0 && q[0] < size[0] as f64 - 60.0 && q[1] < size[1] as f64 - 60.0
             });
         if inside {
             break h;
@@ -249,7 +303,7 @@ pub fn photograph(stamps: &[Stamp], sheet_mm: [f64; 2], cam: &Camera, seed: u64)
         dist *= 1.05;
     };
     let hi = inv(&h);
-    let (w, hh) = (PHOTO_W, PHOTO_H);
+    let (w, hh) = (size[0], size[1]);
     let mut lum = vec![0f32; w * hh];
     for v in 0..hh {
         for u in 0..w {

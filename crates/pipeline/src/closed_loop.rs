@@ -1,0 +1,530 @@
+//! The closed loop's correction (docs/closed-loop.md): what a photo of the last attempt showed
+//! turned into the next attempt. Two levers: the brush ([`fit_brush`]: a width factor, a length
+//! factor and a spread on top of the profile, fitted so that the last attempt's commanded track
+//! rendered through the corrected profile matches the observed ink) and the track ([`Residual`],
+//! [`ilc_target`], [`refine_observed`]: iterative learning control, the model's prediction of
+//! the last attempt shifted by what the photo showed, and the next track refined so that the
+//! model plus that residual matches the glyph).
+
+use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, render_track};
+use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Stroke, Terms, Track};
+use numerics::{NelderMead, nelder_mead};
+use rayon::prelude::*;
+use serde::Serialize;
+use thiserror::Error;
+use track_refine::{RefineOptions, Target};
+use trajectory::CharBox;
+use trajectory::raster::render_glyph;
+
+use crate::write::refine_result;
+use crate::{CharResult, Prepared, WriteOptions};
+
+/// The side of the images the brush correction is fitted on, at most, px (the observed ink is
+/// averaged down to it).
+pub const FIT_PX: u32 = 96;
+
+/// The bounds of a fitted width or length factor.
+pub const FACTOR_RANGE: [f64; 2] = [0.5, 2.0];
+/// The bounds of a fitted spread, mm.
+pub const SPREAD_RANGE_MM: [f64; 2] = [-1.0, 2.0];
+
+/// The least share of the profile's ink error a fitted correction must explain to be taken
+/// (below it the fit is within what the brush's lag and trail, the photo and the fit's own
+/// weakly determined directions leave, and the profile is kept).
+pub const MIN_CORRECTION_GAIN: f64 = 0.2;
+
+/// Nelder–Mead iterations of the brush fit.
+const FIT_ITERS: usize = 40;
+
+/// The forward model's sampling during the brush fit: coarser than the renderers' (0.1 mm),
+/// fine against the fit images' pixels (about 1 mm or more) and footprints several mm long, and
+/// ten times fewer footprints.
+const FIT_MODEL: ForwardModel = ForwardModel {
+    tilt_threshold_rad: brush_model::TILT_THRESHOLD_RAD,
+    trail_reach: brush_model::TRAIL_REACH,
+    min_motion_mm: 0.3,
+    step_mm: 1.0,
+    step_rad: 0.5 * std::f64::consts::PI / 180.0,
+    step_h_mm: 1.0,
+};
+
+/// What the closed loop's correction can refuse.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum ClosedLoopError {
+    /// No characters were given.
+    #[error("no observed characters to correct from")]
+    Empty,
+    /// An observed image is not square (it is a character box's frame).
+    #[error("{ch}: the observed image is {width}×{height} px (expected a square, the character box's frame)")]
+    NotSquare {
+        /// The character.
+        ch: String,
+        /// Columns.
+        width: u32,
+        /// Rows.
+        height: u32,
+    },
+    /// The last attempt of a character has no strokes.
+    #[error("{ch}: the last attempt has no strokes")]
+    NoStrokes {
+        /// The character.
+        ch: String,
+    },
+    /// The corrected profile is not a valid profile (a factor took a length out of bounds).
+    #[error("the corrected brush profile")]
+    Profile(#[source] brush_model::ProfileError),
+    /// Rendering the last attempt through a profile failed.
+    #[error("{ch}: predicting the last attempt")]
+    Predict {
+        /// The character.
+        ch: String,
+        /// Why.
+        #[source]
+        source: brush_model::ProfileError,
+    },
+    /// The shifted glyph made no refinement target.
+    #[error("{ch}: the shifted glyph")]
+    Target {
+        /// The character.
+        ch: String,
+        /// Why.
+        #[source]
+        source: Box<track_refine::RefineError>,
+    },
+    /// Writing the next attempt failed.
+    #[error(transparent)]
+    Pipeline(Box<crate::Error>),
+}
+
+impl From<crate::Error> for ClosedLoopError {
+    fn from(e: crate::Error) -> Self {
+        ClosedLoopError::Pipeline(Box::new(e))
+    }
+}
+
+/// One character of the last attempt: where it sat, what was commanded and what the photo
+/// showed.
+#[derive(Clone, Copy, Debug)]
+pub struct LastAttempt<'a> {
+    /// The character (for messages).
+    pub ch: &'a str,
+    /// Its box on the paper, mm.
+    pub char_box: CharBox,
+    /// The commanded strokes of its track, paper mm.
+    pub strokes: &'a [Stroke],
+    /// The observed ink over the box (`maobi observe`'s `observed.png`: the box at its side in
+    /// px, ink = 1).
+    pub observed: &'a Coverage,
+}
+
+/// A correction on top of a brush profile: every footprint's tip and root lengths scaled by
+/// `length_factor`, its belly half-width by `width_factor`, then `spread_mm` added to all three
+/// (ink spreading past the outline). Applied to the profile's linear model
+/// ([`BrushCorrection::apply`]), so it is a normal profile.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct BrushCorrection {
+    /// Belly half-width factor.
+    pub width_factor: f64,
+    /// Tip and root length factor.
+    pub length_factor: f64,
+    /// Added to tip length, root length and belly half-width, mm.
+    pub spread_mm: f64,
+    /// Mean squared difference between the observed ink and the last attempt predicted by the
+    /// profile, per pixel of the fit images.
+    pub ink_error_before: f64,
+    /// The same through the corrected profile.
+    pub ink_error_after: f64,
+    /// A correction that was fitted but not taken (it explained less than
+    /// [`MIN_CORRECTION_GAIN`] of the error; the factors above are then 1 and the spread 0):
+    /// `[width factor, length factor, spread mm, ink error]`.
+    pub not_taken: Option<[f64; 4]>,
+}
+
+impl BrushCorrection {
+    /// No change.
+    pub const IDENTITY: BrushCorrection = BrushCorrection {
+        width_factor: 1.0,
+        length_factor: 1.0,
+        spread_mm: 0.0,
+        ink_error_before: 0.0,
+        ink_error_after: 0.0,
+        not_taken: None,
+    };
+
+    /// `profile` with this correction applied to its model (every coefficient of `lt` and
+    /// `lh` times the length factor and of `lr` times the width factor, the spread added to
+    /// each intercept), named `name`, checked as a loaded profile is.
+    ///
+    /// # Errors
+    /// [`ClosedLoopError::Profile`] when the corrected model predicts a length out of bounds at
+    /// a corner of the calibrated range.
+    ///
+    /// # Examples
+    /// ```
+    /// use pipeline::BrushCorrection;
+    /// use brush_model::{BrushProfile, Extrapolation, Press};
+    ///
+    /// let pen1 = BrushProfile::builtin("pen1")?;
+    /// let c = BrushCorrection { width_factor: 1.2, spread_mm: 0.1, ..BrushCorrection::IDENTITY };
+    /// let fat = c.apply(&pen1, "pen1-observed")?;
+    /// let press = Press::new(15.0, 0.0, 0.0);
+    /// let (a, b) = (pen1.predict(&press, Extrapolation::Refuse)?, fat.predict(&press, Extrapolation::Refuse)?);
+    /// assert!((b.lr_mm - (1.2 * a.lr_mm + 0.1)).abs() < 1e-12);
+    /// assert!((b.lt_mm - (a.lt_mm + 0.1)).abs() < 1e-12);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn apply(&self, profile: &BrushProfile, name: &str) -> Result<BrushProfile, ClosedLoopError> {
+        let scale = |t: Terms, k: f64| Terms {
+            intercept: k * t.intercept + self.spread_mm,
+            h_mm: t.h_mm.map(|v| k * v),
+            alpha_rad: t.alpha_rad.map(|v| k * v),
+            beta_rad: t.beta_rad.map(|v| k * v),
+        };
+        let mut out = profile.clone();
+        out.name = name.to_string();
+        out.model.lt_mm = scale(profile.model.lt_mm, self.length_factor);
+        out.model.lh_mm = scale(profile.model.lh_mm, self.length_factor);
+        out.model.lr_mm = scale(profile.model.lr_mm, self.width_factor);
+        // The fit statistics were the old model's.
+        out.fit = None;
+        out.validate(name).map_err(ClosedLoopError::Profile)?;
+        Ok(out)
+    }
+}
+
+/// `img` (square) averaged onto `side²` px: each output pixel the mean of a k × k grid of
+/// bilinear samples over its area (k the ratio of the sides, rounded up).
+fn resample(img: &Coverage, side: u32) -> Vec<f32> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    if img.width() == side && img.height() == side {
+        return img.data().to_vec();
+    }
+    let scale = w as f64 / side as f64;
+    let k = scale.ceil().max(1.0) as usize;
+    let d = img.data();
+    let at = |x: f64, y: f64| -> f64 {
+        let (fx, fy) = ((x - 0.5).clamp(0.0, w as f64 - 1.0), (y - 0.5).clamp(0.0, h as f64 - 1.0));
+        let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
+        let g = |x: usize, y: usize| d[y * w + x] as f64;
+        (g(x0, y0) * (1.0 - tx) + g(x1, y0) * tx) * (1.0 - ty) + (g(x0, y1) * (1.0 - tx) + g(x1, y1) * tx) * ty
+    };
+    let n = side as usize;
+    let mut out = vec![0f32; n * n];
+    for j in 0..n {
+        for i in 0..n {
+            let mut s = 0.0;
+            for b in 0..k {
+                for a in 0..k {
+                    let x = (i as f64 + (a as f64 + 0.5) / k as f64) * scale;
+                    let y = (j as f64 + (b as f64 + 0.5) / k as f64) * scale;
+                    s += at(x, y);
+                }
+            }
+            out[j * n + i] = (s / (k * k) as f64) as f32;
+        }
+    }
+    out
+}
+
+fn check_attempt(a: &LastAttempt<'_>) -> Result<(), ClosedLoopError> {
+    if a.observed.width() != a.observed.height() || a.observed.width() == 0 {
+        return Err(ClosedLoopError::NotSquare {
+            ch: a.ch.to_string(),
+            width: a.observed.width(),
+            height: a.observed.height(),
+        });
+    }
+    if a.strokes.is_empty() {
+        return Err(ClosedLoopError::NoStrokes { ch: a.ch.to_string() });
+    }
+    Ok(())
+}
+
+/// The last attempt as `profile` predicts it: its commanded strokes through the forward model
+/// over its box at `side²` px.
+///
+/// # Errors
+/// [`ClosedLoopError::Predict`] when the profile refuses a press (extrapolation is allowed, so
+/// only a degenerate or implausible length).
+pub fn predict_attempt(
+    a: &LastAttempt<'_>,
+    profile: &BrushProfile,
+    model: ModelKind,
+    side: u32,
+) -> Result<Coverage, ClosedLoopError> {
+    let track = Track { strokes: a.strokes.to_vec() };
+    let b = a.char_box;
+    render_track(
+        &track,
+        profile,
+        model.model(),
+        Extrapolation::Allow,
+        PointMm::new(b.x0_mm, b.y0_mm),
+        side as f64 / b.size_mm,
+        side,
+        side,
+    )
+    .map_err(|source| ClosedLoopError::Predict { ch: a.ch.to_string(), source })
+}
+
+/// The last attempt through `profile` as the brush fit sees it ([`FIT_MODEL`]'s sampling) at
+/// `side²` px; `None` when the profile refuses a press.
+fn fit_render(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind, side: u32) -> Option<Coverage> {
+    let mut stamps = Vec::new();
+    for s in a.strokes {
+        for p in FIT_MODEL.sweep(profile, &s.points, Extrapolation::Allow).stamps {
+            let footprint = profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?;
+            stamps.push(Stamp { footprint, anchor: p.anchor(), beta_rad: p.beta_rad });
+        }
+    }
+    let b = a.char_box;
+    Some(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), side as f64 / b.size_mm, side, side))
+}
+
+/// Fits a [`BrushCorrection`] on top of `profile` from the last attempts: Nelder–Mead over
+/// (width factor, length factor, spread) from (1, 1, 0), minimising the mean squared
+/// difference between each character's observed ink and its commanded strokes rendered through
+/// the corrected profile (both at up to [`FIT_PX`] px a side; the forward model sampled every
+/// 1 mm instead of 0.1 mm), within [`FACTOR_RANGE`] and
+/// [`SPREAD_RANGE_MM`]. Deterministic. A correction that explains less than
+/// [`MIN_CORRECTION_GAIN`] of the profile's ink error is not taken: the identity is returned,
+/// with the fitted values in [`BrushCorrection::not_taken`].
+///
+/// # Errors
+/// [`ClosedLoopError::Empty`], [`ClosedLoopError::NotSquare`], [`ClosedLoopError::NoStrokes`]
+/// for unusable attempts; [`ClosedLoopError::Predict`] when the profile itself refuses the
+/// last attempt's presses.
+///
+/// # Examples
+/// A character written by a brush 30 % wider than the profile says is fitted back:
+/// ```
+/// use pipeline::{BrushCorrection, LastAttempt, fit_brush, predict_attempt};
+/// use brush_model::{BrushProfile, Stroke, TrackPoint};
+/// use trajectory::CharBox;
+///
+/// let pen1 = BrushProfile::builtin("pen1")?;
+/// let pt = |x_mm: f64, h_mm: f64| TrackPoint { x_mm, y_mm: 40.0, h_mm, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let strokes = vec![Stroke { points: (0..=40).map(|i| pt(15.0 + i as f64, 11.0 + 0.2 * i as f64)).collect() }];
+/// let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
+/// let truth = BrushCorrection { width_factor: 1.3, ..BrushCorrection::IDENTITY }.apply(&pen1, "world")?;
+/// let a = LastAttempt { ch: "一", char_box, strokes: &strokes, observed: &bezier_raster::Coverage::new(1, 1) };
+/// let observed = predict_attempt(&a, &truth, bezier_raster::ModelKind::Bsm, 96)?;
+/// let fit = fit_brush(&[LastAttempt { observed: &observed, ..a }], &pen1, bezier_raster::ModelKind::Bsm)?;
+/// assert!(fit.ink_error_after < 0.2 * fit.ink_error_before, "{fit:?}");
+/// assert!((fit.width_factor - 1.3).abs() < 0.1, "{fit:?}");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn fit_brush(
+    attempts: &[LastAttempt<'_>],
+    profile: &BrushProfile,
+    model: ModelKind,
+) -> Result<BrushCorrection, ClosedLoopError> {
+    if attempts.is_empty() {
+        return Err(ClosedLoopError::Empty);
+    }
+    attempts.iter().try_for_each(check_attempt)?;
+    let sides: Vec<u32> = attempts.iter().map(|a| a.observed.width().min(FIT_PX)).collect();
+    let observed: Vec<Vec<f32>> = attempts.iter().zip(&sides).map(|(a, &s)| resample(a.observed, s)).collect();
+    // Checks that the profile itself can predict every attempt (a real error, not a bad guess).
+    for (a, &s) in attempts.iter().zip(&sides) {
+        predict_attempt(a, profile, model, s)?;
+    }
+    let error_of = |p: &BrushProfile| -> f64 {
+        let per: Vec<f64> = attempts
+            .par_iter()
+            .zip(sides.par_iter())
+            .zip(observed.par_iter())
+            .map(|((a, &s), obs)| match fit_render(a, p, model, s) {
+                Some(img) => {
+                    img.data().iter().zip(obs).map(|(&u, &o)| (u as f64 - o as f64).powi(2)).sum::<f64>()
+                        / obs.len() as f64
+                }
+                None => f64::INFINITY,
+            })
+            .collect();
+        per.iter().sum::<f64>() / per.len() as f64
+    };
+    let loss = |x: &[f64; 3]| -> f64 {
+        let inside = |v: f64, r: [f64; 2]| (r[0]..=r[1]).contains(&v);
+        if !(inside(x[0], FACTOR_RANGE) && inside(x[1], FACTOR_RANGE) && inside(x[2], SPREAD_RANGE_MM)) {
+            return f64::INFINITY;
+        }
+        let c =
+            BrushCorrection { width_factor: x[0], length_factor: x[1], spread_mm: x[2], ..BrushCorrection::IDENTITY };
+        match c.apply(profile, &profile.name) {
+            Ok(p) => error_of(&p),
+            Err(_) => f64::INFINITY,
+        }
+    };
+    let before = loss(&[1.0, 1.0, 0.0]);
+    let opts = NelderMead { min_spread: Some(1e-5), ..NelderMead::new([0.15, 0.15, 0.2], FIT_ITERS) };
+    let (x, after) = nelder_mead(loss, [1.0, 1.0, 0.0], &opts);
+    if !(after < (1.0 - MIN_CORRECTION_GAIN) * before) {
+        return Ok(BrushCorrection {
+            ink_error_before: before,
+            ink_error_after: before,
+            not_taken: Some([x[0], x[1], x[2], after]),
+            ..BrushCorrection::IDENTITY
+        });
+    }
+    Ok(BrushCorrection {
+        width_factor: x[0],
+        length_factor: x[1],
+        spread_mm: x[2],
+        ink_error_before: before,
+        ink_error_after: after,
+        not_taken: None,
+    })
+}
+
+/// What the photo showed beyond the model: the observed ink minus the model's prediction of
+/// the last attempt, over the character's box (`side²` px, row-major; positive where the paper
+/// has more ink than predicted).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Residual {
+    /// Side, px.
+    pub side: u32,
+    /// `observed − predicted`, in [−1, 1], row-major.
+    pub values: Vec<f32>,
+}
+
+impl Residual {
+    /// The residual of one attempt: `observed − predict_attempt(profile)`, at the observed
+    /// image's side. Take `profile` as the corrected one, so the residual holds only what the
+    /// corrected brush does not explain.
+    ///
+    /// # Errors
+    /// As [`predict_attempt`]; [`ClosedLoopError::NotSquare`] or
+    /// [`ClosedLoopError::NoStrokes`] for an unusable attempt.
+    pub fn of(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind) -> Result<Self, ClosedLoopError> {
+        check_attempt(a)?;
+        let side = a.observed.width();
+        let predicted = predict_attempt(a, profile, model, side)?;
+        let values = a.observed.data().iter().zip(predicted.data()).map(|(&o, &p)| o - p).collect();
+        Ok(Self { side, values })
+    }
+
+    /// Mean absolute residual per pixel.
+    pub fn mean_abs(&self) -> f64 {
+        self.values.iter().map(|v| v.abs() as f64).sum::<f64>() / self.values.len().max(1) as f64
+    }
+
+    /// The residual averaged onto `side²` px.
+    fn resampled(&self, side: u32) -> Vec<f32> {
+        // Shifted into [0, 1] to reuse the coverage resampler, then back.
+        let mut c = Coverage::new(self.side, self.side);
+        for (d, v) in c.data_mut().iter_mut().zip(&self.values) {
+            *d = 0.5 + 0.5 * v;
+        }
+        resample(&c, side).into_iter().map(|v| 2.0 * v - 1.0).collect()
+    }
+}
+
+/// The ILC target: the glyph shifted by the residual, `clamp(G − R, 0, 1)` at `px²` over the
+/// character's box (`G` the glyph raster as [`crate::refine_target`] renders it, `R` the
+/// residual averaged onto the same pixels). Refining a track against it makes the model's
+/// render plus the residual match the glyph (the clamp only drops targets the soft union, which
+/// lies in [0, 1], cannot reach).
+///
+/// # Errors
+/// [`ClosedLoopError::Target`] when `px` or the box make no usable target.
+pub fn ilc_target(
+    glyph: &trajectory::Glyph,
+    char_box: &CharBox,
+    residual: &Residual,
+    px: u32,
+) -> Result<Target, ClosedLoopError> {
+    let g = render_glyph(glyph, px);
+    let r = residual.resampled(px);
+    let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - r).clamp(0.0, 1.0)).collect();
+    Target::new(px, px, ink, PointMm::new(char_box.x0_mm, char_box.y0_mm), char_box.size_mm / px as f64)
+        .map_err(|source| ClosedLoopError::Target { ch: glyph.ch.to_string(), source: Box::new(source) })
+}
+
+/// Refines each written character's track against its ILC target ([`ilc_target`] with its
+/// residual), in parallel, replacing the result's track, renders and figures as
+/// [`crate::write_char`]'s refinement does (figures against the glyph; the built track's are
+/// kept as "before"; a refined track that fails the robot check is not used). `results`,
+/// `prepared` and `residuals` are in the same order.
+///
+/// # Errors
+/// [`ClosedLoopError::Target`] or the pipeline's error for the first character that fails.
+pub fn refine_observed(
+    results: &mut [CharResult],
+    prepared: &[Prepared],
+    residuals: &[Residual],
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    ro: &RefineOptions,
+) -> Result<(), ClosedLoopError> {
+    results.par_iter_mut().zip(prepared.par_iter()).zip(residuals.par_iter()).try_for_each(|((r, p), res)| {
+        let target = ilc_target(&p.glyph, &r.char_box, res, ro.analysis_px)?;
+        refine_result(r, p, profile, opts, ro, &target)?;
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resampling_keeps_the_mean_and_a_residual_round_trips() {
+        let mut c = Coverage::new(8, 8);
+        for (k, v) in c.data_mut().iter_mut().enumerate() {
+            *v = if (k % 8) < 4 { 1.0 } else { 0.0 };
+        }
+        let half = resample(&c, 4);
+        assert_eq!(half.len(), 16);
+        let mean = half.iter().sum::<f32>() / 16.0;
+        assert!((mean - 0.5).abs() < 1e-6, "{half:?}");
+        assert!(half[0] > 0.99 && half[3] < 0.01, "{half:?}");
+        let r = Residual { side: 2, values: vec![-1.0, 0.5, 0.0, 1.0] };
+        let same = r.resampled(2);
+        for (a, b) in same.iter().zip(&r.values) {
+            assert!((a - b).abs() < 1e-6, "{same:?}");
+        }
+        assert!((r.mean_abs() - 0.625).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_target_is_the_glyph_shifted_by_the_residual() {
+        let glyph = trajectory::glyph::embedded('十').unwrap();
+        let b = CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 64.0 };
+        let zero = Residual { side: 32, values: vec![0.0; 32 * 32] };
+        let t0 = ilc_target(&glyph, &b, &zero, 32).unwrap();
+        let g = render_glyph(&glyph, 32);
+        assert_eq!(t0.ink, g.data());
+        assert_eq!((t0.origin_mm.x_mm, t0.mm_per_px), (10.0, 2.0));
+        // Ink the photo showed beyond the prediction is taken off the target; missing ink is
+        // added.
+        let more = Residual { side: 32, values: vec![0.25; 32 * 32] };
+        let t1 = ilc_target(&glyph, &b, &more, 32).unwrap();
+        for (a, g) in t1.ink.iter().zip(g.data()) {
+            assert!((a - (g - 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
+        }
+        let less = Residual { side: 32, values: vec![-0.25; 32 * 32] };
+        let t2 = ilc_target(&glyph, &b, &less, 32).unwrap();
+        assert!(t2.ink.iter().sum::<f32>() > g.data().iter().sum::<f32>());
+    }
+
+    #[test]
+    fn unusable_attempts_are_refused() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 50.0 };
+        let img = Coverage::new(10, 12);
+        let strokes = vec![Stroke { points: vec![] }];
+        let a = LastAttempt { ch: "十", char_box: b, strokes: &strokes, observed: &img };
+        assert!(matches!(fit_brush(&[], &pen1, ModelKind::Bsm), Err(ClosedLoopError::Empty)));
+        assert!(matches!(fit_brush(&[a], &pen1, ModelKind::Bsm), Err(ClosedLoopError::NotSquare { .. })));
+        let sq = Coverage::new(10, 10);
+        let none = LastAttempt { strokes: &[], observed: &sq, ..a };
+        assert!(matches!(Residual::of(&none, &pen1, ModelKind::Bsm), Err(ClosedLoopError::NoStrokes { .. })));
+        // A correction that makes a length non-positive is refused.
+        let bad = BrushCorrection { spread_mm: -50.0, ..BrushCorrection::IDENTITY };
+        assert!(matches!(bad.apply(&pen1, "x"), Err(ClosedLoopError::Profile(_))));
+    }
+}
