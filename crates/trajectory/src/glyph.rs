@@ -1,4 +1,5 @@
-//! Glyph sources: hanzi-writer-data JSON (embedded subset or a folder), CJK fonts, and images.
+//! Glyph sources: hanzi-writer-data (embedded, packed; or a folder of JSON files), CJK fonts,
+//! and images.
 //!
 //! Every glyph lives in the **em frame**: the 1024-unit box of Make Me a Hanzi with y flipped to
 //! point down, so `x' = x`, `y' = 900 − y` (docs/contracts.md §2). The em box is `[0, 1024]²` in `(x', y')`.

@@ -233,7 +233,35 @@ fn decode(ops: &[u8], nums: &[u8]) -> Result<RawHanzi, String> {
     Ok(RawHanzi { outlines, medians })
 }
 
-/// Packs characters (any order; each at most once) and the subset's order into a blob.
+impl RawHanzi {
+    /// Every element's kind and every number's bits (so that -0.0 and 0.0 differ): equal
+    /// vectors mean bit-identical data.
+    pub(crate) fn bits(&self) -> Vec<u64> {
+        let mut v: Vec<u64> = vec![self.outlines.len() as u64];
+        for p in &self.outlines {
+            v.push(p.elements().len() as u64);
+        }
+        for el in self.outlines.iter().flat_map(|p| p.elements()) {
+            let (kind, pts): (u64, &[Point]) = match el {
+                PathEl::MoveTo(a) => (0, std::slice::from_ref(a)),
+                PathEl::LineTo(a) => (1, std::slice::from_ref(a)),
+                PathEl::QuadTo(a, b) => (2, &[*a, *b]),
+                PathEl::CurveTo(a, b, c) => (3, &[*a, *b, *c]),
+                PathEl::ClosePath => (4, &[]),
+            };
+            v.push(kind);
+            v.extend(pts.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]));
+        }
+        for m in &self.medians {
+            v.push(m.len() as u64);
+            v.extend(m.iter().flatten().map(|x| x.to_bits()));
+        }
+        v
+    }
+}
+
+/// Packs characters (any order; each at most once) and the subset's order into a blob, then
+/// decodes every character of it and requires the very same data back.
 pub(crate) fn pack(chars: &[(char, RawHanzi)], subset: &[char]) -> Result<Vec<u8>, String> {
     let mut order: Vec<usize> = (0..chars.len()).collect();
     order.sort_by_key(|&i| chars[i].0);
@@ -279,6 +307,15 @@ pub(crate) fn pack(chars: &[(char, RawHanzi)], subset: &[char]) -> Result<Vec<u8
     }
     blob.extend_from_slice(&fnv1a(&index).to_le_bytes());
     blob.extend_from_slice(&index);
+    let mut k = 0;
+    Blob::open(&blob)?.verify(|ch, raw| {
+        let (want_ch, want) = &chars[order[k]];
+        k += 1;
+        if ch != *want_ch || raw.bits() != want.bits() {
+            return Err(format!("{want_ch:?} does not decode to its data"));
+        }
+        Ok(())
+    })?;
     Ok(blob)
 }
 
@@ -447,26 +484,13 @@ mod tests {
         let b = Blob::open(&blob).unwrap();
         assert_eq!(b.len(), 150);
         assert_eq!(b.subset(), vec!['\u{4E07}', '\u{4E00}']);
-        // Every number's bits and every element's kind, so -0.0 and 0.0 differ.
-        let bits = |r: &RawHanzi| {
-            let mut v: Vec<u64> = r.medians.iter().flatten().flatten().map(|x| x.to_bits()).collect();
-            for el in r.outlines.iter().flat_map(|p| p.elements()) {
-                let (kind, pts) = match *el {
-                    PathEl::MoveTo(a) => (0, vec![a]),
-                    PathEl::LineTo(a) => (1, vec![a]),
-                    PathEl::QuadTo(a, b) => (2, vec![a, b]),
-                    PathEl::CurveTo(a, b, c) => (3, vec![a, b, c]),
-                    PathEl::ClosePath => (4, vec![]),
-                };
-                v.push(kind);
-                v.extend(pts.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]));
-            }
-            v
-        };
         for (c, r) in &chars {
-            assert_eq!(bits(&b.get(*c).unwrap().unwrap()), bits(r), "{c}");
+            assert_eq!(b.get(*c).unwrap().unwrap().bits(), r.bits(), "{c}");
         }
         assert!(b.get('a').unwrap().is_none());
+        // "The same" is bit for bit: the signed zero survives and is told apart.
+        let zero = |z: f64| RawHanzi { outlines: vec![], medians: vec![vec![[z, 1.0]]] }.bits();
+        assert_ne!(zero(0.0), zero(-0.0));
         let mut n = 0;
         b.verify(|_, _| {
             n += 1;
