@@ -188,7 +188,7 @@ impl GlyphError {
 /// Where a glyph came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum GlyphSource {
-    /// The subset compiled into this crate.
+    /// The hanzi-writer-data compiled into this crate ([`embedded`]).
     Embedded,
     /// A hanzi-writer-data folder.
     HanziData(String),
