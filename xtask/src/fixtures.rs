@@ -67,6 +67,13 @@ fn all() -> Vec<Fixture> {
             generate: hanzi_subset,
         },
         Fixture {
+            path: "crates/trajectory/data/hanzi.bin",
+            about: "every hanzi-writer-data character, packed and compressed in chunks (the embedded glyph data)",
+            needs_hanzi: true,
+            needs_python: false,
+            generate: hanzi_blob,
+        },
+        Fixture {
             path: "fixtures/baselines/images/footprints-128.png",
             about: "pen1 h=15 α=5° β=3° with every stroke model side by side (bsm, circle, ellipse, line, qbc)",
             needs_hanzi: false,
@@ -214,14 +221,25 @@ fn python_golden(dir: &str, script: &str) -> Result<Vec<u8>> {
     Ok(out.stdout)
 }
 
-fn hanzi_dir(i: &Inputs) -> Result<&Path> {
-    i.hanzi_data.as_deref().context("needs --hanzi-data DIR (an unpacked `npm pack hanzi-writer-data`)")
+/// The folder holding the character files: `--hanzi-data DIR` itself or the first of its
+/// subfolders (`package/`, as `npm pack hanzi-writer-data` unpacks, or `data/`) that has
+/// `一.json`.
+fn hanzi_dir(i: &Inputs) -> Result<PathBuf> {
+    let dir = i.hanzi_data.as_deref().context("needs --hanzi-data DIR (an unpacked `npm pack hanzi-writer-data`)")?;
+    trajectory::glyph::HANZI_SUBFOLDERS
+        .iter()
+        .map(|sub| if sub.is_empty() { dir.to_path_buf() } else { dir.join(sub) })
+        .find(|d| d.join("一.json").is_file())
+        .with_context(|| {
+            format!(
+                "{}: no hanzi-writer-data character files (一.json) in it or its package/ or data/ folder",
+                dir.display()
+            )
+        })
 }
 
-/// One minified line per character: `{"c":"永","strokes":[...],"medians":[...]}`, in frequency
-/// order, then the extra characters.
-fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
-    let dir = hanzi_dir(i)?;
+/// The characters of the frequency subset: the 1,000 most frequent, then [`EXTRA_CHARS`].
+fn subset_chars() -> Result<Vec<char>> {
     let freq = std::fs::read_to_string(root().join("fixtures/hanzi/frequency.txt"))?;
     let mut chars: Vec<char> =
         freq.lines().filter(|l| !l.starts_with('#')).filter_map(|l| l.chars().next()).take(1000).collect();
@@ -230,8 +248,33 @@ fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
             chars.push(c);
         }
     }
+    Ok(chars)
+}
+
+/// Every `<char>.json` of the package (one character in the name), packed by
+/// `trajectory::glyph::pack_hanzi` with the subset's order.
+fn hanzi_blob(i: &Inputs) -> Result<Vec<u8>> {
+    let dir = hanzi_dir(i)?;
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))? {
+        let path = entry?.path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else { continue };
+        let Some(stem) = name.strip_suffix(".json") else { continue };
+        let mut cs = stem.chars();
+        let (Some(c), None) = (cs.next(), cs.next()) else { continue };
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        files.push((c, text));
+    }
+    files.sort_by_key(|f| f.0);
+    Ok(trajectory::glyph::pack_hanzi(&files, &subset_chars()?)?)
+}
+
+/// One minified line per character: `{"c":"永","strokes":[...],"medians":[...]}`, in frequency
+/// order, then the extra characters.
+fn hanzi_subset(i: &Inputs) -> Result<Vec<u8>> {
+    let dir = hanzi_dir(i)?;
     let mut out = String::new();
-    for c in chars {
+    for c in subset_chars()? {
         let path = dir.join(format!("{c}.json"));
         let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
         let v: serde_json::Value =
@@ -250,13 +293,17 @@ pub fn root() -> PathBuf {
 
 pub fn run(args: &[String]) -> Result<()> {
     let mut check = false;
+    let mut only: Option<String> = None;
     let mut inputs = Inputs { hanzi_data: None, write_extra: false };
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--check" => check = true,
             "--hanzi-data" => inputs.hanzi_data = Some(it.next().context("--hanzi-data needs a folder")?.into()),
-            other => anyhow::bail!("fixtures: unknown argument `{other}` (expected --check, --hanzi-data DIR)"),
+            "--only" => only = Some(it.next().context("--only needs part of a fixture's path")?.clone()),
+            other => {
+                anyhow::bail!("fixtures: unknown argument `{other}` (expected --check, --hanzi-data DIR, --only TEXT)")
+            }
         }
     }
     let root = root();
@@ -267,11 +314,23 @@ pub fn run(args: &[String]) -> Result<()> {
     let python = python_ready();
     inputs.write_extra = !check;
     for f in all() {
+        if only.as_ref().is_some_and(|o| !f.path.contains(o.as_str())) {
+            continue;
+        }
         if f.needs_python && !python {
             println!("skipped  {}  (needs python3 with numpy, scikit-image, statsmodels)", f.path);
             continue;
         }
         if f.needs_hanzi && inputs.hanzi_data.is_none() {
+            if check && f.path.ends_with("hanzi.bin") {
+                // Not regenerable offline, but checkable: its hash, index and every character.
+                let n = trajectory::glyph::verify_embedded().context(f.path)?;
+                println!(
+                    "ok       {}  (offline: hash, index and all {n} characters decode; regenerated only with --hanzi-data DIR)",
+                    f.path
+                );
+                continue;
+            }
             println!("skipped  {}  (needs --hanzi-data DIR; not regenerable offline)", f.path);
             continue;
         }

@@ -21,7 +21,7 @@ cargo xtask <task>
 
 Tasks:
   help                 print this help
-  fixtures [--check] [--hanzi-data DIR]
+  fixtures [--check] [--hanzi-data DIR] [--only TEXT]
                        regenerate every generated file under fixtures/ (or, with --check,
                        verify the committed files are what the generators produce now)
   gates [--update]     similarity regression gates against fixtures/baselines/*.json

@@ -1,9 +1,9 @@
-//! Glyph sources: hanzi-writer-data JSON (embedded subset or a folder), CJK fonts, and images.
+//! Glyph sources: hanzi-writer-data (embedded, packed; or a folder of JSON files), CJK fonts,
+//! and images.
 //!
 //! Every glyph lives in the **em frame**: the 1024-unit box of Make Me a Hanzi with y flipped to
 //! point down, so `x' = x`, `y' = 900 − y` (docs/contracts.md §2). The em box is `[0, 1024]²` in `(x', y')`.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
@@ -15,6 +15,7 @@ mod bitmap;
 pub use bitmap::glyph_from_gray;
 pub mod font;
 pub use font::{FontSet, from_font_files};
+mod packed;
 
 /// Side of the em box, em units.
 pub const EM: f64 = 1024.0;
@@ -118,23 +119,27 @@ fn path_outside(p: &BezPath) -> Option<Point> {
         .find(|&q| !in_window(q))
 }
 
-/// The embedded hanzi-writer-data subset: one minified JSON object per line.
-pub static EMBEDDED_SUBSET: &str = include_str!("../data/hanzi-subset.jsonl");
-/// The Arphic Public License the embedded subset is distributed under.
+/// The embedded hanzi-writer-data: every character of the package, packed and compressed in
+/// chunks (read through [`embedded`]; the format is in docs/trajectory.md).
+static EMBEDDED_BLOB: &[u8] = include_bytes!("../data/hanzi.bin");
+/// The Arphic Public License the embedded data is distributed under.
 pub static ARPHIC_LICENSE: &str = include_str!("../data/ARPHICPL.TXT");
+/// What the embedded data is, for messages and reports.
+pub const EMBEDDED_NAME: &str = "the embedded hanzi-writer-data 2.0.1";
 
 /// Errors from loading glyphs.
 #[derive(Clone, Debug, Error)]
 pub enum GlyphError {
-    /// The character is not in the source.
-    #[error("character {ch:?} (U+{code:04X}) is not in {source_name}")]
+    /// No source that was tried covers the character.
+    #[error("character {ch:?} (U+{code:04X}) is not in {}", tried.join(", nor in "))]
     Unknown {
         /// The character.
         ch: char,
         /// Its code point.
         code: u32,
-        /// Which source was searched.
-        source_name: String,
+        /// The sources searched, each described for a reader (`the embedded hanzi-writer-data
+        /// 2.0.1 (9574 characters)`, a folder, the font files).
+        tried: Vec<String>,
     },
     /// A file or folder could not be read (or is not what was asked for: a folder where a
     /// file was expected, a folder without fonts; the source says which).
@@ -183,7 +188,7 @@ impl GlyphError {
 /// Where a glyph came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum GlyphSource {
-    /// The subset compiled into this crate.
+    /// The hanzi-writer-data compiled into this crate ([`embedded`]).
     Embedded,
     /// A hanzi-writer-data folder.
     HanziData(String),
@@ -240,6 +245,15 @@ pub struct Glyph {
     pub medians: Option<Vec<Vec<Point>>>,
 }
 
+/// A character's hanzi-writer data as the file has it (y up), checked against [`limits`]:
+/// what both the JSON and the packed embedded data decode to before the flip into the em frame.
+pub(crate) struct RawHanzi {
+    /// Stroke outlines, in writing order.
+    pub(crate) outlines: Vec<BezPath>,
+    /// Stroke medians, in writing order.
+    pub(crate) medians: Vec<Vec<[f64; 2]>>,
+}
+
 #[derive(Deserialize)]
 struct HanziJson {
     strokes: Vec<String>,
@@ -255,6 +269,11 @@ fn flip(p: Point) -> Point {
 /// # Errors
 /// [`GlyphError::Malformed`] naming `source_name` and the stroke at fault.
 pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: &str) -> Result<Glyph, GlyphError> {
+    Ok(raw_hanzi_json(text, source_name)?.into_glyph(ch, source))
+}
+
+/// [`parse_hanzi_json`] up to the flip.
+fn raw_hanzi_json(text: &str, source_name: &str) -> Result<RawHanzi, GlyphError> {
     let bad = |message: String| GlyphError::Malformed { source_name: source_name.to_string(), message };
     if text.len() as u64 > limits::MAX_JSON_BYTES {
         return Err(bad(format!("{} bytes; a character file is at most {} bytes", text.len(), limits::MAX_JSON_BYTES)));
@@ -268,19 +287,55 @@ pub fn parse_hanzi_json(ch: char, text: &str, source: GlyphSource, source_name: 
     }
     let outlines = j.strokes.iter().enumerate().map(|(i, s)| stroke_outline(i + 1, s).map_err(bad));
     let outlines: Vec<BezPath> = outlines.collect::<Result<_, _>>()?;
-    let medians = j.medians.iter().enumerate().map(|(i, m)| median(i + 1, m).map_err(bad));
-    let medians: Vec<Vec<Point>> = medians.collect::<Result<_, _>>()?;
-    Ok(Glyph {
-        ch,
-        source,
-        shape: Shape::Outlines(outlines.clone()),
-        stroke_outlines: Some(outlines),
-        medians: Some(medians),
-    })
+    for (i, m) in j.medians.iter().enumerate() {
+        check_median(i + 1, m).map_err(bad)?;
+    }
+    Ok(RawHanzi { outlines, medians: j.medians })
+}
+
+impl RawHanzi {
+    /// The checks [`raw_hanzi_json`] makes after parsing, for data from elsewhere.
+    fn check(&self) -> Result<(), String> {
+        if self.outlines.is_empty() || self.outlines.len() != self.medians.len() {
+            return Err(format!("{} strokes but {} medians", self.outlines.len(), self.medians.len()));
+        }
+        for (i, p) in self.outlines.iter().enumerate() {
+            if let Some(q) = path_outside(p) {
+                let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
+                return Err(format!(
+                    "stroke {}: point ({}, {}) outside the accepted coordinates {lo}..={hi}",
+                    i + 1,
+                    num(q.x),
+                    num(q.y)
+                ));
+            }
+        }
+        self.medians.iter().enumerate().try_for_each(|(i, m)| check_median(i + 1, m))
+    }
+
+    /// The glyph in the em frame: outlines and medians flipped (y down).
+    fn into_glyph(self, ch: char, source: GlyphSource) -> Glyph {
+        let outlines: Vec<BezPath> = self
+            .outlines
+            .into_iter()
+            .map(|mut p| {
+                p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
+                p
+            })
+            .collect();
+        let medians = self.medians.iter().map(|m| m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect()).collect();
+        Glyph {
+            ch,
+            source,
+            shape: Shape::Outlines(outlines.clone()),
+            stroke_outlines: Some(outlines),
+            medians: Some(medians),
+        }
+    }
 }
 
 /// Stroke `k` (1-based) of a hanzi-writer file: its SVG outline, bounded before parsing and
-/// checked after, flipped into the em frame (y down). `Err` is the message.
+/// checked after, in the file's frame (y up). `Err` is the message.
 fn stroke_outline(k: usize, s: &str) -> Result<BezPath, String> {
     let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
     if s.len() > limits::MAX_SVG_BYTES {
@@ -293,7 +348,7 @@ fn stroke_outline(k: usize, s: &str) -> Result<BezPath, String> {
             limits::MAX_SVG_NUMBER
         ));
     }
-    let mut p = BezPath::from_svg(s).map_err(|e| format!("stroke {k}: bad SVG path: {e}"))?;
+    let p = BezPath::from_svg(s).map_err(|e| format!("stroke {k}: bad SVG path: {e}"))?;
     if p.elements().len() > limits::MAX_PATH_ELEMENTS {
         return Err(format!("stroke {k}: {} path elements; at most {}", p.elements().len(), limits::MAX_PATH_ELEMENTS));
     }
@@ -304,13 +359,11 @@ fn stroke_outline(k: usize, s: &str) -> Result<BezPath, String> {
             num(q.y)
         ));
     }
-    p.apply_affine(kurbo::Affine::new([1.0, 0.0, 0.0, -1.0, 0.0, EM_TOP]));
     Ok(p)
 }
 
-/// Median `k` (1-based) of a hanzi-writer file, checked and flipped into the em frame. `Err` is
-/// the message.
-fn median(k: usize, m: &[[f64; 2]]) -> Result<Vec<Point>, String> {
+/// Checks median `k` (1-based) of a hanzi-writer file. `Err` is the message.
+fn check_median(k: usize, m: &[[f64; 2]]) -> Result<(), String> {
     let (lo, hi) = (limits::MIN_COORD, limits::MAX_COORD);
     if m.is_empty() || m.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("median {k} is empty or not finite"));
@@ -325,63 +378,136 @@ fn median(k: usize, m: &[[f64; 2]]) -> Result<Vec<Point>, String> {
             num(*y)
         ));
     }
-    Ok(m.iter().map(|&[x, y]| flip(Point::new(x, y))).collect())
+    Ok(())
 }
 
-fn embedded_index() -> &'static HashMap<char, &'static str> {
-    static INDEX: OnceLock<HashMap<char, &'static str>> = OnceLock::new();
-    INDEX.get_or_init(|| {
-        EMBEDDED_SUBSET
-            .lines()
-            .filter_map(|l| {
-                // Each line starts with {"c":"X", ...
-                let rest = l.strip_prefix("{\"c\":\"")?;
-                Some((rest.chars().next()?, l))
-            })
-            .collect()
-    })
+/// The embedded blob's index, read once.
+fn embedded_blob() -> Result<&'static packed::Blob<'static>, GlyphError> {
+    static BLOB: OnceLock<Result<packed::Blob<'static>, String>> = OnceLock::new();
+    BLOB.get_or_init(|| packed::Blob::open(EMBEDDED_BLOB))
+        .as_ref()
+        .map_err(|message| GlyphError::Malformed { source_name: EMBEDDED_NAME.into(), message: message.clone() })
 }
 
-/// The characters of the embedded subset, in the order of the frequency list.
+/// The embedded data's description for [`GlyphError::Unknown`]: its name and size.
+fn embedded_label() -> String {
+    let n = embedded_blob().map_or(0, |b| b.len());
+    format!("{EMBEDDED_NAME} ({n} characters)")
+}
+
+/// The characters of the frequency subset: the 1,000 most frequent characters, then the test
+/// set, in that order. The default set for evaluations (every one is in the embedded data).
 pub fn embedded_chars() -> Vec<char> {
-    EMBEDDED_SUBSET.lines().filter_map(|l| l.strip_prefix("{\"c\":\"")?.chars().next()).collect()
+    embedded_blob().map(|b| b.subset()).unwrap_or_default()
 }
 
-/// A glyph from the embedded hanzi-writer-data subset.
+/// Every character of the embedded data, in code-point order.
+pub fn embedded_all_chars() -> Vec<char> {
+    embedded_blob().map(|b| b.chars()).unwrap_or_default()
+}
+
+/// A glyph from the hanzi-writer-data compiled into this crate (every character of the npm
+/// package hanzi-writer-data 2.0.1, about 9,500). One call inflates one chunk of 64
+/// characters; nothing is cached.
+///
+/// # Examples
+/// ```
+/// let g = trajectory::glyph::embedded('龍')?;
+/// assert_eq!(g.medians.as_ref().map(Vec::len), Some(16));
+/// # Ok::<(), trajectory::GlyphError>(())
+/// ```
 ///
 /// # Errors
-/// [`GlyphError::Unknown`] if the character is not in the subset.
+/// [`GlyphError::Unknown`] if the character is not in the data; [`GlyphError::Malformed`] if
+/// the compiled-in data is damaged (it never is in a released build: a test decodes all of it).
 pub fn embedded(ch: char) -> Result<Glyph, GlyphError> {
-    let line = embedded_index().get(&ch).ok_or(GlyphError::Unknown {
+    let blob = embedded_blob()?;
+    let bad = |message: String| GlyphError::Malformed { source_name: format!("{EMBEDDED_NAME}, {ch:?}"), message };
+    let raw = blob.get(ch).map_err(bad)?.ok_or_else(|| GlyphError::Unknown {
         ch,
         code: ch as u32,
-        source_name: "the embedded subset (use --hanzi-data DIR for the full set)".into(),
+        tried: vec![embedded_label()],
     })?;
-    parse_hanzi_json(ch, line, GlyphSource::Embedded, "embedded subset")
+    raw.check().map_err(bad)?;
+    Ok(raw.into_glyph(ch, GlyphSource::Embedded))
 }
 
-/// A glyph from an unpacked hanzi-writer-data folder (files `<char>.json`).
+/// Checks the whole embedded data: its hash, its index, and that every character decodes and
+/// passes the checks JSON data gets. Returns the number of characters. For `cargo xtask
+/// fixtures --check`, which cannot regenerate the data offline.
 ///
 /// # Errors
-/// [`GlyphError::Unknown`] if there is no file for the character; [`GlyphError::Malformed`].
+/// [`GlyphError::Malformed`] saying what is wrong.
+pub fn verify_embedded() -> Result<usize, GlyphError> {
+    let blob = embedded_blob()?;
+    let mut n = 0;
+    blob.verify(|ch, raw| {
+        raw.check().map_err(|e| format!("{ch:?}: {e}"))?;
+        n += 1;
+        Ok(())
+    })
+    .map_err(|message| GlyphError::Malformed { source_name: EMBEDDED_NAME.into(), message })?;
+    Ok(n)
+}
+
+/// Packs hanzi-writer-data character files into the embedded data's format (what
+/// `data/hanzi.bin` holds): `files` are `(character, JSON text)`, in any order; `subset` is the
+/// frequency subset [`embedded_chars`] returns, in order. Deterministic: the same input gives
+/// the same bytes.
+///
+/// # Errors
+/// [`GlyphError::Malformed`] for a file that does not parse (as [`parse_hanzi_json`]), a
+/// character given twice, or a subset character without a file.
+pub fn pack_hanzi(files: &[(char, String)], subset: &[char]) -> Result<Vec<u8>, GlyphError> {
+    let raws = files
+        .iter()
+        .map(|(c, text)| Ok((*c, raw_hanzi_json(text, &format!("{c}.json"))?)))
+        .collect::<Result<Vec<_>, GlyphError>>()?;
+    packed::pack(&raws, subset).map_err(|message| GlyphError::Malformed { source_name: "hanzi pack".into(), message })
+}
+
+/// The folders a hanzi-writer-data folder may hold its character files in, in the order they
+/// are searched: the folder itself, then `package/` (what `npm pack hanzi-writer-data` unpacks
+/// to), `data/` (the git repository's layout) and `package/data/`.
+pub const HANZI_SUBFOLDERS: [&str; 4] = ["", "package", "data", "package/data"];
+
+/// A glyph from a hanzi-writer-data folder (files `<char>.json`): the folder itself or, when it
+/// has no file for the character, its `package/`, `data/` or `package/data/` subfolder (see
+/// [`HANZI_SUBFOLDERS`]), so the folder `npm pack` unpacked into works as well as its
+/// `package/` folder. The glyph's source names the folder the file was found in.
+///
+/// # Errors
+/// [`GlyphError::Io`] if `dir` is not a folder; [`GlyphError::Unknown`] naming the folders
+/// searched if none has a file for the character; [`GlyphError::Malformed`].
 pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
     if !dir.is_dir() {
         return Err(GlyphError::io(dir, std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a folder")));
     }
-    let path = dir.join(format!("{ch}.json"));
-    let unknown = || GlyphError::Unknown { ch, code: ch as u32, source_name: dir.display().to_string() };
-    let len = std::fs::metadata(&path).map_err(|_| unknown())?.len();
-    if len > limits::MAX_JSON_BYTES {
-        return Err(GlyphError::Malformed {
-            source_name: path.display().to_string(),
-            message: format!("{len} bytes; a character file is at most {} bytes", limits::MAX_JSON_BYTES),
-        });
+    let mut tried = Vec::new();
+    for sub in HANZI_SUBFOLDERS {
+        let folder = if sub.is_empty() { dir.to_path_buf() } else { dir.join(sub) };
+        if !folder.is_dir() {
+            continue;
+        }
+        let path = folder.join(format!("{ch}.json"));
+        tried.push(format!("the hanzi-writer-data folder {}", folder.display()));
+        let Ok(meta) = std::fs::metadata(&path) else { continue };
+        let len = meta.len();
+        if len > limits::MAX_JSON_BYTES {
+            return Err(GlyphError::Malformed {
+                source_name: path.display().to_string(),
+                message: format!("{len} bytes; a character file is at most {} bytes", limits::MAX_JSON_BYTES),
+            });
+        }
+        let text = match std::fs::read_to_string(&path) {
+            Ok(t) => t,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(GlyphError::io(&path, e)),
+        };
+        let source = GlyphSource::HanziData(folder.display().to_string());
+        return parse_hanzi_json(ch, &text, source, &path.display().to_string());
     }
-    let text = std::fs::read_to_string(&path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::NotFound => unknown(),
-        _ => GlyphError::io(&path, e),
-    })?;
-    parse_hanzi_json(ch, &text, GlyphSource::HanziData(dir.display().to_string()), &path.display().to_string())
+    Err(GlyphError::Unknown { ch, code: ch as u32, tried })
 }
 
 /// A glyph from one font file: TrueType/OpenType (`.ttf`, `.otf`), the first face of a
@@ -421,6 +547,123 @@ pub fn from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The frequency subset as JSON lines (`{"c":"永","strokes":[...],"medians":[...]}`), the
+    /// fixture the packed data is checked against.
+    fn subset_json() -> String {
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("data/hanzi-subset.jsonl")).unwrap()
+    }
+
+    /// Every number's bits and every element's kind of a glyph, so that "equal" means
+    /// bit-identical (-0.0 and 0.0 differ).
+    fn glyph_bits(g: &Glyph) -> (char, GlyphSource, Vec<u64>) {
+        let mut v = Vec::new();
+        let paths = |v: &mut Vec<u64>, ps: &[BezPath]| {
+            v.push(ps.len() as u64);
+            for el in ps.iter().flat_map(|p| p.elements()) {
+                let (kind, pts) = match *el {
+                    kurbo::PathEl::MoveTo(a) => (0, vec![a]),
+                    kurbo::PathEl::LineTo(a) => (1, vec![a]),
+                    kurbo::PathEl::QuadTo(a, b) => (2, vec![a, b]),
+                    kurbo::PathEl::CurveTo(a, b, c) => (3, vec![a, b, c]),
+                    kurbo::PathEl::ClosePath => (4, vec![]),
+                };
+                v.push(kind);
+                v.extend(pts.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]));
+            }
+        };
+        let Shape::Outlines(shape) = &g.shape else { panic!("hanzi data gives outlines") };
+        paths(&mut v, shape);
+        paths(&mut v, g.stroke_outlines.as_deref().unwrap());
+        for m in g.medians.as_ref().unwrap() {
+            v.push(m.len() as u64);
+            v.extend(m.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]));
+        }
+        (g.ch, g.source.clone(), v)
+    }
+
+    #[test]
+    fn embedded_data_decodes_to_the_json_glyph_for_every_subset_character() {
+        let json = subset_json();
+        let mut n = 0;
+        for line in json.lines() {
+            let ch = line.strip_prefix("{\"c\":\"").and_then(|r| r.chars().next()).unwrap();
+            let from_json = parse_hanzi_json(ch, line, GlyphSource::Embedded, "subset").unwrap();
+            let packed = embedded(ch).unwrap();
+            assert_eq!(glyph_bits(&packed), glyph_bits(&from_json), "{ch}");
+            n += 1;
+        }
+        assert_eq!(n, 1001);
+        // The subset's order is kept for evaluations.
+        let order: Vec<char> = json.lines().filter_map(|l| l.strip_prefix("{\"c\":\"")?.chars().next()).collect();
+        assert_eq!(embedded_chars(), order);
+    }
+
+    #[test]
+    fn embedded_data_covers_the_whole_package_and_checks_out() {
+        let all = embedded_all_chars();
+        assert_eq!(verify_embedded().unwrap(), all.len());
+        assert!(all.len() > 9000, "{}", all.len());
+        assert!(all.windows(2).all(|w| w[0] < w[1]));
+        // Characters beyond the frequency subset.
+        for (ch, strokes) in [('眠', 10), ('龍', 16), ('鬱', 29)] {
+            assert!(!embedded_chars().contains(&ch));
+            let g = embedded(ch).unwrap();
+            assert_eq!(g.medians.as_ref().unwrap().len(), strokes, "{ch}");
+            assert_eq!(g.source, GlyphSource::Embedded);
+        }
+        // Not covered: a private-use code point and a rare extension-B character.
+        for ch in ['\u{E000}', '𪚥', 'a'] {
+            match embedded(ch) {
+                Err(GlyphError::Unknown { ch: c, tried, .. }) => {
+                    assert_eq!(c, ch);
+                    assert_eq!(tried.len(), 1);
+                    assert!(
+                        tried[0].starts_with(EMBEDDED_NAME) && tried[0].contains(&all.len().to_string()),
+                        "{tried:?}"
+                    );
+                }
+                other => panic!("{ch}: {other:?}"),
+            }
+        }
+        let e = embedded('\u{E000}').unwrap_err().to_string();
+        assert!(e.contains("U+E000") && e.contains("embedded hanzi-writer-data") && !e.contains("--"), "{e}");
+    }
+
+    #[test]
+    fn a_hanzi_folder_may_be_the_npm_folder_or_its_package_or_data_folder() {
+        let root = std::env::temp_dir().join(format!("trajectory-hanzi-dir-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let json = subset_json();
+        let line = |c: char| json.lines().find(|l| l.starts_with(&format!("{{\"c\":\"{c}\""))).unwrap().to_string();
+        for (sub, ch) in [("package", '永'), ("data", '字')] {
+            std::fs::create_dir_all(root.join(sub)).unwrap();
+            std::fs::write(root.join(sub).join(format!("{ch}.json")), line(ch)).unwrap();
+        }
+        for (from, ch, found_in) in
+            [(root.clone(), '永', "package"), (root.clone(), '字', "data"), (root.join("package"), '永', "package")]
+        {
+            let g = from_hanzi_dir(&from, ch).unwrap();
+            assert_eq!(g.source, GlyphSource::HanziData(root.join(found_in).display().to_string()));
+            assert_eq!(glyph_bits(&g).2, glyph_bits(&embedded(ch).unwrap()).2, "{ch}");
+        }
+        match from_hanzi_dir(&root, '八') {
+            Err(GlyphError::Unknown { tried, .. }) => {
+                let want: Vec<String> = ["", "package", "data"]
+                    .iter()
+                    .map(|s| {
+                        format!(
+                            "the hanzi-writer-data folder {}",
+                            if s.is_empty() { root.clone() } else { root.join(s) }.display()
+                        )
+                    })
+                    .collect();
+                assert_eq!(tried, want);
+            }
+            other => panic!("{other:?}"),
+        }
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     fn parse(path: &str) -> Result<Glyph, GlyphError> {
         let doc = serde_json::json!({"strokes": [path], "medians": [[[100, 400], [900, 400]]]}).to_string();

@@ -3,8 +3,8 @@
 //! From a Chinese character to the 5D brush track `T_i = (H_i, α_i, x_i, y_i, β_i)` a robot can
 //! write.
 //!
-//! 1. **Glyph** ([`glyph`]): hanzi-writer-data JSON (an embedded subset of the most common
-//!    characters, or a full unpacked package), a CJK font's outlines, or a photo of a character.
+//! 1. **Glyph** ([`glyph`]): hanzi-writer-data (every character of the package embedded,
+//!    compressed, or an unpacked package's JSON), a CJK font's outlines, or a photo of a character.
 //!    Everything is in the em frame (1024 box, y down).
 //! 2. **Centre lines** ([`centre_lines`]): the source's stroke medians ([`Method::Medians`]), or a
 //!    skeleton of the glyph image ([`Method::Skeleton`]: Zhang–Suen thinning, spur pruning,

@@ -200,7 +200,15 @@ pub(crate) fn glyph_input(
 /// Loads `ch` and finds its centre lines ([`pipeline::prepare_loaded`]); says on stderr (unless
 /// `quiet`) which template strokes found no ink, and turns a glyph without strokes into advice.
 pub(crate) fn prepare_char(input: &GlyphInput, ch: char, method: Option<Method>, quiet: bool) -> Result<Prepared> {
-    let p = match prepare_loaded(input.load(ch)?, method) {
+    let loaded = input.load(ch).map_err(|e| match e {
+        pipeline::Error::Glyph(trajectory::GlyphError::Unknown { .. }) => anyhow::Error::new(e).context(format!(
+            "no glyph for {ch:?}: add a source that covers it with --font FILE (a CJK font), --image FILE (a photo \
+             or scan of it) or --hanzi-data DIR (another hanzi-writer-data: the folder `npm pack hanzi-writer-data` \
+             unpacked into, or its package/ folder)"
+        )),
+        e => e.into(),
+    })?;
+    let p = match prepare_loaded(loaded, method) {
         Ok(p) => p,
         Err(pipeline::Error::NoStrokes { ch, image, missing }) => bail!(
             "{ch}: found no strokes{}{} (is it one character, dark ink on light paper, strokes wider than a hair?)",

@@ -106,3 +106,63 @@ fn a_sheet_gets_a_brush_that_fits_and_the_summary_says_which() {
     // The track records the brush the robot must hold.
     assert_eq!(json(&auto.join("track.json"))["brush"]["name"], name.as_str());
 }
+
+/// A run's report.json.
+fn report(dir: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn characters_beyond_the_frequent_thousand_write_without_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    for (c, strokes) in [("眠", 10), ("龍", 16)] {
+        let out = dir.path().join(c);
+        ok(&maobi(&["write", c, "--size", "64", "-o", s(&out)]));
+        let r = report(&out);
+        assert_eq!(r["source"], "embedded", "{c}: {r}");
+        assert_eq!(r["plan"]["strokes_found"], strokes, "{c}: {r}");
+    }
+}
+
+#[test]
+fn an_uncovered_character_names_the_sources_tried_and_how_to_add_one() {
+    let dir = tempfile::tempdir().unwrap();
+    // A private-use code point and an extension-B character hanzi-writer-data does not have.
+    for (c, code) in [("\u{E000}", "U+E000"), ("𪚥", "U+2A6A5")] {
+        let out = dir.path().join("o");
+        let o = maobi(&["write", c, "--size", "64", "-o", s(&out)]);
+        assert_eq!(o.status.code(), Some(2), "{c}");
+        let e = stderr(&o);
+        assert!(e.contains(code) && e.contains("is not in the embedded hanzi-writer-data"), "{c}: {e}");
+        for how in ["--font FILE", "--image FILE", "--hanzi-data DIR", "npm pack hanzi-writer-data"] {
+            assert!(e.contains(how), "{c}: the message names {how}: {e}");
+        }
+        assert!(!out.exists(), "nothing written for {c}");
+    }
+}
+
+#[test]
+fn hanzi_data_may_be_the_folder_npm_pack_unpacked_into() {
+    let dir = tempfile::tempdir().unwrap();
+    // `npm pack hanzi-writer-data && tar xzf …` gives npm/package/<char>.json; this one holds 永.
+    let npm = dir.path().join("npm");
+    std::fs::create_dir_all(npm.join("package")).unwrap();
+    let subset =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../trajectory/data/hanzi-subset.jsonl")).unwrap();
+    let line = subset.lines().find(|l| l.starts_with("{\"c\":\"永\"")).unwrap();
+    std::fs::write(npm.join("package/永.json"), line).unwrap();
+    for (name, folder) in [("parent", npm.clone()), ("package", npm.join("package"))] {
+        let out = dir.path().join(name);
+        ok(&maobi(&["write", "永", "--hanzi-data", s(&folder), "--size", "64", "-o", s(&out)]));
+        let r = report(&out);
+        assert_eq!(r["source"], "hanzi-data", "{name}: {r}");
+        assert_eq!(r["plan"]["strokes_found"], 5, "{name}: {r}");
+    }
+    // A character the folder lacks: the folders searched, and how to add a source.
+    let o = maobi(&["write", "眠", "--hanzi-data", s(&npm), "--size", "64", "-o", s(&dir.path().join("x"))]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    let package = npm.join("package");
+    assert!(e.contains(&format!("the hanzi-writer-data folder {}", package.display())), "{e}");
+    assert!(e.contains("--font FILE"), "{e}");
+}

@@ -31,7 +31,9 @@ fn refused(args: &[&str], needle: &str) {
 
 /// The embedded 永 as hanzi-writer-data JSON with `edit` applied, in its own folder.
 fn hanzi_dir(root: &Path, name: &str, edit: impl FnOnce(&mut serde_json::Value)) -> String {
-    let line = trajectory::glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"永\"")).unwrap();
+    let subset = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../trajectory/data/hanzi-subset.jsonl"));
+    let subset = subset.unwrap();
+    let line = subset.lines().find(|l| l.starts_with("{\"c\":\"永\"")).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(line).unwrap();
     edit(&mut v);
     let dir = root.join(name);

@@ -182,7 +182,7 @@ fn skeleton_font_and_image_sources() {
 fn bad_input_fails_cleanly_without_output() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("o");
-    fails(&maobi(&["write", "𪚥", "--out", s(&out)]), "not in the embedded subset");
+    fails(&maobi(&["write", "𪚥", "--out", s(&out)]), "not in the embedded hanzi-writer-data");
     fails(&maobi(&["write", "永𪚥", "--out", s(&out)]), "U+2A6A5");
     let junk = dir.path().join("junk.ttf");
     std::fs::write(&junk, b"not a font").unwrap();
@@ -216,7 +216,7 @@ fn evaluate_reports_means_and_refuses_unknown_characters() {
     assert_eq!(j["summary"]["strokes_match_fraction"], 1.0);
     assert!(j["summary"]["free_widths"]["csim"].as_f64().unwrap() > 0.5, "{j}");
     assert!(j["summary"].get("unconstrained").is_none(), "{j}");
-    fails(&maobi(&["evaluate", "--chars", "十𪚥"]), "not in the embedded subset");
+    fails(&maobi(&["evaluate", "--chars", "十𪚥"]), "not in the embedded hanzi-writer-data");
     fails(&maobi(&["evaluate", "--chars", "十", "--from", "bones"]), "unknown method");
 }
 

@@ -279,11 +279,11 @@ impl FontSet {
         Err(GlyphError::Unknown {
             ch,
             code: ch as u32,
-            source_name: format!(
+            tried: vec![format!(
                 "the {} font file{} tried{face}, none of which covers it: {shown}",
                 names.len(),
                 if names.len() == 1 { "" } else { "s" }
-            ),
+            )],
         })
     }
 }

@@ -106,12 +106,18 @@ fn halving_the_spacing_changes_the_render_by_under_half_a_percent() {
     }
 }
 
+/// The character's line of the frequency subset (`data/hanzi-subset.jsonl`), a
+/// hanzi-writer-data file with the character added.
+fn subset_line(ch: char) -> String {
+    let subset = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/hanzi-subset.jsonl")).unwrap();
+    subset.lines().find(|l| l.starts_with(&format!("{{\"c\":\"{ch}\""))).unwrap().to_string()
+}
+
 #[test]
 fn hanzi_folders_and_malformed_data() {
     let dir = std::env::temp_dir().join(format!("maobi-hanzi-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let line = glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap();
-    std::fs::write(dir.join("十.json"), line).unwrap();
+    std::fs::write(dir.join("十.json"), subset_line('十')).unwrap();
     let g = glyph::from_hanzi_dir(&dir, '十').unwrap();
     assert_eq!(g.medians.unwrap().len(), 2);
     assert!(matches!(glyph::from_hanzi_dir(&dir, '口'), Err(trajectory::GlyphError::Unknown { .. })));
@@ -128,8 +134,7 @@ fn hanzi_folders_and_malformed_data() {
 fn em_frame_follows_the_design_notes() {
     // Make Me a Hanzi's (x, y) with y up maps to (x, 900 − y).
     let g = glyph::embedded('十').unwrap();
-    let raw: serde_json::Value =
-        serde_json::from_str(glyph::EMBEDDED_SUBSET.lines().find(|l| l.starts_with("{\"c\":\"十\"")).unwrap()).unwrap();
+    let raw: serde_json::Value = serde_json::from_str(&subset_line('十')).unwrap();
     let (x, y) = (raw["medians"][0][0][0].as_f64().unwrap(), raw["medians"][0][0][1].as_f64().unwrap());
     let p = g.medians.unwrap()[0][0];
     assert_eq!((p.x, p.y), (x, 900.0 - y));
