@@ -446,18 +446,14 @@ fn the_official_sdk_client_runs_a_path_buffer_on_the_simulator() {
     assert!((path[200] - path[0] - 1.0).abs() < 1e-9, "{} .. {}", path[0], path[200]);
 }
 
-/// hanzi-writer-data files of three held-out characters (`tests/cli/data/heldout/README.md`).
-fn heldout() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/cli/data/heldout")
-}
-
 #[test]
 fn send_writes_held_out_characters_through_the_path_buffer_on_the_time_law() {
     let dir = tempfile::tempdir().unwrap();
     let paper_json = paper();
+    // Three characters of fixtures/hanzi/heldout-2000.txt, from the embedded data.
     for ch in ["玉", "午", "肉"] {
         let out = dir.path().join(ch);
-        ok(&maobi(&["write", ch, "--hanzi-data", s(&heldout()), "--size", "128", "--out", s(&out)]));
+        ok(&maobi(&["write", ch, "--size", "128", "--out", s(&out)]));
         let track = out.join("track.json");
         // `robot check` reports the timing: each stroke's duration and peaks, and the writing time.
         let check = ok(&maobi(&["robot", "check", s(&track), "--paper", s(&paper_json)]));
