@@ -263,16 +263,57 @@ pub(crate) struct Dense {
 impl Dense {
     /// From `B` `[k, n]`, row-major.
     pub(crate) fn new(b: &[f32], k: usize, n: usize, isa: Isa) -> Self {
-        assert_eq!(b.len(), k * n, "matrix: {} values for {k} × {n}", b.len());
         let p = Self::vectors(isa.lanes) * isa.lanes;
-        let np = n.div_ceil(p);
-        let mut panels = vec![0f32; np * k * p];
-        for kk in 0..k {
-            for j in 0..n {
-                panels[((j / p) * k + kk) * p + j % p] = b[kk * n + j];
-            }
+        let mut d = Dense { k, n, p, isa, panels: vec![0f32; n.div_ceil(p) * k * p] };
+        d.repack(b);
+        d
+    }
+
+    /// From `W` `[n, k]`, row-major: the product `x · Wᵀ` (a fully connected layer's forward
+    /// pass with candle's weight layout), without a transposed copy.
+    pub(crate) fn new_transposed(w: &[f32], n: usize, k: usize, isa: Isa) -> Self {
+        let p = Self::vectors(isa.lanes) * isa.lanes;
+        let mut d = Dense { k, n, p, isa, panels: vec![0f32; n.div_ceil(p) * k * p] };
+        d.repack_transposed(w);
+        d
+    }
+
+    /// Packs new values of `B` (`[k, n]`, row-major) into the panels (in parallel over them).
+    ///
+    /// # Panics
+    /// When `b` is not `k × n` long.
+    pub(crate) fn repack(&mut self, b: &[f32]) {
+        let (k, n, p) = (self.k, self.n, self.p);
+        assert_eq!(b.len(), k * n, "matrix: {} values for {k} × {n}", b.len());
+        if k == 0 {
+            return;
         }
-        Dense { k, n, p, isa, panels }
+        self.panels.par_chunks_mut(k * p).enumerate().for_each(|(pi, panel)| {
+            let (j0, cols) = (pi * p, p.min(n - pi * p));
+            for (kk, row) in panel.chunks_exact_mut(p).enumerate() {
+                row[..cols].copy_from_slice(&b[kk * n + j0..kk * n + j0 + cols]);
+            }
+        });
+    }
+
+    /// Packs new values of `W = Bᵀ` (`[n, k]`, row-major) into the panels.
+    ///
+    /// # Panics
+    /// When `w` is not `n × k` long.
+    pub(crate) fn repack_transposed(&mut self, w: &[f32]) {
+        let (k, n, p) = (self.k, self.n, self.p);
+        assert_eq!(w.len(), k * n, "matrix: {} values for {n} × {k}", w.len());
+        if k == 0 {
+            return;
+        }
+        self.panels.par_chunks_mut(k * p).enumerate().for_each(|(pi, panel)| {
+            for q in 0..p.min(n - pi * p) {
+                let src = &w[(pi * p + q) * k..(pi * p + q + 1) * k];
+                for (kk, &v) in src.iter().enumerate() {
+                    panel[kk * p + q] = v;
+                }
+            }
+        });
     }
 
     /// Vectors of columns per tile (with 4 rows: 16 accumulators of 32 AVX-512 registers, 8
@@ -284,12 +325,23 @@ impl Dense {
     /// `y = x · B (+ bias)` for `x` `[m, k]` row-major: `[m, n]`; each sum in order of the
     /// inner index from zero, the bias added last. Parallel over fixed blocks of rows.
     pub(crate) fn apply(&self, x: &[f32], bias: Option<&[f32]>) -> Vec<f32> {
+        let m = x.len().checked_div(self.k).unwrap_or(0);
+        let mut y = vec![0f32; m * self.n];
+        self.apply_into(x, bias, &mut y);
+        y
+    }
+
+    /// As [`Dense::apply`], into `y` (`[m, n]`; every value overwritten).
+    ///
+    /// # Panics
+    /// When `y` is not `m × n` long.
+    pub(crate) fn apply_into(&self, x: &[f32], bias: Option<&[f32]>, y: &mut [f32]) {
         const ROWS: usize = 16;
         let (k, n) = (self.k, self.n);
         let m = x.len().checked_div(k).unwrap_or(0);
-        let mut y = vec![0f32; m * n];
+        assert_eq!(y.len(), m * n, "product: {} values for {m} × {n}", y.len());
         if n == 0 || m == 0 {
-            return y;
+            return;
         }
         y.par_chunks_mut(ROWS * n).zip(x.par_chunks(ROWS * k)).for_each(|(yb, xb)| {
             self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..] });
@@ -299,7 +351,6 @@ impl Dense {
                 }
             }
         });
-        y
     }
 }
 
@@ -478,6 +529,14 @@ mod tests {
             let mut first: Option<Vec<f32>> = None;
             for isa in isas() {
                 let y = Dense::new(&b, k, n, isa).apply(&x, Some(&bias));
+                // The same product from `Bᵀ`, and repacked in place.
+                let bt: Vec<f32> = (0..n * k).map(|i| b[(i % k) * n + i / k]).collect();
+                assert_eq!(Dense::new_transposed(&bt, n, k, isa).apply(&x, Some(&bias)), y);
+                let mut d = Dense::new(&vec![0.5; k * n], k, n, isa);
+                d.repack(&b);
+                assert_eq!(d.apply(&x, Some(&bias)), y);
+                d.repack_transposed(&bt);
+                assert_eq!(d.apply(&x, Some(&bias)), y);
                 assert_eq!(y.len(), m * n);
                 for r in 0..m {
                     for j in 0..n {

@@ -34,6 +34,7 @@ mod adam;
 mod compose;
 mod config;
 mod conv;
+mod convnet;
 #[cfg(test)]
 mod conv_tests;
 mod direct;
@@ -47,6 +48,7 @@ mod vjp;
 use thiserror::Error;
 
 pub use compose::render_track;
+pub use convnet::{DirectNet, NetSpec, StageSpec};
 pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
 pub use eval::{HELD_OUT_SEED, evaluate};
 pub use model::{Generator, config_path};
