@@ -343,8 +343,27 @@ impl Dense {
         if n == 0 || m == 0 {
             return;
         }
+        let np = n.div_ceil(self.p);
+        if m <= PANEL_PARALLEL_ROWS && np >= 4 {
+            // Few rows, many columns: in parallel over the panels, so that each weight is read
+            // once (the rows stay in cache), into a panel-major buffer, then into the rows.
+            let p = self.p;
+            let mut t = vec![0f32; np * m * p];
+            t.par_chunks_mut(m * p).enumerate().for_each(|(pi, tb)| {
+                self.isa.arch.dispatch(DenseOp { d: self, x, y: tb, panels: pi..pi + 1, stride: p, col0: pi * p });
+            });
+            y.par_chunks_mut(n).enumerate().for_each(|(r, row)| {
+                for (pi, chunk) in row.chunks_mut(p).enumerate() {
+                    chunk.copy_from_slice(&t[(pi * m + r) * p..(pi * m + r) * p + chunk.len()]);
+                }
+                if let Some(bias) = bias {
+                    row.iter_mut().zip(bias).for_each(|(v, b)| *v += b);
+                }
+            });
+            return;
+        }
         y.par_chunks_mut(ROWS * n).zip(x.par_chunks(ROWS * k)).for_each(|(yb, xb)| {
-            self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..] });
+            self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..], panels: 0..np, stride: n, col0: 0 });
             if let Some(bias) = bias {
                 for row in yb.chunks_exact_mut(n) {
                     row.iter_mut().zip(bias).for_each(|(v, b)| *v += b);
@@ -354,11 +373,18 @@ impl Dense {
     }
 }
 
-/// Rows `x` through a [`Dense`] into `y`.
+/// Products of at most this many rows run in parallel over the panels of columns.
+const PANEL_PARALLEL_ROWS: usize = 256;
+
+/// Rows `x` through panels `panels` of a [`Dense`] into `y`: row `r`, column `j` of the
+/// product at `y[r · stride + j − col0]`.
 struct DenseOp<'a> {
     d: &'a Dense,
     x: &'a [f32],
     y: &'a mut [f32],
+    panels: std::ops::Range<usize>,
+    stride: usize,
+    col0: usize,
 }
 
 impl WithSimd for DenseOp<'_> {
@@ -372,11 +398,12 @@ impl WithSimd for DenseOp<'_> {
 /// Panel after panel (each then stays in cache), blocks of 4 rows then single rows.
 #[inline(always)]
 fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
-    let (k, n, p) = (op.d.k, op.d.n, op.d.p);
+    let (k, n, p, st) = (op.d.k, op.d.n, op.d.p, op.stride);
     debug_assert_eq!(p, NV * S::F32_LANES);
-    let m = op.y.len() / n;
-    for (pi, panel) in op.d.panels.chunks_exact(k * p).enumerate() {
-        let (j0, cols) = (pi * p, p.min(n - pi * p));
+    let m = op.y.len() / st;
+    for pi in op.panels.clone() {
+        let panel = &op.d.panels[pi * k * p..(pi + 1) * k * p];
+        let (j0, cols) = (pi * p - op.col0, p.min(n - pi * p));
         let mut r = 0;
         while r + 4 <= m {
             dense_tile::<S, 4, NV>(
@@ -384,8 +411,8 @@ fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
                 &op.x[r * k..(r + 4) * k],
                 k,
                 panel,
-                &mut op.y[r * n..(r + 4) * n],
-                n,
+                &mut op.y[r * st..(r + 4) * st],
+                st,
                 j0,
                 cols,
             );
@@ -397,8 +424,8 @@ fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
                 &op.x[r * k..(r + 1) * k],
                 k,
                 panel,
-                &mut op.y[r * n..(r + 1) * n],
-                n,
+                &mut op.y[r * st..(r + 1) * st],
+                st,
                 j0,
                 cols,
             );
@@ -522,7 +549,9 @@ mod tests {
 
     #[test]
     fn matmul_matches_naive_product() {
-        for &(m, k, n) in &[(1, 3, 5), (5, 7, 16), (9, 12, 70), (4, 33, 128), (6, 128, 3), (2, 4, 0)] {
+        for &(m, k, n) in
+            &[(1, 3, 5), (5, 7, 16), (9, 12, 70), (4, 33, 128), (6, 128, 3), (2, 4, 0), (300, 5, 70), (7, 9, 300)]
+        {
             let x = values(m * k, 3 + m as u64);
             let b = values(k * n, 5 + n as u64);
             let bias = values(n, 9);
@@ -537,6 +566,11 @@ mod tests {
                 assert_eq!(d.apply(&x, Some(&bias)), y);
                 d.repack_transposed(&bt);
                 assert_eq!(d.apply(&x, Some(&bias)), y);
+                // Row by row (in parallel over the panels where there are enough): the same bits.
+                if k > 0 {
+                    let rows: Vec<f32> = x.chunks(k).flat_map(|r| d.apply(r, Some(&bias))).collect();
+                    assert_eq!(rows, y, "{isa:?} {m}×{k}×{n}: row by row");
+                }
                 assert_eq!(y.len(), m * n);
                 for r in 0..m {
                     for j in 0..n {
