@@ -34,9 +34,9 @@ mod adam;
 mod compose;
 mod config;
 mod conv;
-mod convnet;
 #[cfg(test)]
 mod conv_tests;
+mod convnet;
 mod direct;
 mod eval;
 mod kernels;
@@ -48,8 +48,8 @@ mod vjp;
 use thiserror::Error;
 
 pub use compose::render_track;
-pub use convnet::{DirectNet, NetSpec, StageSpec};
 pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
+pub use convnet::{DirectNet, NetSpec, StageSpec};
 pub use eval::{HELD_OUT_SEED, evaluate};
 pub use model::{Generator, config_path};
 pub use train::{TrainOptions, TrainPoint, TrainReport, train};
