@@ -54,6 +54,12 @@ const ROWS: &[(&str, &str)] = &[
     ("peak_fp32/fma_all_threads", "peak FP32: independent FMAs on every thread (fixed work)"),
     ("ltp_training/step_batch_64_maobi", "LearningToPaint-size net, Adam step, batch 64, maobi kernels"),
     ("ltp_training/step_batch_64_candle", "LearningToPaint-size net, Adam step, batch 64, stock candle"),
+    ("ltp_training/step_batch_64_direct", "LearningToPaint-size net, Adam step, batch 64, direct kernels"),
+    ("ltp_inference/batch_64_direct", "LearningToPaint-size net, inference batch 64, direct kernels"),
+    (
+        "generator_training/train_job_10_steps_batch_64",
+        "the whole `train` job, 10 steps of batch 64 (targets rendered, one validation)",
+    ),
     ("ltp_inference/batch_1_maobi", "LearningToPaint-size net, inference batch 1, maobi kernels"),
     ("ltp_inference/batch_64_maobi", "LearningToPaint-size net, inference batch 64, maobi kernels"),
     ("ltp_inference/batch_1_candle", "LearningToPaint-size net, inference batch 1, stock candle"),
@@ -94,7 +100,7 @@ pub fn run(args: &[String]) -> Result<()> {
             .and_then(|v| v.parse::<usize>().ok())
             .filter(|&n| (1..=20).contains(&n))
             .context("--rounds takes a count from 1 to 20")?,
-        None => 2,
+        None => 3,
     };
     if args.iter().any(|a| a == "--pairs") {
         let table = pairs(&root, quick, rounds)?;
@@ -244,16 +250,51 @@ struct Pair {
     bench: &'static str,
     filter: &'static str,
     id: &'static str,
+    /// Units of work in one criterion iteration (the figure is per unit: per training step).
+    per_iter: f64,
     script: &'static str,
     args: &'static [&'static str],
     key: &'static str,
-    /// FLOPs of one measured call (2 per multiply–add).
+    /// FLOPs of one unit of work (2 per multiply–add).
     flops: f64,
 }
 
-/// The generator pairs, interleaved: per round, each pair's maobi benchmark then its PyTorch
-/// script, at the same thread count; a table row per pair and round with the times, the
-/// maobi/PyTorch ratio, each as a fraction of the measured peak FP32 rate, and the load.
+/// One measured pair.
+struct Measured {
+    maobi_s: f64,
+    torch_s: Option<f64>,
+    peak: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The machine's peak FP32 rate (FLOP/s): the `peak_fp32` criterion benchmark.
+fn peak_flops(root: &Path, quick: bool) -> Result<f64> {
+    let peak_id = "peak_fp32/fma_all_threads";
+    let peak_ns = criterion_ns(root, "generator", "peak_fp32", peak_id, quick)?;
+    // The benchmark's throughput is its FLOP count (lanes × accumulators × iterations × threads × 2).
+    let peak_work = std::fs::read_to_string(root.join("target/criterion").join(peak_id).join("new/benchmark.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["throughput"]["Elements"].as_f64())
+        .context("no FLOP count in the peak_fp32 benchmark's record")?;
+    Ok(peak_work / (peak_ns * 1e-9))
+}
+
+/// The generator pairs, interleaved: per round, the peak FP32 rate, then each pair's maobi
+/// benchmark and its PyTorch script, at the same thread count; a table row per pair and round
+/// with the times, the maobi/PyTorch ratio, each as a fraction of the round's peak, and the
+/// load; then per pair the best and the median over the rounds.
 fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
     let threads = std::env::var("RAYON_NUM_THREADS")
         .ok()
@@ -269,8 +310,9 @@ fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
             bench: "generator",
             filter: "generator_inference/batch_64$",
             id: "generator_inference/batch_64",
+            per_iter: 1.0,
             script: "gen_vjp_torch.py",
-            args: &[],
+            args: &["--reps", "10"],
             key: "forward_s",
             flops: pen1,
         },
@@ -279,62 +321,96 @@ fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
             bench: "generator",
             filter: "generator_training/network_step_batch_64$",
             id: "generator_training/network_step_batch_64",
+            per_iter: 1.0,
             script: "gen_vjp_torch.py",
-            args: &[],
+            args: &["--reps", "10"],
             key: "train_step_s",
+            flops: 3.0 * pen1,
+        },
+        Pair {
+            label: "`maobi train` job per step (targets rendered; PyTorch + OpenCV peer), batch 64",
+            bench: "generator",
+            filter: "generator_training/train_job_10_steps_batch_64",
+            id: "generator_training/train_job_10_steps_batch_64",
+            per_iter: 10.0,
+            script: "train_torch.py",
+            args: &["--steps", "10"],
+            key: "step_s",
             flops: 3.0 * pen1,
         },
         Pair {
             label: "LearningToPaint-size training step, batch 64",
             bench: "ltp",
-            filter: "ltp_training/step_batch_64_maobi",
-            id: "ltp_training/step_batch_64_maobi",
+            filter: "ltp_training/step_batch_64_direct",
+            id: "ltp_training/step_batch_64_direct",
+            per_iter: 1.0,
             script: "ltp_torch.py",
             args: &["--steps", "10"],
             key: "step_s",
             flops: 3.0 * ltp,
         },
     ];
-    let peak_id = "peak_fp32/fma_all_threads";
-    let peak_ns = criterion_ns(root, "generator", "peak_fp32", peak_id, quick)?;
-    // The benchmark's throughput is its FLOP count (lanes × accumulators × iterations × threads × 2).
-    let peak_work = std::fs::read_to_string(root.join("target/criterion").join(peak_id).join("new/benchmark.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| v["throughput"]["Elements"].as_f64())
-        .context("no FLOP count in the peak_fp32 benchmark's record")?;
-    let peak_flops = peak_work / (peak_ns * 1e-9);
-    let frac = |flops: f64, s: f64| format!("{:.1} %", 100.0 * flops / s / peak_flops);
-    let mut table = format!(
-        "Peak FP32 (FMA loop, {threads} threads): {:.0} GFLOP/s (load {})\n\n\
-         | pair | maobi | PyTorch | maobi / PyTorch time | maobi of peak | PyTorch of peak | load |\n\
-         |---|---|---|---|---|---|---|\n",
-        peak_flops / 1e9,
-        load()
-    );
     let targs = |p: &Pair| -> Vec<String> {
         let mut v: Vec<String> = vec!["--threads".into(), threads.to_string()];
         v.extend(p.args.iter().map(|s| s.to_string()));
         v
     };
-    for _ in 0..rounds {
-        for p in &list {
+    let mut table = format!(
+        "Pairs at {threads} threads, interleaved (maobi's criterion benchmark, then the PyTorch script), {rounds} rounds\n\n\
+         | round | pair | maobi | PyTorch | maobi / PyTorch time | maobi of peak | PyTorch of peak | peak FP32 | load |\n\
+         |---|---|---|---|---|---|---|---|---|\n"
+    );
+    let mut all: Vec<Vec<Measured>> = (0..list.len()).map(|_| Vec::new()).collect();
+    for round in 1..=rounds {
+        let peak = peak_flops(root, quick)?;
+        for (p, seen) in list.iter().zip(&mut all) {
             let before = load();
             let ns = criterion_ns(root, p.bench, p.filter, p.id, quick)?;
             let torch_s = torch_json(root, p.script, &targs(p)).and_then(|v| v[p.key].as_f64());
-            let m = ns * 1e-9;
+            let m = ns * 1e-9 / p.per_iter;
+            let frac = |s: f64| format!("{:.1} %", 100.0 * p.flops / s / peak);
             let (t_cell, ratio, tf) = match torch_s {
-                Some(t) => (human(t * 1e9), format!("{:.2}", m / t), frac(p.flops, t)),
+                Some(t) => (human(t * 1e9), format!("{:.2}", m / t), frac(t)),
                 None => ("not run (no Python with torch)".to_string(), "–".to_string(), "–".to_string()),
             };
             table.push_str(&format!(
-                "| {} | {} | {t_cell} | {ratio} | {} | {tf} | {before}–{} |\n",
+                "| {round} | {} | {} | {t_cell} | {ratio} | {} | {tf} | {:.0} GFLOP/s | {before}–{} |\n",
                 p.label,
-                human(ns),
-                frac(p.flops, m),
+                human(m * 1e9),
+                frac(m),
+                peak / 1e9,
                 load()
             ));
+            seen.push(Measured { maobi_s: m, torch_s, peak });
         }
+    }
+    table.push_str(
+        "\n| pair | maobi best / median | PyTorch best / median | ratio of bests | median of ratios | maobi best of peak |\n\
+         |---|---|---|---|---|---|\n",
+    );
+    for (p, seen) in list.iter().zip(&all) {
+        let ms: Vec<f64> = seen.iter().map(|s| s.maobi_s).collect();
+        let ts: Vec<f64> = seen.iter().filter_map(|s| s.torch_s).collect();
+        let ratios: Vec<f64> = seen.iter().filter_map(|s| s.torch_s.map(|t| s.maobi_s / t)).collect();
+        let best_m = ms.iter().copied().fold(f64::INFINITY, f64::min);
+        let best_peak = seen.iter().map(|s| s.peak).fold(0.0, f64::max);
+        let (t_cell, r_best, r_med) = if ts.is_empty() {
+            ("not run".to_string(), "–".to_string(), "–".to_string())
+        } else {
+            let best_t = ts.iter().copied().fold(f64::INFINITY, f64::min);
+            (
+                format!("{} / {}", human(best_t * 1e9), human(median(ts.clone()) * 1e9)),
+                format!("{:.2}", best_m / best_t),
+                format!("{:.2}", median(ratios)),
+            )
+        };
+        table.push_str(&format!(
+            "| {} | {} / {} | {t_cell} | {r_best} | {r_med} | {:.1} % |\n",
+            p.label,
+            human(best_m * 1e9),
+            human(median(ms) * 1e9),
+            100.0 * p.flops / best_m / best_peak
+        ));
     }
     Ok(table)
 }

@@ -1,6 +1,7 @@
 //! Generator speed: inference at batch 1 and 64 (direct kernels, and candle's graph for
 //! comparison), one training step at batch 64 (the whole `train` step, and the network alone on
-//! the direct kernels and through candle's graph), next to the analytic renderer; and the
+//! the direct kernels and through candle's graph; the whole `train` job for 10 steps), next to
+//! the analytic renderer; and the
 //! machine's peak FP32 rate (a loop of independent fused multiply–adds on every thread), the
 //! yardstick `cargo xtask bench` divides by (`cargo bench -p neural-gen --bench generator`).
 
@@ -96,6 +97,16 @@ fn bench(c: &mut Criterion) {
             Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1)
                 .unwrap();
         let opts = TrainOptions { steps: 1, batch: 64, val_every: 1_000_000, ..TrainOptions::default() };
+        b.iter(|| neural_gen::train(&mut g, &opts, |_| {}).unwrap())
+    });
+    // The whole job of `maobi train` for 10 steps (its data rendered by bezier-raster, the
+    // network on the direct kernels, one validation at the end): the figure, per step, that
+    // benches/train_torch.py (PyTorch, its targets drawn by OpenCV) is compared with.
+    grp.bench_function("train_job_10_steps_batch_64", |b| {
+        let mut g =
+            Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), Arch::default_128()), 1)
+                .unwrap();
+        let opts = TrainOptions { steps: 10, batch: 64, val_every: 1_000_000, ..TrainOptions::default() };
         b.iter(|| neural_gen::train(&mut g, &opts, |_| {}).unwrap())
     });
     // The network alone (as benches/gen_vjp_torch.py's training step): fixed inputs and

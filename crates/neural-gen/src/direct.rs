@@ -224,23 +224,8 @@ impl DirectTrainer {
     /// As [`InputVjp::new`].
     pub fn update(&mut self, lr: f64) -> Result<(), NeuralGenError> {
         self.t += 1;
-        let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8f64);
-        let (sm, sv) = ((1.0 / (1.0 - b1.powi(self.t))) as f32, (1.0 / (1.0 - b2.powi(self.t))) as f32);
-        let (lr, b1, b2, eps) = (lr as f32, b1 as f32, b2 as f32, eps as f32);
         for p in &mut self.params {
-            p.w.par_chunks_mut(1 << 14)
-                .zip(p.m.par_chunks_mut(1 << 14))
-                .zip(p.v.par_chunks_mut(1 << 14))
-                .zip(p.g.par_chunks(1 << 14))
-                .for_each(|(((th, m), v), g)| {
-                    for i in 0..th.len() {
-                        let gi = g[i];
-                        m[i] = b1 * m[i] + (1.0 - b1) * gi;
-                        v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
-                        let step = (m[i] * sm) / ((v[i] * sv).sqrt() + eps);
-                        th[i] -= lr * step;
-                    }
-                });
+            adamw_step(&mut p.w, &p.g, &mut p.m, &mut p.v, lr, self.t);
         }
         self.rebuild()
     }
@@ -310,53 +295,87 @@ impl WithSimd for WeightGrads<'_> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: Simd>(self, simd: S) {
-        let l = S::F32_LANES;
         let (mut aoff, mut goff) = (0, 0);
         for (si, st) in self.net.stages.iter().enumerate() {
-            let (n, wp) = (st.n, st.n + 2);
-            let q2 = wp * wp;
-            let x = &self.acts[aoff..aoff + padded_len(st.cin, n)];
-            let gy = &self.bufs[si];
+            let x = &self.acts[aoff..aoff + padded_len(st.cin, st.n)];
             let (gw, rest) = self.grads[goff..].split_at_mut(st.cout * st.cin * 9);
-            let gb = &mut rest[..st.cout];
-            // Positions q of the padded plane whose 3×3 neighbourhood lies inside it; the
-            // gradient is zero on the border, so these are all that count.
-            let (q0, q1) = (wp + 1, q2 - wp - 1);
-            let len = q1 - q0;
-            let full = len / l * l;
-            for o in 0..st.cout {
-                let g = &gy[o * q2..(o + 1) * q2];
-                gb[o] = g.iter().sum();
-                for c in 0..st.cin {
-                    let xc = &x[c * q2..(c + 1) * q2];
-                    let mut acc = [simd.splat_f32s(0.0); 9];
-                    let mut q = q0;
-                    while q < q0 + full {
-                        let gv: S::f32s = pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&g[q..q + l]));
-                        for (tap, a) in acc.iter_mut().enumerate() {
-                            let s = q + (tap / 3) * wp + tap % 3 - wp - 1;
-                            let xv: S::f32s =
-                                pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&xc[s..s + l]));
-                            *a = simd.mul_add_f32s(gv, xv, *a);
-                        }
-                        q += l;
-                    }
-                    let w = &mut gw[(o * st.cin + c) * 9..(o * st.cin + c + 1) * 9];
-                    for (tap, a) in acc.iter().enumerate() {
-                        let lanes: &[f32] = pulp::bytemuck::cast_slice(std::slice::from_ref(a));
-                        let mut sum: f32 = lanes.iter().sum();
-                        let off = (tap / 3) * wp + tap % 3;
-                        for qq in q0 + full..q1 {
-                            sum += g[qq] * xc[qq + off - wp - 1];
-                        }
-                        w[tap] = sum;
-                    }
-                }
-            }
-            aoff += padded_len(st.cin, n);
+            conv_weight_grads(simd, x, &self.bufs[si], (st.cin, st.cout, st.n), gw, &mut rest[..st.cout]);
+            aoff += padded_len(st.cin, st.n);
             goff += st.cout * st.cin * 9 + st.cout;
         }
     }
+}
+
+/// The weight (`gw`, `[cout, cin, 3, 3]`) and bias (`gb`, `[cout]`) gradients of one 3×3
+/// convolution (padding 1) of one image of `n × n` pixels (`(cin, cout, n)`): `x` its padded
+/// input planes, `gy` the padded gradient at its output (zero borders). Each sum a fixed
+/// order of operations (vectors of positions, then their lanes, then the tail).
+#[inline(always)]
+pub(crate) fn conv_weight_grads<S: Simd>(
+    simd: S,
+    x: &[f32],
+    gy: &[f32],
+    (cin, cout, n): (usize, usize, usize),
+    gw: &mut [f32],
+    gb: &mut [f32],
+) {
+    let l = S::F32_LANES;
+    let wp = n + 2;
+    let q2 = wp * wp;
+    // Positions q of the padded plane whose 3×3 neighbourhood lies inside it; the
+    // gradient is zero on the border, so these are all that count.
+    let (q0, q1) = (wp + 1, q2 - wp - 1);
+    let len = q1 - q0;
+    let full = len / l * l;
+    for o in 0..cout {
+        let g = &gy[o * q2..(o + 1) * q2];
+        gb[o] = g.iter().sum();
+        for c in 0..cin {
+            let xc = &x[c * q2..(c + 1) * q2];
+            let mut acc = [simd.splat_f32s(0.0); 9];
+            let mut q = q0;
+            while q < q0 + full {
+                let gv: S::f32s = pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&g[q..q + l]));
+                for (tap, a) in acc.iter_mut().enumerate() {
+                    let s = q + (tap / 3) * wp + tap % 3 - wp - 1;
+                    let xv: S::f32s = pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&xc[s..s + l]));
+                    *a = simd.mul_add_f32s(gv, xv, *a);
+                }
+                q += l;
+            }
+            let w = &mut gw[(o * cin + c) * 9..(o * cin + c + 1) * 9];
+            for (tap, a) in acc.iter().enumerate() {
+                let lanes: &[f32] = pulp::bytemuck::cast_slice(std::slice::from_ref(a));
+                let mut sum: f32 = lanes.iter().sum();
+                let off = (tap / 3) * wp + tap % 3;
+                for qq in q0 + full..q1 {
+                    sum += g[qq] * xc[qq + off - wp - 1];
+                }
+                w[tap] = sum;
+            }
+        }
+    }
+}
+
+/// One AdamW step (candle's rule, weight decay 0) at step `t` (from 1) on weights `w` with
+/// gradients `g` and moments `m`, `v`, in parallel over fixed chunks.
+pub(crate) fn adamw_step(w: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], lr: f64, t: i32) {
+    let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8f64);
+    let (sm, sv) = ((1.0 / (1.0 - b1.powi(t))) as f32, (1.0 / (1.0 - b2.powi(t))) as f32);
+    let (lr, b1, b2, eps) = (lr as f32, b1 as f32, b2 as f32, eps as f32);
+    w.par_chunks_mut(1 << 14)
+        .zip(m.par_chunks_mut(1 << 14))
+        .zip(v.par_chunks_mut(1 << 14))
+        .zip(g.par_chunks(1 << 14))
+        .for_each(|(((th, m), v), g)| {
+            for i in 0..th.len() {
+                let gi = g[i];
+                m[i] = b1 * m[i] + (1.0 - b1) * gi;
+                v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
+                let step = (m[i] * sm) / ((v[i] * sv).sqrt() + eps);
+                th[i] -= lr * step;
+            }
+        });
 }
 
 #[cfg(test)]

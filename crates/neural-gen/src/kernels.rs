@@ -263,16 +263,57 @@ pub(crate) struct Dense {
 impl Dense {
     /// From `B` `[k, n]`, row-major.
     pub(crate) fn new(b: &[f32], k: usize, n: usize, isa: Isa) -> Self {
-        assert_eq!(b.len(), k * n, "matrix: {} values for {k} × {n}", b.len());
         let p = Self::vectors(isa.lanes) * isa.lanes;
-        let np = n.div_ceil(p);
-        let mut panels = vec![0f32; np * k * p];
-        for kk in 0..k {
-            for j in 0..n {
-                panels[((j / p) * k + kk) * p + j % p] = b[kk * n + j];
-            }
+        let mut d = Dense { k, n, p, isa, panels: vec![0f32; n.div_ceil(p) * k * p] };
+        d.repack(b);
+        d
+    }
+
+    /// From `W` `[n, k]`, row-major: the product `x · Wᵀ` (a fully connected layer's forward
+    /// pass with candle's weight layout), without a transposed copy.
+    pub(crate) fn new_transposed(w: &[f32], n: usize, k: usize, isa: Isa) -> Self {
+        let p = Self::vectors(isa.lanes) * isa.lanes;
+        let mut d = Dense { k, n, p, isa, panels: vec![0f32; n.div_ceil(p) * k * p] };
+        d.repack_transposed(w);
+        d
+    }
+
+    /// Packs new values of `B` (`[k, n]`, row-major) into the panels (in parallel over them).
+    ///
+    /// # Panics
+    /// When `b` is not `k × n` long.
+    pub(crate) fn repack(&mut self, b: &[f32]) {
+        let (k, n, p) = (self.k, self.n, self.p);
+        assert_eq!(b.len(), k * n, "matrix: {} values for {k} × {n}", b.len());
+        if k == 0 {
+            return;
         }
-        Dense { k, n, p, isa, panels }
+        self.panels.par_chunks_mut(k * p).enumerate().for_each(|(pi, panel)| {
+            let (j0, cols) = (pi * p, p.min(n - pi * p));
+            for (kk, row) in panel.chunks_exact_mut(p).enumerate() {
+                row[..cols].copy_from_slice(&b[kk * n + j0..kk * n + j0 + cols]);
+            }
+        });
+    }
+
+    /// Packs new values of `W = Bᵀ` (`[n, k]`, row-major) into the panels.
+    ///
+    /// # Panics
+    /// When `w` is not `n × k` long.
+    pub(crate) fn repack_transposed(&mut self, w: &[f32]) {
+        let (k, n, p) = (self.k, self.n, self.p);
+        assert_eq!(w.len(), k * n, "matrix: {} values for {n} × {k}", w.len());
+        if k == 0 {
+            return;
+        }
+        self.panels.par_chunks_mut(k * p).enumerate().for_each(|(pi, panel)| {
+            for q in 0..p.min(n - pi * p) {
+                let src = &w[(pi * p + q) * k..(pi * p + q + 1) * k];
+                for (kk, &v) in src.iter().enumerate() {
+                    panel[kk * p + q] = v;
+                }
+            }
+        });
     }
 
     /// Vectors of columns per tile (with 4 rows: 16 accumulators of 32 AVX-512 registers, 8
@@ -284,30 +325,66 @@ impl Dense {
     /// `y = x · B (+ bias)` for `x` `[m, k]` row-major: `[m, n]`; each sum in order of the
     /// inner index from zero, the bias added last. Parallel over fixed blocks of rows.
     pub(crate) fn apply(&self, x: &[f32], bias: Option<&[f32]>) -> Vec<f32> {
+        let m = x.len().checked_div(self.k).unwrap_or(0);
+        let mut y = vec![0f32; m * self.n];
+        self.apply_into(x, bias, &mut y);
+        y
+    }
+
+    /// As [`Dense::apply`], into `y` (`[m, n]`; every value overwritten).
+    ///
+    /// # Panics
+    /// When `y` is not `m × n` long.
+    pub(crate) fn apply_into(&self, x: &[f32], bias: Option<&[f32]>, y: &mut [f32]) {
         const ROWS: usize = 16;
         let (k, n) = (self.k, self.n);
         let m = x.len().checked_div(k).unwrap_or(0);
-        let mut y = vec![0f32; m * n];
+        assert_eq!(y.len(), m * n, "product: {} values for {m} × {n}", y.len());
         if n == 0 || m == 0 {
-            return y;
+            return;
+        }
+        let np = n.div_ceil(self.p);
+        if m <= PANEL_PARALLEL_ROWS && np >= 4 {
+            // Few rows, many columns: in parallel over the panels, so that each weight is read
+            // once (the rows stay in cache), into a panel-major buffer, then into the rows.
+            let p = self.p;
+            let mut t = vec![0f32; np * m * p];
+            t.par_chunks_mut(m * p).enumerate().for_each(|(pi, tb)| {
+                self.isa.arch.dispatch(DenseOp { d: self, x, y: tb, panels: pi..pi + 1, stride: p, col0: pi * p });
+            });
+            y.par_chunks_mut(n).enumerate().for_each(|(r, row)| {
+                for (pi, chunk) in row.chunks_mut(p).enumerate() {
+                    chunk.copy_from_slice(&t[(pi * m + r) * p..(pi * m + r) * p + chunk.len()]);
+                }
+                if let Some(bias) = bias {
+                    row.iter_mut().zip(bias).for_each(|(v, b)| *v += b);
+                }
+            });
+            return;
         }
         y.par_chunks_mut(ROWS * n).zip(x.par_chunks(ROWS * k)).for_each(|(yb, xb)| {
-            self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..] });
+            self.isa.arch.dispatch(DenseOp { d: self, x: xb, y: &mut yb[..], panels: 0..np, stride: n, col0: 0 });
             if let Some(bias) = bias {
                 for row in yb.chunks_exact_mut(n) {
                     row.iter_mut().zip(bias).for_each(|(v, b)| *v += b);
                 }
             }
         });
-        y
     }
 }
 
-/// Rows `x` through a [`Dense`] into `y`.
+/// Products of at most this many rows run in parallel over the panels of columns.
+const PANEL_PARALLEL_ROWS: usize = 256;
+
+/// Rows `x` through panels `panels` of a [`Dense`] into `y`: row `r`, column `j` of the
+/// product at `y[r · stride + j − col0]`.
 struct DenseOp<'a> {
     d: &'a Dense,
     x: &'a [f32],
     y: &'a mut [f32],
+    panels: std::ops::Range<usize>,
+    stride: usize,
+    col0: usize,
 }
 
 impl WithSimd for DenseOp<'_> {
@@ -321,11 +398,12 @@ impl WithSimd for DenseOp<'_> {
 /// Panel after panel (each then stays in cache), blocks of 4 rows then single rows.
 #[inline(always)]
 fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
-    let (k, n, p) = (op.d.k, op.d.n, op.d.p);
+    let (k, n, p, st) = (op.d.k, op.d.n, op.d.p, op.stride);
     debug_assert_eq!(p, NV * S::F32_LANES);
-    let m = op.y.len() / n;
-    for (pi, panel) in op.d.panels.chunks_exact(k * p).enumerate() {
-        let (j0, cols) = (pi * p, p.min(n - pi * p));
+    let m = op.y.len() / st;
+    for pi in op.panels.clone() {
+        let panel = &op.d.panels[pi * k * p..(pi + 1) * k * p];
+        let (j0, cols) = (pi * p - op.col0, p.min(n - pi * p));
         let mut r = 0;
         while r + 4 <= m {
             dense_tile::<S, 4, NV>(
@@ -333,8 +411,8 @@ fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
                 &op.x[r * k..(r + 4) * k],
                 k,
                 panel,
-                &mut op.y[r * n..(r + 4) * n],
-                n,
+                &mut op.y[r * st..(r + 4) * st],
+                st,
                 j0,
                 cols,
             );
@@ -346,8 +424,8 @@ fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
                 &op.x[r * k..(r + 1) * k],
                 k,
                 panel,
-                &mut op.y[r * n..(r + 1) * n],
-                n,
+                &mut op.y[r * st..(r + 1) * st],
+                st,
                 j0,
                 cols,
             );
@@ -471,13 +549,28 @@ mod tests {
 
     #[test]
     fn matmul_matches_naive_product() {
-        for &(m, k, n) in &[(1, 3, 5), (5, 7, 16), (9, 12, 70), (4, 33, 128), (6, 128, 3), (2, 4, 0)] {
+        for &(m, k, n) in
+            &[(1, 3, 5), (5, 7, 16), (9, 12, 70), (4, 33, 128), (6, 128, 3), (2, 4, 0), (300, 5, 70), (7, 9, 300)]
+        {
             let x = values(m * k, 3 + m as u64);
             let b = values(k * n, 5 + n as u64);
             let bias = values(n, 9);
             let mut first: Option<Vec<f32>> = None;
             for isa in isas() {
                 let y = Dense::new(&b, k, n, isa).apply(&x, Some(&bias));
+                // The same product from `Bᵀ`, and repacked in place.
+                let bt: Vec<f32> = (0..n * k).map(|i| b[(i % k) * n + i / k]).collect();
+                assert_eq!(Dense::new_transposed(&bt, n, k, isa).apply(&x, Some(&bias)), y);
+                let mut d = Dense::new(&vec![0.5; k * n], k, n, isa);
+                d.repack(&b);
+                assert_eq!(d.apply(&x, Some(&bias)), y);
+                d.repack_transposed(&bt);
+                assert_eq!(d.apply(&x, Some(&bias)), y);
+                // Row by row (in parallel over the panels where there are enough): the same bits.
+                if k > 0 {
+                    let rows: Vec<f32> = x.chunks(k).flat_map(|r| d.apply(r, Some(&bias))).collect();
+                    assert_eq!(rows, y, "{isa:?} {m}×{k}×{n}: row by row");
+                }
                 assert_eq!(y.len(), m * n);
                 for r in 0..m {
                     for j in 0..n {

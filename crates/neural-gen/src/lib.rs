@@ -36,6 +36,7 @@ mod config;
 mod conv;
 #[cfg(test)]
 mod conv_tests;
+mod convnet;
 mod direct;
 mod eval;
 mod kernels;
@@ -48,6 +49,7 @@ use thiserror::Error;
 
 pub use compose::render_track;
 pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
+pub use convnet::{DirectNet, NetSpec, StageSpec};
 pub use eval::{HELD_OUT_SEED, evaluate};
 pub use model::{Generator, config_path};
 pub use train::{TrainOptions, TrainPoint, TrainReport, train};

@@ -14,6 +14,7 @@ use candle_nn::{AdamW, Linear, Optimizer, ParamsAdamW, VarBuilder, VarMap};
 
 use crate::adam::FusedAdamW;
 use crate::conv;
+use crate::{NetSpec, StageSpec};
 
 /// Which kernels the network trains with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -54,6 +55,21 @@ impl Ltp {
         + 16 * 16 * (16 * 32 + 32 * 32) * 9
         + 32 * 32 * (8 * 16 + 16 * 16) * 9
         + 64 * 64 * (4 * 8 + 8 * 4) * 9;
+
+    /// The architecture as a [`NetSpec`], for [`crate::DirectNet::from_varmap`] on
+    /// [`Ltp::varmap`] (the network on the direct kernels).
+    pub fn spec() -> NetSpec {
+        NetSpec {
+            widths: vec![3, 512, 1024, 2048, 4096],
+            relu_last_fc: true,
+            seed_channels: 16,
+            seed_side: 16,
+            stages: CONVS
+                .iter()
+                .map(|&(cin, cout, shuffle)| StageSpec { cin, cout, relu: !shuffle, shuffle })
+                .collect(),
+        }
+    }
 
     /// A network with candle's default (random) initialisation and Adam at learning rate `lr`
     /// (candle's AdamW with weight decay 0).

@@ -144,7 +144,7 @@ fn exp_f32(x: f32) -> f32 {
 
 /// The logistic function `1 / (1 + e⁻ˣ)` (through [`exp_f32`]).
 #[inline(always)]
-fn sigmoid(x: f32) -> f32 {
+pub(crate) fn sigmoid(x: f32) -> f32 {
     1.0 / (1.0 + exp_f32(-x))
 }
 
@@ -166,7 +166,7 @@ fn regions<'a>(stages: &[Stage], mut buf: &'a mut [f32]) -> Vec<&'a mut [f32]> {
 }
 
 /// Copies `c` planes of `n × n` into the interior of zero-bordered padded planes.
-fn write_padded(dst: &mut [f32], src: &[f32], c: usize, n: usize) {
+pub(crate) fn write_padded(dst: &mut [f32], src: &[f32], c: usize, n: usize) {
     let wp = n + 2;
     for ch in 0..c {
         for y in 0..n {
