@@ -724,8 +724,9 @@ const COMPACT_MAX_SPAN: usize = 2000;
 /// points merged where the straight move between the points kept passes within
 /// [`COMPACT_TOLERANCE_M`] and [`COMPACT_TOLERANCE_RAD`] of every point left out (no move
 /// shorter than [`IN_PLACE_MM`] that does not turn, no zero-length move), and every blend
-/// radius at most half the shorter of the two moves it joins (and at most `cfg.blend_mm`).
-/// The dips, approaches and lifts are unchanged.
+/// radius at most half the shorter of the two moves it joins (and at most `cfg.blend_mm`); no
+/// blend where the path turns back by more than 90° (the brush stops there). The dips,
+/// approaches and lifts are unchanged.
 ///
 /// # Examples
 /// ```
@@ -760,14 +761,26 @@ pub fn compact_program(program: &Program, cfg: &RobotConfig) -> Program {
         let lens: Vec<f64> = keep.windows(2).map(|w| dist(&poses[w[0]], &poses[w[1]])).collect();
         let mut press = Vec::with_capacity(keep.len());
         for (k, &i) in keep.iter().enumerate().skip(1) {
-            let blend_m =
-                if k + 1 < keep.len() { (cfg.blend_mm / 1000.0).min(0.5 * lens[k - 1].min(lens[k])) } else { 0.0 };
+            let blend_m = if k + 1 < keep.len() && !turns_back(&poses[keep[k - 1]], &poses[i], &poses[keep[k + 1]]) {
+                (cfg.blend_mm / 1000.0).min(0.5 * lens[k - 1].min(lens[k]))
+            } else {
+                0.0
+            };
             let (a, v) = spec[i - 1];
             press.push(Move::Line { pose: poses[i], a, v, blend_m });
         }
         st.press = press;
     }
     out
+}
+
+/// Whether the path turns back at `b` (by more than 90° between `a → b` and `b → c`): the brush
+/// stops there instead of blending, as the planner's reversals ask (a blend would round the
+/// reversal's tip off: measured on the held-out characters, docs/robot.md).
+fn turns_back(a: &Pose, b: &Pose, c: &Pose) -> bool {
+    let (pa, pb, pc) = (a.position(), b.position(), c.position());
+    let (u, w) = ([pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]], [pc[0] - pb[0], pc[1] - pb[1], pc[2] - pb[2]]);
+    u[0] * w[0] + u[1] * w[1] + u[2] * w[2] < 0.0
 }
 
 /// The points kept (indices into `poses`, the first and the last always).

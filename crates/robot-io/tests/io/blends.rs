@@ -136,3 +136,32 @@ fn the_runner_sends_only_valid_blends_and_the_compacted_program_runs_blended() {
             .all(|p| (p[1] - 60.0).abs() < 1e-6 || (p[0] - 60.0).abs() < 1e-6 || (p[0] > 58.0 && p[1] < 62.0))
     );
 }
+
+#[test]
+fn the_compacted_program_stops_where_the_path_turns_back() {
+    // Out 20 mm, back 10 mm at 150° from the way out, then on at a right angle: the reversal's
+    // tip gets no blend (a blend would round it off), the right angle keeps its 2 mm.
+    let cfg = RobotConfig { blend_mm: 2.0, ..RobotConfig::default() };
+    let pt = |x: f64, y: f64| TrackPoint { x_mm: x, y_mm: y, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+    let back = 150f64.to_radians();
+    let (bx, by) = (60.0 + 10.0 * back.cos(), 60.0 + 10.0 * back.sin());
+    let mut points: Vec<TrackPoint> = (0..=40).map(|i| pt(40.0 + 0.5 * f64::from(i), 60.0)).collect();
+    points.extend((1..=20).map(|i| pt(60.0 + 0.5 * f64::from(i) * back.cos(), 60.0 + 0.5 * f64::from(i) * back.sin())));
+    let (ux, uy) = (-back.sin(), back.cos());
+    points.extend((1..=20).map(|i| pt(bx + 0.5 * f64::from(i) * ux, by + 0.5 * f64::from(i) * uy)));
+    let track = Track { strokes: vec![Stroke { points }] };
+    let (dense, _) = build_program(&track, &pen1(), &paper(), &cfg).unwrap();
+    let compact = compact_program(&dense, &cfg);
+    let blends: Vec<f64> = compact.strokes[0]
+        .press
+        .iter()
+        .map(|m| match *m {
+            Move::Line { blend_m, .. } => blend_m,
+            _ => panic!("a pressed move that is not a line"),
+        })
+        .collect();
+    assert_eq!(blends.len(), 3, "{blends:?}");
+    assert_eq!(blends[0], 0.0, "the reversal blends: {blends:?}");
+    assert!((blends[1] - 0.002).abs() < 1e-12, "the right angle: {blends:?}");
+    assert_eq!(blends[2], 0.0);
+}
