@@ -139,15 +139,16 @@ fn the_runner_sends_only_valid_blends_and_the_compacted_program_runs_blended() {
 
 #[test]
 fn the_compacted_program_stops_where_the_path_turns_back() {
-    // Out 20 mm, back 10 mm at 150° from the way out, then on at a right angle: the reversal's
-    // tip gets no blend (a blend would round it off), the right angle keeps its 2 mm.
+    // Out 20 mm, back 10 mm at 150° from the way out, then on, turning 60°: the reversal's tip
+    // gets no blend (a blend would round it off), the 60° turn keeps its 2 mm.
     let cfg = RobotConfig { blend_mm: 2.0, ..RobotConfig::default() };
     let pt = |x: f64, y: f64| TrackPoint { x_mm: x, y_mm: y, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
     let back = 150f64.to_radians();
     let (bx, by) = (60.0 + 10.0 * back.cos(), 60.0 + 10.0 * back.sin());
     let mut points: Vec<TrackPoint> = (0..=40).map(|i| pt(40.0 + 0.5 * f64::from(i), 60.0)).collect();
     points.extend((1..=20).map(|i| pt(60.0 + 0.5 * f64::from(i) * back.cos(), 60.0 + 0.5 * f64::from(i) * back.sin())));
-    let (ux, uy) = (-back.sin(), back.cos());
+    let on = back + 60f64.to_radians();
+    let (ux, uy) = (on.cos(), on.sin());
     points.extend((1..=20).map(|i| pt(bx + 0.5 * f64::from(i) * ux, by + 0.5 * f64::from(i) * uy)));
     let track = Track { strokes: vec![Stroke { points }] };
     let (dense, _) = build_program(&track, &pen1(), &paper(), &cfg).unwrap();
@@ -162,6 +163,6 @@ fn the_compacted_program_stops_where_the_path_turns_back() {
         .collect();
     assert_eq!(blends.len(), 3, "{blends:?}");
     assert_eq!(blends[0], 0.0, "the reversal blends: {blends:?}");
-    assert!((blends[1] - 0.002).abs() < 1e-12, "the right angle: {blends:?}");
+    assert!((blends[1] - 0.002).abs() < 1e-12, "the 60° turn: {blends:?}");
     assert_eq!(blends[2], 0.0);
 }
