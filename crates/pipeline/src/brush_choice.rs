@@ -68,7 +68,11 @@ pub fn choose_brush(prepared: &[Prepared], candidates: &[BrushProfile], char_mm:
     let reason = format!(
         "{name} (radius {:.1} mm, {}): its width range suits about {brush_char_mm:.0} mm characters for these glyphs, the nearest to the {char_mm:.1} mm box ({} suits {:.0} mm)",
         candidates[best].brush.radius_mm,
-        if name.contains("-s") { "pen1 scaled down, nominal" } else { "nominal" },
+        match (name.contains('+'), name.contains("-s")) {
+            (true, _) => "its profile corrected from the photo",
+            (false, true) => "pen1 scaled down, nominal",
+            (false, false) => "nominal",
+        },
         first.0,
         first.1
     );

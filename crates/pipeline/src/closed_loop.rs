@@ -92,6 +92,19 @@ pub enum ClosedLoopError {
         #[source]
         source: Box<track_refine::RefineError>,
     },
+    /// A profile is not the observed brush's base with a width, length and spread correction
+    /// on top (so the correction cannot be carried over to another brush).
+    #[error("{corrected} is not {base} with a correction on top ({component}: {why})")]
+    NotACorrection {
+        /// The corrected profile's name.
+        corrected: String,
+        /// The base profile's name.
+        base: String,
+        /// The footprint length that does not fit (`lt`, `lh` or `lr`).
+        component: &'static str,
+        /// What does not fit.
+        why: &'static str,
+    },
     /// Writing the next attempt failed.
     #[error(transparent)]
     Pipeline(Box<crate::Error>),
@@ -191,6 +204,121 @@ impl BrushCorrection {
         out.validate(name).map_err(ClosedLoopError::Profile)?;
         Ok(out)
     }
+}
+
+/// The correction `corrected` carries on top of `base`, per footprint length: `(k, s)` with every
+/// term of `corrected` `k` times `base`'s and its intercept `k·b + s` (`lt` and `lh` share one
+/// pair after one [`BrushCorrection`], `lr` has its own; after several rounds the spreads of
+/// lengths and width differ, so the pairs are kept per length).
+fn correction_of(base: &BrushProfile, corrected: &BrushProfile) -> Result<[(f64, f64); 3], ClosedLoopError> {
+    let (b, c) = (&base.model, &corrected.model);
+    let mut out = [(1.0, 0.0); 3];
+    for (k, (component, tb, tc)) in
+        [("lt", b.lt_mm, c.lt_mm), ("lh", b.lh_mm, c.lh_mm), ("lr", b.lr_mm, c.lr_mm)].into_iter().enumerate()
+    {
+        let err = |why| ClosedLoopError::NotACorrection {
+            corrected: corrected.name.clone(),
+            base: base.name.clone(),
+            component,
+            why,
+        };
+        let (hb, hc) = (tb.h_mm.unwrap_or(0.0), tc.h_mm.unwrap_or(0.0));
+        if !(hb.abs() > 1e-9 && (hc / hb).is_finite() && hc / hb > 0.0) {
+            return Err(err("no positive ratio of the depth terms"));
+        }
+        let f = hc / hb;
+        let same = |x: Option<f64>, y: Option<f64>| {
+            let (x, y) = (x.unwrap_or(0.0), y.unwrap_or(0.0));
+            (f * x - y).abs() <= 1e-9 * (1.0 + y.abs())
+        };
+        if !(same(tb.alpha_rad, tc.alpha_rad) && same(tb.beta_rad, tc.beta_rad)) {
+            return Err(err("the tilt terms are not scaled as the depth term is"));
+        }
+        out[k] = (f, tc.intercept - f * tb.intercept);
+    }
+    Ok(out)
+}
+
+/// `to` with the correction that turns `base` into `corrected` (every round's width and length
+/// factors and spreads so far) carried over, named `name`: the brush `to` as the robot's ink,
+/// paper and hairs would make it write, on the assumption that they change `to`'s footprints as
+/// they changed `base`'s (the factors scale every term, the spreads add to the intercepts).
+///
+/// # Errors
+/// [`ClosedLoopError::NotACorrection`] when `corrected` is not `base` with per-length factors
+/// and spreads on top; [`ClosedLoopError::Profile`] when the carried-over model predicts a
+/// length out of bounds over `to`'s calibrated range.
+///
+/// # Examples
+/// ```
+/// use pipeline::{BrushCorrection, carry_correction};
+/// use brush_model::{BrushProfile, Extrapolation, Press};
+///
+/// let (s71, s59) = (BrushProfile::builtin("pen1-s71")?, BrushProfile::builtin("pen1-s59")?);
+/// let c = BrushCorrection { width_factor: 1.2, spread_mm: 0.3, ..BrushCorrection::IDENTITY };
+/// let fat71 = c.apply(&s71, "pen1-s71+observed1")?;
+/// let fat59 = carry_correction(&s71, &fat71, &s59, "pen1-s59+observed1")?;
+/// let press = Press::new(7.0, 0.0, 0.0);
+/// let (a, b) = (s59.predict(&press, Extrapolation::Refuse)?, fat59.predict(&press, Extrapolation::Refuse)?);
+/// assert!((b.lr_mm - (1.2 * a.lr_mm + 0.3)).abs() < 1e-9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn carry_correction(
+    base: &BrushProfile,
+    corrected: &BrushProfile,
+    to: &BrushProfile,
+    name: &str,
+) -> Result<BrushProfile, ClosedLoopError> {
+    let [lt, lh, lr] = correction_of(base, corrected)?;
+    let scale = |t: Terms, (k, s): (f64, f64)| Terms {
+        intercept: k * t.intercept + s,
+        h_mm: t.h_mm.map(|v| k * v),
+        alpha_rad: t.alpha_rad.map(|v| k * v),
+        beta_rad: t.beta_rad.map(|v| k * v),
+    };
+    let mut out = to.clone();
+    out.name = name.to_string();
+    out.model.lt_mm = scale(to.model.lt_mm, lt);
+    out.model.lh_mm = scale(to.model.lh_mm, lh);
+    out.model.lr_mm = scale(to.model.lr_mm, lr);
+    out.fit = None;
+    out.validate(name).map_err(ClosedLoopError::Profile)?;
+    Ok(out)
+}
+
+/// The brush for the next attempt after a correction: among `candidates` (the base brushes the
+/// robot could hold, e.g. [`crate::builtin_brushes`]), each with the correction that turns
+/// `base` into `corrected` carried over ([`carry_correction`], named `<candidate><suffix>`),
+/// the one [`crate::choose_brush`] picks for `prepared` in `char_mm` boxes: the same rule as
+/// `--brush auto`, applied to the corrected footprints. A candidate the correction cannot be
+/// carried to (a length out of bounds) is left out. A brush writing wider than its profile
+/// says suits larger characters, so a smaller base brush may suit the box better.
+///
+/// # Errors
+/// [`ClosedLoopError::NotACorrection`] when `corrected` is not `base` with a correction on
+/// top; [`ClosedLoopError::Profile`] when no candidate takes the correction.
+pub fn choose_corrected_brush(
+    prepared: &[Prepared],
+    base: &BrushProfile,
+    corrected: &BrushProfile,
+    candidates: &[BrushProfile],
+    suffix: &str,
+    char_mm: f64,
+    alpha_rad: f64,
+) -> Result<crate::BrushChoice, ClosedLoopError> {
+    correction_of(base, corrected)?;
+    let mut carried = Vec::new();
+    let mut last_err = None;
+    for c in candidates {
+        match carry_correction(base, corrected, c, &format!("{}{suffix}", c.name)) {
+            Ok(p) => carried.push(p),
+            Err(e) => last_err = Some(e),
+        }
+    }
+    if carried.is_empty() {
+        return Err(last_err.unwrap_or(ClosedLoopError::Empty));
+    }
+    Ok(crate::choose_brush(prepared, &carried, char_mm, alpha_rad))
 }
 
 /// `img` (square) averaged onto `side²` px: each output pixel the mean of a k × k grid of
@@ -526,5 +654,49 @@ mod tests {
         // A correction that makes a length non-positive is refused.
         let bad = BrushCorrection { spread_mm: -50.0, ..BrushCorrection::IDENTITY };
         assert!(matches!(bad.apply(&pen1, "x"), Err(ClosedLoopError::Profile(_))));
+    }
+
+    #[test]
+    fn a_correction_carries_over_to_another_brush_and_a_wider_brush_picks_a_smaller_one() {
+        let s71 = BrushProfile::builtin("pen1-s71").unwrap();
+        let s59 = BrushProfile::builtin("pen1-s59").unwrap();
+        // Two rounds compound: the lengths' and the width's spreads then differ.
+        let c1 =
+            BrushCorrection { width_factor: 1.24, length_factor: 1.18, spread_mm: 0.15, ..BrushCorrection::IDENTITY };
+        let c2 = BrushCorrection { width_factor: 1.1, length_factor: 0.9, spread_mm: 0.2, ..BrushCorrection::IDENTITY };
+        let fat = c2.apply(&c1.apply(&s71, "a").unwrap(), "b").unwrap();
+        let carried = carry_correction(&s71, &fat, &s59, "pen1-s59+observed2").unwrap();
+        let direct = c2.apply(&c1.apply(&s59, "a").unwrap(), "b").unwrap();
+        for (x, y) in [
+            (carried.model.lt_mm, direct.model.lt_mm),
+            (carried.model.lh_mm, direct.model.lh_mm),
+            (carried.model.lr_mm, direct.model.lr_mm),
+        ] {
+            assert!((x.intercept - y.intercept).abs() < 1e-9 && (x.h_mm.unwrap() - y.h_mm.unwrap()).abs() < 1e-9);
+            assert!((x.alpha_rad.unwrap() - y.alpha_rad.unwrap()).abs() < 1e-9);
+        }
+        assert_eq!((carried.name.as_str(), carried.ranges.h_mm.min), ("pen1-s59+observed2", s59.ranges.h_mm.min));
+        // The identity carries the candidate over unchanged.
+        let same = carry_correction(&s71, &s71, &s59, "pen1-s59").unwrap();
+        assert_eq!(same.model.lr_mm.h_mm, s59.model.lr_mm.h_mm);
+        // A profile that is not a correction of the base is refused.
+        let mut odd = s71.clone();
+        odd.model.lr_mm.alpha_rad = Some(5.0);
+        assert!(matches!(carry_correction(&s71, &odd, &s59, "x"), Err(ClosedLoopError::NotACorrection { .. })));
+        // At the box --brush auto gives pen1-s71, the brush writing a third wider suits a
+        // smaller base brush.
+        let p = crate::prepare(trajectory::glyph::embedded('山').unwrap(), None).unwrap();
+        let all = crate::builtin_brushes();
+        let mm = crate::choose_brush(std::slice::from_ref(&p), &all, 1.0, 0.0).candidates
+            [all.iter().position(|b| b.name == "pen1-s71").unwrap()]
+        .1;
+        let nominal = choose_corrected_brush(std::slice::from_ref(&p), &s71, &s71, &all, "", mm, 0.0).unwrap();
+        assert_eq!(nominal.name, "pen1-s71", "{}", nominal.reason);
+        let wide = BrushCorrection { width_factor: 1.34, length_factor: 1.12, ..BrushCorrection::IDENTITY }
+            .apply(&s71, "pen1-s71+observed1")
+            .unwrap();
+        let c = choose_corrected_brush(std::slice::from_ref(&p), &s71, &wide, &all, "+observed1", mm, 0.0).unwrap();
+        let scale = |n: &str| BrushProfile::builtin_scale(n.split('+').next().unwrap()).unwrap_or(1.0);
+        assert!(scale(&c.name) < scale("pen1-s71") && c.name.ends_with("+observed1"), "{}", c.reason);
     }
 }

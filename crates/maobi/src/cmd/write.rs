@@ -107,7 +107,9 @@ pub struct Args {
     /// Write the sheet again, corrected from a photo of the last attempt: OUT is the folder
     /// `maobi observe` wrote for it (its summary.json names the sheet it observed; TEXT and the
     /// layout flags must give the same sheet). The brush the sheet was written with is re-fitted
-    /// to the observed ink (width, length, spread; saved as brush.json in the output) and, with
+    /// to the observed ink (width, length, spread); when it is a built-in, the built-in whose
+    /// corrected footprints suit the boxes (as --brush auto) writes the next attempt (put it in
+    /// the robot; saved corrected as brush.json in the output, named on stdout) and, with
     /// --refine, each track is refined against the glyph shifted by what the photo showed beyond
     /// the model (iterative learning control). summary.json gains every round's figures
     /// (docs/closed-loop.md).
@@ -284,6 +286,26 @@ pub fn run(args: Args) -> Result<()> {
     };
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
+    // With --refine the residual is what the brush that wrote the last attempt (corrected)
+    // does not explain.
+    let refine = args.refine.options()?;
+    let residuals = match (&observed, refine) {
+        (Some(o), Some(_)) => Some(o.residuals(&profile, args.model)?),
+        _ => None,
+    };
+    // After the re-fit, the brush for the next attempt: the one whose corrected footprints
+    // suit the box (as `--brush auto`, with the correction carried over to every built-in).
+    let corrected_name = profile.name.clone();
+    let next_choice = match (&observed, box_mm) {
+        (Some(o), Some(mm)) if !args.renderer.neural() => {
+            let c = o.next_brush(&prepared, &profile, mm, alpha_rad);
+            if let Some(c) = &c {
+                profile = c.profile.clone();
+            }
+            c
+        }
+        _ => None,
+    };
     let choice = match box_mm {
         // The generator is trained for pen1: the neural renderer keeps it.
         Some(mm) if auto && !args.renderer.neural() => {
@@ -293,7 +315,6 @@ pub fn run(args: Args) -> Result<()> {
         }
         _ => None,
     };
-    let refine = args.refine.options()?;
     let generator = match refine {
         Some(r) if r.gradients == track_refine::Gradients::Generator => Some(committed_gen_model()?),
         _ => None,
@@ -321,10 +342,9 @@ pub fn run(args: Args) -> Result<()> {
     let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
-    if let (Some(o), Some(ro), Some(prepared)) = (&observed, refine, &kept) {
+    if let (Some(residuals), Some(ro), Some(prepared)) = (&residuals, refine, &kept) {
         opts.refine = Some(ro);
-        let residuals = o.residuals(&profile, args.model)?;
-        pipeline::refine_observed(&mut results, prepared, &residuals, &profile, &opts, &ro)
+        pipeline::refine_observed(&mut results, prepared, residuals, &profile, &opts, &ro)
             .context("--observed with --refine")?;
     }
     let char_mm = lay.char_mm;
@@ -346,9 +366,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
     let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
-    summary["brush_choice"] = json!(choice);
+    summary["brush_choice"] = json!(choice.as_ref().or(next_choice.as_ref()));
     if let (Some(o), Some(c)) = (&observed, &correction) {
-        let (this, rounds) = o.rounds(c, &profile, refine.is_some());
+        let (this, rounds) = o.rounds(c, &profile, next_choice.as_ref(), refine.is_some());
         summary["observed"] = this;
         summary["rounds"] = rounds;
         write_atomic(&stage.path().join("brush.json"), profile.to_json().as_bytes())?;
@@ -409,11 +429,12 @@ pub fn run(args: Args) -> Result<()> {
             summary["brush_fit"]["note"].as_str().unwrap_or(""),
             args.output.display()
         );
+        let next =
+            next_choice.as_ref().map_or(String::new(), |c| format!("; brush for the next attempt: {}", c.reason));
         match (&choice, &correction) {
             (Some(c), _) => println!("brush (--brush auto): {}", c.reason),
             (None, Some(c)) if c.not_taken.is_some() => println!(
-                "brush kept from the photo (--observed): {}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm) explains only {:.0} % of the ink error {:.4} (under {:.0} %); written to {}{}",
-                profile.name,
+                "brush kept from the photo (--observed): {corrected_name}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm) explains only {:.0} % of the ink error {:.4} (under {:.0} %){next}; written to {}{}",
                 c.not_taken.map_or(1.0, |v| v[0]),
                 c.not_taken.map_or(1.0, |v| v[1]),
                 c.not_taken.map_or(0.0, |v| v[2]),
@@ -428,8 +449,7 @@ pub fn run(args: Args) -> Result<()> {
                 }
             ),
             (None, Some(c)) => println!(
-                "brush re-fitted from the photo (--observed): {} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (ink error {:.4} → {:.4}); written to {}{}",
-                profile.name,
+                "brush re-fitted from the photo (--observed): {corrected_name} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (ink error {:.4} → {:.4}){next}; written to {}{}",
                 c.width_factor,
                 c.length_factor,
                 c.spread_mm,
@@ -775,6 +795,38 @@ impl ObservedRun {
         Ok((c, corrected))
     }
 
+    /// The brush for the next attempt when the observed sheet's base brush is a built-in:
+    /// among the built-ins, each with the correction from that base to `corrected` carried
+    /// over, the one whose footprints suit `char_mm` boxes ([`pipeline::choose_corrected_brush`]);
+    /// `None` (with a note on stderr) when the base is not a built-in or `corrected` is not a
+    /// correction of it (a calibrated brush of the user's own is kept).
+    fn next_brush(
+        &self,
+        prepared: &[pipeline::Prepared],
+        corrected: &BrushProfile,
+        char_mm: f64,
+        alpha_rad: f64,
+    ) -> Option<pipeline::BrushChoice> {
+        let root = corrected.name.split('+').next().unwrap_or(&corrected.name);
+        let base = BrushProfile::builtin(root).ok()?;
+        let suffix = corrected.name.strip_prefix(root).unwrap_or("");
+        match pipeline::choose_corrected_brush(
+            prepared,
+            &base,
+            corrected,
+            &pipeline::builtin_brushes(),
+            suffix,
+            char_mm,
+            alpha_rad,
+        ) {
+            Ok(c) => Some(c),
+            Err(e) => {
+                eprintln!("note: --observed: the brush {} is kept (no other brush considered): {e}", corrected.name);
+                None
+            }
+        }
+    }
+
     /// Each character's residual: observed ink minus the last attempt through `profile`.
     fn residuals(&self, profile: &BrushProfile, model: ModelKind) -> Result<Vec<pipeline::Residual>> {
         self.attempts()
@@ -789,6 +841,7 @@ impl ObservedRun {
         &self,
         c: &pipeline::BrushCorrection,
         corrected: &BrushProfile,
+        choice: Option<&pipeline::BrushChoice>,
         ilc: bool,
     ) -> (serde_json::Value, serde_json::Value) {
         let chars = self.summary["chars"].as_array().cloned().unwrap_or_default();
@@ -812,6 +865,7 @@ impl ObservedRun {
             })).collect::<Vec<_>>(),
             "correction": c,
             "brush_after": corrected.name,
+            "brush_choice": choice,
             "track": if ilc { "refined against the glyph shifted by the observed residual (ILC)" } else { "built with the corrected brush" },
         });
         let mut all = self.earlier.clone();

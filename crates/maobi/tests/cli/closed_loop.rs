@@ -57,6 +57,14 @@ fn world_csim(sheet: &Path, truth: &brush_model::BrushProfile, w: &WorldBrush) -
         .collect()
 }
 
+/// The brush in the robot when `sheet` was written: the built-in its profile was derived from
+/// (a corrected profile is named `<built-in>+observedN`; when a round picks another brush, the
+/// user puts that one in). The world writes with it times the world's factors.
+fn robot_brush(sheet: &Path) -> brush_model::BrushProfile {
+    let named = robot_io::TrackFile::load(&sheet.join("track.json")).unwrap().brush.name;
+    brush_model::BrushProfile::builtin(named.split('+').next().unwrap()).unwrap()
+}
+
 fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
@@ -79,9 +87,9 @@ fn chain(dir: &Path, setup: &Setup<'_>, refine: bool, rounds: usize) -> Chain {
     };
     let first = dir.join(format!("{tag}-0"));
     write(&first, None);
-    // The world's brush is the one the first sheet was written for; every later sheet names a
-    // corrected profile, which the world does not follow.
-    let truth = robot_io::TrackFile::load(&first.join("track.json")).unwrap().brush;
+    // The world's brush is the built-in each sheet was written for (the first sheet's, or the
+    // one a round picked); the corrected profiles only change what is commanded.
+    let truth = robot_brush(&first);
     let mut chain = Chain {
         csim: Vec::new(),
         per_char: Vec::new(),
@@ -92,6 +100,7 @@ fn chain(dir: &Path, setup: &Setup<'_>, refine: bool, rounds: usize) -> Chain {
     let mut rng = Rng(2028);
     for k in 0..=rounds {
         let sheet = chain.sheets[k].clone();
+        let truth = robot_brush(&sheet);
         let per = world_csim(&sheet, &truth, &WORLD);
         chain.csim.push(mean(&per));
         chain.per_char.push(per);
@@ -112,11 +121,16 @@ fn chain(dir: &Path, setup: &Setup<'_>, refine: bool, rounds: usize) -> Chain {
         chain.sheets.push(next);
     }
     eprintln!(
-        "{tag} {}: world CSIM vs glyph per round {:?} (per char {:?}); world == model {:.4}",
+        "{tag} {}: world CSIM vs glyph per round {:?} (per char {:?}); world == model {:.4}; brushes {:?}",
         setup.chars,
         chain.csim.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>(),
         chain.per_char,
-        chain.baseline
+        chain.baseline,
+        chain
+            .sheets
+            .iter()
+            .map(|d| robot_io::TrackFile::load(&d.join("track.json")).unwrap().brush.name)
+            .collect::<Vec<_>>()
     );
     chain
 }
@@ -144,6 +158,15 @@ fn two_rounds(refine: bool) {
     // far less.
     let corr = |k: usize, f: &str| rounds[k]["correction"][f].as_f64().unwrap();
     assert!(corr(0, "width_factor") > 1.08 && corr(0, "length_factor") > 1.04, "{}", rounds[0]);
+    // The corrected brush writes wider than its profile said: the first correction writes the
+    // next attempt with a smaller built-in (the one whose corrected footprints suit the box),
+    // and says why; the second keeps it.
+    let radius_mm = |n: &str| brush_model::BrushProfile::builtin(n.split('+').next().unwrap()).unwrap().brush.radius_mm;
+    let brush = |k: usize, f: &str| rounds[k][f].as_str().unwrap().to_string();
+    assert!(radius_mm(&brush(0, "brush_after")) < radius_mm(&brush(0, "brush")), "{}", rounds[0]);
+    assert_eq!(rounds[0]["brush_choice"]["name"].as_str(), Some(brush(0, "brush_after").as_str()));
+    assert!(rounds[0]["brush_choice"]["reason"].as_str().unwrap().contains("corrected from the photo"));
+    assert_eq!(brush(1, "brush_after"), brush(0, "brush_after"), "{}", rounds[1]);
     let drop = |k: usize| corr(k, "ink_error_before") - corr(k, "ink_error_after");
     assert!(drop(1) < 0.25 * drop(0), "{} then {}", rounds[0]["correction"], rounds[1]["correction"]);
     eprintln!("refine {refine}: corrections {} then {}", rounds[0]["correction"], rounds[1]["correction"]);
@@ -216,8 +239,8 @@ fn closed_loop_figures() {
             );
         }
         // The corrected profiles' footprints against the world's over the press range.
-        let truth = robot_io::TrackFile::load(&c.sheets[0].join("track.json")).unwrap().brush;
         for k in 1..=2 {
+            let truth = robot_brush(&c.sheets[k]);
             let fitted = brush_model::BrushProfile::load(&c.sheets[k].join("brush.json")).unwrap();
             for f in [0.0, 0.5, 1.0] {
                 let h = truth.ranges.h_mm.lerp(f);
@@ -241,7 +264,6 @@ fn closed_loop_figures() {
         if let Some(out) = std::env::var_os("MAOBI_LOOP_IMAGES") {
             let out = PathBuf::from(out);
             std::fs::create_dir_all(&out).unwrap();
-            let truth = robot_io::TrackFile::load(&c.sheets[0].join("track.json")).unwrap().brush;
             let st = json(&c.sheets[0].join("track.json"));
             let mut rows = Vec::new();
             for (i, ch) in st["chars"].as_array().unwrap().iter().enumerate() {
@@ -250,7 +272,7 @@ fn closed_loop_figures() {
                 let mut row = vec![Coverage::load(&c.sheets[0].join(&name).join("reference.png")).unwrap()];
                 for sheet in &c.sheets {
                     let t = robot_io::TrackFile::load(&sheet.join("track.json")).unwrap();
-                    row.push(world_ink(&world_stamps(&t.strokes, &truth), [b[0], b[1], b[2]], full.size));
+                    row.push(world_ink(&world_stamps(&t.strokes, &robot_brush(sheet)), [b[0], b[1], b[2]], full.size));
                 }
                 rows.push(pipeline::side_by_side(&row.iter().collect::<Vec<_>>()));
             }
