@@ -1,16 +1,17 @@
 //! The executed figure on the controller's time law: for each character, executed CSIM against
 //! the glyph with the plain executor (what `maobi write` reports), with the program sent as path
 //! buffers, sent as compacted blended moves (`robot send --motion moves`), and as compacted
-//! moves without blends (`blend_mm` 0: what compaction and ramps alone cost), and as compacted
-//! moves without a blend where the path turns back (more than 90°), as the simulator server
-//! runs them; prints each and the means. A character whose program the timing refuses is
+//! moves without blends (`blend_mm` 0: what compaction and ramps alone cost), as the simulator
+//! server runs them (compaction leaves no blend where the path turns back by more than 90°);
+//! prints each and the means. A character whose program the timing refuses is
 //! named and left out of the means.
 //!
 //! ```sh
 //! cargo run -p pipeline --example executed_time_law -- HANZI_DIR SET_FILE FIRST LAST [SIZE]
 //! ```
 //!
-//! `HANZI_DIR` is an unpacked `npm pack hanzi-writer-data`; `SET_FILE` a character list, one
+//! `HANZI_DIR` is an unpacked `npm pack hanzi-writer-data`, or `embedded` for the data compiled
+//! into maobi; `SET_FILE` a character list, one
 //! per line, `#` comments (`fixtures/hanzi/heldout-2000.txt`); `FIRST`..`LAST` the lines
 //! (1-based, inclusive, comments not counted); `SIZE` the render side (default 512, as `maobi
 //! write`).
@@ -23,38 +24,6 @@ use pipeline::{
     write_placed,
 };
 use robot_io::RobotConfig;
-
-/// The compacted program with no blend at a pressed point where the path turns back (its
-/// direction changes by more than 90°), executed as the simulator runs blended moves.
-fn stop_where_turning_back(
-    track: &brush_model::Track,
-    profile: &BrushProfile,
-    frame: &robot_io::PaperFrame,
-    cfg: &RobotConfig,
-) -> Result<Vec<brush_model::TrackPoint>, Box<dyn std::error::Error>> {
-    use robot_io::Move;
-    use robot_io::kinematics::DhParams;
-    let (program, _) = robot_io::build_program(track, profile, frame, cfg)?;
-    let mut compact = robot_io::program::compact_program(&program, cfg);
-    let at = |m: &Move| match m {
-        Move::Line { pose, .. } => Some(robot_io::nalgebra::Vector3::from(pose.position())),
-        _ => None,
-    };
-    for st in &mut compact.strokes {
-        let mut pts: Vec<_> = st.approach.last().and_then(at).into_iter().collect();
-        pts.extend(st.press.iter().filter_map(at));
-        for k in 0..st.press.len().saturating_sub(1) {
-            let (a, b, c) = (pts[k], pts[k + 1], pts[k + 2]);
-            if (b - a).dot(&(c - b)) < 0.0
-                && let Move::Line { blend_m, .. } = &mut st.press[k]
-            {
-                *blend_m = 0.0;
-            }
-        }
-    }
-    let trace = robot_io::sim::execute_as_sent(&compact, &DhParams::AUBO_I5, robot_io::sim::SendMotion::Moves)?;
-    Ok(robot_io::exec::trace_to_states(&trace, frame))
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -71,16 +40,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .skip(first.saturating_sub(1))
         .take(last + 1 - first.max(1))
         .collect();
-    let input = GlyphInput::Hanzi(Some(PathBuf::from(dir)));
+    let input = GlyphInput::Hanzi((dir != "embedded").then(|| PathBuf::from(dir)));
     let pen1 = BrushProfile::builtin("pen1")?;
     let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
     let cfg = RobotConfig::default();
     // Moves without blends: what the compaction and the ramps alone cost.
     let stops = RobotConfig { blend_mm: 0.0, ..RobotConfig::default() };
-    let mut sums = [0.0f64; 5];
-    let mut worst_drop = [0.0f64; 4];
+    let mut sums = [0.0f64; 4];
+    let mut worst_drop = [0.0f64; 3];
     let mut n = 0usize;
-    println!("char\tplain\tpath_buffer\tmoves\tmoves_without_blends\tmoves_stopping_where_they_turn_back");
+    println!("char\tplain\tpath_buffer\tmoves\tmoves_without_blends");
     let mut refused = Vec::new();
     'chars: for ch in chars {
         let p = match input.prepare(ch, None) {
@@ -93,7 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
         let plain = r.report.executed.ok_or("not executed")?.csim;
         let frame = level_frame_for(&r.char_box);
-        let mut scores = [plain, 0.0, 0.0, 0.0, 0.0];
+        let mut scores = [plain, 0.0, 0.0, 0.0];
         for (k, how, c) in
             [(1, Execution::PathBuffer, &cfg), (2, Execution::Moves, &cfg), (3, Execution::Moves, &stops)]
         {
@@ -108,13 +77,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             scores[k] = similarity(&r.reference, &img)?.csim;
             worst_drop[k - 1] = worst_drop[k - 1].max(plain - scores[k]);
         }
-        // Moves whose blend is dropped where the path turns back (more than 90°).
-        let states = stop_where_turning_back(&r.track, &pen1, &frame, &cfg)?;
-        let img = render_states(&states, &pen1, opts.model, brush_model::Extrapolation::Refuse, &r.char_box, size);
-        scores[4] = similarity(&r.reference, &img)?.csim;
-        worst_drop[3] = worst_drop[3].max(plain - scores[4]);
-        println!("{ch}\t{:.5}\t{:.5}\t{:.5}\t{:.5}\t{:.5}", scores[0], scores[1], scores[2], scores[3], scores[4]);
-        for k in 0..5 {
+        println!("{ch}\t{:.5}\t{:.5}\t{:.5}\t{:.5}", scores[0], scores[1], scores[2], scores[3]);
+        for k in 0..4 {
             sums[k] += scores[k];
         }
         n += 1;
@@ -135,12 +99,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sums[3] / m,
         (sums[3] - sums[0]) / m,
         worst_drop[2]
-    );
-    println!(
-        "moves stopping where they turn back: {:.5} ({:+.5}; largest drop {:.5})",
-        sums[4] / m,
-        (sums[4] - sums[0]) / m,
-        worst_drop[3]
     );
     Ok(())
 }
