@@ -34,17 +34,17 @@ pub enum RobotCmd {
     Kinematics(KinematicsArgs),
 }
 
-/// Arguments of `maobi robot kinematics`.
+/// How to reach a controller (`robot send`, `robot kinematics`).
 #[derive(clap::Args, Debug)]
-pub struct KinematicsArgs {
+pub struct ControllerArgs {
     /// Controller host.
     #[arg(long)]
     host: String,
     /// Port (default: 30004 for framed and lines, 9012 for http).
     #[arg(long)]
     port: Option<u16>,
-    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines or
-    /// http.
+    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines
+    /// (line-delimited JSON, positional params) or http (JSON-RPC over HTTP).
     #[arg(long, default_value = "framed")]
     transport: Transport,
     /// User for the framed transport's login.
@@ -53,12 +53,38 @@ pub struct KinematicsArgs {
     /// Password for the framed transport's login.
     #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
     password: String,
-    /// The robot's name on the controller (default: the first it reports).
-    #[arg(long)]
-    robot_name: Option<String>,
     /// Timeout per call, ms.
     #[arg(long, default_value_t = 2000)]
     timeout_ms: u64,
+}
+
+impl ControllerArgs {
+    /// `host:port`, the port the transport's default when not given; refuses a timeout out of
+    /// range.
+    fn addr(&self) -> Result<String> {
+        if !(1..=600_000).contains(&self.timeout_ms) {
+            bail!("--timeout-ms must be between 1 and 600000, got {}", self.timeout_ms);
+        }
+        Ok(format!("{}:{}", self.host, self.port.unwrap_or(self.transport.default_port())))
+    }
+
+    fn link(&self) -> Link {
+        Link { transport: self.transport, user: self.user.clone(), password: self.password.clone() }
+    }
+
+    fn timeout(&self) -> Duration {
+        Duration::from_millis(self.timeout_ms)
+    }
+}
+
+/// Arguments of `maobi robot kinematics`.
+#[derive(clap::Args, Debug)]
+pub struct KinematicsArgs {
+    #[command(flatten)]
+    controller: ControllerArgs,
+    /// The robot's name on the controller (default: the first it reports).
+    #[arg(long)]
+    robot_name: Option<String>,
     /// Output file (arm.json).
     #[arg(short, long)]
     output: PathBuf,
@@ -153,28 +179,11 @@ pub struct ExportArgs {
 pub struct SendArgs {
     #[command(flatten)]
     program: ProgramArgs,
-    /// Controller host.
-    #[arg(long)]
-    host: String,
-    /// Port (default: 30004 for framed and lines, 9012 for http).
-    #[arg(long)]
-    port: Option<u16>,
-    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines
-    /// (line-delimited JSON, positional params) or http (JSON-RPC over HTTP).
-    #[arg(long, default_value = "framed")]
-    transport: Transport,
-    /// User for the framed transport's login.
-    #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
-    user: String,
-    /// Password for the framed transport's login.
-    #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
-    password: String,
+    #[command(flatten)]
+    controller: ControllerArgs,
     /// Check and print the plan without connecting.
     #[arg(long)]
     dry_run: bool,
-    /// Timeout per call, ms.
-    #[arg(long, default_value_t = 2000)]
-    timeout_ms: u64,
     /// How pressed strokes are sent: path-buffer (each stroke one path buffer of joint
     /// waypoints on its timing, on the controller's own kinematics) or moves (a moveLine per
     /// point of the compacted track, blends at most half the shorter neighbouring move).
@@ -396,15 +405,11 @@ fn export(a: ExportArgs) -> Result<()> {
 }
 
 fn kinematics(a: KinematicsArgs) -> Result<()> {
-    if !(1..=600_000).contains(&a.timeout_ms) {
-        bail!("--timeout-ms must be between 1 and 600000, got {}", a.timeout_ms);
-    }
+    let c = &a.controller;
+    let addr = c.addr()?;
     check_output_file("-o", &a.output, a.force)?;
-    let port = a.port.unwrap_or(a.transport.default_port());
-    let addr = format!("{}:{port}", a.host);
-    let link = Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() };
-    let (mut client, names) = robot_io::AuboClient::open(&addr, &link, Duration::from_millis(a.timeout_ms))
-        .with_context(|| format!("connecting to {addr} ({})", a.transport))?;
+    let (mut client, names) = robot_io::AuboClient::open(&addr, &c.link(), c.timeout())
+        .with_context(|| format!("connecting to {addr} ({})", c.transport))?;
     let robot = match &a.robot_name {
         Some(r) => r.clone(),
         None => names.first().cloned().with_context(|| format!("{addr}: the controller reports no robot"))?,
@@ -413,7 +418,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
         client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
     let arm = robot_io::export::ArmKinematics {
         robot: robot.clone(),
-        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", a.transport),
+        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.transport),
         real: true,
         kinematics: params,
     };
@@ -425,10 +430,8 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
 }
 
 fn send(a: SendArgs) -> Result<()> {
-    if !(1..=600_000).contains(&a.timeout_ms) {
-        bail!("--timeout-ms must be between 1 and 600000, got {}", a.timeout_ms);
-    }
-    let port = a.port.unwrap_or(a.transport.default_port());
+    let c = &a.controller;
+    let addr = c.addr()?;
     let l = load(&a.program)?;
     let (program, report) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
@@ -444,11 +447,10 @@ fn send(a: SendArgs) -> Result<()> {
     }
     if a.dry_run {
         println!(
-            "dry run: {} strokes, {} moves would be sent to {}:{port} ({}, {}); nothing connected",
+            "dry run: {} strokes, {} moves would be sent to {addr} ({}, {}); nothing connected",
             report.strokes,
             if by_moves { program.move_count() } else { report.moves },
-            a.host,
-            a.transport,
+            c.transport,
             a.motion
         );
         return Ok(());
@@ -458,15 +460,14 @@ fn send(a: SendArgs) -> Result<()> {
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
     let pb = progress(program.strokes.len() as u64, "strokes");
     let opts = RunOptions {
-        timeout: Duration::from_millis(a.timeout_ms),
+        timeout: c.timeout(),
         lift_m: l.cfg.lift_mm / 1000.0,
-        link: Link { transport: a.transport, user: a.user.clone(), password: a.password.clone() },
+        link: c.link(),
         path_buffer: (!by_moves).then(|| l.cfg.clone()),
         nominal_kinematics: a.nominal_kinematics,
         accept_nominal_kinematics: a.accept_nominal_kinematics,
         ..RunOptions::new(&stop)
     };
-    let addr = format!("{}:{port}", a.host);
     let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| {
         pb.set_position(r.strokes_completed.len() as u64)
     });
@@ -483,11 +484,11 @@ fn send(a: SendArgs) -> Result<()> {
             return Err(e).with_context(|| {
                 format!(
                     "running on {addr} ({}): the path buffers need the arm's own kinematics; pass --accept-nominal-kinematics to write with maobi's nominal ones anyway (the controller's forward kinematics still checks them), or --motion moves",
-                    a.transport
+                    c.transport
                 )
             });
         }
-        Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", a.transport)),
+        Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", c.transport)),
     };
     println!(
         "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed; {} controller calls, {} path buffer(s)",
