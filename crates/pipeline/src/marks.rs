@@ -53,6 +53,20 @@ pub enum MarkRole {
     BottomMiddle,
 }
 
+impl MarkRole {
+    /// Where the mark is, in words (`"top-left"`, `"key (beside the top-left)"`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            MarkRole::TopLeft => "top-left",
+            MarkRole::TopRight => "top-right",
+            MarkRole::BottomRight => "bottom-right",
+            MarkRole::BottomLeft => "bottom-left",
+            MarkRole::Key => "key (beside the top-left)",
+            MarkRole::BottomMiddle => "bottom-middle",
+        }
+    }
+}
+
 /// One registration mark on the paper: a horizontal bar of ink centred on `centre_mm`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mark {

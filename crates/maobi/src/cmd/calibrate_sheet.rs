@@ -88,17 +88,6 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn role_name(r: MarkRole) -> &'static str {
-    match r {
-        MarkRole::TopLeft => "top-left",
-        MarkRole::TopRight => "top-right",
-        MarkRole::BottomRight => "bottom-right",
-        MarkRole::BottomLeft => "bottom-left",
-        MarkRole::Key => "key (beside the top-left)",
-        MarkRole::BottomMiddle => "bottom-middle",
-    }
-}
-
 /// Reads `CAL/layout.json` (or the file itself).
 fn load_layout(cal: &Path) -> Result<(PathBuf, CalibrationLayout)> {
     let path = if cal.is_dir() { cal.join("layout.json") } else { cal.to_path_buf() };
@@ -135,7 +124,7 @@ fn known_marks(layout: &CalibrationLayout, path: &Path) -> Result<Vec<KnownMark>
     Ok(marks
         .iter()
         .map(|m| KnownMark {
-            role: role_name(m.role).into(),
+            role: m.role.name().into(),
             centre_mm: m.centre_mm,
             half_length_mm: m.half_length_mm,
             half_width_mm: m.half_width_mm,

@@ -37,17 +37,6 @@ pub struct Args {
     json: bool,
 }
 
-fn role_name(r: MarkRole) -> &'static str {
-    match r {
-        MarkRole::TopLeft => "top-left",
-        MarkRole::TopRight => "top-right",
-        MarkRole::BottomRight => "bottom-right",
-        MarkRole::BottomLeft => "bottom-left",
-        MarkRole::Key => "key (beside the top-left)",
-        MarkRole::BottomMiddle => "bottom-middle",
-    }
-}
-
 /// One character of the sheet as planned.
 struct Planned {
     name: String,
@@ -79,7 +68,7 @@ fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> 
     let known = marks
         .iter()
         .map(|m| KnownMark {
-            role: role_name(m.role).into(),
+            role: m.role.name().into(),
             centre_mm: m.centre_mm,
             half_length_mm: m.half_length_mm,
             half_width_mm: m.half_width_mm,
