@@ -30,7 +30,7 @@ cargo xtask styles --font F [--font F2 ...] [--hanzi-data DIR] [--chars STR | --
 
   --font F       a TrueType/OpenType file (a .ttc: its first font) or a folder of them; given
                  several times, each character comes from the first file that has it
-  --hanzi-data   stroke data (unpacked hanzi-writer-data); default: the embedded subset
+  --hanzi-data   stroke data (unpacked hanzi-writer-data); default: the embedded data
   --chars        the characters (default: the embedded subset in frequency order); @FILE or
   --chars-file   read them from a file (whitespace and lines starting with # ignored)
   --skip/--take  a slice of that list (e.g. tune on --take 100, report on --skip 100)

@@ -26,8 +26,10 @@ use crate::common::{
 pub struct Args {
     /// The character(s) to write.
     text: String,
-    /// Glyphs from an unpacked hanzi-writer-data package (files `<char>.json`); with --font or
-    /// --image, the stroke templates registered onto their glyphs (`--from template`).
+    /// Glyphs from another hanzi-writer-data version instead of the embedded 2.0.1 (all 9,574
+    /// characters): the folder `npm pack hanzi-writer-data` unpacked into, its `package/`
+    /// folder, or a folder of `<char>.json` files; with --font or --image, the stroke templates
+    /// registered onto their glyphs (`--from template`).
     #[arg(long)]
     hanzi_data: Option<PathBuf>,
     /// Glyphs from fonts: TTF, OTF, TTC/OTC (see --font-index), WOFF or WOFF2 files, or folders

@@ -141,9 +141,10 @@ fn two_rounds(refine: bool) {
     let dir = dir.path();
     let dir = &std::env::var_os("MAOBI_LOOP_KEEP").map_or(dir.to_path_buf(), PathBuf::from);
     let c = chain(dir, &FAST, refine, 2);
-    // The gain over two rounds, and the second round no worse than the first (converged).
+    // The gain over two rounds (the target: 0.04), and the second round no worse than
+    // the first (converged).
     let gain = c.csim[2] - c.csim[0];
-    assert!(gain >= 0.03, "refine {refine}: CSIM {:?}: gain {gain}", c.csim);
+    assert!(gain >= 0.04, "refine {refine}: CSIM {:?}: gain {gain}", c.csim);
     assert!(c.csim[2] >= c.csim[1] - 0.005, "refine {refine}: CSIM {:?}", c.csim);
     // Each round's figures, from the observed summaries, in the last sheet's summary.
     let summary = json(&c.sheets[2].join("summary.json"));
