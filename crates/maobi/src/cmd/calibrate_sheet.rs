@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use brush_model::{Brush, Footprint, Measurement};
-use observe::{KnownMark, Photo, ink_map, measure_footprint, register};
-use pipeline::{CalibrationLayout, MarkRole, calibration_sheet, calibration_sheet_image, parse_sheet};
+use observe::{Photo, ink_map, measure_footprint, register};
+use pipeline::{CalibrationLayout, calibration_sheet, calibration_sheet_image, parse_sheet};
 use rayon::prelude::*;
 
 use crate::common::{
@@ -113,25 +113,6 @@ fn load_layout(cal: &Path) -> Result<(PathBuf, CalibrationLayout)> {
     Ok((path, layout))
 }
 
-/// The marks in the order `observe::register` takes them: the four corners, then the others.
-fn known_marks(layout: &CalibrationLayout, path: &Path) -> Result<Vec<KnownMark>> {
-    let order = [MarkRole::TopLeft, MarkRole::TopRight, MarkRole::BottomRight, MarkRole::BottomLeft];
-    let mut marks: Vec<_> = order.iter().filter_map(|r| layout.marks.iter().find(|m| m.role == *r)).collect();
-    if marks.len() != 4 || layout.marks.len() < 5 {
-        bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display());
-    }
-    marks.extend(layout.marks.iter().filter(|m| !order.contains(&m.role)));
-    Ok(marks
-        .iter()
-        .map(|m| KnownMark {
-            role: m.role.name().into(),
-            centre_mm: m.centre_mm,
-            half_length_mm: m.half_length_mm,
-            half_width_mm: m.half_width_mm,
-        })
-        .collect())
-}
-
 /// The sheet photo measured: the marks found, every press's footprint fitted on the paper; the
 /// presses that could not be measured, or whose fit is poor (IoU under `min_iou`), points the
 /// wrong way or lies away from its press point, are listed and left out; fewer than three
@@ -139,7 +120,10 @@ fn known_marks(layout: &CalibrationLayout, path: &Path) -> Result<Vec<KnownMark>
 /// (written by the caller once the fit is accepted) and the brush the sheet was made for.
 pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measurement>, String, Brush)> {
     let (path, layout) = load_layout(cal)?;
-    let marks = known_marks(&layout, &path)?;
+    let marks = match super::observe::known_marks(&layout.marks) {
+        Some(marks) if layout.marks.len() >= 5 => marks,
+        _ => bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display()),
+    };
     let what = || format!("--sheet-photo {}", photo_path.display());
     let img = bezier_raster::coverage::decode_image(photo_path).with_context(what)?;
     let photo = Photo::from_image(&img).with_context(what)?;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use bezier_raster::Coverage;
 use observe::{Frame, KnownMark, Photo, Registration, diagnose, ink_map, rectify, register};
-use pipeline::{MarkRole, SheetTrack, similarity};
+use pipeline::{Mark, MarkRole, SheetTrack, similarity};
 use serde_json::json;
 
 use crate::common::{OutputLock, Stage, check_output_folder, print_json, recover_leftovers, write_atomic};
@@ -47,6 +47,28 @@ struct Planned {
 }
 
 /// Reads the sheet folder: its track.json (with marks) and each character's images.
+/// `marks` in the order `observe::register` takes them, the four corners first, then the others;
+/// `None` when a corner is missing.
+pub(super) fn known_marks(marks: &[Mark]) -> Option<Vec<KnownMark>> {
+    let order = [MarkRole::TopLeft, MarkRole::TopRight, MarkRole::BottomRight, MarkRole::BottomLeft];
+    let mut ordered: Vec<&Mark> = order.iter().filter_map(|r| marks.iter().find(|m| m.role == *r)).collect();
+    if ordered.len() != 4 {
+        return None;
+    }
+    ordered.extend(marks.iter().filter(|m| !order.contains(&m.role)));
+    Some(
+        ordered
+            .iter()
+            .map(|m| KnownMark {
+                role: m.role.name().into(),
+                centre_mm: m.centre_mm,
+                half_length_mm: m.half_length_mm,
+                half_width_mm: m.half_width_mm,
+            })
+            .collect(),
+    )
+}
+
 fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> {
     let path = dir.join("track.json");
     let text = std::fs::read_to_string(&path).with_context(|| format!("--sheet: cannot read {}", path.display()))?;
@@ -59,21 +81,9 @@ fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> 
             path.display()
         );
     }
-    let order = [MarkRole::TopLeft, MarkRole::TopRight, MarkRole::BottomRight, MarkRole::BottomLeft];
-    let mut marks: Vec<_> = order.iter().filter_map(|r| track.marks.iter().find(|m| m.role == *r)).collect();
-    if marks.len() != 4 {
+    let Some(known) = known_marks(&track.marks) else {
         bail!("--sheet: {} lacks one of the four corner registration marks", path.display());
-    }
-    marks.extend(track.marks.iter().filter(|m| !order.contains(&m.role)));
-    let known = marks
-        .iter()
-        .map(|m| KnownMark {
-            role: m.role.name().into(),
-            centre_mm: m.centre_mm,
-            half_length_mm: m.half_length_mm,
-            half_width_mm: m.half_width_mm,
-        })
-        .collect();
+    };
     let single = track.chars.len() == 1;
     let h_min = track.brush.ranges.h_mm.min;
     let mut chars = Vec::new();
