@@ -101,15 +101,44 @@ impl Conv3 {
         assert_eq!(w.len(), cout * cin * 9, "3×3 weights");
         let ob = isa.blocking(cout).0;
         let blocks = cout.div_ceil(ob);
-        let mut wb = vec![0f32; blocks * cin * 9 * ob];
+        let mut c3 = Conv3 { cin, cout, ob, isa, w: vec![0f32; blocks * cin * 9 * ob] };
+        c3.repack(w);
+        c3
+    }
+
+    /// Rearranges new weights `[cout, cin, 3, 3]` (row-major) into the blocks, in place.
+    ///
+    /// # Panics
+    /// When `w` is not `cout × cin × 9` long.
+    pub(crate) fn repack(&mut self, w: &[f32]) {
+        let (cin, cout, ob) = (self.cin, self.cout, self.ob);
+        assert_eq!(w.len(), cout * cin * 9, "3×3 weights");
         for o in 0..cout {
             for c in 0..cin {
                 for tap in 0..9 {
-                    wb[(((o / ob) * cin + c) * 9 + tap) * ob + o % ob] = w[(o * cin + c) * 9 + tap];
+                    self.w[(((o / ob) * cin + c) * 9 + tap) * ob + o % ob] = w[(o * cin + c) * 9 + tap];
                 }
             }
         }
-        Conv3 { cin, cout, ob, isa, w: wb }
+    }
+
+    /// As [`Conv3::repack`] from the weights `[cout, cin, 3, 3]` of the correlation this one is
+    /// the flipped transpose of (`[cin, cout, 3, 3]` here: the input gradient's kernel).
+    ///
+    /// # Panics
+    /// When `w` is not `cout × cin × 9` long.
+    pub(crate) fn repack_flipped(&mut self, w: &[f32]) {
+        // This correlation maps `cin` (the original's outputs) to `cout` (its inputs).
+        let (ci, co, ob) = (self.cin, self.cout, self.ob);
+        assert_eq!(w.len(), co * ci * 9, "3×3 weights");
+        for o in 0..co {
+            for c in 0..ci {
+                for tap in 0..9 {
+                    // wf[o, c, tap] = w[c, o, 8 − tap].
+                    self.w[(((o / ob) * ci + c) * 9 + tap) * ob + o % ob] = w[(c * co + o) * 9 + 8 - tap];
+                }
+            }
+        }
     }
 
     /// Correlates the padded planes `x` (`cin` planes of `(n + 2)²`, then [`SLACK`]) and calls

@@ -101,24 +101,56 @@ pub(crate) fn validation_presses(g: &Generator) -> Vec<Press> {
 /// # Errors
 /// [`NeuralGenError`] if the profile refuses a press.
 pub(crate) fn targets(g: &Generator, presses: &[Press]) -> Result<Vec<f32>, NeuralGenError> {
+    let s = g.config.size as usize;
+    let mut out = vec![0f32; presses.len() * s * s];
+    targets_into(g, presses, &mut out)?;
+    Ok(out)
+}
+
+/// As [`targets`], into `out` (`B × S²` values, every one overwritten).
+fn targets_into(g: &Generator, presses: &[Press], out: &mut [f32]) -> Result<(), NeuralGenError> {
     let s = g.config.size;
+    let ss = (s * s) as usize;
+    debug_assert_eq!(out.len(), presses.len() * ss);
     let canvas = StrokeCanvas::with_scale(s, g.config.px_per_mm);
     let profile = &g.config.profile;
-    let imgs: Vec<Vec<f32>> = presses
-        .par_iter()
-        .map_init(
-            || (Rasterizer::new(), Coverage::new(s, s)),
-            |(r, img), p| -> Result<Vec<f32>, NeuralGenError> {
-                let fp = profile.predict(p, brush_model::Extrapolation::Allow).map_err(|e| NeuralGenError::Config {
-                    source_name: "profile".into(),
-                    problem: ConfigError::Profile(e),
-                })?;
-                r.render(&Bsm, &fp, canvas.anchor_mm(&fp, p.beta_rad), p.beta_rad, canvas.px_per_mm, img);
-                Ok(img.data().to_vec())
-            },
-        )
-        .collect::<Result<_, _>>()?;
-    Ok(imgs.into_iter().flatten().collect())
+    out.par_chunks_mut(ss).zip(presses.par_iter()).try_for_each_init(
+        || (Rasterizer::new(), Coverage::new(s, s)),
+        |(r, img), (dst, p)| -> Result<(), NeuralGenError> {
+            let fp = profile.predict(p, brush_model::Extrapolation::Allow).map_err(|e| NeuralGenError::Config {
+                source_name: "profile".into(),
+                problem: ConfigError::Profile(e),
+            })?;
+            r.render(&Bsm, &fp, canvas.anchor_mm(&fp, p.beta_rad), p.beta_rad, canvas.px_per_mm, img);
+            dst.copy_from_slice(img.data());
+            Ok(())
+        },
+    )
+}
+
+/// One batch of training data: normalised inputs (`[B, 3]`) and targets (`B × S²`), rendered
+/// into reused buffers.
+struct Batch {
+    presses: Vec<Press>,
+    x: Vec<f32>,
+    y: Vec<f32>,
+}
+
+impl Batch {
+    fn new() -> Self {
+        Batch { presses: Vec::new(), x: Vec::new(), y: Vec::new() }
+    }
+
+    /// The batch of `step`: presses `step·B .. (step + 1)·B` of `spec`'s stream.
+    fn fill(&mut self, g: &Generator, spec: &DatasetSpec, step: usize, batch: usize) -> Result<(), NeuralGenError> {
+        self.presses.clear();
+        self.presses.extend((0..batch).map(|i| spec.press((step * batch + i) as u64)));
+        self.x.clear();
+        self.x.extend(self.presses.iter().flat_map(|p| g.config.normalise(p)));
+        let ss = (g.config.size * g.config.size) as usize;
+        self.y.resize(batch * ss, 0.0);
+        targets_into(g, &self.presses, &mut self.y)
+    }
 }
 
 /// One optimiser step of the network alone through candle's graph (forward, MSE, backward,
@@ -205,13 +237,29 @@ pub fn train(
     let mut best_weights: Option<Vec<Vec<f32>>> = None;
     let mut data_seconds = 0.0;
     let mut stopped_early = false;
+    // The next batch's targets render while the network trains on this one (two buffers,
+    // swapped each step); every batch is the same whichever thread renders it.
+    let (mut cur, mut next) = (Batch::new(), Batch::new());
+    let td = Instant::now();
+    cur.fill(g, &spec, 0, opts.batch)?;
+    data_seconds += td.elapsed().as_secs_f64();
     for step in 0..opts.steps {
         let lr = lr_at(step, opts.steps, opts.lr);
-        let td = Instant::now();
-        let presses: Vec<Press> = (0..opts.batch).map(|i| spec.press((step * opts.batch + i) as u64)).collect();
-        let (x, y) = (normalised(&presses), targets(g, &presses)?);
-        data_seconds += td.elapsed().as_secs_f64();
-        let train_mse = net.step(&x, &y, lr)?;
+        let more = step + 1 < opts.steps;
+        let gr = &*g;
+        let (trained, rendered) = rayon::join(
+            || net.step(&cur.x, &cur.y, lr),
+            || -> Result<f64, NeuralGenError> {
+                let td = Instant::now();
+                if more {
+                    next.fill(gr, &spec, step + 1, opts.batch)?;
+                }
+                Ok(td.elapsed().as_secs_f64())
+            },
+        );
+        let train_mse = trained?;
+        data_seconds += rendered?;
+        std::mem::swap(&mut cur, &mut next);
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
             let imgs = net.kernels().images_normalised(&val_x);

@@ -43,10 +43,10 @@ pub(crate) struct Fc {
 
 /// One 3×3 convolution stage (padding 1), followed by a ×2 pixel shuffle.
 pub(crate) struct Stage {
-    fwd: Conv3,
+    pub(crate) fwd: Conv3,
     /// The flipped, transposed kernel: the correlation that gives the input gradient.
-    bwd: Conv3,
-    b: Vec<f32>,
+    pub(crate) bwd: Conv3,
+    pub(crate) b: Vec<f32>,
     pub(crate) cin: usize,
     pub(crate) cout: usize,
     /// Side of the stage's input (and of its convolution's output), px.
