@@ -8,6 +8,8 @@
 //! weights live here during training; [`DirectTrainer::write_back`] copies them into the
 //! generator's candle variables (checkpoints, the final weights).
 
+use std::sync::{Mutex, MutexGuard};
+
 use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 
@@ -44,7 +46,53 @@ pub struct DirectTrainer {
     per_image: Vec<f32>,
     /// The gradient at a fully connected layer's output, transposed (`[out, batch]`).
     gt: Vec<f32>,
+    /// The fully connected layers' outputs (after the ReLU but the last: the seed maps).
+    hid: Vec<Vec<f32>>,
+    /// Each fully connected layer's input, packed for its weight gradient (`[batch, in]`).
+    xin: Vec<Dense>,
+    /// The gradients at a fully connected layer's output and input (`[batch, ·]`).
+    g: Vec<f32>,
+    gi: Vec<f32>,
+    /// Scratch of the panel-parallel products; the images' squared errors.
+    dense_t: Vec<f32>,
+    sq: Vec<f64>,
+    /// Per-thread scratch of the per-image passes (gradient planes with zero borders).
+    pool: Vec<Mutex<Scratch>>,
     batch: usize,
+}
+
+/// One thread's scratch for the per-image passes: the padded gradient at every stage's output
+/// (zero borders kept) and the correlation's accumulators.
+struct Scratch {
+    bufs: Vec<Vec<f32>>,
+    acc: Vec<f32>,
+}
+
+/// A thread's [`Scratch`] from the trainer's pool, or its own where that is in use.
+struct ScratchRef<'a> {
+    guard: Option<MutexGuard<'a, Scratch>>,
+    own: Option<Scratch>,
+}
+
+impl Scratch {
+    fn new(net: &InputVjp) -> Self {
+        Scratch { bufs: net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect(), acc: Vec::new() }
+    }
+
+    /// The current thread's entry of `pool` (by rayon's thread index), when free.
+    fn take(pool: &[Mutex<Scratch>]) -> ScratchRef<'_> {
+        let i = rayon::current_thread_index().unwrap_or(0) % pool.len().max(1);
+        ScratchRef { guard: pool.get(i).and_then(|m| m.try_lock().ok()), own: None }
+    }
+}
+
+impl ScratchRef<'_> {
+    fn get(&mut self, net: &InputVjp) -> &mut Scratch {
+        match &mut self.guard {
+            Some(g) => g,
+            None => self.own.get_or_insert_with(|| Scratch::new(net)),
+        }
+    }
 }
 
 /// Convolution parameters (weights and biases of every stage) of an architecture.
@@ -93,6 +141,13 @@ impl DirectTrainer {
             up: Vec::new(),
             per_image: Vec::new(),
             gt: Vec::new(),
+            hid: Vec::new(),
+            xin: Vec::new(),
+            g: Vec::new(),
+            gi: Vec::new(),
+            dense_t: Vec::new(),
+            sq: Vec::new(),
+            pool: Vec::new(),
             batch: 0,
         };
         tr.rebuild()?;
@@ -119,6 +174,20 @@ impl DirectTrainer {
         self.images = vec![0.0; batch * ss];
         self.up = vec![0.0; batch * ss];
         self.per_image = vec![0.0; batch * (conv_len(&self.net) + self.net.seed_len())];
+        self.hid = self.net.fcs.iter().map(|fc| vec![0.0; batch * fc.out]).collect();
+        let mut inp = 3;
+        self.xin = self
+            .net
+            .fcs
+            .iter()
+            .map(|fc| {
+                let d = Dense::new(&vec![0.0; batch * inp], batch, inp, self.net.isa);
+                inp = fc.out;
+                d
+            })
+            .collect();
+        let threads = rayon::current_num_threads().max(1);
+        self.pool = (0..threads).map(|_| Mutex::new(Scratch::new(&self.net))).collect();
         self.batch = batch;
     }
 
@@ -133,38 +202,55 @@ impl DirectTrainer {
         assert_eq!(target.len(), b * ss, "targets");
         self.size_for(b);
         let net = &self.net;
-        let (hidden, seed) = net.dense_forward(x);
+        let nfc = net.fcs.len();
+        // The fully connected layers on the whole batch, into the kept buffers (the same
+        // products as `InputVjp::dense_forward`).
+        for li in 0..nfc {
+            let (prev, cur) = self.hid.split_at_mut(li);
+            let input: &[f32] = if li == 0 { x } else { &prev[li - 1] };
+            let fc = &net.fcs[li];
+            fc.fwd.apply_scratch(input, Some(&fc.b), &mut cur[0], &mut self.dense_t);
+            if li + 1 < nfc {
+                cur[0].iter_mut().for_each(|v| *v = v.max(0.0));
+            }
+        }
+        let (hidden, seed) = self.hid.split_at(nfc - 1);
+        let seed = &seed[0];
         let (pi, mp, sl) = (net.per_image, net.masks_per_image, net.seed_len());
+        let pool = &self.pool;
         self.images
             .par_chunks_mut(ss)
             .zip(self.masks.par_chunks_mut(mp))
             .zip(self.acts.par_chunks_mut(pi))
             .zip(seed.par_chunks(sl))
-            .for_each_init(Vec::new, |acc, (((img, masks), buf), sd)| {
-                net.isa.dispatch(ForwardImage { net, seed: sd, img, masks, buf, acc })
-            });
+            .for_each_init(
+                || Scratch::take(pool),
+                |sc, (((img, masks), buf), sd)| {
+                    let sc = sc.get(net);
+                    net.isa.dispatch(ForwardImage { net, seed: sd, img, masks, buf, acc: &mut sc.acc })
+                },
+            );
         // MSE and its gradient.
         // (The squared errors summed image by image, then the images in order.)
         let k = 2.0 / (b * ss) as f32;
-        let per: Vec<f64> = self
-            .up
-            .par_chunks_mut(ss)
+        self.sq.resize(b, 0.0);
+        self.sq
+            .par_iter_mut()
+            .zip(self.up.par_chunks_mut(ss))
             .zip(self.images.par_chunks(ss))
             .zip(target.par_chunks(ss))
-            .map(|((u, y), t)| {
-                let mut s = 0f64;
+            .for_each(|(((s, u), y), t)| {
+                let mut acc = 0f64;
                 for ((u, &y), &t) in u.iter_mut().zip(y).zip(t) {
                     let d = y - t;
-                    s += (d as f64) * (d as f64);
+                    acc += (d as f64) * (d as f64);
                     *u = k * d;
                 }
-                s
-            })
-            .collect();
-        let loss = per.iter().sum::<f64>() / (b * ss) as f64;
+                *s = acc;
+            });
+        let loss = self.sq.iter().sum::<f64>() / (b * ss) as f64;
         // Per image: back through the stages, the weight gradients of each.
         let cl = conv_len(net);
-        let bufs = || -> Vec<Vec<f32>> { net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect() };
         self.per_image
             .par_chunks_mut(cl + sl)
             .zip(self.up.par_chunks(ss))
@@ -172,15 +258,16 @@ impl DirectTrainer {
             .zip(self.masks.par_chunks(mp))
             .zip(self.acts.par_chunks(pi))
             .for_each_init(
-                || (bufs(), Vec::new()),
-                |(bufs, acc), ((((out, up), img), masks), acts)| {
+                || Scratch::take(pool),
+                |sc, ((((out, up), img), masks), acts)| {
+                    let sc = sc.get(net);
                     let (grads, gs) = out.split_at_mut(cl);
+                    let (bufs, acc) = (&mut sc.bufs[..], &mut sc.acc);
                     net.isa.dispatch(BackwardImage { net, gs, up, img, masks, bufs, acc });
                     net.isa.dispatch(WeightGrads { net, bufs, acts, grads });
                 },
             );
         // The convolution gradients summed over the images, in image order.
-        let nfc = net.fcs.len();
         let mut off = 0;
         for p in &mut self.params[2 * nfc..] {
             let len = p.g.len();
@@ -196,8 +283,11 @@ impl DirectTrainer {
             off += len;
         }
         // Back through the fully connected layers, on the whole batch.
-        let mut g: Vec<f32> =
-            (0..b).flat_map(|i| self.per_image[i * (cl + sl) + cl..(i + 1) * (cl + sl)].to_vec()).collect();
+        let (mut g, mut gi) = (std::mem::take(&mut self.g), std::mem::take(&mut self.gi));
+        g.clear();
+        for i in 0..b {
+            g.extend_from_slice(&self.per_image[i * (cl + sl) + cl..(i + 1) * (cl + sl)]);
+        }
         for li in (0..nfc).rev() {
             let fc = &net.fcs[li];
             let input: &[f32] = if li == 0 { x } else { &hidden[li - 1] };
@@ -213,18 +303,23 @@ impl DirectTrainer {
                     *v = g[i * out + o];
                 }
             });
-            Dense::new(input, b, inp, net.isa).apply_into(&self.gt, None, gw);
+            let xin = &mut self.xin[li];
+            xin.repack(input);
+            xin.apply_scratch(&self.gt, None, gw, &mut self.dense_t);
             gb.par_iter_mut().zip(self.gt.par_chunks(b)).for_each(|(bo, row)| *bo = row.iter().fold(0.0, |a, v| a + v));
             if li > 0 {
-                let mut gi = fc.bwd.apply(&g, None);
+                gi.resize(b * inp, 0.0);
+                fc.bwd.apply_scratch(&g, None, &mut gi, &mut self.dense_t);
                 gi.iter_mut().zip(&hidden[li - 1]).for_each(|(v, &a)| {
                     if a <= 0.0 {
                         *v = 0.0;
                     }
                 });
-                g = gi;
+                std::mem::swap(&mut g, &mut gi);
             }
         }
+        self.g = g;
+        self.gi = gi;
         loss
     }
 

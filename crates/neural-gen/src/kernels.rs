@@ -365,6 +365,15 @@ impl Dense {
     /// # Panics
     /// When `y` is not `m × n` long.
     pub(crate) fn apply_into(&self, x: &[f32], bias: Option<&[f32]>, y: &mut [f32]) {
+        self.apply_scratch(x, bias, y, &mut Vec::new());
+    }
+
+    /// As [`Dense::apply_into`], with `t` as the scratch of the panel-parallel products (kept
+    /// by the caller, so that repeated products allocate nothing).
+    ///
+    /// # Panics
+    /// When `y` is not `m × n` long.
+    pub(crate) fn apply_scratch(&self, x: &[f32], bias: Option<&[f32]>, y: &mut [f32], t: &mut Vec<f32>) {
         const ROWS: usize = 16;
         let (k, n) = (self.k, self.n);
         let m = x.len().checked_div(k).unwrap_or(0);
@@ -377,7 +386,7 @@ impl Dense {
             // Few rows, many columns: in parallel over the panels, so that each weight is read
             // once (the rows stay in cache), into a panel-major buffer, then into the rows.
             let p = self.p;
-            let mut t = vec![0f32; np * m * p];
+            t.resize(np * m * p, 0.0);
             t.par_chunks_mut(m * p).enumerate().for_each(|(pi, tb)| {
                 self.isa.arch.dispatch(DenseOp { d: self, x, y: tb, panels: pi..pi + 1, stride: p, col0: pi * p });
             });
