@@ -600,3 +600,26 @@ fn an_arm_whose_kinematics_differ_refuses_nominal_joints_and_follows_its_own() {
     let (x0, x1) = states.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.x_mm), b.max(p.x_mm)));
     assert!((x0 - 30.0).abs() <= tol_mm && (x1 - 90.0).abs() <= tol_mm, "x {x0}..{x1}");
 }
+
+#[test]
+fn sim_refuses_a_kinematics_file_it_cannot_use_before_listening() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_port().to_string();
+    let sim = |arm: &Path| maobi(&["robot", "sim", "--port", &port, "--kinematics", s(arm)]);
+    fails(&sim(&dir.path().join("none.json")), "none.json");
+    // The nominal parameters saved as if real would not be another arm; a length out of range
+    // is named by its array and joint.
+    let arm = dir.path().join("arm.json");
+    let mut file = robot_io::export::ArmKinematics {
+        robot: "rob1".into(),
+        source: "a test arm".into(),
+        real: false,
+        kinematics: robot_io::kinematics::DhParams::AUBO_I5,
+    };
+    std::fs::write(&arm, serde_json::to_string(&file).unwrap()).unwrap();
+    fails(&sim(&arm), "`real` is false");
+    file.real = true;
+    file.kinematics.d_m[1] = 1e9;
+    std::fs::write(&arm, serde_json::to_string(&file).unwrap()).unwrap();
+    fails(&sim(&arm), "arm.json: kinematics: d[1]");
+}
