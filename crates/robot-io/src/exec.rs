@@ -255,11 +255,8 @@ pub fn trace_to_states(trace: &[TraceEntry], frame: &PaperFrame) -> Vec<brush_mo
             let z = inv * (t.pose.to_iso().rotation * nalgebra::Vector3::z());
             let alpha = z.z.clamp(-1.0, 1.0).acos();
             let beta = if z.x.hypot(z.y) > 1e-12 { z.y.atan2(z.x) } else { 0.0 };
-            // Round-off of a pose at the surface must not count as contact, nor round-off of a
-            // solved pose (a path buffer's joints through forward kinematics: 11 mm reads
-            // 10.9999999999) put a press at the edge of a brush's calibrated depths outside it:
-            // depths are kept to the nearest nanometre.
-            let h = if p[2].abs() < 1e-6 { 0.0 } else { (p[2] * 1e6).round() / 1e6 };
+            // Round-off of a pose at the surface must not count as contact.
+            let h = if p[2].abs() < 1e-6 { 0.0 } else { p[2] };
             brush_model::TrackPoint { x_mm: p[0], y_mm: p[1], h_mm: h, alpha_rad: alpha, beta_rad: beta }
         })
         .collect()
@@ -287,21 +284,5 @@ mod tests {
             let back = f.to_paper(base);
             assert!((0..3).all(|i| (back[i] - paper[i]).abs() < 1e-9), "{base:?} → {back:?}");
         }
-    }
-
-    #[test]
-    fn depths_are_kept_to_the_nanometre_so_round_off_leaves_a_press_where_it_was() {
-        let f = level_frame_in_front([60.0, 40.0], [10.0, 20.0, 110.0, 60.0]);
-        let at = |depth_mm: f64| {
-            let b = f.iso * nalgebra::Point3::new(0.06, 0.04, depth_mm / 1000.0);
-            let pose = crate::pose::Pose([b.x, b.y, b.z, std::f64::consts::PI, 0.0, 0.0]);
-            trace_to_states(&[TraceEntry { t_s: 0.0, kind: TraceKind::PathBuffer, pose }], &f)[0].h_mm
-        };
-        // 11 mm read back through a solved pose as 10.9999999999 mm is 11 mm (a brush's
-        // shallowest calibrated depth stays inside its range); a micrometre stays a micrometre.
-        assert_eq!(at(11.0 - 1e-10), 11.0);
-        assert_eq!(at(11.0 + 1e-10), 11.0);
-        assert!((at(10.999) - 10.999).abs() < 1e-9);
-        assert_eq!(at(1e-7), 0.0);
     }
 }
