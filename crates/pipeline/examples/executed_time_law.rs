@@ -1,6 +1,6 @@
 //! The executed figure on the controller's time law: for each character, executed CSIM against
-//! the glyph with the plain executor (what `maobi write` reports), with the program sent as path
-//! buffers, sent as compacted blended moves (`robot send --motion moves`), and as compacted
+//! the glyph with the plain executor (no ramps, no blends), with the program sent as path
+//! buffers (what `maobi write` reports), sent as compacted blended moves (`robot send --motion moves`), and as compacted
 //! moves without blends (`blend_mm` 0: what compaction and ramps alone cost), as the simulator
 //! server runs them (compaction leaves no blend where the path turns back by more than 90°);
 //! prints each and the means. A character whose program the timing refuses is
@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let input = GlyphInput::Hanzi((dir != "embedded").then(|| PathBuf::from(dir)));
     let pen1 = BrushProfile::builtin("pen1")?;
-    let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
+    let opts = WriteOptions { size, free_widths: false, execution: Execution::Plain, ..WriteOptions::default() };
     let cfg = RobotConfig::default();
     // Moves without blends: what the compaction and the ramps alone cost.
     let stops = RobotConfig { blend_mm: 0.0, ..RobotConfig::default() };

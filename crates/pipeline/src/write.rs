@@ -31,6 +31,9 @@ pub struct WriteOptions {
     /// Also run the track as a robot program (default paper frame and `robot.json`, the
     /// simulator's motion) and score what it writes.
     pub execute: bool,
+    /// How the program is executed for the executed figure (default: as `robot send` sends it,
+    /// [`Execution::PathBuffer`]).
+    pub execution: Execution,
     /// Refine the built track by gradient descent against the glyph (`track_refine`); `None`
     /// leaves the track as built.
     pub refine: Option<RefineOptions>,
@@ -50,6 +53,7 @@ impl std::fmt::Debug for WriteOptions {
             .field("spacing_mm", &self.spacing_mm)
             .field("free_widths", &self.free_widths)
             .field("execute", &self.execute)
+            .field("execution", &self.execution)
             .field("refine", &self.refine);
         #[cfg(feature = "generator")]
         d.field("generator", &self.generator.as_ref().map(|_| "a generator"));
@@ -67,6 +71,7 @@ impl Default for WriteOptions {
             spacing_mm: trajectory::DEFAULT_SPACING_MM,
             free_widths: true,
             execute: true,
+            execution: Execution::default(),
             refine: None,
             #[cfg(feature = "generator")]
             generator: None,
@@ -242,36 +247,63 @@ pub fn level_frame_for(b: &CharBox) -> PaperFrame {
     )
 }
 
-/// Builds the robot program of a track (checked like `maobi robot check`) and executes it as the
-/// simulator does; returns the executed brush states on the paper.
+/// Builds the robot program of a track (checked like `maobi robot check`) and executes it as
+/// `robot send` sends it and the simulator runs it ([`Execution::PathBuffer`]: each pressed
+/// stroke one path buffer on its timing); returns the executed brush states on the paper.
 ///
 /// # Errors
-/// The check's error when the program fails it.
+/// The check's error when the program fails it; the timing's when a stroke cannot be timed
+/// within the limits.
 pub fn execute_track(
     track: &Track,
     profile: &BrushProfile,
     frame: &PaperFrame,
     cfg: &RobotConfig,
 ) -> Result<Vec<TrackPoint>, robot_io::RobotError> {
-    let (program, _) = build_program(track, profile, frame, cfg)?;
-    let trace = robot_io::exec::execute_program(&program);
-    Ok(robot_io::exec::trace_to_states(&trace, frame))
+    execute_track_with(track, profile, frame, cfg, Execution::default())
 }
 
 /// How a program is executed for an executed figure.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Execution {
     /// [`robot_io::exec::execute_program`]: every move at its commanded speed, straight
-    /// between the points, no ramps and no blends (the figure `write` reports).
-    #[default]
+    /// between the points, no ramps and no blends (no controller moves so; kept to measure
+    /// what the time law changes).
     Plain,
     /// As `robot send` sends it by default and the simulator server runs it: each pressed
     /// stroke as one path buffer of its timed waypoints, the other moves on the trapezoidal
-    /// time law ([`robot_io::sim::execute_as_sent`]).
+    /// time law ([`robot_io::sim::execute_as_sent`]). The figure `maobi write` reports.
+    #[default]
     PathBuffer,
     /// As `robot send --motion moves` sends it: the program compacted
     /// ([`robot_io::program::compact_program`]) and run with its blends rounded, on the time law.
     Moves,
+}
+
+impl Execution {
+    /// Every kind, in the order the CLI lists them.
+    pub const ALL: [Execution; 3] = [Execution::PathBuffer, Execution::Moves, Execution::Plain];
+
+    /// The CLI name: `path-buffer`, `moves` or `plain`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Execution::Plain => "plain",
+            Execution::PathBuffer => "path-buffer",
+            Execution::Moves => "moves",
+        }
+    }
+}
+
+impl std::str::FromStr for Execution {
+    type Err = String;
+
+    /// Parses [`Execution::name`].
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        Execution::ALL
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| format!("expected path-buffer, moves or plain, got `{s}`"))
+    }
 }
 
 /// [`execute_track`] executed as `how` says (the AUBO-i5's nominal kinematics, the simulator's
@@ -301,7 +333,19 @@ pub fn execute_track_with(
             execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?
         }
     };
-    Ok(robot_io::exec::trace_to_states(&trace, frame))
+    let mut states = robot_io::exec::trace_to_states(&trace, frame);
+    for p in &mut states {
+        p.h_mm = to_nanometre(p.h_mm);
+    }
+    Ok(states)
+}
+
+/// A depth kept to the nearest nanometre (mm in, mm out): the round-off of a solved pose (a path
+/// buffer's joints through forward kinematics read 11 mm as 10.9999999999 mm) must not put a
+/// press at a brush's shallowest calibrated depth outside its range, where the forward model
+/// refuses it.
+fn to_nanometre(h_mm: f64) -> f64 {
+    (h_mm * 1e6).round() / 1e6
 }
 
 /// Renders brush states (an executed path) through the forward model over a char box onto a
@@ -407,7 +451,8 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
 }
 
 /// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
-/// char box with the default `robot.json` ([`execute_track`]), rendered like the plan
+/// char box with the default `robot.json`, executed as [`WriteOptions::execution`] says
+/// ([`execute_track_with`]), rendered like the plan
 /// ([`render_states`]). Returns the executed states and their render.
 fn execute_and_render(
     track: &Track,
@@ -415,7 +460,8 @@ fn execute_and_render(
     opts: &WriteOptions,
     char_box: &CharBox,
 ) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
-    let states = execute_track(track, profile, &level_frame_for(char_box), &RobotConfig::default())?;
+    let states =
+        execute_track_with(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
     let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, char_box, opts.size);
     Ok((states, img))
 }
@@ -585,4 +631,45 @@ pub fn rerender_with_generator(
         r.render = img;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn depths_read_back_through_a_solved_pose_are_kept_to_the_nanometre() {
+        assert_eq!(to_nanometre(11.0 - 1e-10), 11.0);
+        assert_eq!(to_nanometre(11.0 + 1e-10), 11.0);
+        assert!((to_nanometre(10.999) - 10.999).abs() < 1e-12);
+        assert_eq!(to_nanometre(0.0), 0.0);
+    }
+
+    #[test]
+    fn execution_names_round_trip_and_a_bad_one_is_named() {
+        for e in Execution::ALL {
+            assert_eq!(e.name().parse::<Execution>(), Ok(e));
+        }
+        assert_eq!("fast".parse::<Execution>(), Err("expected path-buffer, moves or plain, got `fast`".to_string()));
+    }
+
+    #[test]
+    fn the_executed_figure_is_the_program_as_sent_unless_asked_otherwise() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let p = crate::prepare(trajectory::glyph::embedded('十').unwrap(), None).unwrap();
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 60.0 };
+        let opts = WriteOptions { size: 64, free_widths: false, ..WriteOptions::default() };
+        assert_eq!(opts.execution, Execution::PathBuffer);
+        let r = write_char(&p, &pen1, b, &opts).unwrap();
+        let (frame, cfg) = (level_frame_for(&b), RobotConfig::default());
+        let as_sent = execute_track_with(&r.track, &pen1, &frame, &cfg, Execution::PathBuffer).unwrap();
+        let plain = execute_track_with(&r.track, &pen1, &frame, &cfg, Execution::Plain).unwrap();
+        // The path buffers are sampled on their timing, the plain executor at its speeds: not
+        // the same samples.
+        assert_ne!(as_sent, plain);
+        assert_eq!(r.executed_states.as_ref(), Some(&as_sent));
+        let plain_opts = WriteOptions { execution: Execution::Plain, ..opts };
+        let r = write_char(&p, &pen1, b, &plain_opts).unwrap();
+        assert_eq!(r.executed_states.as_ref(), Some(&plain));
+    }
 }

@@ -244,6 +244,12 @@ pub struct SimArgs {
     /// controller without them would.
     #[arg(long)]
     no_kinematics_param: bool,
+    /// Be another arm: move, answer forwardKinematics/inverseKinematics and report
+    /// getKinematicsParam(true) with the parameters in this file (as `maobi robot kinematics
+    /// -o` writes it), the compensation being their difference from the nominal i5 (default:
+    /// the nominal i5).
+    #[arg(long, value_name = "ARM.json")]
+    kinematics: Option<PathBuf>,
 }
 
 /// Runs a `maobi robot` subcommand.
@@ -538,6 +544,7 @@ fn sim(a: SimArgs) -> Result<()> {
             listen.push(Listen { bind: format!("127.0.0.1:{p}"), transports: vec![t] });
         }
     }
+    let arm = a.kinematics.as_deref().map(robot_io::export::ArmKinematics::load).transpose()?;
     let options = SimOptions {
         faults,
         user: a.user.clone(),
@@ -546,6 +553,7 @@ fn sim(a: SimArgs) -> Result<()> {
         idle_timeout: Duration::from_secs(a.idle_timeout_s),
         trace_path: a.trace.clone(),
         kinematics_param: !a.no_kinematics_param,
+        kinematics: arm.as_ref().map_or(robot_io::kinematics::DhParams::AUBO_I5, |k| k.kinematics),
         ..SimOptions::default()
     };
     // The trace file is created before anything listens: a folder or an unwritable path fails now.
@@ -558,8 +566,12 @@ fn sim(a: SimArgs) -> Result<()> {
             format!("{addr} ({})", names.join(", "))
         })
         .collect();
+    let which = match (&a.kinematics, &arm) {
+        (Some(p), Some(k)) => format!("an AUBO-i5 with the kinematics of {} ({})", p.display(), k.source),
+        _ => "an AUBO-i5 (nominal kinematics)".to_string(),
+    };
     eprintln!(
-        "simulating an AUBO-i5 (robot `{}`, login `{}`) on {}; Ctrl-C to stop",
+        "simulating {which} (robot `{}`, login `{}`) on {}; Ctrl-C to stop",
         robot_io::sim::SIM_ROBOT,
         a.user,
         ports.join(", ")

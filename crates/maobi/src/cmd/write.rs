@@ -21,6 +21,11 @@ use crate::common::{
     print_json, progress, recover_leftovers, write_atomic,
 };
 
+/// The `--execution` argument: how the executed figure runs the program.
+fn parse_execution() -> crate::common::Named<pipeline::Execution> {
+    crate::common::Named::new(&pipeline::Execution::ALL.map(pipeline::Execution::name))
+}
+
 /// Arguments of `maobi write`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -61,6 +66,12 @@ pub struct Args {
     /// Side of each character's images, px.
     #[arg(long, default_value_t = 512)]
     size: u32,
+    /// How the executed figure runs each character's program on the simulator's arm:
+    /// path-buffer (as `robot send` sends it: each stroke one path buffer on its timing),
+    /// moves (as `robot send --motion moves`: compacted, blended) or plain (every move straight
+    /// at its speed, no ramps or blends: no controller moves so).
+    #[arg(long, default_value = "path-buffer", value_parser = parse_execution())]
+    execution: pipeline::Execution,
     /// Side of the character box on paper, mm (default: chosen so the brush's width range
     /// covers the glyphs' stroke widths; see docs/trajectory.md).
     #[arg(long, allow_negative_numbers = true)]
@@ -326,6 +337,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut opts = WriteOptions {
         model: args.model,
         size: args.size,
+        execution: args.execution,
         alpha_rad,
         refine: write_refine,
         generator,

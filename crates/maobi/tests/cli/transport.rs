@@ -523,3 +523,103 @@ fn send_refuses_nominal_kinematics_unless_accepted() {
     let o = ok(&send(new, &[]));
     assert!(o.contains("on the controller's kinematics (getKinematicsParam, its compensation checked)"), "{o}");
 }
+
+/// The distance (mm) a refusal names in "put the TCP D mm".
+fn refused_distance_mm(e: &str) -> f64 {
+    let at = e.find("put the TCP ").unwrap_or_else(|| panic!("no distance in {e}")) + "put the TCP ".len();
+    e[at..].split_whitespace().next().and_then(|d| d.parse().ok()).unwrap_or_else(|| panic!("{e}"))
+}
+
+#[test]
+fn an_arm_whose_kinematics_differ_refuses_nominal_joints_and_follows_its_own() {
+    use robot_io::kinematics::DhParams;
+    let dir = tempfile::tempdir().unwrap();
+    let track = one_stroke_track(dir.path());
+    let paper_json = paper();
+    // Another i5: its upper arm 20 mm longer and its shoulder's zero 0.3° off (a calibration
+    // far from nominal), as `robot kinematics -o` would save it.
+    let mut theirs = DhParams::AUBO_I5;
+    theirs.a_m[2] += 0.020;
+    theirs.theta_rad[1] += 0.3f64.to_radians();
+    let arm = dir.path().join("arm.json");
+    let file = robot_io::export::ArmKinematics {
+        robot: "rob1".into(),
+        source: "a test arm".into(),
+        real: true,
+        kinematics: theirs,
+    };
+    std::fs::write(&arm, serde_json::to_string_pretty(&file).unwrap()).unwrap();
+    let (quiet, reporting) = (free_port(), free_port());
+    let (quiet_trace, trace) = (dir.path().join("quiet.jsonl"), dir.path().join("trace.jsonl"));
+    // An arm whose controller does not report its parameters, and one that does.
+    let _quiet = Sim::start(quiet, &["--kinematics", s(&arm), "--no-kinematics-param", "--trace", s(&quiet_trace)]);
+    let _reporting = Sim::start(reporting, &["--kinematics", s(&arm), "--trace", s(&trace)]);
+    let send = |port: u16, extra: &[&str]| {
+        let p = port.to_string();
+        let mut args =
+            vec!["robot", "send", s(&track), "--paper", s(&paper_json), "--host", "127.0.0.1", "--port", p.as_str()];
+        args.extend_from_slice(extra);
+        maobi(&args)
+    };
+    // Nominal joints accepted by the user: the controller's forward kinematics refuse them
+    // before anything moves, naming the waypoint and how far the TCP would be.
+    for (port, extra) in [
+        (quiet, &["--accept-nominal-kinematics"][..]),
+        (reporting, &["--nominal-kinematics", "--accept-nominal-kinematics"][..]),
+    ] {
+        let o = send(port, extra);
+        fails(&o, "waypoint 0 of the path buffer: the controller's forward kinematics put the TCP");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("nothing was moved") && e.contains("stroke 1"), "{e}");
+        // 20 mm of upper arm and 0.3° at the shoulder: centimetres, far beyond the 0.1 mm allowed.
+        let d = refused_distance_mm(&e);
+        assert!(d > 10.0 && d < 100.0, "{d} mm: {e}");
+    }
+    for t in [&quiet_trace, &trace] {
+        assert_eq!(std::fs::read_to_string(t).unwrap(), "", "{} moved", t.display());
+    }
+    // The parameters read from that controller are its own.
+    let read = dir.path().join("read.json");
+    let p = reporting.to_string();
+    ok(&maobi(&["robot", "kinematics", "--host", "127.0.0.1", "--port", &p, "-o", s(&read)]));
+    let got = robot_io::export::ArmKinematics::load(&read).unwrap();
+    assert_eq!(got.kinematics, theirs);
+    // Sent on them (the default): written, and what the arm executed lies on the stroke (y 60
+    // mm, depth 14 mm, x 30..90 mm) within the timing's path tolerance.
+    let o = ok(&send(reporting, &[]));
+    assert!(o.contains("1 of 1 strokes completed") && o.contains("on the controller's kinematics"), "{o}");
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let samples: Vec<robot_io::exec::TraceEntry> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let pressed: Vec<_> = samples.into_iter().filter(|t| t.kind == robot_io::exec::TraceKind::PathBuffer).collect();
+    assert!(pressed.len() > 100, "{} samples", pressed.len());
+    let frame = robot_io::frame::PaperFrame::load(&paper_json).unwrap();
+    let tol_mm = robot_io::timing::PATH_TOLERANCE_M * 1e3;
+    let states = robot_io::exec::trace_to_states(&pressed, &frame);
+    let worst = states.iter().map(|p| (p.y_mm - 60.0).abs().max((p.h_mm - 14.0).abs())).fold(0.0, f64::max);
+    assert!(worst <= tol_mm, "{worst} mm off the stroke");
+    let (x0, x1) = states.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.x_mm), b.max(p.x_mm)));
+    assert!((x0 - 30.0).abs() <= tol_mm && (x1 - 90.0).abs() <= tol_mm, "x {x0}..{x1}");
+}
+
+#[test]
+fn sim_refuses_a_kinematics_file_it_cannot_use_before_listening() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_port().to_string();
+    let sim = |arm: &Path| maobi(&["robot", "sim", "--port", &port, "--kinematics", s(arm)]);
+    fails(&sim(&dir.path().join("none.json")), "none.json");
+    // The nominal parameters saved as if real would not be another arm; a length out of range
+    // is named by its array and joint.
+    let arm = dir.path().join("arm.json");
+    let mut file = robot_io::export::ArmKinematics {
+        robot: "rob1".into(),
+        source: "a test arm".into(),
+        real: false,
+        kinematics: robot_io::kinematics::DhParams::AUBO_I5,
+    };
+    std::fs::write(&arm, serde_json::to_string(&file).unwrap()).unwrap();
+    fails(&sim(&arm), "`real` is false");
+    file.real = true;
+    file.kinematics.d_m[1] = 1e9;
+    std::fs::write(&arm, serde_json::to_string(&file).unwrap()).unwrap();
+    fails(&sim(&arm), "arm.json: kinematics: d[1]");
+}

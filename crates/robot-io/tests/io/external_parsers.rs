@@ -683,6 +683,34 @@ fn lua_path_buffer_exports_move_nothing_on_another_arm() {
     assert!(calls.iter().any(|c| c.name == "moveLine") && !calls.iter().any(|c| c.name == "movePathBuffer"));
 }
 
+#[test]
+fn lua_path_buffer_exports_on_the_arms_own_kinematics_run_on_that_arm() {
+    if !have_lua() {
+        return skipped("lua_path_buffer_exports_on_the_arms_own_kinematics_run_on_that_arm", NO_LUA);
+    }
+    let cfg = config(None);
+    let p = program(&cfg);
+    // Another i5 (upper arm 20 mm longer, shoulder zero 0.3° off), as `robot export
+    // --kinematics ARM.json` gets it from `robot kinematics -o`.
+    let mut theirs = DhParams::AUBO_I5;
+    theirs.a_m[2] += 0.020;
+    theirs.theta_rad[1] += 0.3f64.to_radians();
+    let script = aubo_lua_path_buffer(&p, &theirs, &cfg, "十").unwrap();
+    assert!(luac_check(&script).status.success());
+    // On that arm: its kinematics check passes and every stroke runs as the program timed on it.
+    let ran = run_lua_arm(&script, "status", &kin_table(&theirs, ""), "follows", true);
+    assert!(ran.status.success(), "{}", ran.stderr);
+    let calls = parse_calls(&ran.stdout);
+    assert_eq!(calls.last().map(|c| c.name.as_str()), Some("done"));
+    if let Err(e) = same_calls(&path_buffer_effects(&calls), &expected_path_buffer_calls(&p, &theirs, &cfg)) {
+        panic!("{e}");
+    }
+    // The same script on a nominal arm moves nothing.
+    let ran = run_lua_arm(&script, "status", &kin_table(&DhParams::AUBO_I5, ""), "follows", true);
+    assert!(!ran.status.success() && ran.stderr.contains("differ from those the joint waypoints were computed with"));
+    assert!(!parse_calls(&ran.stdout).iter().any(|c| c.name == "movePathBuffer" || c.name == "moveLine"));
+}
+
 // ---------------------------------------------------------------------------------------------
 // G-code through gcodeparser (PyPI)
 
