@@ -578,21 +578,39 @@ pub fn ilc_target(
 /// kept as "before"; a refined track that fails the robot check is not used). `results`,
 /// `prepared` and `residuals` are in the same order.
 ///
+/// With `starts` (one stroke list per character, paper mm: the last attempt's tracks, when they
+/// were written with `profile` in the same boxes), each refinement starts from the last
+/// attempt's track instead of the built one, as iterative learning control takes the next input
+/// from the last: the residual was measured at that track, so the refinement moves only as far
+/// from it as the residual asks. A refined track that is not used leaves the built one.
+///
 /// # Errors
 /// [`ClosedLoopError::Target`] or the pipeline's error for the first character that fails.
 pub fn refine_observed(
     results: &mut [CharResult],
     prepared: &[Prepared],
     residuals: &[Residual],
+    starts: Option<&[&[Stroke]]>,
     profile: &BrushProfile,
     opts: &WriteOptions,
     ro: &RefineOptions,
 ) -> Result<(), ClosedLoopError> {
-    results.par_iter_mut().zip(prepared.par_iter()).zip(residuals.par_iter()).try_for_each(|((r, p), res)| {
-        let target = ilc_target(&p.glyph, &r.char_box, res, ro.analysis_px)?;
-        refine_result(r, p, profile, opts, ro, &target)?;
-        Ok(())
-    })
+    results.par_iter_mut().zip(prepared.par_iter()).zip(residuals.par_iter()).enumerate().try_for_each(
+        |(i, ((r, p), res))| {
+            let target = ilc_target(&p.glyph, &r.char_box, res, ro.analysis_px)?;
+            let built = match starts.and_then(|s| s.get(i)) {
+                Some(s) => Some(std::mem::replace(&mut r.track, Track { strokes: s.to_vec() })),
+                None => None,
+            };
+            refine_result(r, p, profile, opts, ro, &target)?;
+            if let Some(built) = built
+                && r.report.refine.as_ref().is_some_and(|x| x.rejected.is_some())
+            {
+                r.track = built;
+            }
+            Ok(())
+        },
+    )
 }
 
 #[cfg(test)]
