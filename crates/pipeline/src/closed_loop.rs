@@ -551,11 +551,17 @@ impl Residual {
     }
 }
 
-/// The ILC target: the glyph shifted by the residual, `clamp(G − R, 0, 1)` at `px²` over the
-/// character's box (`G` the glyph raster as [`crate::refine_target`] renders it, `R` the
-/// residual averaged onto the same pixels). Refining a track against it makes the model's
-/// render plus the residual match the glyph (the clamp only drops targets the soft union, which
-/// lies in [0, 1], cannot reach).
+/// The learning gain of the ILC step: the target is the glyph shifted by this many times the
+/// residual (1 would aim the model's render plus the residual exactly at the glyph; the
+/// refinement, held to the track's shape by its regularisers, moves only part of the way, so a
+/// gain above 1 asks for more). How it was chosen: docs/closed-loop.md.
+const ILC_GAIN: f32 = 1.5;
+
+/// The ILC target: the glyph shifted by the residual times the learning gain `γ` (1.5),
+/// `clamp(G − γ·R, 0, 1)` at `px²` over the character's box (`G` the glyph raster as
+/// [`crate::refine_target`] renders it, `R` the residual averaged onto the same pixels).
+/// Refining a track against it makes the model's render plus the residual approach the glyph
+/// (the clamp only drops targets the soft union, which lies in [0, 1], cannot reach).
 ///
 /// # Errors
 /// [`ClosedLoopError::Target`] when `px` or the box make no usable target.
@@ -567,7 +573,7 @@ pub fn ilc_target(
 ) -> Result<Target, ClosedLoopError> {
     let g = render_glyph(glyph, px);
     let r = residual.resampled(px);
-    let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - r).clamp(0.0, 1.0)).collect();
+    let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - ILC_GAIN * r).clamp(0.0, 1.0)).collect();
     Target::new(px, px, ink, PointMm::new(char_box.x0_mm, char_box.y0_mm), char_box.size_mm / px as f64)
         .map_err(|source| ClosedLoopError::Target { ch: glyph.ch.to_string(), source: Box::new(source) })
 }
@@ -650,7 +656,7 @@ mod tests {
         let more = Residual { side: 32, values: vec![0.25; 32 * 32] };
         let t1 = ilc_target(&glyph, &b, &more, 32).unwrap();
         for (a, g) in t1.ink.iter().zip(g.data()) {
-            assert!((a - (g - 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
+            assert!((a - (g - ILC_GAIN * 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
         }
         let less = Residual { side: 32, values: vec![-0.25; 32 * 32] };
         let t2 = ilc_target(&glyph, &b, &less, 32).unwrap();
