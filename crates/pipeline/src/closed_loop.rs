@@ -551,11 +551,17 @@ impl Residual {
     }
 }
 
-/// The ILC target: the glyph shifted by the residual, `clamp(G − R, 0, 1)` at `px²` over the
-/// character's box (`G` the glyph raster as [`crate::refine_target`] renders it, `R` the
-/// residual averaged onto the same pixels). Refining a track against it makes the model's
-/// render plus the residual match the glyph (the clamp only drops targets the soft union, which
-/// lies in [0, 1], cannot reach).
+/// The learning gain of the ILC step: the target is the glyph shifted by this many times the
+/// residual (1 would aim the model's render plus the residual exactly at the glyph; the
+/// refinement, held to the track's shape by its regularisers, moves only part of the way, so a
+/// gain above 1 asks for more). How it was chosen: docs/closed-loop.md.
+const ILC_GAIN: f32 = 1.5;
+
+/// The ILC target: the glyph shifted by the residual times the learning gain `γ` (1.5),
+/// `clamp(G − γ·R, 0, 1)` at `px²` over the character's box (`G` the glyph raster as
+/// [`crate::refine_target`] renders it, `R` the residual averaged onto the same pixels).
+/// Refining a track against it makes the model's render plus the residual approach the glyph
+/// (the clamp only drops targets the soft union, which lies in [0, 1], cannot reach).
 ///
 /// # Errors
 /// [`ClosedLoopError::Target`] when `px` or the box make no usable target.
@@ -567,7 +573,7 @@ pub fn ilc_target(
 ) -> Result<Target, ClosedLoopError> {
     let g = render_glyph(glyph, px);
     let r = residual.resampled(px);
-    let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - r).clamp(0.0, 1.0)).collect();
+    let ink = g.data().iter().zip(&r).map(|(&g, &r)| (g - ILC_GAIN * r).clamp(0.0, 1.0)).collect();
     Target::new(px, px, ink, PointMm::new(char_box.x0_mm, char_box.y0_mm), char_box.size_mm / px as f64)
         .map_err(|source| ClosedLoopError::Target { ch: glyph.ch.to_string(), source: Box::new(source) })
 }
@@ -578,21 +584,39 @@ pub fn ilc_target(
 /// kept as "before"; a refined track that fails the robot check is not used). `results`,
 /// `prepared` and `residuals` are in the same order.
 ///
+/// With `starts` (one stroke list per character, paper mm: the last attempt's tracks, when they
+/// were written with `profile` in the same boxes), each refinement starts from the last
+/// attempt's track instead of the built one, as iterative learning control takes the next input
+/// from the last: the residual was measured at that track, so the refinement moves only as far
+/// from it as the residual asks. A refined track that is not used leaves the built one.
+///
 /// # Errors
 /// [`ClosedLoopError::Target`] or the pipeline's error for the first character that fails.
 pub fn refine_observed(
     results: &mut [CharResult],
     prepared: &[Prepared],
     residuals: &[Residual],
+    starts: Option<&[&[Stroke]]>,
     profile: &BrushProfile,
     opts: &WriteOptions,
     ro: &RefineOptions,
 ) -> Result<(), ClosedLoopError> {
-    results.par_iter_mut().zip(prepared.par_iter()).zip(residuals.par_iter()).try_for_each(|((r, p), res)| {
-        let target = ilc_target(&p.glyph, &r.char_box, res, ro.analysis_px)?;
-        refine_result(r, p, profile, opts, ro, &target)?;
-        Ok(())
-    })
+    results.par_iter_mut().zip(prepared.par_iter()).zip(residuals.par_iter()).enumerate().try_for_each(
+        |(i, ((r, p), res))| {
+            let target = ilc_target(&p.glyph, &r.char_box, res, ro.analysis_px)?;
+            let built = match starts.and_then(|s| s.get(i)) {
+                Some(s) => Some(std::mem::replace(&mut r.track, Track { strokes: s.to_vec() })),
+                None => None,
+            };
+            refine_result(r, p, profile, opts, ro, &target)?;
+            if let Some(built) = built
+                && r.report.refine.as_ref().is_some_and(|x| x.rejected.is_some())
+            {
+                r.track = built;
+            }
+            Ok(())
+        },
+    )
 }
 
 #[cfg(test)]
@@ -632,7 +656,7 @@ mod tests {
         let more = Residual { side: 32, values: vec![0.25; 32 * 32] };
         let t1 = ilc_target(&glyph, &b, &more, 32).unwrap();
         for (a, g) in t1.ink.iter().zip(g.data()) {
-            assert!((a - (g - 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
+            assert!((a - (g - ILC_GAIN * 0.25).clamp(0.0, 1.0)).abs() < 1e-6);
         }
         let less = Residual { side: 32, values: vec![-0.25; 32 * 32] };
         let t2 = ilc_target(&glyph, &b, &less, 32).unwrap();

@@ -356,9 +356,15 @@ pub fn run(args: Args) -> Result<()> {
     let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
     pb.finish_and_clear();
     let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
+    let mut warm_started = false;
     if let (Some(residuals), Some(ro), Some(prepared)) = (&residuals, refine, &kept) {
         opts.refine = Some(ro);
-        pipeline::refine_observed(&mut results, prepared, residuals, &profile, &opts, &ro)
+        // With the brush the last attempt was written with, each refinement starts from the
+        // last attempt's track (the residual was measured there).
+        let last = observed.as_ref().filter(|o| same_brush(&o.track.brush, &profile)).map(|o| o.attempts());
+        warm_started = last.is_some();
+        let starts: Option<Vec<&[brush_model::Stroke]>> = last.as_ref().map(|a| a.iter().map(|a| a.strokes).collect());
+        pipeline::refine_observed(&mut results, prepared, residuals, starts.as_deref(), &profile, &opts, &ro)
             .context("--observed with --refine")?;
     }
     let char_mm = lay.char_mm;
@@ -382,7 +388,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
     summary["brush_choice"] = json!(choice.as_ref().or(next_choice.as_ref()));
     if let (Some(o), Some(c)) = (&observed, &correction) {
-        let (this, rounds) = o.rounds(c, &profile, next_choice.as_ref(), refine.is_some());
+        let (this, rounds) = o.rounds(c, &profile, next_choice.as_ref(), refine.is_some(), warm_started);
         summary["observed"] = this;
         summary["rounds"] = rounds;
         write_atomic(&stage.path().join("brush.json"), profile.to_json().as_bytes())?;
@@ -421,7 +427,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     }
     if !single {
-        let img = pipeline::sheet_image(&results, &profile, args.model, &lay, args.size)?;
+        let img = sheet_png(&results, &sheet_track, &profile, args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
         write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
@@ -666,6 +672,60 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
     Ok(())
 }
 
+/// Whether two profiles are the same brush: the same name, brush and ranges, and footprint
+/// models equal to 1e-9 mm (a correction carried back onto its own base rounds).
+fn same_brush(a: &BrushProfile, b: &BrushProfile) -> bool {
+    let terms = |x: brush_model::Terms, y: brush_model::Terms| {
+        let close = |u: f64, v: f64| (u - v).abs() <= 1e-9 * (1.0 + u.abs());
+        let opt = |u: Option<f64>, v: Option<f64>| close(u.unwrap_or(0.0), v.unwrap_or(0.0));
+        close(x.intercept, y.intercept)
+            && opt(x.h_mm, y.h_mm)
+            && opt(x.alpha_rad, y.alpha_rad)
+            && opt(x.beta_rad, y.beta_rad)
+    };
+    let (m, n) = (&a.model, &b.model);
+    a.name == b.name
+        && a.brush == b.brush
+        && a.ranges == b.ranges
+        && terms(m.lt_mm, n.lt_mm)
+        && terms(m.lh_mm, n.lh_mm)
+        && terms(m.lr_mm, n.lr_mm)
+}
+
+/// `sheet.png`: every character's track ([`pipeline::sheet_image`]) and the registration marks
+/// the robot writes before them (the first `mark_strokes` of the sheet track, as the preview and
+/// the exports show them), at the characters' image scale. The marks lie in the margin, apart
+/// from the characters; their ink is joined to the characters' as a union.
+fn sheet_png(
+    results: &[CharResult],
+    sheet_track: &SheetTrack,
+    profile: &BrushProfile,
+    model: ModelKind,
+    lay: &Layout,
+    size: u32,
+) -> Result<bezier_raster::Coverage> {
+    let mut img = pipeline::sheet_image(results, profile, model, lay, size).context("sheet.png")?;
+    if sheet_track.mark_strokes > 0 {
+        let marks = brush_model::Track { strokes: sheet_track.strokes[..sheet_track.mark_strokes].to_vec() };
+        let (wp, hp) = lay.image_px(size);
+        let m = bezier_raster::render_track(
+            &marks,
+            profile,
+            model.model(),
+            brush_model::Extrapolation::Refuse,
+            brush_model::PointMm::new(0.0, 0.0),
+            size as f64 / lay.char_mm,
+            wp as u32,
+            hp as u32,
+        )
+        .context("sheet.png: the registration marks")?;
+        for (a, &b) in img.data_mut().iter_mut().zip(m.data()) {
+            *a = 1.0 - (1.0 - *a) * (1.0 - b);
+        }
+    }
+    Ok(img)
+}
+
 /// The last attempt that `--observed OUT` names: `maobi observe`'s output, the sheet folder it
 /// observed, and each character's observed ink.
 struct ObservedRun {
@@ -857,6 +917,7 @@ impl ObservedRun {
         corrected: &BrushProfile,
         choice: Option<&pipeline::BrushChoice>,
         ilc: bool,
+        from_last: bool,
     ) -> (serde_json::Value, serde_json::Value) {
         let chars = self.summary["chars"].as_array().cloned().unwrap_or_default();
         let mean = |k: &str| {
@@ -880,7 +941,11 @@ impl ObservedRun {
             "correction": c,
             "brush_after": corrected.name,
             "brush_choice": choice,
-            "track": if ilc { "refined against the glyph shifted by the observed residual (ILC)" } else { "built with the corrected brush" },
+            "track": match (ilc, from_last) {
+                (true, true) => "refined from the last attempt's track against the glyph shifted by the observed residual (ILC)",
+                (true, false) => "refined against the glyph shifted by the observed residual (ILC)",
+                (false, _) => "built with the corrected brush",
+            },
         });
         let mut all = self.earlier.clone();
         all.push(this.clone());

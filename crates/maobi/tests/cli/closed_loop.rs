@@ -168,6 +168,10 @@ fn two_rounds(refine: bool) {
     assert_eq!(rounds[0]["brush_choice"]["name"].as_str(), Some(brush(0, "brush_after").as_str()));
     assert!(rounds[0]["brush_choice"]["reason"].as_str().unwrap().contains("corrected from the photo"));
     assert_eq!(brush(1, "brush_after"), brush(0, "brush_after"), "{}", rounds[1]);
+    // With --refine, the round that keeps the brush refines from the last attempt's track; the
+    // round that changed it rebuilt the track.
+    let from_last = |k: usize| rounds[k]["track"].as_str().unwrap().contains("from the last attempt's track");
+    assert_eq!((from_last(0), from_last(1)), (false, refine), "{} / {}", rounds[0]["track"], rounds[1]["track"]);
     let drop = |k: usize| corr(k, "ink_error_before") - corr(k, "ink_error_after");
     assert!(drop(1) < 0.25 * drop(0), "{} then {}", rounds[0]["correction"], rounds[1]["correction"]);
     eprintln!("refine {refine}: corrections {} then {}", rounds[0]["correction"], rounds[1]["correction"]);

@@ -169,6 +169,30 @@ fn sheets_carry_registration_marks_that_the_robot_checks_and_exports() {
     let bare = dir.path().join("bare");
     ok(&maobi(&["write", "十口", "--sheet", "A5", "--size", "64", "--no-marks", "-o", s(&bare)]));
     assert!(json(&bare.join("track.json")).get("marks").is_none());
+    // sheet.png draws the marks as the preview does: ink at every mark's centre and along its
+    // bar, none there without marks; the characters' pixels are the same in both.
+    let (img, img_bare) = (
+        image::open(out.join("sheet.png")).unwrap().to_luma8(),
+        image::open(bare.join("sheet.png")).unwrap().to_luma8(),
+    );
+    assert_eq!(img.dimensions(), img_bare.dimensions());
+    let ppm = 64.0 / t["char_mm"].as_f64().unwrap();
+    for m in marks {
+        let c = [m["centre_mm"][0].as_f64().unwrap(), m["centre_mm"][1].as_f64().unwrap()];
+        let half = m["half_length_mm"].as_f64().unwrap();
+        for dx_mm in [-0.5 * half, 0.0, 0.5 * half] {
+            let (x, y) = (((c[0] + dx_mm) * ppm) as u32, (c[1] * ppm) as u32);
+            assert!(img.get_pixel(x, y)[0] < 128, "no mark ink at {x},{y} px ({m})");
+            assert!(img_bare.get_pixel(x, y)[0] > 250, "ink at {x},{y} px without marks");
+        }
+    }
+    let top = (15.0 * ppm).ceil() as u32 + 1;
+    let bottom = ((210.0 - 15.0) * ppm).floor() as u32 - 1;
+    for y in top..bottom {
+        for x in 0..img.width() {
+            assert_eq!(img.get_pixel(x, y), img_bare.get_pixel(x, y), "character pixel {x},{y} differs");
+        }
+    }
     let one = dir.path().join("one");
     ok(&maobi(&["write", "十", "--size", "64", "-o", s(&one)]));
     assert!(json(&one.join("track.json")).get("marks").is_none());
