@@ -169,9 +169,8 @@ pub fn time_program_from(
     for st in &program.strokes {
         let path = pressed_path(st);
         let depths: Vec<f64> = path.iter().map(|p| program.depth_mm(p.position())).collect();
-        if let Some(t) = time_stroke(st.index, &path, &depths, kin, &tcp, seed.as_ref(), cfg)? {
+        if let Some(t) = time_stroke_within_limits(st.index, &path, &depths, kin, &tcp, seed.as_ref(), cfg)? {
             seed = t.joints.last().copied();
-            check_stroke(&t, cfg)?;
             strokes.push(t);
         }
     }
@@ -187,6 +186,64 @@ pub fn time_program_from(
         peak_joint_speed_rad_s: peak,
         strokes,
     })
+}
+
+/// How many times a stroke is timed again, uniformly slower, when a measured figure of its
+/// waypoints exceeds a limit: the per-point bounds of [`time_stroke`] hold for the planned
+/// speed profile, and its moving average and the stops can still push a measured peak over.
+const RETIMES: usize = 4;
+
+/// [`time_stroke`], then checked against the limits; while a speed, acceleration or jerk
+/// exceeds its limit, timed again with every planned rate scaled in time (speeds by `f`,
+/// accelerations by `f²`, jerks by `f³`, `f` from the worst excess), at most [`RETIMES`] times.
+/// A stroke within the limits at once is timed exactly as [`time_stroke`] times it.
+fn time_stroke_within_limits(
+    stroke: usize,
+    poses: &[Pose],
+    depths: &[f64],
+    kin: &DhParams,
+    tcp: &Isometry3<f64>,
+    seed: Option<&[f64; 6]>,
+    cfg: &RobotConfig,
+) -> Result<Option<TimedStroke>, RobotError> {
+    let mut planned = cfg.clone();
+    let mut attempt = 0;
+    loop {
+        let Some(t) = time_stroke(stroke, poses, depths, kin, tcp, seed, &planned)? else {
+            return Ok(None);
+        };
+        let excess = limit_excess(&t, cfg);
+        if excess <= 1.0 || attempt == RETIMES {
+            check_stroke(&t, cfg)?;
+            return Ok(Some(t));
+        }
+        attempt += 1;
+        let f = 0.97 / excess;
+        planned.write_speed_m_s *= f;
+        planned.joint_speed_rad_s *= f;
+        planned.timing.max_depth_rate_mm_s *= f;
+        planned.write_acc_m_s2 *= f * f;
+        planned.joint_acc_rad_s2 *= f * f;
+        planned.timing.write_jerk_m_s3 *= f * f * f;
+        planned.timing.joint_jerk_rad_s3 *= f * f * f;
+    }
+}
+
+/// The factor by which a stroke's time scale must shrink for its measured peaks to meet the
+/// limits (1 or less when they do): the worst of speed ratio, √ acceleration ratio and
+/// ∛ jerk ratio.
+fn limit_excess(t: &TimedStroke, cfg: &RobotConfig) -> f64 {
+    let l = &cfg.limits;
+    let joint_speed = t.peak_joint_speed_rad_s.iter().copied().fold(0.0, f64::max);
+    [
+        t.peak_speed_m_s / l.max_linear_speed_m_s,
+        joint_speed / l.max_joint_speed_rad_s,
+        (t.peak_acc_m_s2 / l.max_linear_acc_m_s2).sqrt(),
+        (t.peak_joint_acc_rad_s2 / l.max_joint_acc_rad_s2).sqrt(),
+        (t.peak_joint_jerk_rad_s3 / l.max_joint_jerk_rad_s3).cbrt(),
+    ]
+    .into_iter()
+    .fold(0.0, f64::max)
 }
 
 fn unsafe_at(stroke: usize, point: Option<usize>, reason: String) -> RobotError {
@@ -778,5 +835,33 @@ mod tests {
         let back = t.poses.iter().filter(|p| p.position()[1] < -0.09 - 1e-9 && p.position()[1] > -0.09025 + 1e-9);
         assert!(back.count() >= 2);
         check_stroke(&t, &cfg).unwrap();
+    }
+    #[test]
+    fn a_stroke_over_a_limit_is_timed_again_slower_until_within_it() {
+        // Corners of 30–85° in a 10 mm stroke, with the joint jerk limit set to what the timing
+        // plans for: the per-point bounds alone overshoot it at some corner; timed again, every
+        // stroke is within every limit, and one that was within at once is timed unchanged.
+        let tcp = Isometry3::from_parts(nalgebra::Translation3::new(0.0, 0.0, 0.2), UnitQuaternion::identity());
+        let mut cfg = RobotConfig::default();
+        cfg.limits.max_joint_jerk_rad_s3 = cfg.timing.joint_jerk_rad_s3;
+        let (mut over, mut within) = (0, 0);
+        for deg in (30..=85).step_by(5) {
+            let turn = f64::from(deg).to_radians();
+            let at = |x: f64, y: f64| Pose([0.5 + x, -0.1 + y, 0.1, std::f64::consts::PI, 0.0, 0.0]);
+            let poses = [at(0.0, 0.0), at(0.0, 0.005), at(0.005 * turn.sin(), 0.005 + 0.005 * turn.cos())];
+            let first = time_stroke(0, &poses, &[1.0; 3], &DhParams::AUBO_I5, &tcp, None, &cfg).unwrap().unwrap();
+            let t =
+                time_stroke_within_limits(0, &poses, &[1.0; 3], &DhParams::AUBO_I5, &tcp, None, &cfg).unwrap().unwrap();
+            assert!(limit_excess(&t, &cfg) <= 1.0, "{deg}°: {t:?}");
+            check_stroke(&t, &cfg).unwrap();
+            if check_stroke(&first, &cfg).is_err() {
+                over += 1;
+                assert!(t.duration_s > first.duration_s, "{deg}°: slower");
+            } else {
+                within += 1;
+                assert_eq!(t.joints, first.joints, "{deg}°: unchanged");
+            }
+        }
+        assert!(over > 0 && within > 0, "corners over the limit {over}, within {within}: both kinds are needed");
     }
 }
