@@ -193,10 +193,16 @@ pub fn time_program_from(
 /// speed profile, and its moving average and the stops can still push a measured peak over.
 const RETIMES: usize = 4;
 
+/// The slowest a stroke is retimed to, as a fraction of its planned speeds: a stroke that
+/// needs more than this is over its limits by more than the timing's approximations, and is
+/// refused rather than written at a crawl (a brush held nearly still spreads ink).
+const MIN_RETIME_SCALE: f64 = 0.5;
+
 /// [`time_stroke`], then checked against the limits; while a speed, acceleration or jerk
 /// exceeds its limit, timed again with every planned rate scaled in time (speeds by `f`,
-/// accelerations by `f²`, jerks by `f³`, `f` from the worst excess), at most [`RETIMES`] times.
-/// A stroke within the limits at once is timed exactly as [`time_stroke`] times it.
+/// accelerations by `f²`, jerks by `f³`, `f` from the worst excess), at most [`RETIMES`] times
+/// and down to [`MIN_RETIME_SCALE`] of the planned speeds; beyond that it is refused. A stroke
+/// within the limits at once is timed exactly as [`time_stroke`] times it.
 fn time_stroke_within_limits(
     stroke: usize,
     poses: &[Pose],
@@ -207,18 +213,19 @@ fn time_stroke_within_limits(
     cfg: &RobotConfig,
 ) -> Result<Option<TimedStroke>, RobotError> {
     let mut planned = cfg.clone();
-    let mut attempt = 0;
+    let (mut attempt, mut scale) = (0, 1.0);
     loop {
         let Some(t) = time_stroke(stroke, poses, depths, kin, tcp, seed, &planned)? else {
             return Ok(None);
         };
         let excess = limit_excess(&t, cfg);
-        if excess <= 1.0 || attempt == RETIMES {
+        let f = 0.97 / excess;
+        if excess <= 1.0 || attempt == RETIMES || scale * f < MIN_RETIME_SCALE {
             check_stroke(&t, cfg)?;
             return Ok(Some(t));
         }
         attempt += 1;
-        let f = 0.97 / excess;
+        scale *= f;
         planned.write_speed_m_s *= f;
         planned.joint_speed_rad_s *= f;
         planned.timing.max_depth_rate_mm_s *= f;
