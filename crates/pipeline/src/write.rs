@@ -333,19 +333,9 @@ pub fn execute_track_with(
             execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?
         }
     };
-    let mut states = robot_io::exec::trace_to_states(&trace, frame);
-    for p in &mut states {
-        p.h_mm = to_nanometre(p.h_mm);
-    }
-    Ok(states)
-}
-
-/// A depth kept to the nearest nanometre (mm in, mm out): the round-off of a solved pose (a path
-/// buffer's joints through forward kinematics read 11 mm as 10.9999999999 mm) must not put a
-/// press at a brush's shallowest calibrated depth outside its range, where the forward model
-/// refuses it.
-fn to_nanometre(h_mm: f64) -> f64 {
-    (h_mm * 1e6).round() / 1e6
+    // Depths as executed: a press at the range's end read back a little outside it is the
+    // forward model's to take (`brush_model::DEPTH_EDGE_TOLERANCE_MM`).
+    Ok(robot_io::exec::trace_to_states(&trace, frame))
 }
 
 /// Renders brush states (an executed path) through the forward model over a char box onto a
@@ -636,14 +626,6 @@ pub fn rerender_with_generator(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn depths_read_back_through_a_solved_pose_are_kept_to_the_nanometre() {
-        assert_eq!(to_nanometre(11.0 - 1e-10), 11.0);
-        assert_eq!(to_nanometre(11.0 + 1e-10), 11.0);
-        assert!((to_nanometre(10.999) - 10.999).abs() < 1e-12);
-        assert_eq!(to_nanometre(0.0), 0.0);
-    }
 
     #[test]
     fn execution_names_round_trip_and_a_bad_one_is_named() {
