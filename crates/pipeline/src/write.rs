@@ -635,6 +635,27 @@ mod tests {
         assert_eq!("fast".parse::<Execution>(), Err("expected path-buffer, moves or plain, got `fast`".to_string()));
     }
 
+    /// `字`'s roof is pressed at pen1's shallowest calibrated depth; executed as sent, its depths
+    /// come back up to 1e-5 mm shallower (joints interpolated between solved poses) and must
+    /// still leave their footprints: plan and execution agree (the gate's worst was 0.984).
+    /// pen2's shallowest depth (7.333… mm) is not a whole number of nanometres and is kept too.
+    #[test]
+    fn presses_at_the_shallowest_depth_are_executed_without_gaps() {
+        for (ch, brush, size_mm) in [('字', "pen1", None), ('十', "pen2", Some(60.0))] {
+            let profile = BrushProfile::builtin(brush).unwrap();
+            let p = crate::prepare(trajectory::glyph::embedded(ch).unwrap(), Some(Method::Medians)).unwrap();
+            let opts = WriteOptions { size: 128, free_widths: false, ..WriteOptions::default() };
+            let size_mm = size_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, 0.0));
+            let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm }, &opts).unwrap();
+            let states = r.executed_states.as_ref().unwrap();
+            let min = profile.ranges.h_mm.min;
+            let at_min = states.iter().filter(|s| (s.h_mm - min).abs() < 1e-3).count();
+            assert!(at_min > 10, "{ch}: {at_min} executed depths at {min} mm: the case is not exercised");
+            let agreement = r.report.agreement.unwrap().csim;
+            assert!(agreement > 0.999, "{ch} with {brush}: plan vs executed CSIM {agreement}");
+        }
+    }
+
     #[test]
     fn the_executed_figure_is_the_program_as_sent_unless_asked_otherwise() {
         let pen1 = BrushProfile::builtin("pen1").unwrap();
