@@ -80,6 +80,14 @@ pub const TILT_THRESHOLD_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 /// (docs/trajectory.md, Track building).
 pub const TRAIL_REACH: f64 = 0.5;
 
+/// How far outside the profile's calibrated depth range a pressed state may lie and still count
+/// as the range's end, mm (1 µm): an executed path (joints interpolated between solved poses,
+/// read back through forward kinematics) follows a press at the range's end only to a few
+/// hundredths of a micrometre, far below any depth a brush tells apart, and such a press must
+/// leave the footprint of the end it was commanded at (with [`Extrapolation::Refuse`]; with
+/// [`Extrapolation::Allow`] every depth is used as it is).
+pub const DEPTH_EDGE_TOLERANCE_MM: f64 = 1e-3;
+
 impl Default for ForwardModel {
     fn default() -> Self {
         Self {
@@ -170,6 +178,7 @@ impl ForwardModel {
                 last = None;
                 continue;
             }
+            let p = at_range_edge(profile, p, extrapolation);
             let here = (p.x_mm, p.y_mm);
             let Ok(len) = footprint_length(profile, &p, extrapolation) else {
                 history.push(here);
@@ -271,6 +280,23 @@ impl ForwardModel {
         }
         out
     }
+}
+
+/// `p` with a depth within [`DEPTH_EDGE_TOLERANCE_MM`] outside the calibrated range set to the
+/// range's end (when `extrapolation` refuses presses outside it).
+fn at_range_edge(profile: &BrushProfile, p: TrackPoint, extrapolation: Extrapolation) -> TrackPoint {
+    let r = profile.ranges.h_mm;
+    if extrapolation == Extrapolation::Allow || r.contains(p.h_mm) {
+        return p;
+    }
+    let h_mm = if p.h_mm < r.min && p.h_mm >= r.min - DEPTH_EDGE_TOLERANCE_MM {
+        r.min
+    } else if p.h_mm > r.max && p.h_mm <= r.max + DEPTH_EDGE_TOLERANCE_MM {
+        r.max
+    } else {
+        p.h_mm
+    };
+    TrackPoint { h_mm, ..p }
 }
 
 /// The footprint length `lh + lt` of a press, mm.
@@ -410,5 +436,41 @@ mod tests {
         let path = [pt(0.0, 0.0, 12.0), pt(0.0, 5.0, 12.0), pt(0.0, 5.0, 18.0)];
         let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
         assert!((s.directions[2].unwrap() + FRAC_PI_2).abs() < 1e-9);
+    }
+
+    /// A stroke pressed at pen1's shallowest calibrated depth, read back as an arm executes it
+    /// (a few hundredths of a micrometre either side of 11 mm), leaves every footprint of the
+    /// stroke at 11 mm; 2 µm shallower is lighter than the range and leaves none, and with
+    /// extrapolation allowed the depths are used as they are.
+    #[test]
+    fn a_press_read_back_just_outside_the_range_leaves_the_footprint_of_its_end() {
+        let m = ForwardModel::default();
+        let pen1 = pen1();
+        let (min, max) = (pen1.ranges.h_mm.min, pen1.ranges.h_mm.max);
+        let exact: Vec<TrackPoint> = (0..=100).map(|i| pt(f64::from(i) * 0.1, 0.0, min)).collect();
+        let wobble = |d: f64| -> Vec<TrackPoint> {
+            exact.iter().enumerate().map(|(i, p)| TrackPoint { h_mm: p.h_mm - d * (i % 3) as f64, ..*p }).collect()
+        };
+        let want = m.sweep(&pen1, &exact, Extrapolation::Refuse);
+        assert!(want.stamps.len() >= 100);
+        for d in [1e-10, 3e-6, 2e-5, 0.5 * DEPTH_EDGE_TOLERANCE_MM] {
+            let got = m.sweep(&pen1, &wobble(d), Extrapolation::Refuse);
+            assert_eq!(got.stamps.len(), want.stamps.len(), "{d} mm shallower than the range");
+            for (g, w) in got.stamps.iter().zip(&want.stamps) {
+                assert_eq!((g.x_mm, g.y_mm, g.beta_rad), (w.x_mm, w.y_mm, w.beta_rad));
+                assert!((g.h_mm - min).abs() < 1e-9, "{d}: {}", g.h_mm);
+            }
+        }
+        let light = m.sweep(&pen1, &wobble(2.0 * DEPTH_EDGE_TOLERANCE_MM), Extrapolation::Refuse);
+        assert!(light.stamps.len() < want.stamps.len() / 2, "{}", light.stamps.len());
+        assert!(light.stamps.iter().all(|p| p.h_mm == min));
+        // The deep end likewise.
+        let deep: Vec<TrackPoint> = exact.iter().map(|p| TrackPoint { h_mm: max + 1e-5, ..*p }).collect();
+        let got = m.sweep(&pen1, &deep, Extrapolation::Refuse);
+        assert_eq!(got.stamps.len(), want.stamps.len());
+        assert!(got.stamps.iter().all(|p| p.h_mm == max));
+        // Extrapolation allowed: depths as given.
+        let got = m.sweep(&pen1, &wobble(3e-6), Extrapolation::Allow);
+        assert!(got.stamps.iter().any(|p| p.h_mm < min));
     }
 }
