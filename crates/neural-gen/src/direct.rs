@@ -37,11 +37,6 @@ pub struct DirectTrainer {
     params: Vec<Param>,
     net: InputVjp,
     t: i32,
-    /// Per image: the stages' padded inputs (zero borders kept), masks, images, upstream.
-    acts: Vec<f32>,
-    masks: Vec<u8>,
-    images: Vec<f32>,
-    up: Vec<f32>,
     /// Per image: the convolution stages' weight and bias gradients, then the seed-map gradient.
     per_image: Vec<f32>,
     /// The gradient at a fully connected layer's output, transposed (`[out, batch]`).
@@ -61,10 +56,16 @@ pub struct DirectTrainer {
     batch: usize,
 }
 
-/// One thread's scratch for the per-image passes: the padded gradient at every stage's output
-/// (zero borders kept) and the correlation's accumulators.
+/// One thread's scratch for the per-image pass (forward, loss, backward and weight gradients
+/// of one image, so that its activations stay in the core's cache): the stages' padded inputs
+/// and the padded gradient at every stage's output (zero borders kept), the ReLU masks, the
+/// image and the loss's gradient, and the correlation's accumulators.
 struct Scratch {
+    acts: Vec<f32>,
     bufs: Vec<Vec<f32>>,
+    masks: Vec<u8>,
+    img: Vec<f32>,
+    up: Vec<f32>,
     acc: Vec<f32>,
 }
 
@@ -76,7 +77,15 @@ struct ScratchRef<'a> {
 
 impl Scratch {
     fn new(net: &InputVjp) -> Self {
-        Scratch { bufs: net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect(), acc: Vec::new() }
+        let ss = net.size() * net.size();
+        Scratch {
+            acts: vec![0f32; net.per_image],
+            bufs: net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect(),
+            masks: vec![0u8; net.masks_per_image],
+            img: vec![0f32; ss],
+            up: vec![0f32; ss],
+            acc: Vec::new(),
+        }
     }
 
     /// The current thread's entry of `pool` (by rayon's thread index), when free.
@@ -135,10 +144,6 @@ impl DirectTrainer {
             net: InputVjp::new(g)?,
             params,
             t: 0,
-            acts: Vec::new(),
-            masks: Vec::new(),
-            images: Vec::new(),
-            up: Vec::new(),
             per_image: Vec::new(),
             gt: Vec::new(),
             hid: Vec::new(),
@@ -168,11 +173,6 @@ impl DirectTrainer {
         if batch == self.batch {
             return;
         }
-        let ss = self.net.size() * self.net.size();
-        self.acts = vec![0.0; batch * self.net.per_image];
-        self.masks = vec![0; batch * self.net.masks_per_image];
-        self.images = vec![0.0; batch * ss];
-        self.up = vec![0.0; batch * ss];
         self.per_image = vec![0.0; batch * (conv_len(&self.net) + self.net.seed_len())];
         self.hid = self.net.fcs.iter().map(|fc| vec![0.0; batch * fc.out]).collect();
         let mut inp = 3;
@@ -216,57 +216,37 @@ impl DirectTrainer {
         }
         let (hidden, seed) = self.hid.split_at(nfc - 1);
         let seed = &seed[0];
-        let (pi, mp, sl) = (net.per_image, net.masks_per_image, net.seed_len());
+        let sl = net.seed_len();
         let pool = &self.pool;
-        self.images
-            .par_chunks_mut(ss)
-            .zip(self.masks.par_chunks_mut(mp))
-            .zip(self.acts.par_chunks_mut(pi))
-            .zip(seed.par_chunks(sl))
-            .for_each_init(
-                || Scratch::take(pool),
-                |sc, (((img, masks), buf), sd)| {
-                    let sc = sc.get(net);
-                    net.isa.dispatch(ForwardImage { net, seed: sd, img, masks, buf, acc: &mut sc.acc })
-                },
-            );
-        // MSE and its gradient.
-        // (The squared errors summed image by image, then the images in order.)
+        // Per image, in one pass (its activations stay in the core's cache): the stages, the
+        // squared error and its gradient, back through the stages, the weight gradients of each.
+        // The squared errors are summed image by image, then over the images in order.
         let k = 2.0 / (b * ss) as f32;
-        self.sq.resize(b, 0.0);
-        self.sq
-            .par_iter_mut()
-            .zip(self.up.par_chunks_mut(ss))
-            .zip(self.images.par_chunks(ss))
-            .zip(target.par_chunks(ss))
-            .for_each(|(((s, u), y), t)| {
-                let mut acc = 0f64;
-                for ((u, &y), &t) in u.iter_mut().zip(y).zip(t) {
-                    let d = y - t;
-                    acc += (d as f64) * (d as f64);
-                    *u = k * d;
-                }
-                *s = acc;
-            });
-        let loss = self.sq.iter().sum::<f64>() / (b * ss) as f64;
-        // Per image: back through the stages, the weight gradients of each.
         let cl = conv_len(net);
+        self.sq.resize(b, 0.0);
         self.per_image
             .par_chunks_mut(cl + sl)
-            .zip(self.up.par_chunks(ss))
-            .zip(self.images.par_chunks(ss))
-            .zip(self.masks.par_chunks(mp))
-            .zip(self.acts.par_chunks(pi))
+            .zip(self.sq.par_iter_mut())
+            .zip(seed.par_chunks(sl))
+            .zip(target.par_chunks(ss))
             .for_each_init(
                 || Scratch::take(pool),
-                |sc, ((((out, up), img), masks), acts)| {
-                    let sc = sc.get(net);
+                |sc, (((out, sq), sd), t)| {
+                    let Scratch { acts, bufs, masks, img, up, acc } = sc.get(net);
+                    net.isa.dispatch(ForwardImage { net, seed: sd, img, masks: Some(&mut masks[..]), buf: acts, acc });
+                    let mut e = 0f64;
+                    for ((u, &y), &t) in up.iter_mut().zip(img.iter()).zip(t) {
+                        let d = y - t;
+                        e += (d as f64) * (d as f64);
+                        *u = k * d;
+                    }
+                    *sq = e;
                     let (grads, gs) = out.split_at_mut(cl);
-                    let (bufs, acc) = (&mut sc.bufs[..], &mut sc.acc);
                     net.isa.dispatch(BackwardImage { net, gs, up, img, masks, bufs, acc });
                     net.isa.dispatch(WeightGrads { net, bufs, acts, grads });
                 },
             );
+        let loss = self.sq.iter().sum::<f64>() / (b * ss) as f64;
         // The convolution gradients summed over the images, in image order.
         let mut off = 0;
         for p in &mut self.params[2 * nfc..] {

@@ -62,12 +62,13 @@ impl Isa {
     }
 
     /// Output channels per register block and vectors per tile for a correlation with `o`
-    /// outputs: `ob × nv` accumulators (16 of the 32 AVX-512 registers, 8 of 16 otherwise).
+    /// outputs: `ob × nv` accumulators (16 of the 32 AVX-512 registers, [`NARROW_VECTORS`]
+    /// × 4 of 16 otherwise).
     fn blocking(self, o: usize) -> (usize, usize) {
         match self.lanes {
             16 if o % 8 == 0 => (8, 2),
             16 => (4, 4),
-            _ => (4, 2),
+            _ => (4, NARROW_VECTORS),
         }
     }
 }
@@ -93,6 +94,8 @@ struct Geometry {
     span: usize,
     tiles: usize,
     ob: usize,
+    /// Rows per band.
+    band: usize,
 }
 
 impl Conv3 {
@@ -142,21 +145,25 @@ impl Conv3 {
     }
 
     /// Correlates the padded planes `x` (`cin` planes of `(n + 2)²`, then [`SLACK`]) and calls
-    /// `emit(o, y, row)` with the `n` outputs of every output channel `o` and row `y`, channel
-    /// block after block, rows in order. `acc` is scratch.
+    /// `emit(o, y, row)` with the `n` outputs of every output channel `o` and row `y`: band of
+    /// rows after band of rows, in each band channel block after block, rows in order (every
+    /// pair `(o, y)` exactly once). `acc` is scratch.
     ///
     /// # Panics
     /// When `x` is shorter than [`padded_len`]`(cin, n)`.
     #[inline(always)]
     pub(crate) fn run(&self, x: &[f32], n: usize, acc: &mut Vec<f32>, mut emit: impl FnMut(usize, usize, &[f32])) {
         let g = self.geometry(x, n, acc);
-        for blk in 0..self.cout.div_ceil(self.ob) {
-            self.block(x, blk, g, acc);
-            let o0 = blk * self.ob;
-            for j in 0..self.ob.min(self.cout - o0) {
-                for y in 0..n {
-                    let r = j * g.span + y * g.wp;
-                    emit(o0 + j, y, &acc[r..r + n]);
+        for y0 in (0..n).step_by(g.band) {
+            let y1 = (y0 + g.band).min(n);
+            for blk in 0..self.cout.div_ceil(self.ob) {
+                self.block(x, blk, g, (y0, y1, n), acc);
+                let o0 = blk * self.ob;
+                for j in 0..self.ob.min(self.cout - o0) {
+                    for y in y0..y1 {
+                        let r = j * g.span + (y - y0) * g.wp;
+                        emit(o0 + j, y, &acc[r..r + n]);
+                    }
                 }
             }
         }
@@ -177,19 +184,24 @@ impl Conv3 {
     ) {
         assert!(self.cout % 2 == 0, "pairs of {} channels", self.cout);
         let g = self.geometry(x, n, acc);
-        for blk in 0..self.cout.div_ceil(self.ob) {
-            self.block(x, blk, g, acc);
-            let o0 = blk * self.ob;
-            for j in (0..self.ob.min(self.cout - o0)).step_by(2) {
-                for y in 0..n {
-                    let (r0, r1) = (j * g.span + y * g.wp, (j + 1) * g.span + y * g.wp);
-                    emit(o0 + j, y, &acc[r0..r0 + n], &acc[r1..r1 + n]);
+        for y0 in (0..n).step_by(g.band) {
+            let y1 = (y0 + g.band).min(n);
+            for blk in 0..self.cout.div_ceil(self.ob) {
+                self.block(x, blk, g, (y0, y1, n), acc);
+                let o0 = blk * self.ob;
+                for j in (0..self.ob.min(self.cout - o0)).step_by(2) {
+                    for y in y0..y1 {
+                        let (r0, r1) = (j * g.span + (y - y0) * g.wp, (j + 1) * g.span + (y - y0) * g.wp);
+                        emit(o0 + j, y, &acc[r0..r0 + n], &acc[r1..r1 + n]);
+                    }
                 }
             }
         }
     }
 
-    /// Checks the input and sizes the accumulators for an `n × n` image.
+    /// Checks the input and sizes the accumulators for an `n × n` image, in bands of rows of
+    /// about [`BAND_POSITIONS`] positions (so that a band's accumulators and input rows stay
+    /// in the L1 cache while every block of output channels runs over them).
     #[inline(always)]
     fn geometry(&self, x: &[f32], n: usize, acc: &mut Vec<f32>) -> Geometry {
         let wp = n + 2;
@@ -201,21 +213,33 @@ impl Conv3 {
         );
         let t = self.isa.blocking(self.cout).1 * self.isa.lanes;
         assert!(t <= SLACK);
-        let tiles = (n * wp - 2).div_ceil(t);
-        let span = tiles * t;
+        let band = BAND_POSITIONS.div_ceil(wp).clamp(1, n.max(1));
+        let span = (band * wp).div_ceil(t) * t;
         acc.resize(self.ob * span, 0.0);
-        Geometry { cin: self.cin, wp, span, tiles, ob: self.ob }
+        Geometry { cin: self.cin, wp, span, tiles: 0, ob: self.ob, band }
     }
 
-    /// Block `blk` of output channels into `acc`, on rows of `n + 2` (`span` values per
-    /// channel).
+    /// Block `blk` of output channels of the rows `y0 .. y1` (of `n`) into `acc`, on rows of
+    /// `n + 2` from row `y0` (`span` values per channel).
     #[inline(always)]
-    fn block(&self, x: &[f32], blk: usize, g: Geometry, acc: &mut [f32]) {
+    fn block(&self, x: &[f32], blk: usize, g: Geometry, (y0, y1, n): (usize, usize, usize), acc: &mut [f32]) {
         let wblk = self.cin * 9 * self.ob;
         let w = &self.w[blk * wblk..(blk + 1) * wblk];
-        self.isa.arch.dispatch(ConvBlock { x, w, acc, g });
+        let t = self.isa.blocking(self.cout).1 * self.isa.lanes;
+        // The last band stops two positions short of its last padded row (what lies past
+        // them is discarded), so that its tiles read at most `t` values past the planes.
+        let positions = (y1 - y0) * g.wp - if y1 == n { 2 } else { 0 };
+        let g = Geometry { tiles: positions.div_ceil(t), ..g };
+        self.isa.arch.dispatch(ConvBlock { x, w, acc, g, p0: y0 * g.wp });
     }
 }
+
+/// Vectors of positions per correlation tile below 16 lanes (AVX2: 4 output channels × this
+/// many vectors of accumulators, of the 16 vector registers).
+const NARROW_VECTORS: usize = 2;
+
+/// Output positions per band of rows of a correlation (see [`Conv3::run`]).
+const BAND_POSITIONS: usize = 512;
 
 /// One block of output channels of a correlation, every tile (see [`conv_block`]).
 struct ConvBlock<'a> {
@@ -223,6 +247,8 @@ struct ConvBlock<'a> {
     w: &'a [f32],
     acc: &'a mut [f32],
     g: Geometry,
+    /// First position of the band (its tiles' positions are relative to it in `acc`).
+    p0: usize,
 }
 
 impl WithSimd for ConvBlock<'_> {
@@ -232,7 +258,7 @@ impl WithSimd for ConvBlock<'_> {
         match (S::F32_LANES, self.g.ob) {
             (16, 8) => conv_block::<S, 8, 2>(simd, self),
             (16, _) => conv_block::<S, 4, 4>(simd, self),
-            _ => conv_block::<S, 4, 2>(simd, self),
+            _ => conv_block::<S, 4, NARROW_VECTORS>(simd, self),
         }
     }
 }
@@ -251,10 +277,11 @@ fn conv_block<S: Simd, const OB: usize, const NV: usize>(simd: S, op: ConvBlock<
     let plane = g.wp * g.wp;
     for tile in 0..g.tiles {
         let t0 = tile * NV * l;
+        let p = op.p0 + t0;
         let mut a = [[simd.splat_f32s(0.0); NV]; OB];
         for c in 0..g.cin {
             let wc = &op.w[c * 9 * OB..(c + 1) * 9 * OB];
-            let xc = &op.x[c * plane + t0..c * plane + t0 + 2 * g.wp + 2 + NV * l];
+            let xc = &op.x[c * plane + p..c * plane + p + 2 * g.wp + 2 + NV * l];
             for ky in 0..3 {
                 for kx in 0..3 {
                     let off = ky * g.wp + kx;
@@ -526,10 +553,13 @@ mod tests {
     }
 
     /// Every kernel against a naive f64 correlation, and every instruction set against the
-    /// portable one bit for bit, on odd channel counts and sides.
+    /// portable one bit for bit, on odd channel counts and sides (the last two in several
+    /// bands of rows, the last band of 40 a single row).
     #[test]
     fn conv3_matches_naive_correlation() {
-        for &(cin, cout, n) in &[(3, 8, 5), (2, 5, 1), (4, 12, 9), (8, 16, 8), (5, 4, 17), (16, 32, 4)] {
+        for &(cin, cout, n) in
+            &[(3, 8, 5), (2, 5, 1), (4, 12, 9), (8, 16, 8), (5, 4, 17), (16, 32, 4), (3, 5, 40), (2, 4, 64)]
+        {
             let w = values(cout * cin * 9, (cin * 100 + cout) as u64);
             let img = values(cin * n * n, n as u64 + 7);
             let wp = n + 2;

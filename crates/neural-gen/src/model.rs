@@ -183,9 +183,13 @@ impl Generator {
             return Ok(Vec::new());
         }
         let x: Vec<f32> = presses.iter().flat_map(|p| self.config.normalise(p)).collect();
-        let flat = self.kernels()?.images_normalised(&x);
         let s = self.config.size;
-        Ok(flat.chunks((s * s) as usize).map(|c| Coverage::from_vec(s, s, c.to_vec()).expect("sized")).collect())
+        Ok(self
+            .kernels()?
+            .images_normalised_each(&x)
+            .into_iter()
+            .map(|img| Coverage::from_vec(s, s, img).expect("sized"))
+            .collect())
     }
 
     /// The image for one press and the gradient of `Σ upstream · image` with respect to the

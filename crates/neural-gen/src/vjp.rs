@@ -279,7 +279,7 @@ impl InputVjp {
         images.par_chunks_mut(ss).zip(masks.par_chunks_mut(mp)).zip(seed.par_chunks(self.seed_len())).for_each_init(
             || (vec![0f32; self.per_image], Vec::new()),
             |(buf, acc), ((img, m), sd)| {
-                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks: m, buf, acc })
+                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks: Some(m), buf, acc })
             },
         );
         Tape { batch: b, hidden, masks, images }
@@ -322,19 +322,49 @@ impl InputVjp {
         }
         let (_, seed) = self.dense_forward(x);
         images.par_chunks_mut(ss).zip(seed.par_chunks(self.seed_len())).for_each_init(
-            || (vec![0f32; self.per_image], Vec::new(), vec![0u8; self.masks_per_image]),
-            |(buf, acc, masks), (img, sd)| {
-                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks, buf, acc })
-            },
+            || (vec![0f32; self.per_image], Vec::new()),
+            |(buf, acc), (img, sd)| self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks: None, buf, acc }),
         );
         images
     }
 
+    /// As [`InputVjp::images_normalised`], each image in a vector of its own (`size²` values),
+    /// written where the image is computed (no copy out of a batch buffer). The vectors are
+    /// allocated by the calling thread, which usually frees them too (so that the allocator
+    /// reuses their memory), and filled in parallel.
+    ///
+    /// # Panics
+    /// When `x.len()` is not a multiple of 3.
+    pub(crate) fn images_normalised_each(&self, x: &[f32]) -> Vec<Vec<f32>> {
+        assert_eq!(x.len() % 3, 0, "inputs come in threes");
+        let ss = self.size * self.size;
+        let mut out: Vec<Vec<f32>> = (0..x.len() / 3).map(|_| Vec::with_capacity(ss)).collect();
+        if out.is_empty() {
+            return out;
+        }
+        let (_, seed) = self.dense_forward(x);
+        out.par_iter_mut().zip(seed.par_chunks(self.seed_len())).for_each_init(
+            || (vec![0f32; self.per_image], Vec::new()),
+            |(buf, acc), (img, sd)| {
+                img.resize(ss, 0.0);
+                self.isa.dispatch(ForwardImage { net: self, seed: sd, img, masks: None, buf, acc })
+            },
+        );
+        out
+    }
+
     /// The convolution stages of one image, from its seed map: the image into `img`, the ReLU
-    /// masks into `masks`; `buf` holds the stages' padded inputs (zero borders kept), `acc`
-    /// scratch.
+    /// masks into `masks` where given (training and VJPs; inference does without); `buf`
+    /// holds the stages' padded inputs (zero borders kept), `acc` scratch.
     #[inline(always)]
-    fn forward_image(&self, seed: &[f32], img: &mut [f32], masks: &mut [u8], buf: &mut [f32], acc: &mut Vec<f32>) {
+    fn forward_image(
+        &self,
+        seed: &[f32],
+        img: &mut [f32],
+        mut masks: Option<&mut [u8]>,
+        buf: &mut [f32],
+        acc: &mut Vec<f32>,
+    ) {
         let mut reg = regions(&self.stages, buf);
         write_padded(reg[0], seed, self.stages[0].cin, self.stages[0].n);
         let last = self.stages.len() - 1;
@@ -345,7 +375,7 @@ impl InputVjp {
                 // Bias, ReLU and the pixel shuffle into the next stage's padded input.
                 let (dst, wq) = (&mut *next[0], s + 2);
                 let nx = &self.stages[si + 1];
-                let m = &mut masks[nx.moff..nx.moff + nx.cin * s * s];
+                let mut m = masks.as_deref_mut().map(|m| &mut m[nx.moff..nx.moff + nx.cin * s * s]);
                 st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
                     let (ch, r, b0, b1) = (o / 4, 2 * y + (o / 2) % 2, st.b[o], st.b[o + 1]);
                     let d = &mut dst[ch * wq * wq + (r + 1) * wq + 1..ch * wq * wq + (r + 1) * wq + 1 + s];
@@ -353,12 +383,15 @@ impl InputVjp {
                         dd[0] = (v0 + b0).max(0.0);
                         dd[1] = (v1 + b1).max(0.0);
                     }
-                    for (mm, &v) in m[(ch * s + r) * s..(ch * s + r + 1) * s].iter_mut().zip(d.iter()) {
-                        *mm = u8::from(v > 0.0);
+                    if let Some(m) = m.as_deref_mut() {
+                        for (mm, &v) in m[(ch * s + r) * s..(ch * s + r + 1) * s].iter_mut().zip(d.iter()) {
+                            *mm = u8::from(v > 0.0);
+                        }
                     }
                 });
             } else {
-                // Bias and the pixel shuffle into the image, then the sigmoid.
+                // Bias and the pixel shuffle into the image, then the sigmoid on the row while
+                // it is in cache (each call writes one whole row of the image).
                 st.fwd.run_pairs(x, n, acc, |o, y, r0, r1| {
                     let (ch, r, b0, b1) = (o / 4, 2 * y + (o / 2) % 2, st.b[o], st.b[o + 1]);
                     let d = &mut img[(ch * s + r) * s..(ch * s + r + 1) * s];
@@ -366,10 +399,10 @@ impl InputVjp {
                         dd[0] = v0 + b0;
                         dd[1] = v1 + b1;
                     }
+                    for v in d.iter_mut() {
+                        *v = sigmoid(*v);
+                    }
                 });
-                for v in img.iter_mut() {
-                    *v = sigmoid(*v);
-                }
             }
         }
     }
@@ -601,7 +634,7 @@ pub(crate) struct ForwardImage<'a> {
     pub(crate) net: &'a InputVjp,
     pub(crate) seed: &'a [f32],
     pub(crate) img: &'a mut [f32],
-    pub(crate) masks: &'a mut [u8],
+    pub(crate) masks: Option<&'a mut [u8]>,
     pub(crate) buf: &'a mut [f32],
     pub(crate) acc: &'a mut Vec<f32>,
 }
@@ -753,5 +786,29 @@ mod tests {
         assert_eq!(sigmoid(1e4), 1.0);
         assert!(sigmoid(-1e4) >= 0.0 && sigmoid(-1e4) < 1e-37);
         assert!((sigmoid(2.0) as f64 - 1.0 / (1.0 + (-2f64).exp())).abs() < 1e-7);
+    }
+
+    /// Inference (no masks kept, the images in a batch buffer or one vector each) gives the
+    /// same bits as the forward pass that keeps its tape, for the shipped architecture (its
+    /// larger stages run in several bands of rows) and an odd one.
+    #[test]
+    fn inference_equals_the_taped_forward_pass() {
+        use crate::{Arch, Generator, GeneratorConfig};
+        use brush_model::{BrushProfile, Press};
+        let odd =
+            Arch { hidden: vec![24, 40], seed_channels: 12, seed_side: 3, stages: vec![(12, 20), (5, 12), (3, 4)] };
+        for arch in [Arch::default_128(), odd] {
+            let g = Generator::new(GeneratorConfig::new(BrushProfile::builtin("pen1").unwrap(), arch), 2).unwrap();
+            let ps: Vec<Press> =
+                (0..5).map(|i| Press::from_degrees(11.0 + 2.0 * i as f64, 3.0 * i as f64, 1.0 * i as f64)).collect();
+            let x: Vec<f32> = ps.iter().flat_map(|p| g.config.normalise(p)).collect();
+            let net = super::InputVjp::new(&g).unwrap();
+            let taped = net.forward(&ps);
+            let flat = net.images_normalised(&x);
+            assert_eq!(taped.images(), &flat[..]);
+            let each: Vec<f32> = net.images_normalised_each(&x).concat();
+            assert_eq!(each, flat);
+            assert!(flat.iter().any(|&v| v > 0.01 && v < 0.99), "a flat image tests little");
+        }
     }
 }
