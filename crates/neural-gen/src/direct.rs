@@ -416,7 +416,8 @@ impl WithSimd for WeightGrads<'_> {
 /// The weight (`gw`, `[cout, cin, 3, 3]`) and bias (`gb`, `[cout]`) gradients of one 3×3
 /// convolution (padding 1) of one image of `n × n` pixels (`(cin, cout, n)`): `x` its padded
 /// input planes, `gy` the padded gradient at its output (zero borders). Each sum a fixed
-/// order of operations (vectors of positions, then their lanes, then the tail); output
+/// order of operations (vectors of positions, the last one partial, then their lanes, as
+/// [`Simd::reduce_sum_f32s`] adds them); output
 /// channels are taken four at a time (three at a time, then one, for the rest) and kernel rows
 /// one at a time, so that each vector of the input is loaded once for several output
 /// channels and taps; the blocking does not change any sum.
@@ -460,46 +461,61 @@ fn wgrad_block<S: Simd, const OB: usize>(
     // Positions q of the padded plane whose 3×3 neighbourhood lies inside it; the
     // gradient is zero on the border, so these are all that count.
     let (q0, q1) = (wp + 1, q2 - wp - 1);
-    let len = q1 - q0;
-    let full = len / l * l;
+    let full = (q1 - q0) / l * l;
+    let tail = q1 - q0 - full;
+    let load = |v: &[f32], at: usize| -> S::f32s {
+        pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&v[at..at + l]))
+    };
     let g: [&[f32]; OB] = std::array::from_fn(|j| &gy[(o0 + j) * q2..(o0 + j + 1) * q2]);
-    // The bias sums: one sequential chain per channel, the chains side by side.
-    let mut sb = [-0.0f32; OB];
-    for q in 0..q2 {
+    // The bias sums: vectors of positions over the whole plane (the last one partial), then
+    // their lanes.
+    let mut sb = [simd.splat_f32s(0.0); OB];
+    let mut q = 0;
+    while q + l <= q2 {
         for (s, gj) in sb.iter_mut().zip(&g) {
-            *s += gj[q];
+            *s = simd.add_f32s(*s, load(gj, q));
+        }
+        q += l;
+    }
+    if q < q2 {
+        for (s, gj) in sb.iter_mut().zip(&g) {
+            *s = simd.add_f32s(*s, simd.partial_load_f32s(&gj[q..q2]));
         }
     }
-    gb[o0..o0 + OB].copy_from_slice(&sb);
+    for (b, s) in gb[o0..o0 + OB].iter_mut().zip(sb) {
+        *b = simd.reduce_sum_f32s(s);
+    }
     for c in 0..cin {
         let xc = &x[c * q2..(c + 1) * q2];
         for ky in 0..3 {
             let mut acc = [[simd.splat_f32s(0.0); 3]; OB];
             let mut q = q0;
             while q < q0 + full {
-                let gv: [S::f32s; OB] = std::array::from_fn(|j| {
-                    pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&g[j][q..q + l]))
-                });
+                let gv: [S::f32s; OB] = std::array::from_fn(|j| load(g[j], q));
                 for kx in 0..3 {
-                    let s = q + ky * wp + kx - wp - 1;
-                    let xv: S::f32s = pulp::bytemuck::pod_read_unaligned(pulp::bytemuck::cast_slice(&xc[s..s + l]));
+                    let xv = load(xc, q + ky * wp + kx - wp - 1);
                     for (aj, &gj) in acc.iter_mut().zip(&gv) {
                         aj[kx] = simd.mul_add_f32s(gj, xv, aj[kx]);
                     }
                 }
                 q += l;
             }
+            if tail > 0 {
+                // The last positions as one partial vector (zeros past the end).
+                let gv: [S::f32s; OB] = std::array::from_fn(|j| simd.partial_load_f32s(&g[j][q..q1]));
+                for kx in 0..3 {
+                    let s = q + ky * wp + kx - wp - 1;
+                    let xv = simd.partial_load_f32s(&xc[s..s + tail]);
+                    for (aj, &gj) in acc.iter_mut().zip(&gv) {
+                        aj[kx] = simd.mul_add_f32s(gj, xv, aj[kx]);
+                    }
+                }
+            }
             for (j, aj) in acc.iter().enumerate() {
                 let o = o0 + j;
                 let w = &mut gw[(o * cin + c) * 9..(o * cin + c + 1) * 9];
-                for (kx, a) in aj.iter().enumerate() {
-                    let lanes: &[f32] = pulp::bytemuck::cast_slice(std::slice::from_ref(a));
-                    let mut sum: f32 = lanes.iter().sum();
-                    let off = ky * wp + kx;
-                    for qq in q0 + full..q1 {
-                        sum += g[j][qq] * xc[qq + off - wp - 1];
-                    }
-                    w[ky * 3 + kx] = sum;
+                for (kx, &a) in aj.iter().enumerate() {
+                    w[ky * 3 + kx] = simd.reduce_sum_f32s(a);
                 }
             }
         }
@@ -649,5 +665,89 @@ mod tests {
             })
         };
         assert_eq!(run(1), run(2));
+    }
+
+    /// The weight and bias gradients of one convolution against a naive f64 sum, on every
+    /// instruction set (AVX-512, AVX2 and scalar where the CPU has them), for odd channel
+    /// counts (blocks of four, two and one output channel) and sides whose positions end in a
+    /// partial vector.
+    #[test]
+    fn convolution_weight_gradients_match_naive_sums() {
+        use crate::kernels::{Isa, padded_len};
+        use pulp::{Simd, WithSimd};
+        struct Grads<'a> {
+            x: &'a [f32],
+            gy: &'a [f32],
+            dims: (usize, usize, usize),
+            gw: &'a mut [f32],
+            gb: &'a mut [f32],
+        }
+        impl WithSimd for Grads<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn with_simd<S: Simd>(self, simd: S) {
+                super::conv_weight_grads(simd, self.x, self.gy, self.dims, self.gw, self.gb);
+            }
+        }
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        };
+        for &(cin, cout, n) in &[(3, 5, 1), (2, 7, 5), (4, 9, 8), (3, 6, 17), (2, 4, 40), (1, 3, 64)] {
+            let wp = n + 2;
+            let q2 = wp * wp;
+            // Padded input planes (borders zero, as the stages write them) and a gradient that
+            // is zero on the border.
+            let mut x = vec![0f32; padded_len(cin, n)];
+            let mut gy = vec![0f32; padded_len(cout, n)];
+            for (planes, v) in [(cin, &mut x), (cout, &mut gy)] {
+                for p in 0..planes {
+                    for y in 1..=n {
+                        for xx in 1..=n {
+                            v[p * q2 + y * wp + xx] = next();
+                        }
+                    }
+                }
+            }
+            let mut want_w = vec![0f64; cout * cin * 9];
+            let mut scale_w = vec![0f64; cout * cin * 9];
+            let mut want_b = vec![0f64; cout];
+            for o in 0..cout {
+                for y in 0..n {
+                    for xx in 0..n {
+                        let g = f64::from(gy[o * q2 + (y + 1) * wp + xx + 1]);
+                        want_b[o] += g;
+                        for c in 0..cin {
+                            for ky in 0..3 {
+                                for kx in 0..3 {
+                                    let v = g * f64::from(x[c * q2 + (y + ky) * wp + xx + kx]);
+                                    want_w[((o * cin + c) * 3 + ky) * 3 + kx] += v;
+                                    scale_w[((o * cin + c) * 3 + ky) * 3 + kx] += v.abs();
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            for isa in Isa::all_for_tests() {
+                let (mut gw, mut gb) = (vec![f32::NAN; cout * cin * 9], vec![f32::NAN; cout]);
+                isa.dispatch(Grads { x: &x, gy: &gy, dims: (cin, cout, n), gw: &mut gw, gb: &mut gb });
+                for (i, (g, w)) in gw.iter().zip(&want_w).enumerate() {
+                    assert!(
+                        (f64::from(*g) - w).abs() <= 1e-5 * (1.0 + scale_w[i]),
+                        "{isa:?} {cin}→{cout}@{n} weight [{i}]: {g} vs {w}"
+                    );
+                }
+                for (o, (g, w)) in gb.iter().zip(&want_b).enumerate() {
+                    assert!(
+                        (f64::from(*g) - w).abs() <= 1e-5 * (1.0 + n as f64 * n as f64),
+                        "{isa:?} {cin}→{cout}@{n} bias [{o}]: {g} vs {w}"
+                    );
+                }
+            }
+        }
     }
 }

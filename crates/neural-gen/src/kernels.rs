@@ -61,6 +61,24 @@ impl Isa {
         self.arch.dispatch(op)
     }
 
+    /// The detected instruction set, on x86-64 also AVX2 + FMA where the CPU has wider
+    /// vectors (so that both paths are tested on an AVX-512 machine), and the scalar one (one
+    /// lane).
+    #[cfg(test)]
+    pub(crate) fn all_for_tests() -> Vec<Isa> {
+        let scalar = pulp::Arch::Scalar;
+        let mut out = vec![Isa::detect()];
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = pulp::x86::V3::try_new() {
+            let arch = pulp::Arch::V3(v3);
+            if arch.dispatch(Lanes) != out[0].lanes {
+                out.push(Isa { arch, lanes: arch.dispatch(Lanes) });
+            }
+        }
+        out.push(Isa { arch: scalar, lanes: 1 });
+        out
+    }
+
     /// Output channels per register block and vectors per tile for a correlation with `o`
     /// outputs: `ob × nv` accumulators (16 of the 32 AVX-512 registers, [`NARROW_VECTORS`]
     /// × 4 of 16 otherwise).
@@ -547,9 +565,8 @@ mod tests {
             .collect()
     }
 
-    /// The detected instruction set and the scalar one (one lane).
     fn isas() -> Vec<Isa> {
-        vec![Isa::detect(), Isa { arch: pulp::Arch::Scalar, lanes: 1 }]
+        Isa::all_for_tests()
     }
 
     /// Every kernel against a naive f64 correlation, and every instruction set against the
