@@ -48,6 +48,11 @@ const FIT_MODEL: ForwardModel = ForwardModel {
     step_h_mm: 1.0,
 };
 
+/// The trailing reaches (an upright brush's tip on the path this fraction of a footprint length
+/// back: [`ForwardModel::trail_reach`]) the brush fit tries beside the forward model's own
+/// ([`brush_model::TRAIL_REACH`]).
+pub const TRAIL_CANDIDATES: [f64; 5] = [0.2, 0.3, 0.4, 0.5, 0.6];
+
 /// What the closed loop's correction can refuse.
 #[derive(Debug, Error)]
 #[non_exhaustive]
@@ -152,6 +157,12 @@ pub struct BrushCorrection {
     /// [`MIN_CORRECTION_GAIN`] of the error; the factors above are then 1 and the spread 0):
     /// `[width factor, length factor, spread mm, ink error]`.
     pub not_taken: Option<[f64; 4]>,
+    /// The trailing reach under which the factors were fitted ([`TRAIL_CANDIDATES`]): the
+    /// forward model's ([`brush_model::TRAIL_REACH`]) unless another explained the ink better by
+    /// at least [`MIN_CORRECTION_GAIN`] of what remained. Fitted so that a brush whose tip
+    /// trails otherwise does not bias the lengths; the next attempt is still planned, rendered
+    /// and refined with the forward model's.
+    pub trail_reach: f64,
 }
 
 impl BrushCorrection {
@@ -163,6 +174,7 @@ impl BrushCorrection {
         ink_error_before: 0.0,
         ink_error_after: 0.0,
         not_taken: None,
+        trail_reach: brush_model::TRAIL_REACH,
     };
 
     /// `profile` with this correction applied to its model (every coefficient of `lt` and
@@ -400,10 +412,17 @@ pub fn predict_attempt(
 
 /// The last attempt through `profile` as the brush fit sees it ([`FIT_MODEL`]'s sampling) at
 /// `side²` px; `None` when the profile refuses a press.
-fn fit_render(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind, side: u32) -> Option<Coverage> {
+fn fit_render(
+    a: &LastAttempt<'_>,
+    profile: &BrushProfile,
+    model: ModelKind,
+    side: u32,
+    trail_reach: f64,
+) -> Option<Coverage> {
+    let fm = ForwardModel { trail_reach, ..FIT_MODEL };
     let mut stamps = Vec::new();
     for s in a.strokes {
-        for p in FIT_MODEL.sweep(profile, &s.points, Extrapolation::Allow).stamps {
+        for p in fm.sweep(profile, &s.points, Extrapolation::Allow).stamps {
             let footprint = profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?;
             stamps.push(Stamp { footprint, anchor: p.anchor(), beta_rad: p.beta_rad });
         }
@@ -460,12 +479,12 @@ pub fn fit_brush(
     for (a, &s) in attempts.iter().zip(&sides) {
         predict_attempt(a, profile, model, s)?;
     }
-    let error_of = |p: &BrushProfile| -> f64 {
+    let error_of = |p: &BrushProfile, trail_reach: f64| -> f64 {
         let per: Vec<f64> = attempts
             .par_iter()
             .zip(sides.par_iter())
             .zip(observed.par_iter())
-            .map(|((a, &s), obs)| match fit_render(a, p, model, s) {
+            .map(|((a, &s), obs)| match fit_render(a, p, model, s, trail_reach) {
                 Some(img) => {
                     img.data().iter().zip(obs).map(|(&u, &o)| (u as f64 - o as f64).powi(2)).sum::<f64>()
                         / obs.len() as f64
@@ -475,7 +494,7 @@ pub fn fit_brush(
             .collect();
         per.iter().sum::<f64>() / per.len() as f64
     };
-    let loss = |x: &[f64; 3]| -> f64 {
+    let loss = |x: &[f64; 3], trail_reach: f64| -> f64 {
         let inside = |v: f64, r: [f64; 2]| (r[0]..=r[1]).contains(&v);
         if !(inside(x[0], FACTOR_RANGE) && inside(x[1], FACTOR_RANGE) && inside(x[2], SPREAD_RANGE_MM)) {
             return f64::INFINITY;
@@ -483,18 +502,34 @@ pub fn fit_brush(
         let c =
             BrushCorrection { width_factor: x[0], length_factor: x[1], spread_mm: x[2], ..BrushCorrection::IDENTITY };
         match c.apply(profile, &profile.name) {
-            Ok(p) => error_of(&p),
+            Ok(p) => error_of(&p, trail_reach),
             Err(_) => f64::INFINITY,
         }
     };
-    let before = loss(&[1.0, 1.0, 0.0]);
     let opts = NelderMead { min_spread: Some(1e-5), ..NelderMead::new([0.15, 0.15, 0.2], FIT_ITERS) };
-    let (x, after) = nelder_mead(loss, [1.0, 1.0, 0.0], &opts);
+    // The factors fitted under each trailing reach: (reach, the profile's error, x, error).
+    let fits: Vec<(f64, f64, [f64; 3], f64)> = TRAIL_CANDIDATES
+        .iter()
+        .map(|&t| {
+            let (x, after) = nelder_mead(|x: &[f64; 3]| loss(x, t), [1.0, 1.0, 0.0], &opts);
+            (t, loss(&[1.0, 1.0, 0.0], t), x, after)
+        })
+        .collect();
+    let own = fits.iter().copied().find(|f| f.0 == brush_model::TRAIL_REACH).unwrap_or((
+        brush_model::TRAIL_REACH,
+        loss(&[1.0, 1.0, 0.0], brush_model::TRAIL_REACH),
+        [1.0, 1.0, 0.0],
+        f64::INFINITY,
+    ));
+    let best = fits.iter().copied().min_by(|a, b| a.3.total_cmp(&b.3)).unwrap_or(own);
+    // Another reach only when it explains enough of what the model's own leaves.
+    let (trail_reach, before, x, after) = if best.3 < (1.0 - MIN_CORRECTION_GAIN) * own.3 { best } else { own };
     if !(after < (1.0 - MIN_CORRECTION_GAIN) * before) {
         return Ok(BrushCorrection {
             ink_error_before: before,
             ink_error_after: before,
             not_taken: Some([x[0], x[1], x[2], after]),
+            trail_reach,
             ..BrushCorrection::IDENTITY
         });
     }
@@ -505,6 +540,7 @@ pub fn fit_brush(
         ink_error_before: before,
         ink_error_after: after,
         not_taken: None,
+        trail_reach,
     })
 }
 
@@ -640,6 +676,44 @@ mod tests {
             assert!((a - b).abs() < 1e-6, "{same:?}");
         }
         assert!((r.mean_abs() - 0.625).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_brush_whose_tip_trails_less_is_fitted_under_its_own_trail() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        // Half a circle of radius 20 mm, upright, pressed 12–15 mm: where the tip lies on the
+        // path behind decides which way each footprint points round the curve.
+        let mut pts = Vec::new();
+        for i in 0..=200 {
+            let t = f64::from(i) / 200.0;
+            let a = std::f64::consts::PI * t;
+            let (x, y) = (40.0 - 20.0 * a.cos(), 30.0 + 20.0 * a.sin());
+            pts.push(brush_model::TrackPoint { x_mm: x, y_mm: y, h_mm: 12.0 + 3.0 * t, alpha_rad: 0.0, beta_rad: 0.0 });
+        }
+        let strokes = vec![Stroke { points: pts }];
+        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
+        let truth = BrushCorrection { width_factor: 1.2, ..BrushCorrection::IDENTITY }.apply(&pen1, "world").unwrap();
+        let ink = |trail_reach: f64| {
+            let model = ForwardModel { trail_reach, ..ForwardModel::default() };
+            let stamps: Vec<Stamp> = model
+                .sweep(&truth, &strokes[0].points, Extrapolation::Allow)
+                .stamps
+                .iter()
+                .map(|p| Stamp {
+                    footprint: truth.predict_oriented(&p.press(), Extrapolation::Allow).unwrap(),
+                    anchor: p.anchor(),
+                    beta_rad: p.beta_rad,
+                })
+                .collect();
+            render_stamps(&stamps, ModelKind::Bsm.model(), PointMm::new(0.0, 0.0), 96.0 / 80.0, 96, 96)
+        };
+        for reach in [0.3, brush_model::TRAIL_REACH] {
+            let observed = ink(reach);
+            let a = LastAttempt { ch: "~", char_box, strokes: &strokes, observed: &observed };
+            let fit = fit_brush(&[a], &pen1, ModelKind::Bsm).unwrap();
+            assert_eq!(fit.trail_reach, reach, "{fit:?}");
+            assert!((fit.width_factor - 1.2).abs() < 0.05 && (fit.length_factor - 1.0).abs() < 0.05, "{fit:?}");
+        }
     }
 
     #[test]

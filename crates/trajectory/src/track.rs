@@ -115,7 +115,9 @@ pub const GLIDE_H_MM: f64 = 0.01;
 ///    *backwards* to the start. Moving back, the hairs trail ahead, so the tip points forward as
 ///    kaiti's blunt stroke heads want: the root on the station, the belly `lh` ahead sized to
 ///    the glyph's half-width there, pressed lighter (or not at all) where the tip would reach
-///    past the piece's end.
+///    past the piece's end. When that leaves only the head pressed (a piece shorter than the
+///    lightest footprint), the brush glides back to it with its tip only touching
+///    ([`GLIDE_H_MM`]) and presses there, so the head trails forward along the piece too.
 /// 2. **Turn.** At the start the brush eases up until only its tip touches ([`GLIDE_H_MM`], no
 ///    ink), glides forward along the stroke to the first station where its lightest press fits
 ///    behind it, and presses again: turning the hairs over under pressure would sweep the tail
@@ -321,7 +323,7 @@ impl<'a> Placer<'a> {
             .find(|&j| self.length(self.lowest) <= first.distance(point_at(&s, pts, stations[j])))
             .unwrap_or(stations.len() - 1)
             .min(entry_end);
-        let mut out = Vec::with_capacity(stations.len() + entry_end + 2);
+        let mut out: Vec<TrackPoint> = Vec::with_capacity(stations.len() + entry_end + 3);
         // 1. Entry: backwards from the touch-down station to the start, tips ahead.
         for j in (0..=entry_end).rev() {
             let t = stations[j];
@@ -332,7 +334,19 @@ impl<'a> Placer<'a> {
                 counts.tally(clamp);
                 h_in.min(fit)
             } else if j == 0 {
-                // The head must be inked even when the piece is shorter than any footprint.
+                // The head must be inked even when the piece is shorter than any footprint. When
+                // no other entry station is pressed, the brush glides back to the head with its
+                // tip only touching (no ink) instead of coming down on it from the air: so the
+                // head's footprint trails forward along the piece by the drag rule, as the
+                // entry's do, rather than pointing whichever way the model or a real brush
+                // happens to leave an upright brush pressed straight down and lifted again.
+                if !out.is_empty() && out.iter().all(|p| p.h_mm <= 0.0) {
+                    for p in &mut out {
+                        p.h_mm = GLIDE_H_MM;
+                    }
+                    // Down in place at the head.
+                    out.push(at(t, GLIDE_H_MM));
+                }
                 self.lowest
             } else {
                 0.0

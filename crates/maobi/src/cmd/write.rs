@@ -454,10 +454,11 @@ pub fn run(args: Args) -> Result<()> {
         match (&choice, &correction) {
             (Some(c), _) => println!("brush (--brush auto): {}", c.reason),
             (None, Some(c)) if c.not_taken.is_some() => println!(
-                "brush kept from the photo (--observed): {corrected_name}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm) explains only {:.0} % of the ink error {:.4} (under {:.0} %){next}; written to {}{}",
+                "brush kept from the photo (--observed): {corrected_name}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm, the tip trailing {:.1} footprint lengths) explains only {:.0} % of the ink error {:.4} (under {:.0} %){next}; written to {}{}",
                 c.not_taken.map_or(1.0, |v| v[0]),
                 c.not_taken.map_or(1.0, |v| v[1]),
                 c.not_taken.map_or(0.0, |v| v[2]),
+                c.trail_reach,
                 c.not_taken.map_or(0.0, |v| 100.0 * (1.0 - v[3] / c.ink_error_before)),
                 c.ink_error_before,
                 100.0 * pipeline::MIN_CORRECTION_GAIN,
@@ -469,11 +470,12 @@ pub fn run(args: Args) -> Result<()> {
                 }
             ),
             (None, Some(c)) => println!(
-                "brush re-fitted from the photo (--observed): {corrected_name} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (ink error {:.4} → {:.4}){next}; written to {}{}",
+                "brush re-fitted from the photo (--observed): {corrected_name} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (fitted with the tip trailing {:.1} footprint lengths; ink error {:.4} → {:.4}){next}; written to {}{}",
                 c.width_factor,
                 c.length_factor,
                 c.spread_mm,
                 observed.as_ref().map_or("", |o| o.track.brush.name.as_str()),
+                c.trail_reach,
                 c.ink_error_before,
                 c.ink_error_after,
                 args.output.join("brush.json").display(),

@@ -233,7 +233,9 @@ fn closed_loop_figures() {
     let dir = tempfile::tempdir().unwrap();
     let dir = dir.path();
     let dir = &std::env::var_os("MAOBI_LOOP_KEEP").map_or(dir.to_path_buf(), PathBuf::from);
-    let full = Setup { chars: FULL_CHARS, size: 256, photo: [PHOTO_W, PHOTO_H], focal_px: FOCAL_PX };
+    // `MAOBI_LOOP_CHARS` takes other characters (the tuning set, 中国, when trying a change).
+    let chars = std::env::var("MAOBI_LOOP_CHARS").unwrap_or_else(|_| FULL_CHARS.to_string());
+    let full = Setup { chars: &chars, size: 256, photo: [PHOTO_W, PHOTO_H], focal_px: FOCAL_PX };
     for refine in [false, true] {
         let c = chain(dir, &full, refine, 2);
         let summary = json(&c.sheets[2].join("summary.json"));
@@ -292,6 +294,43 @@ fn closed_loop_figures() {
             }
             let tag = if refine { "refined" } else { "unrefined" };
             std::fs::write(out.join(format!("closed-loop-{tag}.png")), img.encode_png().unwrap()).unwrap();
+        }
+    }
+}
+
+/// Which of the world's differences costs the first attempt what (docs/closed-loop.md): the
+/// refined first attempt of 天心山 (256 px) inked by the world, by the world with one
+/// difference taken out, and by the model's world with one put in; world CSIM per character.
+/// With `MAOBI_LOOP_IMAGES=DIR`, 山's ink under each as `world-<variant>.png`.
+/// `cargo test -p maobi --test cli -- closed_loop::what_each_world_difference_costs --ignored --nocapture`.
+#[test]
+#[ignore = "slow: a measurement for docs/closed-loop.md"]
+fn what_each_world_difference_costs() {
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("sheet");
+    ok(&maobi(&["write", FULL_CHARS, "--sheet", "A4", "--size", "256", "--refine", "-o", s(&sheet)]));
+    let truth = robot_brush(&sheet);
+    let variants = [
+        ("world", WORLD),
+        ("world-trail-0.5", WorldBrush { trail_reach: 0.5, ..WORLD }),
+        ("world-lag-0", WorldBrush { lag_mm: 0.0, ..WORLD }),
+        ("model", MODEL_WORLD),
+        ("model-trail-0.3", WorldBrush { trail_reach: WORLD_TRAIL_REACH, ..MODEL_WORLD }),
+        ("model-lag-0.4", WorldBrush { lag_mm: WORLD_LAG_MM, ..MODEL_WORLD }),
+    ];
+    let track = robot_io::TrackFile::load(&sheet.join("track.json")).unwrap();
+    let st = json(&sheet.join("track.json"));
+    let out = std::env::var_os("MAOBI_LOOP_IMAGES").map(PathBuf::from);
+    for (name, w) in variants {
+        let per = world_csim(&sheet, &truth, &w);
+        eprintln!("{name}: world CSIM per character {per:.4?}, mean {:.4}", mean(&per));
+        if let Some(out) = &out {
+            std::fs::create_dir_all(out).unwrap();
+            let stamps = world_stamps_with(&track.strokes, &truth, &w);
+            let ch = &st["chars"][2];
+            let b: Vec<f64> = ch["char_box_mm"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let ink = world_ink(&stamps, [b[0], b[1], b[2]], 256);
+            std::fs::write(out.join(format!("world-{name}.png")), ink.encode_png().unwrap()).unwrap();
         }
     }
 }

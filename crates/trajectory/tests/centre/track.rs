@@ -262,3 +262,33 @@ fn a_track_holds_only_motion_the_forward_model_explains() {
         }
     }
 }
+
+#[test]
+fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward() {
+    // A 5 mm piece along +x, a corner, then 40 mm the other way round (−y in the em frame).
+    let (x0, y0) = (300.0, 600.0);
+    let mut points: Vec<Point> = (0..=10).map(|i| Point::new(x0 + 5.0 * f64::from(i), y0)).collect();
+    points.extend((1..=80).map(|i| Point::new(x0 + 50.0, y0 - 5.0 * f64::from(i))));
+    let half_widths = vec![25.0; points.len()];
+    let paths = vec![trajectory::StrokePath { points, half_widths, corners: vec![10] }];
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 102.4 };
+    let opts = TrackOptions { char_box: b, spacing_mm: DEFAULT_SPACING_MM, alpha_rad: 0.0, sizing: Sizing::Brush };
+    let pts = &build_track(&paths, &pen1, &opts).unwrap().track.strokes[0].points;
+    // The head is pressed once, at the lightest press, where the piece starts.
+    let head = pts.iter().position(|q| q.h_mm >= pen1.ranges.h_mm.min).unwrap();
+    let start = b.to_paper(Point::new(x0, y0));
+    let end = b.to_paper(Point::new(x0 + 50.0, y0));
+    assert!(pts[head].anchor().distance(start) < 1e-9, "{:?}", pts[head]);
+    assert!(pts[head + 1].h_mm < pen1.ranges.h_mm.min, "a lone press");
+    // Before it the brush glides back along the piece with only its tip touching (never lifted),
+    // so the head's footprint trails forward along the piece by the drag rule.
+    assert!(head > 2 && pts[..head].iter().all(|q| q.h_mm == trajectory::GLIDE_H_MM), "{:?}", &pts[..head]);
+    assert!(pts[0].anchor().distance(start) > 2.0, "the glide starts along the piece");
+    let forward = (end.y_mm - start.y_mm).atan2(end.x_mm - start.x_mm);
+    assert!(
+        brush_model::motion::wrap(pts[head].beta_rad - forward).abs() < 0.2,
+        "β {} vs {forward}",
+        pts[head].beta_rad
+    );
+}
