@@ -169,7 +169,7 @@ pub(crate) struct RefineArgs {
     #[arg(long, requires = "refine")]
     iters: Option<usize>,
     /// Where --refine takes its gradients from: the analytic soft footprint (default: as good
-    /// to 0.001 CSIM at the defaults and about 7× faster) or the B-BSMG generator's VJP (see
+    /// to 0.001 CSIM at the defaults and about 4.5× faster) or the B-BSMG generator's VJP (see
     /// docs/trajectory.md, "Refinement"). Scores always come from the analytic renderer.
     #[arg(long, requires = "refine", value_parser = ["analytic", "generator"])]
     gradients: Option<String>,
