@@ -160,8 +160,10 @@ pub struct BrushCorrection {
     /// The trailing reach under which the factors were fitted ([`TRAIL_CANDIDATES`]): the
     /// forward model's ([`brush_model::TRAIL_REACH`]) unless another explained the ink better by
     /// at least [`MIN_CORRECTION_GAIN`] of what remained. Fitted so that a brush whose tip
-    /// trails otherwise does not bias the lengths; the next attempt is still planned, rendered
-    /// and refined with the forward model's.
+    /// trails otherwise does not bias the lengths; the next attempt's track is planned
+    /// (`trajectory::build_track_with`) and refined (`RefineOptions::trail_reach`) and its
+    /// residual predicted ([`Residual::of`]) with it, and the next round's fit starts from it
+    /// ([`fit_brush_from`]).
     pub trail_reach: f64,
 }
 
@@ -383,6 +385,38 @@ fn check_attempt(a: &LastAttempt<'_>) -> Result<(), ClosedLoopError> {
     Ok(())
 }
 
+/// [`predict_attempt`] through a brush whose tip trails `trail_reach` footprint lengths back
+/// ([`ForwardModel::trail_reach`]; the forward model's own gives [`predict_attempt`] exactly).
+///
+/// # Errors
+/// As [`predict_attempt`].
+pub fn predict_attempt_with(
+    a: &LastAttempt<'_>,
+    profile: &BrushProfile,
+    model: ModelKind,
+    side: u32,
+    trail_reach: f64,
+) -> Result<Coverage, ClosedLoopError> {
+    if trail_reach == brush_model::TRAIL_REACH {
+        return predict_attempt(a, profile, model, side);
+    }
+    let fm = ForwardModel { trail_reach, ..ForwardModel::default() };
+    let refused = |source| ClosedLoopError::Predict { ch: a.ch.to_string(), source };
+    for p in a.strokes.iter().flat_map(|s| &s.points).filter(|p| p.h_mm >= profile.ranges.h_mm.min) {
+        profile.predict_oriented(&p.press(), Extrapolation::Allow).map_err(refused)?;
+    }
+    let mut stamps = Vec::new();
+    for s in a.strokes {
+        for p in fm.sweep(profile, &s.points, Extrapolation::Allow).stamps {
+            if let Ok(footprint) = profile.predict_oriented(&p.press(), Extrapolation::Allow) {
+                stamps.push(Stamp { footprint, anchor: p.anchor(), beta_rad: p.beta_rad });
+            }
+        }
+    }
+    let b = a.char_box;
+    Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), side as f64 / b.size_mm, side, side))
+}
+
 /// The last attempt as `profile` predicts it: its commanded strokes through the forward model
 /// over its box at `side²` px.
 ///
@@ -469,6 +503,23 @@ pub fn fit_brush(
     profile: &BrushProfile,
     model: ModelKind,
 ) -> Result<BrushCorrection, ClosedLoopError> {
+    fit_brush_from(attempts, profile, model, brush_model::TRAIL_REACH)
+}
+
+/// [`fit_brush`] for a profile whose brush is known to trail `base_trail_reach` footprint
+/// lengths back (the reach an earlier round fitted it under, carried with the corrected
+/// profile): that reach takes the forward model's place as the one another must beat by
+/// [`MIN_CORRECTION_GAIN`] (it is tried beside [`TRAIL_CANDIDATES`]). With
+/// [`brush_model::TRAIL_REACH`] it is [`fit_brush`].
+///
+/// # Errors
+/// As [`fit_brush`].
+pub fn fit_brush_from(
+    attempts: &[LastAttempt<'_>],
+    profile: &BrushProfile,
+    model: ModelKind,
+    base_trail_reach: f64,
+) -> Result<BrushCorrection, ClosedLoopError> {
     if attempts.is_empty() {
         return Err(ClosedLoopError::Empty);
     }
@@ -508,16 +559,20 @@ pub fn fit_brush(
     };
     let opts = NelderMead { min_spread: Some(1e-5), ..NelderMead::new([0.15, 0.15, 0.2], FIT_ITERS) };
     // The factors fitted under each trailing reach: (reach, the profile's error, x, error).
-    let fits: Vec<(f64, f64, [f64; 3], f64)> = TRAIL_CANDIDATES
+    let mut reaches = TRAIL_CANDIDATES.to_vec();
+    if !reaches.contains(&base_trail_reach) {
+        reaches.push(base_trail_reach);
+    }
+    let fits: Vec<(f64, f64, [f64; 3], f64)> = reaches
         .iter()
         .map(|&t| {
             let (x, after) = nelder_mead(|x: &[f64; 3]| loss(x, t), [1.0, 1.0, 0.0], &opts);
             (t, loss(&[1.0, 1.0, 0.0], t), x, after)
         })
         .collect();
-    let own = fits.iter().copied().find(|f| f.0 == brush_model::TRAIL_REACH).unwrap_or((
-        brush_model::TRAIL_REACH,
-        loss(&[1.0, 1.0, 0.0], brush_model::TRAIL_REACH),
+    let own = fits.iter().copied().find(|f| f.0 == base_trail_reach).unwrap_or((
+        base_trail_reach,
+        loss(&[1.0, 1.0, 0.0], base_trail_reach),
         [1.0, 1.0, 0.0],
         f64::INFINITY,
     ));
@@ -558,15 +613,21 @@ pub struct Residual {
 impl Residual {
     /// The residual of one attempt: `observed − predict_attempt(profile)`, at the observed
     /// image's side. Take `profile` as the corrected one, so the residual holds only what the
-    /// corrected brush does not explain.
+    /// corrected brush does not explain, and `trail_reach` the reach it was fitted under
+    /// ([`BrushCorrection::trail_reach`]), so the trail's ink is predicted, not left in it.
     ///
     /// # Errors
     /// As [`predict_attempt`]; [`ClosedLoopError::NotSquare`] or
     /// [`ClosedLoopError::NoStrokes`] for an unusable attempt.
-    pub fn of(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind) -> Result<Self, ClosedLoopError> {
+    pub fn of(
+        a: &LastAttempt<'_>,
+        profile: &BrushProfile,
+        model: ModelKind,
+        trail_reach: f64,
+    ) -> Result<Self, ClosedLoopError> {
         check_attempt(a)?;
         let side = a.observed.width();
-        let predicted = predict_attempt(a, profile, model, side)?;
+        let predicted = predict_attempt_with(a, profile, model, side, trail_reach)?;
         let values = a.observed.data().iter().zip(predicted.data()).map(|(&o, &p)| o - p).collect();
         Ok(Self { side, values })
     }
@@ -717,6 +778,42 @@ mod tests {
     }
 
     #[test]
+    fn the_fitted_trail_is_predicted_and_carried_into_the_next_fit() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        // Half a circle of radius 20 mm, upright, pressed 12–15 mm.
+        let pts: Vec<brush_model::TrackPoint> = (0..=200)
+            .map(|i| {
+                let t = f64::from(i) / 200.0;
+                let a = std::f64::consts::PI * t;
+                brush_model::TrackPoint {
+                    x_mm: 40.0 - 20.0 * a.cos(),
+                    y_mm: 30.0 + 20.0 * a.sin(),
+                    h_mm: 12.0 + 3.0 * t,
+                    alpha_rad: 0.0,
+                    beta_rad: 0.0,
+                }
+            })
+            .collect();
+        let strokes = vec![Stroke { points: pts }];
+        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
+        let blank = Coverage::new(96, 96);
+        let a = LastAttempt { ch: "~", char_box, strokes: &strokes, observed: &blank };
+        let own = predict_attempt(&a, &pen1, ModelKind::Bsm, 96).unwrap();
+        let same = predict_attempt_with(&a, &pen1, ModelKind::Bsm, 96, brush_model::TRAIL_REACH).unwrap();
+        assert_eq!(own.data(), same.data());
+        // The brush trailing 0.3: its ink is predicted, so the residual of that ink is nil.
+        let observed = predict_attempt_with(&a, &pen1, ModelKind::Bsm, 96, 0.3).unwrap();
+        assert_ne!(own.data(), observed.data());
+        let a = LastAttempt { observed: &observed, ..a };
+        assert!(Residual::of(&a, &pen1, ModelKind::Bsm, 0.3).unwrap().mean_abs() < 1e-9);
+        assert!(Residual::of(&a, &pen1, ModelKind::Bsm, brush_model::TRAIL_REACH).unwrap().mean_abs() > 1e-3);
+        // A profile already fitted under 0.3 keeps it (the reach carried), with little to correct.
+        let fit = fit_brush_from(&[a], &pen1, ModelKind::Bsm, 0.3).unwrap();
+        assert_eq!(fit.trail_reach, 0.3, "{fit:?}");
+        assert!((fit.width_factor - 1.0).abs() < 0.05 && (fit.length_factor - 1.0).abs() < 0.05, "{fit:?}");
+    }
+
+    #[test]
     fn the_target_is_the_glyph_shifted_by_the_residual() {
         let glyph = trajectory::glyph::embedded('十').unwrap();
         let b = CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 64.0 };
@@ -748,7 +845,10 @@ mod tests {
         assert!(matches!(fit_brush(&[a], &pen1, ModelKind::Bsm), Err(ClosedLoopError::NotSquare { .. })));
         let sq = Coverage::new(10, 10);
         let none = LastAttempt { strokes: &[], observed: &sq, ..a };
-        assert!(matches!(Residual::of(&none, &pen1, ModelKind::Bsm), Err(ClosedLoopError::NoStrokes { .. })));
+        assert!(matches!(
+            Residual::of(&none, &pen1, ModelKind::Bsm, brush_model::TRAIL_REACH),
+            Err(ClosedLoopError::NoStrokes { .. })
+        ));
         // A correction that makes a length non-positive is refused.
         let bad = BrushCorrection { spread_mm: -50.0, ..BrushCorrection::IDENTITY };
         assert!(matches!(bad.apply(&pen1, "x"), Err(ClosedLoopError::Profile(_))));

@@ -4,12 +4,12 @@
 use std::time::Instant;
 
 use bezier_raster::{Coverage, ModelKind, render_stamps, render_track, sweep_stamps};
-use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
+use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
 use track_refine::{LossTerms, RefineOptions, Target};
-use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, raster::render_glyph};
+use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track_with, chamfer_pct, raster::render_glyph};
 
 use crate::{Error, Prepared, Result, TemplateReport};
 
@@ -41,6 +41,10 @@ pub struct WriteOptions {
     /// [`track_refine::Gradients::Generator`] (the caller loads it once and shares it).
     #[cfg(feature = "generator")]
     pub generator: Option<std::sync::Arc<track_refine::GenModel>>,
+    /// The trailing reach the track's directions are derived with
+    /// ([`brush_model::ForwardModel::trail_reach`], `trajectory::build_track_with`): the forward
+    /// model's own unless the closed loop fitted another (`BrushCorrection::trail_reach`).
+    pub trail_reach: f64,
 }
 
 impl std::fmt::Debug for WriteOptions {
@@ -54,7 +58,8 @@ impl std::fmt::Debug for WriteOptions {
             .field("free_widths", &self.free_widths)
             .field("execute", &self.execute)
             .field("execution", &self.execution)
-            .field("refine", &self.refine);
+            .field("refine", &self.refine)
+            .field("trail_reach", &self.trail_reach);
         #[cfg(feature = "generator")]
         d.field("generator", &self.generator.as_ref().map(|_| "a generator"));
         d.finish()
@@ -75,6 +80,7 @@ impl Default for WriteOptions {
             refine: None,
             #[cfg(feature = "generator")]
             generator: None,
+            trail_reach: brush_model::TRAIL_REACH,
         }
     }
 }
@@ -384,14 +390,15 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let t0 = Instant::now();
     let topts =
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-    let built = build_track(&p.paths, profile, &topts)?;
+    let fm = ForwardModel { trail_reach: opts.trail_reach, ..ForwardModel::default() };
+    let built = build_track_with(&p.paths, profile, &topts, &fm)?;
     let render = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
     let reference = render_glyph(&p.glyph, opts.size);
     let sim = similarity(&reference, &render)?;
     let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     let free_widths = if opts.free_widths {
-        let free = build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
+        let free = build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
         let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
         Some(similarity(&reference, &img)?)
     } else {

@@ -69,7 +69,7 @@ pub use skeleton::{
     PairSample, Skeleton, SkeletonModelError, SkeletonModels,
 };
 pub use template::{Registration, StrokeFit, TemplateOptions};
-pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track};
+pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track, build_track_with};
 
 /// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons.
 /// Chosen on the tuning set (docs/trajectory.md, Tuned constants).

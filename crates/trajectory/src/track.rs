@@ -157,13 +157,28 @@ pub fn build_track(
     profile: &BrushProfile,
     opts: &TrackOptions,
 ) -> Result<BuiltTrack, ProfileError> {
+    build_track_with(paths, profile, opts, &ForwardModel::default())
+}
+
+/// [`build_track`] with the directions derived by `model` (its `tilt_threshold_rad` set out of
+/// reach, as there) instead of the default forward model: the closed loop plans with the
+/// trailing reach it fitted to the observed ink (`pipeline::BrushCorrection::trail_reach`).
+/// With `ForwardModel::default()` it is [`build_track`].
+///
+/// # Errors
+/// As [`build_track`].
+pub fn build_track_with(
+    paths: &[StrokePath],
+    profile: &BrushProfile,
+    opts: &TrackOptions,
+    model: &ForwardModel,
+) -> Result<BuiltTrack, ProfileError> {
     let placer = Placer::new(profile, opts);
     let k = opts.char_box.mm_per_em();
     let mut counts = Clamped::default();
     let mut strokes = Vec::with_capacity(paths.len());
     // Directions as an upright brush would leave them (the tilt threshold out of reach).
-    let model = ForwardModel::default();
-    let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..model };
+    let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..*model };
     for path in paths {
         if path.points.is_empty() {
             continue;

@@ -301,9 +301,12 @@ pub fn run(args: Args) -> Result<()> {
     let prepared = prepare_all(&args, &chars)?;
     // With --refine the residual is what the brush that wrote the last attempt (corrected)
     // does not explain.
-    let refine = args.refine.options()?;
+    // The next attempt is planned, refined and its residual predicted with the brush's fitted
+    // trail (the forward model's own without --observed).
+    let trail_reach = correction.as_ref().map_or(brush_model::TRAIL_REACH, |c| c.trail_reach);
+    let refine = args.refine.options()?.map(|r| track_refine::RefineOptions { trail_reach, ..r });
     let residuals = match (&observed, refine) {
-        (Some(o), Some(_)) => Some(o.residuals(&profile, args.model)?),
+        (Some(o), Some(_)) => Some(o.residuals(&profile, args.model, trail_reach)?),
         _ => None,
     };
     // After the re-fit, the brush for the next attempt: the one whose corrected footprints
@@ -341,6 +344,7 @@ pub fn run(args: Args) -> Result<()> {
         alpha_rad,
         refine: write_refine,
         generator,
+        trail_reach,
         ..WriteOptions::default()
     };
     let text = TextOptions {
@@ -860,7 +864,7 @@ impl ObservedRun {
         profile: &BrushProfile,
         model: ModelKind,
     ) -> Result<(pipeline::BrushCorrection, BrushProfile)> {
-        let c = pipeline::fit_brush(&self.attempts(), profile, model)
+        let c = pipeline::fit_brush_from(&self.attempts(), profile, model, self.trail_reach())
             .with_context(|| format!("--observed {}: re-fitting the brush", self.dir.display()))?;
         let root = profile.name.split('+').next().unwrap_or(&profile.name);
         let name = match c.not_taken {
@@ -903,11 +907,18 @@ impl ObservedRun {
         }
     }
 
-    /// Each character's residual: observed ink minus the last attempt through `profile`.
-    fn residuals(&self, profile: &BrushProfile, model: ModelKind) -> Result<Vec<pipeline::Residual>> {
+    /// The trailing reach the observed sheet's brush was last fitted under (the last round's
+    /// `correction.trail_reach` in its summary.json), the forward model's own when none was.
+    fn trail_reach(&self) -> f64 {
+        self.earlier.last().and_then(|r| r["correction"]["trail_reach"].as_f64()).unwrap_or(brush_model::TRAIL_REACH)
+    }
+
+    /// Each character's residual: observed ink minus the last attempt through `profile` with
+    /// the tip trailing `trail_reach`.
+    fn residuals(&self, profile: &BrushProfile, model: ModelKind, trail_reach: f64) -> Result<Vec<pipeline::Residual>> {
         self.attempts()
             .iter()
-            .map(|a| pipeline::Residual::of(a, profile, model))
+            .map(|a| pipeline::Residual::of(a, profile, model, trail_reach))
             .collect::<Result<_, _>>()
             .with_context(|| format!("--observed {}", self.dir.display()))
     }

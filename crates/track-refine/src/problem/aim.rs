@@ -26,11 +26,17 @@ pub struct Directions {
 }
 
 impl Problem<'_> {
+    /// The forward model the directions are derived with: the default one with
+    /// [`RefineOptions::trail_reach`](crate::RefineOptions::trail_reach).
+    fn model(&self) -> ForwardModel {
+        ForwardModel { trail_reach: self.opts.trail_reach, ..ForwardModel::default() }
+    }
+
     /// The track at an iterate with every direction re-derived by the forward model, as
     /// `trajectory::build_track` derives them (see [`Problem`]), and the pressed points'
     /// directions.
     pub fn directions(&self, theta: &[f64]) -> Directions {
-        let model = ForwardModel::default();
+        let model = self.model();
         let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..model };
         let strokes: Vec<Stroke> = self
             .vars
@@ -71,7 +77,7 @@ impl Problem<'_> {
     /// does; `None` where another rule set the direction or the found sample disagrees with
     /// `beta` (then the angle is kept fixed).
     fn find_aim(&self, pts: &[TrackPoint], s: usize, i: usize, beta: f64) -> Option<((usize, usize, f64), [f64; 3])> {
-        let model = ForwardModel::default();
+        let model = self.model();
         let p = pts[i];
         let len = self.profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?.length_mm();
         let reach = model.trail_reach * len;
@@ -131,7 +137,7 @@ impl Problem<'_> {
     /// the forward model takes it), from the profile's linear model.
     fn reach(&self, h: f64, alpha: f64) -> f64 {
         let m = &self.profile.model;
-        ForwardModel::default().trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
+        self.opts.trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
     }
 
     /// `∂reach/∂(h, α)` of [`Self::reach`] (constant: the profile's model is linear in h and α).
@@ -139,7 +145,7 @@ impl Problem<'_> {
         let m = &self.profile.model;
         let c = |t: &brush_model::Terms| [t.h_mm.unwrap_or(0.0), t.alpha_rad.unwrap_or(0.0)];
         let (a, b) = (c(&m.lt_mm), c(&m.lh_mm));
-        let tr = ForwardModel::default().trail_reach;
+        let tr = self.opts.trail_reach;
         [tr * (a[0] + b[0]), tr * (a[1] + b[1])]
     }
 

@@ -152,3 +152,49 @@ fn the_first_footprints_of_a_stroke_aim_at_the_farthest_sample() {
     assert!(far >= held + 30, "{far} aims with aim_far, {held} without");
     assert!(first_far.unwrap() < 3 && first_held.unwrap() > 30, "{first_far:?} {first_held:?}");
 }
+
+#[test]
+fn directions_follow_the_trail_reach_of_the_options_which_is_written_only_when_not_the_models() {
+    let profile = pen1();
+    let target = bar_target(64);
+    // A quarter circle of radius 20 mm, upright, pressed 12 mm.
+    let pts = (0..=60)
+        .map(|i| {
+            let a = std::f64::consts::FRAC_PI_2 * f64::from(i) / 60.0;
+            brush_model::TrackPoint {
+                x_mm: 10.0 + 20.0 * a.sin(),
+                y_mm: 40.0 - 20.0 * a.cos(),
+                h_mm: 12.0,
+                alpha_rad: 0.0,
+                beta_rad: 0.0,
+            }
+        })
+        .collect();
+    let track = Track { strokes: vec![brush_model::Stroke { points: pts }] };
+    let betas = |trail_reach: f64| {
+        let opts = RefineOptions { trail_reach, ..RefineOptions::default() };
+        let p = Problem::new(&track, &profile, &target, &opts).unwrap();
+        let got = p.directions(&p.initial()).beta_rad;
+        let model = brush_model::ForwardModel {
+            trail_reach,
+            tilt_threshold_rad: f64::INFINITY,
+            ..brush_model::ForwardModel::default()
+        };
+        let want = model.with_directions(&profile, &track.strokes[0].points, brush_model::Extrapolation::Refuse);
+        for (g, w) in got.iter().zip(&want) {
+            assert!(brush_model::motion::wrap(g - w.beta_rad).abs() < 1e-12, "{trail_reach}: {g} vs {}", w.beta_rad);
+        }
+        got
+    };
+    let (own, short) = (betas(brush_model::TRAIL_REACH), betas(0.3));
+    assert!(
+        own.iter().zip(&short).any(|(a, b)| (a - b).abs() > 1e-3),
+        "the reach turns the footprints round the curve"
+    );
+    let json = |o: RefineOptions| serde_json::to_string(&o).unwrap();
+    assert!(!json(RefineOptions::default()).contains("trail_reach"));
+    let short_opts = RefineOptions { trail_reach: 0.3, ..RefineOptions::default() };
+    assert!(json(short_opts).contains("\"trail_reach\":0.3"));
+    assert_eq!(serde_json::from_str::<RefineOptions>(&json(short_opts)).unwrap(), short_opts);
+    assert!(RefineOptions { trail_reach: 0.0, ..RefineOptions::default() }.validate().is_err());
+}

@@ -292,3 +292,40 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
         pts[head].beta_rad
     );
 }
+
+#[test]
+fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trail_derives() {
+    // 永 upright: the closed loop plans with the trailing reach it fitted to the observed ink.
+    let pen1 = BrushProfile::builtin("pen1").unwrap();
+    let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
+    let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
+    let opts = TrackOptions {
+        char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm },
+        spacing_mm: DEFAULT_SPACING_MM,
+        alpha_rad: 0.0,
+        sizing: Sizing::Brush,
+    };
+    let own = build_track(&paths, &pen1, &opts).unwrap().track;
+    let same = trajectory::build_track_with(&paths, &pen1, &opts, &brush_model::ForwardModel::default()).unwrap().track;
+    assert_eq!(own, same, "the default model is build_track");
+    let short = brush_model::ForwardModel { trail_reach: 0.3, ..brush_model::ForwardModel::default() };
+    let t = trajectory::build_track_with(&paths, &pen1, &opts, &short).unwrap().track;
+    let mut turned = 0;
+    for (s, o) in t.strokes.iter().zip(&own.strokes) {
+        assert_eq!(s.points.len(), o.points.len());
+        let sweep = short.sweep(&pen1, &s.points, Extrapolation::Refuse);
+        for ((p, q), d) in s.points.iter().zip(&o.points).zip(&sweep.directions) {
+            // The motion is the same: the trail only decides which way the footprints point.
+            assert_eq!((p.x_mm, p.y_mm, p.h_mm, p.alpha_rad), (q.x_mm, q.y_mm, q.h_mm, q.alpha_rad));
+            if p.h_mm >= pen1.ranges.h_mm.min {
+                let d = d.expect("a pressed point has a direction");
+                assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
+                if brush_model::motion::wrap(p.beta_rad - q.beta_rad).abs() > 1e-3 {
+                    turned += 1;
+                }
+            }
+        }
+    }
+    // Round the curves the tip 0.3 footprint lengths back points the footprints otherwise.
+    assert!(turned > 10, "{turned} footprints turned");
+}
