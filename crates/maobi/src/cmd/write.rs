@@ -864,7 +864,7 @@ impl ObservedRun {
         profile: &BrushProfile,
         model: ModelKind,
     ) -> Result<(pipeline::BrushCorrection, BrushProfile)> {
-        let c = pipeline::fit_brush_from(&self.attempts(), profile, model, self.trail_reach())
+        let c = pipeline::fit_brush_from(&self.attempts(), profile, model, self.trail_reach()?)
             .with_context(|| format!("--observed {}: re-fitting the brush", self.dir.display()))?;
         let root = profile.name.split('+').next().unwrap_or(&profile.name);
         let name = match c.not_taken {
@@ -909,8 +909,21 @@ impl ObservedRun {
 
     /// The trailing reach the observed sheet's brush was last fitted under (the last round's
     /// `correction.trail_reach` in its summary.json), the forward model's own when none was.
-    fn trail_reach(&self) -> f64 {
-        self.earlier.last().and_then(|r| r["correction"]["trail_reach"].as_f64()).unwrap_or(brush_model::TRAIL_REACH)
+    ///
+    /// # Errors
+    /// A reach that is there but not a number in (0, 1] (a damaged or hand-edited summary).
+    fn trail_reach(&self) -> Result<f64> {
+        let Some(v) = self.earlier.last().map(|r| &r["correction"]["trail_reach"]).filter(|v| !v.is_null()) else {
+            return Ok(brush_model::TRAIL_REACH);
+        };
+        match v.as_f64() {
+            Some(r) if r > 0.0 && r <= 1.0 => Ok(r),
+            _ => bail!(
+                "{}: rounds[{}].correction.trail_reach is {v} (expected a number in (0, 1], the fitted trailing reach)",
+                self.sheet_dir.join("summary.json").display(),
+                self.earlier.len() - 1
+            ),
+        }
     }
 
     /// Each character's residual: observed ink minus the last attempt through `profile` with

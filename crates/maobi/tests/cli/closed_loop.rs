@@ -180,6 +180,32 @@ fn two_rounds(refine: bool) {
     ok(&maobi(&["write", "十", "--size", "64", "--brush", s(&brush), "-o", s(&dir.join(format!("b{refine}")))]));
     let report = json(&c.sheets[1].join("01-山").join("report.json"));
     assert_eq!(report["refine"].is_object(), refine, "{report}");
+    if !refine {
+        // A damaged trailing reach in the observed sheet's rounds is refused by name, and
+        // nothing is written.
+        let sheet_summary = c.sheets[1].join("summary.json");
+        let mut damaged = json(&sheet_summary);
+        damaged["rounds"][0]["correction"]["trail_reach"] = serde_json::json!(7.5);
+        std::fs::write(&sheet_summary, damaged.to_string()).unwrap();
+        let out = dir.join("damaged");
+        let size = FAST.size.to_string();
+        fails(
+            &maobi(&[
+                "write",
+                FAST.chars,
+                "--sheet",
+                "A4",
+                "--size",
+                &size,
+                "--observed",
+                s(&c.observed[1]),
+                "-o",
+                s(&out),
+            ]),
+            "rounds[0].correction.trail_reach is 7.5",
+        );
+        assert!(!out.exists());
+    }
 }
 
 #[test]
