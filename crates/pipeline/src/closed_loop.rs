@@ -6,7 +6,7 @@
 //! the last attempt shifted by what the photo showed, and the next track refined so that the
 //! model plus that residual matches the glyph).
 
-use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, render_track};
+use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, track_stamps_with};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Stroke, Terms, Track};
 use numerics::{NelderMead, nelder_mead};
 use rayon::prelude::*;
@@ -397,22 +397,10 @@ pub fn predict_attempt_with(
     side: u32,
     trail_reach: f64,
 ) -> Result<Coverage, ClosedLoopError> {
-    if trail_reach == brush_model::TRAIL_REACH {
-        return predict_attempt(a, profile, model, side);
-    }
     let fm = ForwardModel { trail_reach, ..ForwardModel::default() };
-    let refused = |source| ClosedLoopError::Predict { ch: a.ch.to_string(), source };
-    for p in a.strokes.iter().flat_map(|s| &s.points).filter(|p| p.h_mm >= profile.ranges.h_mm.min) {
-        profile.predict_oriented(&p.press(), Extrapolation::Allow).map_err(refused)?;
-    }
-    let mut stamps = Vec::new();
-    for s in a.strokes {
-        for p in fm.sweep(profile, &s.points, Extrapolation::Allow).stamps {
-            if let Ok(footprint) = profile.predict_oriented(&p.press(), Extrapolation::Allow) {
-                stamps.push(Stamp { footprint, anchor: p.anchor(), beta_rad: p.beta_rad });
-            }
-        }
-    }
+    let track = Track { strokes: a.strokes.to_vec() };
+    let stamps = track_stamps_with(&track, profile, Extrapolation::Allow, &fm)
+        .map_err(|source| ClosedLoopError::Predict { ch: a.ch.to_string(), source })?;
     let b = a.char_box;
     Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), side as f64 / b.size_mm, side, side))
 }
@@ -429,19 +417,7 @@ pub fn predict_attempt(
     model: ModelKind,
     side: u32,
 ) -> Result<Coverage, ClosedLoopError> {
-    let track = Track { strokes: a.strokes.to_vec() };
-    let b = a.char_box;
-    render_track(
-        &track,
-        profile,
-        model.model(),
-        Extrapolation::Allow,
-        PointMm::new(b.x0_mm, b.y0_mm),
-        side as f64 / b.size_mm,
-        side,
-        side,
-    )
-    .map_err(|source| ClosedLoopError::Predict { ch: a.ch.to_string(), source })
+    predict_attempt_with(a, profile, model, side, brush_model::TRAIL_REACH)
 }
 
 /// The last attempt through `profile` as the brush fit sees it ([`FIT_MODEL`]'s sampling) at
