@@ -237,20 +237,47 @@ fn time_stroke_within_limits(
 }
 
 /// The factor by which a stroke's time scale must shrink for its measured peaks to meet the
-/// limits (1 or less when they do): the worst of speed ratio, √ acceleration ratio and
-/// ∛ jerk ratio.
+/// limits (1 or less when they do): the worst over [`limit_figures`] of each ratio to its
+/// limit, taken to the root of the figure's order (speed ratio, √ acceleration ratio, ∛ jerk
+/// ratio).
 fn limit_excess(t: &TimedStroke, cfg: &RobotConfig) -> f64 {
+    limit_figures(t, cfg)
+        .into_iter()
+        .map(|f| {
+            let r = f.value / f.max;
+            match f.order {
+                1 => r,
+                2 => r.sqrt(),
+                _ => r.cbrt(),
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+/// One measured figure of a timed stroke beside its limit.
+struct LimitFigure {
+    what: &'static str,
+    value: f64,
+    max: f64,
+    field: &'static str,
+    unit: &'static str,
+    /// How the figure scales with the stroke's time: 1 for a speed, 2 for an acceleration, 3
+    /// for a jerk (retiming by `f` scales it by `f^order`).
+    order: u8,
+}
+
+/// A timed stroke's measured peaks against the limits, in the order they are checked.
+fn limit_figures(t: &TimedStroke, cfg: &RobotConfig) -> [LimitFigure; 5] {
     let l = &cfg.limits;
     let joint_speed = t.peak_joint_speed_rad_s.iter().copied().fold(0.0, f64::max);
+    let f = |what, value, max, field, unit, order| LimitFigure { what, value, max, field, unit, order };
     [
-        t.peak_speed_m_s / l.max_linear_speed_m_s,
-        joint_speed / l.max_joint_speed_rad_s,
-        (t.peak_acc_m_s2 / l.max_linear_acc_m_s2).sqrt(),
-        (t.peak_joint_acc_rad_s2 / l.max_joint_acc_rad_s2).sqrt(),
-        (t.peak_joint_jerk_rad_s3 / l.max_joint_jerk_rad_s3).cbrt(),
+        f("TCP speed", t.peak_speed_m_s, l.max_linear_speed_m_s, "max_linear_speed_m_s", "m/s", 1),
+        f("TCP acceleration", t.peak_acc_m_s2, l.max_linear_acc_m_s2, "max_linear_acc_m_s2", "m/s²", 2),
+        f("joint speed", joint_speed, l.max_joint_speed_rad_s, "max_joint_speed_rad_s", "rad/s", 1),
+        f("joint acceleration", t.peak_joint_acc_rad_s2, l.max_joint_acc_rad_s2, "max_joint_acc_rad_s2", "rad/s²", 2),
+        f("joint jerk", t.peak_joint_jerk_rad_s3, l.max_joint_jerk_rad_s3, "max_joint_jerk_rad_s3", "rad/s³", 3),
     ]
-    .into_iter()
-    .fold(0.0, f64::max)
 }
 
 fn unsafe_at(stroke: usize, point: Option<usize>, reason: String) -> RobotError {
@@ -259,15 +286,7 @@ fn unsafe_at(stroke: usize, point: Option<usize>, reason: String) -> RobotError 
 
 /// Refuses a timed stroke whose measured figures exceed the limits.
 fn check_stroke(t: &TimedStroke, cfg: &RobotConfig) -> Result<(), RobotError> {
-    let l = &cfg.limits;
-    let joint_speed = t.peak_joint_speed_rad_s.iter().copied().fold(0.0, f64::max);
-    for (what, v, max, field, unit) in [
-        ("TCP speed", t.peak_speed_m_s, l.max_linear_speed_m_s, "max_linear_speed_m_s", "m/s"),
-        ("TCP acceleration", t.peak_acc_m_s2, l.max_linear_acc_m_s2, "max_linear_acc_m_s2", "m/s²"),
-        ("joint speed", joint_speed, l.max_joint_speed_rad_s, "max_joint_speed_rad_s", "rad/s"),
-        ("joint acceleration", t.peak_joint_acc_rad_s2, l.max_joint_acc_rad_s2, "max_joint_acc_rad_s2", "rad/s²"),
-        ("joint jerk", t.peak_joint_jerk_rad_s3, l.max_joint_jerk_rad_s3, "max_joint_jerk_rad_s3", "rad/s³"),
-    ] {
+    for LimitFigure { what, value: v, max, field, unit, .. } in limit_figures(t, cfg) {
         if v > max {
             return Err(unsafe_at(
                 t.stroke,
