@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use bezier_raster::{Coverage, ModelKind, render_stamps, render_track, sweep_stamps};
+use bezier_raster::{Coverage, ModelKind, render_stamps, sweep_stamps_with, track_stamps_with};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
@@ -42,9 +42,18 @@ pub struct WriteOptions {
     #[cfg(feature = "generator")]
     pub generator: Option<std::sync::Arc<track_refine::GenModel>>,
     /// The trailing reach the track's directions are derived with
-    /// ([`brush_model::ForwardModel::trail_reach`], `trajectory::build_track_with`): the forward
-    /// model's own unless the closed loop fitted another (`BrushCorrection::trail_reach`).
+    /// ([`brush_model::ForwardModel::trail_reach`], `trajectory::build_track_with`) and its
+    /// plan, executed path and refined track are rendered with: the forward model's own unless
+    /// the closed loop fitted another (`BrushCorrection::trail_reach`).
     pub trail_reach: f64,
+}
+
+impl WriteOptions {
+    /// The forward model the track is built and rendered with (the default one with
+    /// [`WriteOptions::trail_reach`]).
+    pub fn forward_model(&self) -> ForwardModel {
+        ForwardModel { trail_reach: self.trail_reach, ..ForwardModel::default() }
+    }
 }
 
 impl std::fmt::Debug for WriteOptions {
@@ -354,7 +363,20 @@ pub fn render_states(
     b: &CharBox,
     size: u32,
 ) -> Coverage {
-    let stamps = sweep_stamps(states, profile, ex);
+    render_states_through(&ForwardModel::default(), states, profile, model, ex, b, size)
+}
+
+/// [`render_states`] through `fm` (a brush whose tip trails otherwise: [`WriteOptions::trail_reach`]).
+fn render_states_through(
+    fm: &ForwardModel,
+    states: &[TrackPoint],
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Coverage {
+    let stamps = sweep_stamps_with(states, profile, ex, fm);
     render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
 }
 
@@ -370,16 +392,21 @@ pub fn render_char(
     b: &CharBox,
     size: u32,
 ) -> Result<Coverage> {
-    Ok(render_track(
-        track,
-        profile,
-        model.model(),
-        ex,
-        PointMm::new(b.x0_mm, b.y0_mm),
-        size as f64 / b.size_mm,
-        size,
-        size,
-    )?)
+    render_char_through(&ForwardModel::default(), track, profile, model, ex, b, size)
+}
+
+/// [`render_char`] through `fm` (a brush whose tip trails otherwise: [`WriteOptions::trail_reach`]).
+pub(crate) fn render_char_through(
+    fm: &ForwardModel,
+    track: &Track,
+    profile: &BrushProfile,
+    model: ModelKind,
+    ex: Extrapolation,
+    b: &CharBox,
+    size: u32,
+) -> Result<Coverage> {
+    let stamps = track_stamps_with(track, profile, ex, fm)?;
+    Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size))
 }
 
 /// Builds, renders and scores one prepared character placed at `char_box`.
@@ -390,16 +417,18 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let t0 = Instant::now();
     let topts =
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-    let fm = ForwardModel { trail_reach: opts.trail_reach, ..ForwardModel::default() };
+    let fm = opts.forward_model();
     let built = build_track_with(&p.paths, profile, &topts, &fm)?;
-    let render = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
+    let render =
+        render_char_through(&fm, &built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
     let reference = render_glyph(&p.glyph, opts.size);
     let sim = similarity(&reference, &render)?;
     let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     let free_widths = if opts.free_widths {
         let free = build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
-        let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+        let img =
+            render_char_through(&fm, &free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
         Some(similarity(&reference, &img)?)
     } else {
         None
@@ -459,7 +488,15 @@ fn execute_and_render(
 ) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
     let states =
         execute_track_with(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
-    let img = render_states(&states, profile, opts.model, Extrapolation::Refuse, char_box, opts.size);
+    let img = render_states_through(
+        &opts.forward_model(),
+        &states,
+        profile,
+        opts.model,
+        Extrapolation::Refuse,
+        char_box,
+        opts.size,
+    );
     Ok((states, img))
 }
 
@@ -497,7 +534,15 @@ pub(crate) fn refine_result(
         track_refine::Gradients::Generator => return Err(Error::NoGenerator),
     }
     .map_err(|source| Error::Refine { ch: p.glyph.ch, source })?;
-    let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
+    let render = render_char_through(
+        &opts.forward_model(),
+        &refined.track,
+        profile,
+        opts.model,
+        Extrapolation::Refuse,
+        &r.char_box,
+        opts.size,
+    )?;
     let planned_after = similarity(&r.reference, &render)?;
     let planned_before = r.report.plan.similarity();
     let mut rejected = None;
@@ -681,5 +726,47 @@ mod tests {
         let plain_opts = WriteOptions { execution: Execution::Plain, ..opts };
         let r = write_char(&p, &pen1, b, &plain_opts).unwrap();
         assert_eq!(r.executed_states.as_ref(), Some(&plain));
+    }
+
+    /// A brush fitted to trail otherwise (the closed loop's `trail_reach`) is the one the plan,
+    /// the executed path and the refined track are rendered with, not the forward model's own.
+    #[test]
+    fn the_plan_is_rendered_with_the_options_trail() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        // 心's hook and dots curve: where the tip trails decides which way their footprints point.
+        let p = crate::prepare(trajectory::glyph::embedded('心').unwrap(), Some(Method::Medians)).unwrap();
+        let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 120.0 };
+        let base = WriteOptions { size: 96, free_widths: false, ..WriteOptions::default() };
+        let r5 = write_char(&p, &pen1, b, &base).unwrap();
+        let opts = WriteOptions {
+            trail_reach: 0.3,
+            refine: Some(RefineOptions { iterations: 2, ..RefineOptions::default() }),
+            ..base
+        };
+        let r3 = write_char(&p, &pen1, b, &opts).unwrap();
+        let fm = opts.forward_model();
+        assert_eq!(fm.trail_reach, 0.3);
+        let by = |fm: &ForwardModel, t: &Track| {
+            render_char_through(fm, t, &pen1, opts.model, Extrapolation::Refuse, &b, 96).unwrap()
+        };
+        // The refined track's render is the one kept, through the fitted reach.
+        assert!(r3.report.refine.as_ref().unwrap().rejected.is_none());
+        assert_eq!(r3.render.data(), by(&fm, &r3.track).data());
+        assert_ne!(r3.render.data(), by(&ForwardModel::default(), &r3.track).data());
+        let executed = render_states_through(
+            &fm,
+            r3.executed_states.as_ref().unwrap(),
+            &pen1,
+            opts.model,
+            Extrapolation::Refuse,
+            &b,
+            96,
+        );
+        assert_eq!(r3.executed.as_ref().unwrap().data(), executed.data());
+        // Without a fitted reach, the forward model's own (`render_char`).
+        assert_eq!(
+            r5.render.data(),
+            render_char(&r5.track, &pen1, base.model, Extrapolation::Refuse, &b, 96).unwrap().data()
+        );
     }
 }

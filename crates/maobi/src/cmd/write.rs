@@ -122,12 +122,18 @@ pub struct Args {
     /// layout flags must give the same sheet). The brush the sheet was written with is re-fitted
     /// to the observed ink (width, length, spread); when it is a built-in, the built-in whose
     /// corrected footprints suit the boxes (as --brush auto) writes the next attempt (put it in
-    /// the robot; saved corrected as brush.json in the output, named on stdout) and, with
-    /// --refine, each track is refined against the glyph shifted by what the photo showed beyond
-    /// the model (iterative learning control). summary.json gains every round's figures
-    /// (docs/closed-loop.md).
+    /// the robot; saved corrected as brush.json in the output, named on stdout) and each track is
+    /// refined against the glyph shifted by what the photo showed beyond the model (iterative
+    /// learning control; with --refine's options, its defaults without --refine). summary.json
+    /// gains every round's figures (docs/closed-loop.md).
     #[arg(long, value_name = "OUT", requires = "sheet", conflicts_with = "brush")]
     observed: Option<PathBuf>,
+    /// With --observed: correct the brush only. The next attempt's tracks are built with the
+    /// corrected brush and not refined against the observed residual: faster, but what the
+    /// brush does beyond its footprints' sizes (such as how far its tip trails round a curve)
+    /// is then left as it was (docs/closed-loop.md).
+    #[arg(long, requires = "observed", conflicts_with = "refine")]
+    brush_only: bool,
     #[command(flatten)]
     renderer: RendererArgs,
     #[command(flatten)]
@@ -299,12 +305,18 @@ pub fn run(args: Args) -> Result<()> {
     };
     // Load and analyse every glyph before writing anything.
     let prepared = prepare_all(&args, &chars)?;
-    // With --refine the residual is what the brush that wrote the last attempt (corrected)
-    // does not explain.
-    // The next attempt is planned, refined and its residual predicted with the brush's fitted
-    // trail (the forward model's own without --observed).
+    // With --observed both levers act: the tracks are refined against the glyph shifted by the
+    // residual, what the brush that wrote the last attempt (corrected) does not explain (ILC),
+    // with --refine's options or, without --refine, its defaults; --brush-only leaves the track
+    // lever out. The next attempt is planned, refined and its residual predicted with the
+    // brush's fitted trail (the forward model's own without --observed).
     let trail_reach = correction.as_ref().map_or(brush_model::TRAIL_REACH, |c| c.trail_reach);
-    let refine = args.refine.options()?.map(|r| track_refine::RefineOptions { trail_reach, ..r });
+    let refine = match (args.refine.options()?, &observed) {
+        (Some(r), _) => Some(r),
+        (None, Some(_)) if !args.brush_only => Some(track_refine::RefineOptions::default()),
+        _ => None,
+    }
+    .map(|r| track_refine::RefineOptions { trail_reach, ..r });
     let residuals = match (&observed, refine) {
         (Some(o), Some(_)) => Some(o.residuals(&profile, args.model, trail_reach)?),
         _ => None,
@@ -369,7 +381,7 @@ pub fn run(args: Args) -> Result<()> {
         warm_started = last.is_some();
         let starts: Option<Vec<&[brush_model::Stroke]>> = last.as_ref().map(|a| a.iter().map(|a| a.strokes).collect());
         pipeline::refine_observed(&mut results, prepared, residuals, starts.as_deref(), &profile, &opts, &ro)
-            .context("--observed with --refine")?;
+            .context("--observed: refining against the observed residual")?;
     }
     let char_mm = lay.char_mm;
     if args.renderer.neural() {
