@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use bezier_raster::{Coverage, ModelKind, render_stamps, sweep_stamps_with, track_stamps_with};
+use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, sweep_stamps, sweep_stamps_with, track_stamps_with};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
@@ -363,21 +363,12 @@ pub fn render_states(
     b: &CharBox,
     size: u32,
 ) -> Coverage {
-    render_states_through(&ForwardModel::default(), states, profile, model, ex, b, size)
+    render_over(&sweep_stamps(states, profile, ex), model, b, size)
 }
 
-/// [`render_states`] through `fm` (a brush whose tip trails otherwise: [`WriteOptions::trail_reach`]).
-fn render_states_through(
-    fm: &ForwardModel,
-    states: &[TrackPoint],
-    profile: &BrushProfile,
-    model: ModelKind,
-    ex: Extrapolation,
-    b: &CharBox,
-    size: u32,
-) -> Coverage {
-    let stamps = sweep_stamps_with(states, profile, ex, fm);
-    render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
+/// Footprints (paper mm) over a char box onto a `size²` image of the box.
+fn render_over(stamps: &[Stamp], model: ModelKind, b: &CharBox, size: u32) -> Coverage {
+    render_stamps(stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
 }
 
 /// Renders a track over a char box onto a `size²` image of the box.
@@ -405,8 +396,7 @@ pub(crate) fn render_char_through(
     b: &CharBox,
     size: u32,
 ) -> Result<Coverage> {
-    let stamps = track_stamps_with(track, profile, ex, fm)?;
-    Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size))
+    Ok(render_over(&track_stamps_with(track, profile, ex, fm)?, model, b, size))
 }
 
 /// Builds, renders and scores one prepared character placed at `char_box`.
@@ -488,15 +478,8 @@ fn execute_and_render(
 ) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
     let states =
         execute_track_with(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
-    let img = render_states_through(
-        &opts.forward_model(),
-        &states,
-        profile,
-        opts.model,
-        Extrapolation::Refuse,
-        char_box,
-        opts.size,
-    );
+    let stamps = sweep_stamps_with(&states, profile, Extrapolation::Refuse, &opts.forward_model());
+    let img = render_over(&stamps, opts.model, char_box, opts.size);
     Ok((states, img))
 }
 
@@ -753,15 +736,8 @@ mod tests {
         assert!(r3.report.refine.as_ref().unwrap().rejected.is_none());
         assert_eq!(r3.render.data(), by(&fm, &r3.track).data());
         assert_ne!(r3.render.data(), by(&ForwardModel::default(), &r3.track).data());
-        let executed = render_states_through(
-            &fm,
-            r3.executed_states.as_ref().unwrap(),
-            &pen1,
-            opts.model,
-            Extrapolation::Refuse,
-            &b,
-            96,
-        );
+        let stamps = sweep_stamps_with(r3.executed_states.as_ref().unwrap(), &pen1, Extrapolation::Refuse, &fm);
+        let executed = render_over(&stamps, opts.model, &b, 96);
         assert_eq!(r3.executed.as_ref().unwrap().data(), executed.data());
         // Without a fitted reach, the forward model's own (`render_char`).
         assert_eq!(

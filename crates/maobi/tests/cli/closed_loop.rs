@@ -217,22 +217,16 @@ fn two_rounds(tracks: Tracks) {
     assert!(report["refine"].is_object(), "{report}");
     if tracks == Tracks::Unrefined {
         let size = FAST.size.to_string();
+        let rewrite = |seen: &Path, extra: &[&str], out: &Path| {
+            let mut a =
+                vec!["write", FAST.chars, "--sheet", "A4", "--size", &size, "--observed", s(seen), "-o", s(out)];
+            a.extend(extra);
+            maobi(&a)
+        };
         // --brush-only: the same round with the brush lever alone builds the tracks, refines
         // nothing, and says so.
         let only = dir.join("brush-only");
-        ok(&maobi(&[
-            "write",
-            FAST.chars,
-            "--sheet",
-            "A4",
-            "--size",
-            &size,
-            "--observed",
-            s(&c.observed[0]),
-            "--brush-only",
-            "-o",
-            s(&only),
-        ]));
+        ok(&rewrite(&c.observed[0], &["--brush-only"], &only));
         let report = json(&only.join("01-山").join("report.json"));
         assert!(report["refine"].is_null(), "{report}");
         let round = &json(&only.join("summary.json"))["rounds"][0];
@@ -246,21 +240,7 @@ fn two_rounds(tracks: Tracks) {
         damaged["rounds"][0]["correction"]["trail_reach"] = serde_json::json!(7.5);
         std::fs::write(&sheet_summary, damaged.to_string()).unwrap();
         let out = dir.join("damaged");
-        fails(
-            &maobi(&[
-                "write",
-                FAST.chars,
-                "--sheet",
-                "A4",
-                "--size",
-                &size,
-                "--observed",
-                s(&c.observed[1]),
-                "-o",
-                s(&out),
-            ]),
-            "rounds[0].correction.trail_reach is 7.5",
-        );
+        fails(&rewrite(&c.observed[1], &[], &out), "rounds[0].correction.trail_reach is 7.5");
         assert!(!out.exists());
     }
 }
