@@ -538,13 +538,15 @@ impl Layout {
 }
 
 /// Every written character's track on one image of the whole sheet, at the scale of the
-/// characters' own images (`size_px` per char box side).
+/// characters' own images (`size_px` per char box side), the footprints through `fm` (the
+/// forward model the characters were written with: [`crate::WriteOptions::forward_model`]).
 ///
 /// # Errors
 /// When the profile refuses a press (it accepted them when the characters were written).
 pub fn sheet_image(
     results: &[CharResult],
     profile: &BrushProfile,
+    fm: &brush_model::ForwardModel,
     model: ModelKind,
     layout: &Layout,
     size_px: u32,
@@ -555,16 +557,15 @@ pub fn sheet_image(
     }
     let px_per_mm = size_px as f64 / layout.char_mm;
     let (wp, hp) = layout.image_px(size_px);
-    bezier_raster::render_track(
-        &all,
-        profile,
+    let stamps = bezier_raster::track_stamps_with(&all, profile, Extrapolation::Refuse, fm)?;
+    Ok(bezier_raster::render_stamps(
+        &stamps,
         model.model(),
-        Extrapolation::Refuse,
         brush_model::PointMm::new(0.0, 0.0),
         px_per_mm,
         wp as u32,
         hp as u32,
-    )
+    ))
 }
 
 /// Share of track points beyond one end of the brush's width range above which

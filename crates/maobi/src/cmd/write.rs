@@ -443,7 +443,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     }
     if !single {
-        let img = sheet_png(&results, &sheet_track, &profile, args.model, &lay, args.size)?;
+        let img = sheet_png(&results, &sheet_track, &profile, &opts.forward_model(), args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
         write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
@@ -718,25 +718,25 @@ fn sheet_png(
     results: &[CharResult],
     sheet_track: &SheetTrack,
     profile: &BrushProfile,
+    fm: &brush_model::ForwardModel,
     model: ModelKind,
     lay: &Layout,
     size: u32,
 ) -> Result<bezier_raster::Coverage> {
-    let mut img = pipeline::sheet_image(results, profile, model, lay, size).context("sheet.png")?;
+    let mut img = pipeline::sheet_image(results, profile, fm, model, lay, size).context("sheet.png")?;
     if sheet_track.mark_strokes > 0 {
         let marks = brush_model::Track { strokes: sheet_track.strokes[..sheet_track.mark_strokes].to_vec() };
         let (wp, hp) = lay.image_px(size);
-        let m = bezier_raster::render_track(
-            &marks,
-            profile,
+        let stamps = bezier_raster::track_stamps_with(&marks, profile, brush_model::Extrapolation::Refuse, fm)
+            .context("sheet.png: the registration marks")?;
+        let m = bezier_raster::render_stamps(
+            &stamps,
             model.model(),
-            brush_model::Extrapolation::Refuse,
             brush_model::PointMm::new(0.0, 0.0),
             size as f64 / lay.char_mm,
             wp as u32,
             hp as u32,
-        )
-        .context("sheet.png: the registration marks")?;
+        );
         for (a, &b) in img.data_mut().iter_mut().zip(m.data()) {
             *a = 1.0 - (1.0 - *a) * (1.0 - b);
         }
