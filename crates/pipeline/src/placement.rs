@@ -6,7 +6,7 @@ use brush_model::{BrushProfile, Extrapolation, Track};
 use robot_io::program::{RobotConfig, build_program};
 use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track_with, raster::render_glyph};
 
-use crate::write::{level_frame_for, render_char_through};
+use crate::write::{level_frame_for, render_char};
 use crate::{CharResult, Prepared, Result, WriteOptions, write_char};
 
 /// How [`write_placed`] sizes a character's box.
@@ -178,15 +178,8 @@ fn plan_score(
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let fm = opts.forward_model();
     let built = build_track_with(&with_splits(&p.paths, split), profile, &topts, &fm)?;
-    let img = render_char_through(
-        &fm,
-        &built.track,
-        profile,
-        opts.model,
-        Extrapolation::Refuse,
-        &char_box,
-        CHAR_BOX_SEARCH_PX,
-    )?;
+    let img =
+        render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
     Ok((stroke_metrics::csim(reference.as_gray(), img.as_gray())?, built.track))
 }
 

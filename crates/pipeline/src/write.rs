@@ -371,26 +371,16 @@ fn render_over(stamps: &[Stamp], model: ModelKind, b: &CharBox, size: u32) -> Co
     render_stamps(stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
 }
 
-/// Renders a track over a char box onto a `size²` image of the box.
+/// Renders a track through the forward model `fm` (the default one, or
+/// [`WriteOptions::forward_model`] for a brush fitted to trail otherwise) over a char box onto a
+/// `size²` image of the box.
 ///
 /// # Errors
 /// When the profile refuses a point.
 pub fn render_char(
     track: &Track,
     profile: &BrushProfile,
-    model: ModelKind,
-    ex: Extrapolation,
-    b: &CharBox,
-    size: u32,
-) -> Result<Coverage> {
-    render_char_through(&ForwardModel::default(), track, profile, model, ex, b, size)
-}
-
-/// [`render_char`] through `fm` (a brush whose tip trails otherwise: [`WriteOptions::trail_reach`]).
-pub(crate) fn render_char_through(
     fm: &ForwardModel,
-    track: &Track,
-    profile: &BrushProfile,
     model: ModelKind,
     ex: Extrapolation,
     b: &CharBox,
@@ -409,16 +399,14 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let fm = opts.forward_model();
     let built = build_track_with(&p.paths, profile, &topts, &fm)?;
-    let render =
-        render_char_through(&fm, &built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
+    let render = render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
     let reference = render_glyph(&p.glyph, opts.size);
     let sim = similarity(&reference, &render)?;
     let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
     let millis = t0.elapsed().as_secs_f64() * 1e3;
     let free_widths = if opts.free_widths {
         let free = build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
-        let img =
-            render_char_through(&fm, &free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+        let img = render_char(&free.track, profile, &fm, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
         Some(similarity(&reference, &img)?)
     } else {
         None
@@ -517,10 +505,10 @@ pub(crate) fn refine_result(
         track_refine::Gradients::Generator => return Err(Error::NoGenerator),
     }
     .map_err(|source| Error::Refine { ch: p.glyph.ch, source })?;
-    let render = render_char_through(
-        &opts.forward_model(),
+    let render = render_char(
         &refined.track,
         profile,
+        &opts.forward_model(),
         opts.model,
         Extrapolation::Refuse,
         &r.char_box,
@@ -730,7 +718,7 @@ mod tests {
         let fm = opts.forward_model();
         assert_eq!(fm.trail_reach, 0.3);
         let by = |fm: &ForwardModel, t: &Track| {
-            render_char_through(fm, t, &pen1, opts.model, Extrapolation::Refuse, &b, 96).unwrap()
+            render_char(t, &pen1, fm, opts.model, Extrapolation::Refuse, &b, 96).unwrap()
         };
         // The refined track's render is the one kept, through the fitted reach.
         assert!(r3.report.refine.as_ref().unwrap().rejected.is_none());
@@ -739,10 +727,7 @@ mod tests {
         let stamps = sweep_stamps_with(r3.executed_states.as_ref().unwrap(), &pen1, Extrapolation::Refuse, &fm);
         let executed = render_over(&stamps, opts.model, &b, 96);
         assert_eq!(r3.executed.as_ref().unwrap().data(), executed.data());
-        // Without a fitted reach, the forward model's own (`render_char`).
-        assert_eq!(
-            r5.render.data(),
-            render_char(&r5.track, &pen1, base.model, Extrapolation::Refuse, &b, 96).unwrap().data()
-        );
+        // Without a fitted reach, the forward model's own.
+        assert_eq!(r5.render.data(), by(&ForwardModel::default(), &r5.track).data());
     }
 }
