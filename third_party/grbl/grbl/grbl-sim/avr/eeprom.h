@@ -1,0 +1,3 @@
+
+#include "../eeprom.h"
+void eeprom_close();

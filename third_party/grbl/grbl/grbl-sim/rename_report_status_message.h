@@ -1,0 +1,1 @@
+#define report_status_message orig_report_status_message

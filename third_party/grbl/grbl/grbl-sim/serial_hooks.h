@@ -1,0 +1,2 @@
+#define serial_read orig_serial_read
+

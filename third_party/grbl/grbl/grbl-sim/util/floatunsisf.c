@@ -1,0 +1,3 @@
+float __floatunsisf (unsigned long v) {
+	return v;
+}
