@@ -1,0 +1,430 @@
+//! Streaming a checked program with GRBL's character-counting protocol, and the safe stop.
+
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+use crate::codes::{alarm_keeps_position, describe};
+use crate::machine::{Grbl, MachineInfo, keep};
+use crate::program::{GcodeProgram, LineKind};
+use crate::response::{Response, State, Status};
+use crate::{Fault, GrblError, Stopped};
+
+/// How often a status report is asked for while streaming.
+const POLL: Duration = Duration::from_millis(200);
+
+/// How far a run has got.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StreamProgress {
+    /// Lines acknowledged (`ok`: parsed and planned; the machine may still be moving through
+    /// the last few).
+    pub lines_acked: usize,
+    /// Lines in the program.
+    pub lines_total: usize,
+    /// Strokes whose lift has been acknowledged.
+    pub strokes_done: usize,
+    /// Strokes in the program.
+    pub strokes_total: usize,
+    /// Seconds since the first line was sent.
+    pub elapsed_s: f64,
+    /// The planned time of the lines not yet acknowledged, s.
+    pub remaining_s: f64,
+    /// The last reported position, work mm.
+    pub work_mm: Option<[f64; 3]>,
+    /// The last reported state.
+    pub state: Option<State>,
+}
+
+/// What a finished run did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StreamReport {
+    /// Lines streamed (all acknowledged).
+    pub lines: usize,
+    /// Bytes streamed.
+    pub bytes: usize,
+    /// The most bytes ever in flight (sent, not yet acknowledged).
+    pub max_in_flight: usize,
+    /// Seconds from the first line to the machine `Idle` after the last.
+    pub elapsed_s: f64,
+    /// The program's planned time, s (at the feeds streamed).
+    pub planned_s: f64,
+    /// Where the machine stopped, work mm.
+    pub work_mm: Option<[f64; 3]>,
+    /// Messages the machine pushed (`[MSG:Pgm End]`).
+    pub messages: Vec<String>,
+}
+
+/// The safe height the brush is raised to, and how.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SafeStop {
+    /// Whether the brush is known to be off the paper (raised, the machine answered).
+    pub lifted: bool,
+    /// What was done, in words.
+    pub how: String,
+    /// Where the machine stopped, work mm, as last reported.
+    pub work_mm: Option<[f64; 3]>,
+}
+
+/// A line sent and not yet acknowledged.
+struct InFlight {
+    index: usize,
+    bytes: usize,
+}
+
+/// The lines as streamed: the program's, with every feed scaled by `scale`.
+fn streamed_lines(program: &GcodeProgram, scale: f64) -> Vec<String> {
+    program
+        .lines
+        .iter()
+        .map(|l| {
+            if scale >= 1.0 || l.kind != LineKind::Feed {
+                return l.text.clone();
+            }
+            match l.text.rsplit_once('F') {
+                Some((head, _)) => format!("{head}F{:.6}", l.feed_mm_min * scale),
+                None => l.text.clone(),
+            }
+        })
+        .collect()
+}
+
+impl Grbl {
+    /// Streams `program` (checked by [`crate::check_program`], feeds scaled by `feed_scale`)
+    /// with GRBL's character-counting protocol: lines are sent while the bytes not yet
+    /// acknowledged stay below the receive buffer; every line must be answered `ok`. A status
+    /// report is asked for every 200 ms; `progress` is called after every answer. The run ends
+    /// when the last line is acknowledged and the machine reports `Idle`.
+    ///
+    /// On `error:N` or `ALARM:N`, when `stop` is set (Ctrl-C), when the machine resets itself or
+    /// stops answering, the streaming stops and the brush is made safe where the machine still
+    /// answers ([`Grbl::safe_stop`]); the error is [`GrblError::Stopped`] with the cause, the
+    /// last acknowledged line and what the safe stop did.
+    ///
+    /// # Errors
+    /// [`GrblError::Stopped`] as above.
+    pub fn stream(
+        &mut self,
+        info: &MachineInfo,
+        program: &GcodeProgram,
+        feed_scale: f64,
+        stop: &AtomicBool,
+        progress: &mut dyn FnMut(&StreamProgress),
+    ) -> Result<StreamReport, GrblError> {
+        let texts = streamed_lines(program, feed_scale);
+        let planned: Vec<f64> = program
+            .lines
+            .iter()
+            .map(|l| if l.kind == LineKind::Feed && feed_scale < 1.0 { l.planned_s / feed_scale } else { l.planned_s })
+            .collect();
+        let planned_total: f64 = planned.iter().sum();
+        // Strictly less than the buffer, as GRBL's own stream.py keeps it.
+        let limit = info.rx_buffer - 1;
+        let mut next = 0;
+        let mut in_flight: VecDeque<InFlight> = VecDeque::new();
+        let mut in_flight_bytes = 0;
+        let mut acked = 0;
+        let mut max_in_flight = 0;
+        let mut bytes = 0;
+        let mut messages = Vec::new();
+        let mut last: Option<Status> = None;
+        let start = Instant::now();
+        let mut last_poll: Option<Instant> = None;
+        let mut last_heard = Instant::now();
+        let mut finished_at: Option<Instant> = None;
+        let timeout = self.opts.timeout;
+        let report = |acked: usize, last: &Option<Status>, progress: &mut dyn FnMut(&StreamProgress)| {
+            let strokes_done = program.lines[..acked]
+                .iter()
+                .enumerate()
+                .filter(|(i, l)| {
+                    l.kind == LineKind::Travel
+                        && l.stroke.is_some()
+                        && program.lines.get(i + 1).is_none_or(|n| n.stroke != l.stroke || n.kind == LineKind::End)
+                })
+                .count();
+            progress(&StreamProgress {
+                lines_acked: acked,
+                lines_total: texts.len(),
+                strokes_done,
+                strokes_total: program.strokes,
+                elapsed_s: start.elapsed().as_secs_f64(),
+                remaining_s: planned[acked..].iter().sum(),
+                work_mm: last.as_ref().and_then(|s| work(s, info.wco)),
+                state: last.as_ref().map(|s| s.state),
+            });
+        };
+        let fault = |g: &mut Grbl, cause: Fault, acked: usize, last: &Option<Status>| -> GrblError {
+            let safe = g.safe_stop(info, program, &cause, last.as_ref());
+            stopped(program, cause, acked, safe)
+        };
+        loop {
+            if stop.load(Ordering::SeqCst) {
+                return Err(fault(self, Fault::Interrupted, acked, &last));
+            }
+            while next < texts.len() && in_flight_bytes + texts[next].len() + 1 <= limit {
+                let mut line = texts[next].clone().into_bytes();
+                line.push(b'\n');
+                if let Err(e) = self.lines.write(&line) {
+                    return Err(stopped(program, Fault::Link(e.to_string()), acked, lost()));
+                }
+                in_flight_bytes += line.len();
+                bytes += line.len();
+                max_in_flight = max_in_flight.max(in_flight_bytes);
+                in_flight.push_back(InFlight { index: next, bytes: line.len() });
+                next += 1;
+            }
+            let now = Instant::now();
+            if last_poll.is_none_or(|t| now - t >= POLL) {
+                if let Err(e) = self.lines.write(b"?") {
+                    return Err(stopped(program, Fault::Link(e.to_string()), acked, lost()));
+                }
+                last_poll = Some(now);
+            }
+            if now - last_heard > timeout {
+                let cause = Fault::Quiet(timeout.as_secs_f64());
+                return Err(fault(self, cause, acked, &last));
+            }
+            let deadline = last_poll.map_or(now, |t| t + POLL).max(now + Duration::from_millis(5));
+            let line = match self.lines.next_line(deadline) {
+                Ok(Some(l)) => l,
+                Ok(None) => continue,
+                Err(e) => return Err(stopped(program, Fault::Link(e.to_string()), acked, lost())),
+            };
+            last_heard = Instant::now();
+            match Response::parse(&line) {
+                Response::Ok => {
+                    let Some(f) = in_flight.pop_front() else {
+                        let cause = Fault::Protocol("an `ok` with no line waiting for it".into());
+                        return Err(fault(self, cause, acked, &last));
+                    };
+                    in_flight_bytes -= f.bytes;
+                    acked = f.index + 1;
+                    if acked == texts.len() {
+                        finished_at = Some(Instant::now());
+                        // The next status report decides: Idle ends the run.
+                        last_poll = None;
+                    }
+                    report(acked, &last, progress);
+                }
+                Response::Error(code) => {
+                    let index = in_flight.front().map_or(acked, |f| f.index);
+                    let cause = Fault::Firmware {
+                        what: describe("error", code),
+                        line: program.lines[index].source_line,
+                        text: texts[index].clone(),
+                    };
+                    return Err(fault(self, cause, acked, &last));
+                }
+                Response::Alarm(code) => {
+                    return Err(fault(self, Fault::Alarm(code), acked, &last));
+                }
+                Response::Banner(v) => {
+                    return Err(fault(self, Fault::Reset(v), acked, &last));
+                }
+                Response::Status(s) => {
+                    if s.state == State::Alarm {
+                        last = Some(s);
+                        return Err(fault(self, Fault::AlarmState, acked, &last));
+                    }
+                    let idle = s.state == State::Idle;
+                    last = Some(s);
+                    if finished_at.is_some() && idle && in_flight.is_empty() {
+                        return Ok(StreamReport {
+                            lines: texts.len(),
+                            bytes,
+                            max_in_flight,
+                            elapsed_s: start.elapsed().as_secs_f64(),
+                            planned_s: planned_total,
+                            work_mm: last.as_ref().and_then(|s| work(s, info.wco)),
+                            messages,
+                        });
+                    }
+                    report(acked, &last, progress);
+                }
+                Response::Bracket(b) => keep(&mut messages, b),
+                Response::Setting(..) | Response::Other(_) => {}
+            }
+        }
+    }
+
+    /// Makes the brush safe after a fault, keeping the machine's position where GRBL can:
+    ///
+    /// 1. feed hold (`!`), and wait until the machine has stopped (`Hold:0`, `Idle` or
+    ///    `Alarm`);
+    /// 2. soft reset (Ctrl-X), which empties the planner and the receive buffer; GRBL keeps the
+    ///    position when it is reset in a completed hold (not in motion);
+    /// 3. in alarm, unlock (`$X`);
+    /// 4. raise the brush: where the position is kept, straight up in machine coordinates
+    ///    (`G53 G0 Z`) to the program's travel height over the work zero found at connect (the
+    ///    reset cleared the parser's modes, not the offsets in EEPROM); where it may be lost
+    ///    (a hard limit, a reset in motion), up by the travel height plus the deepest press,
+    ///    relative (`G91 G0 Z`), and say so.
+    ///
+    /// Each step waits at most the link time-out (the hold: four of them); a machine that stops
+    /// answering leaves the brush where it is, and the result says so.
+    pub fn safe_stop(
+        &mut self,
+        info: &MachineInfo,
+        program: &GcodeProgram,
+        cause: &Fault,
+        last: Option<&Status>,
+    ) -> SafeStop {
+        let mut work_mm = last.and_then(|s| work(s, info.wco));
+        let mut steps: Vec<String> = Vec::new();
+        let mut alarm = match cause {
+            Fault::Alarm(c) => Some(*c),
+            _ => None,
+        };
+        let result = (|| -> Result<bool, String> {
+            // 1. Hold.
+            self.lines.write(b"!").map_err(|e| e.to_string())?;
+            steps.push("feed hold".into());
+            let hold_deadline = Instant::now() + self.opts.timeout * 4;
+            let mut held = false;
+            while Instant::now() < hold_deadline {
+                match self.poll_status(&mut alarm) {
+                    Ok(Some(s)) => {
+                        work_mm = work(&s, info.wco).or(work_mm);
+                        if (s.state == State::Hold && s.sub == Some(0)) || matches!(s.state, State::Idle | State::Alarm)
+                        {
+                            held = true;
+                            break;
+                        }
+                    }
+                    Ok(None) => {}
+                    Err(e) => return Err(e),
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            if !held {
+                return Err("the machine did not come to a stop after the feed hold".into());
+            }
+            // 2. Reset: the queue goes, the position stays (stopped in a hold).
+            self.lines.write(&[0x18]).map_err(|e| e.to_string())?;
+            steps.push("soft reset".into());
+            self.wait_for_banner(&mut alarm)?;
+            let s = self.status_now(&mut alarm)?;
+            work_mm = work(&s, info.wco).or(work_mm);
+            // GRBL alarms when it loses the position (a reset in motion is ALARM:3); a reset
+            // without an alarm kept it.
+            let kept = alarm.is_none_or(alarm_keeps_position);
+            // 3. Unlock.
+            if s.state == State::Alarm {
+                self.command("$X")?;
+                steps.push("unlock ($X)".into());
+            }
+            // 4. Raise the brush.
+            if kept {
+                let machine_z = s.machine(info.wco).map(|m| m[2]);
+                let target = info.wco[2] + program.lift_mm;
+                if machine_z.is_some_and(|z| z >= target - 1e-3) {
+                    steps.push(format!("the brush already above the travel height (work Z {:.3})", program.lift_mm));
+                } else {
+                    self.command(&format!("G53G0Z{target:.3}"))?;
+                    steps.push(format!("brush raised to work Z {:.3} (G53 G0 Z{target:.3})", program.lift_mm));
+                }
+            } else {
+                let up = program.lift_mm - program.min_z_mm.min(0.0);
+                self.command(&format!("G91G0Z{up:.3}"))?;
+                self.command("G90")?;
+                steps.push(format!(
+                    "the position may be lost: brush raised {up:.3} mm (G91 G0 Z{up:.3}); home or touch off again before the next run"
+                ));
+            }
+            // The move is over when the machine is idle again.
+            let deadline = Instant::now() + self.opts.timeout * 4;
+            loop {
+                let s = self.status_now(&mut alarm)?;
+                work_mm = work(&s, info.wco).or(work_mm);
+                if s.state == State::Idle {
+                    return Ok(true);
+                }
+                if Instant::now() > deadline {
+                    return Err(format!("the machine is {} after the lift, not Idle", s.state_text()));
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        })();
+        match result {
+            Ok(lifted) => SafeStop { lifted, how: steps.join(", "), work_mm },
+            Err(e) => {
+                let done = if steps.is_empty() { String::new() } else { format!(" after {}", steps.join(", ")) };
+                SafeStop {
+                    lifted: false,
+                    how: format!(
+                        "the brush could not be made safe{done}: {e}; it may still press into the paper: lift it by hand"
+                    ),
+                    work_mm,
+                }
+            }
+        }
+    }
+
+    /// Asks for a status report and reads what comes until it (or `None` after 200 ms).
+    fn poll_status(&mut self, alarm: &mut Option<u16>) -> Result<Option<Status>, String> {
+        self.lines.write(b"?").map_err(|e| e.to_string())?;
+        let deadline = Instant::now() + Duration::from_millis(200);
+        loop {
+            match self.lines.next_line(deadline).map_err(|e| e.to_string())? {
+                None => return Ok(None),
+                Some(l) => match Response::parse(&l) {
+                    Response::Status(s) => return Ok(Some(s)),
+                    Response::Alarm(a) => *alarm = Some(a),
+                    _ => {}
+                },
+            }
+        }
+    }
+
+    /// A status report within the time-out.
+    fn status_now(&mut self, alarm: &mut Option<u16>) -> Result<Status, String> {
+        let deadline = Instant::now() + self.opts.timeout;
+        while Instant::now() < deadline {
+            if let Some(s) = self.poll_status(alarm)? {
+                return Ok(s);
+            }
+        }
+        Err(format!("no status report for {:.1} s", self.opts.timeout.as_secs_f64()))
+    }
+
+    /// Waits for the banner after a reset.
+    fn wait_for_banner(&mut self, alarm: &mut Option<u16>) -> Result<(), String> {
+        let deadline = Instant::now() + self.opts.timeout.max(self.opts.banner_wait);
+        loop {
+            match self.lines.next_line(deadline).map_err(|e| e.to_string())? {
+                None => return Err("no banner after the soft reset".into()),
+                Some(l) => match Response::parse(&l) {
+                    Response::Banner(_) => return Ok(()),
+                    Response::Alarm(a) => *alarm = Some(a),
+                    _ => {}
+                },
+            }
+        }
+    }
+
+    /// Sends one command and waits for its `ok`.
+    fn command(&mut self, cmd: &str) -> Result<(), String> {
+        let mut messages = Vec::new();
+        self.query(cmd, &mut messages).map(|_| ()).map_err(|e| format!("`{cmd}`: {e}"))
+    }
+}
+
+/// The work position of a status report.
+fn work(s: &Status, wco: [f64; 3]) -> Option<[f64; 3]> {
+    s.wpos.or_else(|| s.mpos.map(|m| [m[0] - wco[0], m[1] - wco[1], m[2] - wco[2]]))
+}
+
+fn lost() -> SafeStop {
+    SafeStop {
+        lifted: false,
+        how: "the link is lost: the machine runs what it had queued (up to its planner's moves and its receive buffer) and the brush may be left pressed into the paper: lift it by hand".into(),
+        work_mm: None,
+    }
+}
+
+fn stopped(program: &GcodeProgram, cause: Fault, acked: usize, safe: SafeStop) -> GrblError {
+    let last = acked.checked_sub(1).map(|i| (program.lines[i].source_line, program.lines[i].text.clone()));
+    GrblError::Stopped(Box::new(Stopped { cause, lines_acked: acked, lines_total: program.lines.len(), last_acked: last, safe }))
+}
