@@ -9,8 +9,12 @@
 //! * [`kinematics`]: AUBO-i5 forward kinematics (modified DH) and a numerical inverse.
 //! * [`program`]: `robot.json`, the writing program (travel, descend, press, lift, optional
 //!   dipping) and the safety envelope checked before anything moves.
-//! * [`aubo`]: the ARCS JSON-RPC client (the SDK's framed protocol with its login, line-delimited
-//!   JSON, or HTTP) and a fault-tolerant runner (reconnect, lift, resume).
+//! * [`Controller`]: the seam `maobi robot send` drives: prepare a checked program in a
+//!   controller's form, connect and check before anything moves, run it with progress and a safe
+//!   stop. Each controller lives in its own module.
+//! * [`aubo`]: AUBO arms: the ARCS JSON-RPC client (the SDK's framed protocol with its login,
+//!   line-delimited JSON, or HTTP), a fault-tolerant runner (reconnect, lift, resume) and the
+//!   [`aubo::AuboRpc`] controller.
 //! * [`export`]: ARCS Lua script, URScript, G-code.
 //! * [`exec`]: the pure motion executor (no sockets): a program executed as the controller
 //!   would move, sampled in time, tagged by stroke and ink dip, and turned back into brush
@@ -43,19 +47,19 @@ struct ReadmeDoctests;
 
 pub mod aubo;
 mod config;
+mod controller;
 pub mod exec;
 pub mod export;
 pub mod frame;
 pub mod kinematics;
 pub mod pose;
 pub mod program;
-mod run;
 pub mod sim;
 pub mod timing;
 pub mod wire;
 
-pub use aubo::{AuboClient, Link, RunOptions, RunReport, run_program, send_script};
 pub use config::SettingError;
+pub use controller::{Controller, Plan, Position, Preflight, Prepared, Progress, RunSummary, Watch, expected_seconds};
 pub use exec::{
     TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
 };
@@ -197,7 +201,7 @@ pub enum RobotError {
     Interrupted,
     /// Path-buffer waypoints would be computed from maobi's nominal AUBO-i5 parameters (the
     /// controller does not report its own, or nominal ones were asked for) and the caller did
-    /// not accept that ([`RunOptions::accept_nominal_kinematics`]); nothing was moved.
+    /// not accept that ([`aubo::RunOptions::accept_nominal_kinematics`]); nothing was moved.
     #[error(
         "refused: the joint waypoints would be computed from maobi's nominal AUBO-i5 parameters, not the arm's own ({reason}); nothing was moved"
     )]
@@ -232,7 +236,10 @@ pub enum RobotError {
     /// A run on the controller ended before the program finished, after the brush may have
     /// moved; says how far it got and whether the brush was lifted to the safe height. The
     /// cause is the source.
-    #[error("stopped after {completed} of {total} strokes ({reconnects} reconnect(s)); {lift}")]
+    #[error(
+        "stopped after {completed} of {total} strokes ({reconnects} reconnect(s)); {lift}{}",
+        at.as_ref().map_or(String::new(), |p| format!("; last seen at {p}"))
+    )]
     RunStopped {
         /// Why the run stopped.
         #[source]
@@ -247,6 +254,9 @@ pub enum RobotError {
         lifted: bool,
         /// What the retreat did, in words.
         lift: String,
+        /// Where the machine was last seen after the retreat (`None`: not known, or not trusted);
+        /// boxed to keep the error small.
+        at: Option<Box<Position>>,
     },
 }
 

@@ -7,14 +7,14 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use robot_io::Transport;
-use robot_io::aubo::{Link, RunOptions, run_program};
+use robot_io::aubo::{AuboRpc, Link, Motion};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program_chars};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
-use robot_io::{RobotError, TrackFile};
+use robot_io::{Controller, Plan, Progress, RobotError, TrackFile, Watch};
 
-use crate::common::{check_output_file, print_json, progress, write_atomic};
+use crate::common::{PROGRESS_QUIET_S, check_output_file, clock, print_json, progress, write_atomic};
 
 /// `maobi robot` subcommands.
 #[derive(clap::Subcommand, Debug)]
@@ -174,26 +174,36 @@ pub struct ExportArgs {
     accept_nominal_kinematics: bool,
 }
 
+/// The controllers `maobi robot send` drives (each behind `robot_io::Controller`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ControllerKind {
+    /// An AUBO arm (ARCS): JSON-RPC over --transport framed, lines or http.
+    Aubo,
+}
+
 /// Arguments of `maobi robot send`.
 #[derive(clap::Args, Debug)]
 pub struct SendArgs {
     #[command(flatten)]
     program: ProgramArgs,
+    /// Which controller drives the arm.
+    #[arg(long, value_enum, default_value = "aubo")]
+    controller: ControllerKind,
     #[command(flatten)]
-    controller: ControllerArgs,
+    link: ControllerArgs,
     /// Check and print the plan without connecting.
     #[arg(long)]
     dry_run: bool,
-    /// How pressed strokes are sent: path-buffer (each stroke one path buffer of joint
+    /// AUBO: how pressed strokes are sent: path-buffer (each stroke one path buffer of joint
     /// waypoints on its timing, on the controller's own kinematics) or moves (a moveLine per
     /// point of the compacted track, blends at most half the shorter neighbouring move).
     #[arg(long, default_value = "path-buffer", value_parser = ["path-buffer", "moves"])]
     motion: String,
-    /// Time the path buffers on maobi's nominal AUBO-i5 parameters instead of the ones the
+    /// AUBO: time the path buffers on maobi's nominal AUBO-i5 parameters instead of the ones the
     /// controller reports (getKinematicsParam); needs --accept-nominal-kinematics.
     #[arg(long)]
     nominal_kinematics: bool,
-    /// Accept path-buffer joint waypoints computed from maobi's nominal AUBO-i5 parameters
+    /// AUBO: accept path-buffer joint waypoints computed from maobi's nominal AUBO-i5 parameters
     /// (when --nominal-kinematics asks for them, or the controller does not report its own);
     /// its forward kinematics must still agree with them before anything moves.
     #[arg(long)]
@@ -414,7 +424,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
     let c = &a.controller;
     let addr = c.addr()?;
     check_output_file("-o", &a.output, a.force)?;
-    let (mut client, names) = robot_io::AuboClient::open(&addr, &c.link(), c.timeout())
+    let (mut client, names) = robot_io::aubo::AuboClient::open(&addr, &c.link(), c.timeout())
         .with_context(|| format!("connecting to {addr} ({})", c.transport))?;
     let robot = match &a.robot_name {
         Some(r) => r.clone(),
@@ -435,87 +445,92 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
     Ok(())
 }
 
+/// The controller `a` asks for, at the address its flags give.
+fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
+    let c = &a.link;
+    let motion = if a.motion == "moves" { Motion::Moves } else { Motion::PathBuffer };
+    Ok(match a.controller {
+        ControllerKind::Aubo => Box::new(
+            AuboRpc::new(&c.addr()?, c.link(), c.timeout(), motion)
+                .nominal_kinematics(a.nominal_kinematics, a.accept_nominal_kinematics),
+        ),
+    })
+}
+
 fn send(a: SendArgs) -> Result<()> {
-    let c = &a.controller;
-    let addr = c.addr()?;
     let l = load(&a.program)?;
-    let (program, report) =
+    let (program, _) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
-    let by_moves = a.motion == "moves";
-    let program = if by_moves { robot_io::program::compact_program(&program, &l.cfg) } else { program };
-    if by_moves {
-        robot_io::program::check_blends(&program)?;
-    }
-    // Checked here on the nominal arm (the simulator's); the runner times again on the
-    // controller's own kinematics before anything moves.
-    if !by_moves {
-        robot_io::time_program(&program, &robot_io::kinematics::DhParams::AUBO_I5, &l.cfg)?;
-    }
+    let track = l.track.track();
+    let t = title(&l.track);
+    let plan = Plan {
+        program: &program,
+        config: &l.cfg,
+        track: &track,
+        stroke_chars: l.track.stroke_chars.as_deref(),
+        title: &t,
+    };
+    let mut controller = controller_for(&a)?;
+    let to = controller.describe();
+    let prepared = controller.prepare(&plan)?;
     if a.dry_run {
         println!(
-            "dry run: {} strokes, {} moves would be sent to {addr} ({}, {}); nothing connected",
-            report.strokes,
-            if by_moves { program.move_count() } else { report.moves },
-            c.transport,
-            a.motion
+            "dry run: {} strokes, {} would be sent to {to} ({}); nothing connected",
+            prepared.strokes, prepared.summary, a.motion
         );
         return Ok(());
     }
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
-    let pb = progress(program.strokes.len() as u64, "strokes");
-    let opts = RunOptions {
-        timeout: c.timeout(),
-        lift_m: l.cfg.lift_mm / 1000.0,
-        link: c.link(),
-        path_buffer: (!by_moves).then(|| l.cfg.clone()),
-        nominal_kinematics: a.nominal_kinematics,
-        accept_nominal_kinematics: a.accept_nominal_kinematics,
-        ..RunOptions::new(&stop)
+    let preflight = match controller.connect() {
+        Ok(p) => p,
+        Err(e) => return Err(advice(e, &to)),
     };
-    let result = run_program(&addr, &program, l.cfg.robot_name.as_deref(), &opts, |r| {
-        pb.set_position(r.strokes_completed.len() as u64)
-    });
+    println!("{}: checked before moving: {}", preflight.controller, preflight.checks.join("; "));
+    let pb = progress(program.strokes.len() as u64, "strokes");
+    let started = std::time::Instant::now();
+    let mut show = |p: &Progress| {
+        pb.set_position(p.strokes_done as u64);
+        // Without a terminal (the bar), a line per stroke once the run is longer than a moment.
+        use std::io::IsTerminal;
+        if !std::io::stderr().is_terminal() && started.elapsed().as_secs_f64() >= PROGRESS_QUIET_S {
+            let left = p.remaining_s.map_or(String::new(), |s| format!(", about {} left", clock(s)));
+            eprintln!("send: {}/{} strokes, elapsed {}{left}", p.strokes_done, p.strokes_total, clock(p.elapsed_s));
+        }
+    };
+    let result = controller.run(&mut Watch { stop: &stop, progress: &mut show });
     pb.finish_and_clear();
     let r = match result {
         Ok(r) => r,
         Err(e) if matches!(&e, RobotError::RunStopped { cause, .. } if matches!(**cause, RobotError::Interrupted)) => {
             // Ctrl-C: not a success; the conventional status of a run ended by SIGINT.
             // The cause first (RunStopped's own text says how far it got and the lift).
-            eprintln!("error: running on {addr}: {}; {e}", RobotError::Interrupted);
+            eprintln!("error: running on {to}: {}; {e}", RobotError::Interrupted);
             std::process::exit(130);
         }
-        Err(e @ RobotError::NominalKinematics { .. }) => {
-            return Err(e).with_context(|| {
-                format!(
-                    "running on {addr} ({}): the path buffers need the arm's own kinematics; pass --accept-nominal-kinematics to write with maobi's nominal ones anyway (the controller's forward kinematics still checks them), or --motion moves",
-                    c.transport
-                )
-            });
-        }
-        Err(e) => return Err(e).with_context(|| format!("running on {addr} ({})", c.transport)),
+        Err(e) => return Err(advice(e, &to)),
     };
-    println!(
-        "{} of {} strokes completed; {} reconnect(s), {} stroke(s) resumed; {} controller calls, {} path buffer(s)",
-        r.strokes_completed.len(),
-        r.strokes_total,
-        r.reconnects,
-        r.strokes_resumed,
-        r.calls,
-        r.path_buffers,
-    );
-    if r.nominal_kinematics {
-        println!(
-            "the path buffers were timed on maobi's nominal AUBO-i5 parameters (accepted), checked by the controller's forward kinematics"
-        );
-    } else if r.path_buffers > 0 {
-        println!(
-            "the path buffers were timed on the controller's kinematics (getKinematicsParam{})",
-            if r.compensation_checked { ", its compensation checked" } else { "" }
-        );
+    let mut line = format!("{} of {} strokes completed", r.strokes_completed.len(), r.strokes_total);
+    for c in &r.counts {
+        line.push_str("; ");
+        line.push_str(c);
+    }
+    println!("{line}");
+    for n in &r.notes {
+        println!("{n}");
     }
     Ok(())
+}
+
+/// A controller's error with the flags that change it, in the context of `to`.
+fn advice(e: RobotError, to: &str) -> anyhow::Error {
+    match e {
+        e @ RobotError::NominalKinematics { .. } => anyhow::Error::new(e).context(format!(
+            "running on {to}: the path buffers need the arm's own kinematics; pass --accept-nominal-kinematics to write with maobi's nominal ones anyway (the controller's forward kinematics still checks them), or --motion moves"
+        )),
+        e => anyhow::Error::new(e).context(format!("running on {to}")),
+    }
 }
 
 fn sim(a: SimArgs) -> Result<()> {

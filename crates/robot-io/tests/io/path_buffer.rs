@@ -176,8 +176,8 @@ fn send_writes_each_stroke_as_one_path_buffer_on_the_controllers_own_kinematics(
         Simulator::start_with(&[Listen { bind: "127.0.0.1:0".into(), transports: vec![Transport::Framed] }], options)
             .unwrap();
     let stop = AtomicBool::new(false);
-    let opts = robot_io::RunOptions { path_buffer: Some(cfg.clone()), ..robot_io::RunOptions::new(&stop) };
-    let report = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts, |_| {}).unwrap();
+    let opts = robot_io::aubo::RunOptions { path_buffer: Some(cfg.clone()), ..robot_io::aubo::RunOptions::new(&stop) };
+    let report = robot_io::aubo::run_program(&sim.addr.to_string(), &program, None, &opts, |_| {}).unwrap();
     assert_eq!(report.strokes_completed, vec![0, 1]);
     assert_eq!(report.path_buffers, 2);
     // It reported a compensation (its arm minus the nominal one), checked against its own
@@ -218,35 +218,36 @@ fn nominal_kinematics_are_refused_unless_accepted_and_still_checked_by_the_contr
             .unwrap()
     };
     let stop = AtomicBool::new(false);
-    let opts = |nominal: bool, accept: bool| robot_io::RunOptions {
+    let opts = |nominal: bool, accept: bool| robot_io::aubo::RunOptions {
         path_buffer: Some(cfg.clone()),
         nominal_kinematics: nominal,
         accept_nominal_kinematics: accept,
-        ..robot_io::RunOptions::new(&stop)
+        ..robot_io::aubo::RunOptions::new(&stop)
     };
     let moved = |sim: &Simulator| sim.trace().iter().any(|t| t.kind != TraceKind::Joint);
     // A controller that does not report its parameters: refused before a stroke is written
     // (only the start move, which the controller solves itself, ran).
     let without = SimOptions { kinematics_param: false, ..SimOptions::default() };
     let sim = start(without.clone());
-    let e = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts(false, false), |_| {}).unwrap_err();
+    let e =
+        robot_io::aubo::run_program(&sim.addr.to_string(), &program, None, &opts(false, false), |_| {}).unwrap_err();
     assert!(matches!(&e, RobotError::NominalKinematics { reason } if reason.contains("getKinematicsParam")), "{e}");
     assert!(!moved(&sim));
     // Accepted: written, on the nominal parameters (which this arm has), checked by its own
     // forward kinematics.
     let sim = start(without);
-    let r = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts(false, true), |_| {}).unwrap();
+    let r = robot_io::aubo::run_program(&sim.addr.to_string(), &program, None, &opts(false, true), |_| {}).unwrap();
     assert_eq!((r.strokes_completed.len(), r.nominal_kinematics, r.compensation_checked), (2, true, false));
     // Nominal asked for: refused unless accepted, even where the controller reports its own.
     let sim = start(SimOptions::default());
-    let e = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts(true, false), |_| {}).unwrap_err();
+    let e = robot_io::aubo::run_program(&sim.addr.to_string(), &program, None, &opts(true, false), |_| {}).unwrap_err();
     assert!(matches!(&e, RobotError::NominalKinematics { reason } if reason.contains("asked for")), "{e}");
     // Accepted on an arm that is not the nominal one: its forward kinematics disagree, and
     // nothing is written.
     let mut arm = DhParams::AUBO_I5;
     arm.a_m[2] += 0.02;
     let sim = start(SimOptions { kinematics: arm, ..SimOptions::default() });
-    let e = robot_io::run_program(&sim.addr.to_string(), &program, None, &opts(true, true), |_| {}).unwrap_err();
+    let e = robot_io::aubo::run_program(&sim.addr.to_string(), &program, None, &opts(true, true), |_| {}).unwrap_err();
     assert!(e.to_string().contains("the controller's forward kinematics put the TCP"), "{e}");
     assert!(!moved(&sim));
 }

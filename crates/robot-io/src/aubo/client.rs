@@ -1,5 +1,4 @@
-//! The AUBO ARCS JSON-RPC 2.0 client, and (re-exported from the crate's `run` module) the
-//! fault-tolerant program runner.
+//! The AUBO ARCS JSON-RPC 2.0 client.
 //!
 //! The client speaks one of three [`Transport`]s: the official SDK's framed protocol on port
 //! 30004 (the default: named params, string ids, version query and login first), maobi's
@@ -115,7 +114,7 @@ impl AuboClient {
     /// # Examples
     /// ```no_run
     /// use std::time::Duration;
-    /// use robot_io::AuboClient;
+    /// use robot_io::aubo::AuboClient;
     /// // A controller on the local network (the line-delimited transport).
     /// let client = AuboClient::connect("192.168.1.10:8899", Duration::from_secs(5))?;
     /// # drop(client);
@@ -930,11 +929,6 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
     let mut s = c.stream;
     s.write_all(script.as_bytes()).and_then(|_| s.write_all(b"\r\n\r\n")).map_err(|e| io_at(addr, e))
 }
-
-pub use crate::run::{
-    CONTROLLER_FK_TOLERANCE_M, CONTROLLER_FK_TOLERANCE_RAD, MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD,
-    PATH_VALID_WAIT, POSE_TOLERANCE_M, REF_TEMPERATURE_C, RunOptions, RunReport, run_program,
-};
 
 /// Refuses a script the script port would not take as one script: one containing the
 /// terminator `\r\n\r\n` or a NUL byte.

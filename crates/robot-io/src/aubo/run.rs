@@ -14,6 +14,7 @@ use nalgebra::{Point3, Vector3};
 
 use crate::RobotError;
 use crate::aubo::{AuboClient, Link, io_at};
+use crate::controller::Position;
 use crate::pose::Pose;
 use crate::program::{Move, Program, StrokeProgram};
 use crate::timing::{PATH_TOLERANCE_M, PATH_TOLERANCE_RAD, TimedStroke};
@@ -44,6 +45,7 @@ pub const NEIGHBOURHOOD_M: f64 = 0.1;
 const DONE_M: f64 = 0.0005;
 
 /// How the runner behaves on faults.
+#[derive(Clone)]
 pub struct RunOptions<'a> {
     /// Per-call timeout.
     pub timeout: Duration,
@@ -460,14 +462,78 @@ pub fn run_program(
     program: &Program,
     robot_name: Option<&str>,
     opts: &RunOptions<'_>,
-    mut progress: impl FnMut(&RunReport),
+    progress: impl FnMut(&RunReport),
 ) -> Result<RunReport, RobotError> {
     if opts.path_buffer.is_none() {
         // A move per point: the blends must be ones a controller accepts.
         crate::program::check_blends(program)?;
     }
-    let report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
     let session = open(addr, program, opts, robot_name)?;
+    run_opened(addr, program, robot_name, opts, session, progress)
+}
+
+/// A connection opened and checked before a run ([`preflight`]): the session, the controller's
+/// interface version, and where the arm was.
+pub(super) struct Opened {
+    session: Session,
+    /// `SystemInfo.getInterfaceVersionCode` (not asked on the line-delimited transport).
+    pub(super) interface_version: Option<i64>,
+    /// The robot driven.
+    pub(super) robot: String,
+    /// The TCP pose reported, checked to be finite and within reach.
+    pub(super) pose: Pose,
+}
+
+/// Opens the connection as [`run_program`] does (the handshake, the robot name, the tool offset
+/// and speed fraction set) and checks what [`run_program`] checks before its first move: the
+/// controller idle (`getExecId` −1) and a finite pose within reach. Nothing moves.
+///
+/// # Errors
+/// As [`run_program`] before anything moved.
+pub(super) fn preflight(
+    addr: &str,
+    program: &Program,
+    robot_name: Option<&str>,
+    opts: &RunOptions<'_>,
+) -> Result<Opened, RobotError> {
+    let mut session = open(addr, program, opts, robot_name)?;
+    let id = session.client.exec_id(&session.robot)?;
+    if id != -1 {
+        return Err(RobotError::UnexpectedState(format!(
+            "before the run: getExecId reported motion {id} though this run has nothing queued (is another client driving the arm?)"
+        )));
+    }
+    let pose = session.client.tcp_pose(&session.robot)?;
+    check_pose(&pose, &Expect::Reach, None, "before the run")?;
+    let interface_version = session.client.interface_version();
+    let robot = session.robot.clone();
+    Ok(Opened { session, interface_version, robot, pose })
+}
+
+/// [`run_program`] on a connection [`preflight`] opened.
+///
+/// # Errors
+/// As [`run_program`] after the connection is open.
+pub(super) fn run_preflighted(
+    addr: &str,
+    program: &Program,
+    robot_name: Option<&str>,
+    opts: &RunOptions<'_>,
+    opened: Opened,
+    progress: impl FnMut(&RunReport),
+) -> Result<RunReport, RobotError> {
+    run_opened(addr, program, robot_name, opts, opened.session, progress)
+}
+
+fn run_opened(
+    addr: &str,
+    program: &Program,
+    robot_name: Option<&str>,
+    opts: &RunOptions<'_>,
+    session: Session,
+    mut progress: impl FnMut(&RunReport),
+) -> Result<RunReport, RobotError> {
+    let report = RunReport { strokes_total: program.strokes.len(), ..RunReport::default() };
     let mut run = Runner {
         addr,
         program,
@@ -1080,6 +1146,7 @@ impl Runner<'_, '_> {
             reconnects: self.report.reconnects,
             lifted,
             lift,
+            at: if lifted { self.commanded.from.map(|p| Box::new(Position::Tcp(p))) } else { None },
         }
     }
 }
