@@ -42,6 +42,7 @@
 #![warn(unreachable_pub)]
 
 mod codes;
+mod controller;
 mod link;
 mod machine;
 mod program;
@@ -49,6 +50,7 @@ mod response;
 mod stream;
 
 pub use codes::{alarm_meaning, error_meaning};
+pub use controller::{Endpoint, GrblPlotter};
 pub use link::{MAX_LINE_BYTES, Port, SerialLink, TcpLink};
 pub use machine::{Checked, DEFAULT_RX_BUFFER, Grbl, LinkOptions, MachineInfo, RateFit, check_program};
 pub use program::{GRBL_MAX_LINE, GcodeProgram, LineKind, ProgramLine};
@@ -110,6 +112,10 @@ pub struct Stopped {
     pub lines_acked: usize,
     /// Lines in the program.
     pub lines_total: usize,
+    /// Strokes whose lift was acknowledged.
+    pub strokes_done: usize,
+    /// Strokes in the program.
+    pub strokes_total: usize,
     /// The last acknowledged line: its number in the G-code file and its text.
     pub last_acked: Option<(usize, String)>,
     /// What the safe stop did.

@@ -194,7 +194,10 @@ impl Grbl {
             match Response::parse(&line) {
                 Response::Ok => return Ok(out),
                 Response::Error(e) => {
-                    return Err(GrblError::Protocol(format!("`{cmd}` answered {}", crate::codes::describe("error", e))));
+                    return Err(GrblError::Protocol(format!(
+                        "`{cmd}` answered {}",
+                        crate::codes::describe("error", e)
+                    )));
                 }
                 Response::Alarm(a) => {
                     return Err(GrblError::Refused(format!(
@@ -282,7 +285,10 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
         ));
     }
     if st.state != State::Idle {
-        return refuse(format!("the machine is in state {}, not Idle: let it finish or reset it first", st.state_text()));
+        return refuse(format!(
+            "the machine is in state {}, not Idle: let it finish or reset it first",
+            st.state_text()
+        ));
     }
     checks.push(format!("Grbl {} ({}), Idle", info.version, info.build));
     if info.setting(13).is_some_and(|v| v != 0.0) {

@@ -135,7 +135,10 @@ impl GcodeProgram {
                 lift = target[2];
             }
             if kind == LineKind::Feed && lift.is_none() {
-                return Err(refuse(n, "the program presses before it has raised the brush to its travel height".into()));
+                return Err(refuse(
+                    n,
+                    "the program presses before it has raised the brush to its travel height".into(),
+                ));
             }
             if let Some(z) = target[2] {
                 min_z = min_z.min(z);

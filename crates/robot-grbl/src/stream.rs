@@ -135,15 +135,7 @@ impl Grbl {
         let mut finished_at: Option<Instant> = None;
         let timeout = self.opts.timeout;
         let report = |acked: usize, last: &Option<Status>, progress: &mut dyn FnMut(&StreamProgress)| {
-            let strokes_done = program.lines[..acked]
-                .iter()
-                .enumerate()
-                .filter(|(i, l)| {
-                    l.kind == LineKind::Travel
-                        && l.stroke.is_some()
-                        && program.lines.get(i + 1).is_none_or(|n| n.stroke != l.stroke || n.kind == LineKind::End)
-                })
-                .count();
+            let strokes_done = strokes_done(program, acked);
             progress(&StreamProgress {
                 lines_acked: acked,
                 lines_total: texts.len(),
@@ -424,7 +416,28 @@ fn lost() -> SafeStop {
     }
 }
 
+/// Strokes whose lift (the `G0 Z` that ends them) is among the first `acked` lines.
+fn strokes_done(program: &GcodeProgram, acked: usize) -> usize {
+    program.lines[..acked]
+        .iter()
+        .enumerate()
+        .filter(|(i, l)| {
+            l.kind == LineKind::Travel
+                && l.stroke.is_some()
+                && program.lines.get(i + 1).is_none_or(|n| n.stroke != l.stroke || n.kind == LineKind::End)
+        })
+        .count()
+}
+
 fn stopped(program: &GcodeProgram, cause: Fault, acked: usize, safe: SafeStop) -> GrblError {
     let last = acked.checked_sub(1).map(|i| (program.lines[i].source_line, program.lines[i].text.clone()));
-    GrblError::Stopped(Box::new(Stopped { cause, lines_acked: acked, lines_total: program.lines.len(), last_acked: last, safe }))
+    GrblError::Stopped(Box::new(Stopped {
+        cause,
+        lines_acked: acked,
+        lines_total: program.lines.len(),
+        strokes_done: strokes_done(program, acked),
+        strokes_total: program.strokes,
+        last_acked: last,
+        safe,
+    }))
 }

@@ -68,6 +68,11 @@ void grbl_per_byte(void){
   printBlock();
 }
 
+// maobi: see simulator.h.
+int sim_in_motion(void){
+  return (sys.state & (STATE_CYCLE | STATE_HOLD | STATE_JOG | STATE_HOMING)) != 0;
+}
+
 void grbl_app_exit(void){
   //force final position print
   print_steps(1);

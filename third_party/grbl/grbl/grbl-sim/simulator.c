@@ -139,7 +139,9 @@ void sim_loop(){
     platform_resume_avr();
     // maobi: the main program runs (and refills the step segments) before the next slice,
     // as the AVR's would between interrupts, however busy the host.
-    platform_wait_main(checkpoints, SIM_MAIN_WAIT_US);
+    // Only while the steppers run: elsewhere the main program may busy-wait on the
+    // simulator (a full transmit buffer) without passing such a point.
+    if (sim_in_motion()) { platform_wait_main(checkpoints, SIM_MAIN_WAIT_US); }
    }
 
    platform_sleep(SIM_SLICE_US);

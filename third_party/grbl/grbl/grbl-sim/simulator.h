@@ -81,5 +81,9 @@ void simulate_serial();
 //print serial output to stdout or file
 void sim_serial_out(uint8_t data);
 
+// maobi: whether the firmware is moving (a cycle, a hold, jogging, homing): then the
+// simulator waits for its main program between slices (grbl_interface.c).
+int sim_in_motion(void);
+
 
 #endif
