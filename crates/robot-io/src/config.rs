@@ -243,6 +243,42 @@ pub struct RobotConfig {
     pub limits: Limits,
     /// How pressed strokes are timed (docs/robot.md, "Motion: timing and the path buffer").
     pub timing: Timing,
+    /// How a 3-axis plotter's work coordinates lie on the paper (the G-code export and
+    /// `robot send --controller grbl`; docs/robot.md, "GRBL brush plotters").
+    pub plotter: PlotterConfig,
+}
+
+/// `robot.json` → `plotter`: how the G-code's work coordinates lie on the paper. The work zero
+/// is the paper's top-left corner with the brush tip just touching it (the touch-off); X runs
+/// right along the paper's x.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlotterConfig {
+    /// Which way the machine's +Y runs on the paper.
+    pub y_axis: YAxis,
+}
+
+/// Which way a plotter's +Y runs on the paper (`robot.json` `plotter.y_axis`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum YAxis {
+    /// Away from you, up the page (right-handed, the CNC convention GRBL machines follow): the
+    /// sheet lies at negative Y, `Y = −y`.
+    #[default]
+    Away,
+    /// Toward you, down the page (as the paper's y and SVG): `Y = y`.
+    Toward,
+}
+
+impl YAxis {
+    /// The G-code Y of paper `y_mm`.
+    pub fn y(self, y_mm: f64) -> f64 {
+        match self {
+            // `0.0 - y` keeps 0 a plain zero.
+            YAxis::Away => 0.0 - y_mm,
+            YAxis::Toward => y_mm,
+        }
+    }
 }
 
 /// How pressed strokes are timed (`robot.json` → `timing`; every field optional): the write
@@ -291,6 +327,7 @@ impl Default for RobotConfig {
             approach: Approach::default(),
             limits: Limits::default(),
             timing: Timing::default(),
+            plotter: PlotterConfig::default(),
         }
     }
 }

@@ -719,8 +719,10 @@ pub const GCODE_MERGE_TOLERANCE_MM: f64 = 0.05;
 const GCODE_MAX_SPAN: usize = 2000;
 
 /// G-code for a 3-axis brush plotter working in paper millimetres (GRBL-style): `G21`
-/// (millimetres), `G90` (absolute), X, Y on the paper, Z = −H (Z 0 where the tip touches,
-/// positive up), `G0` travel at `lift_mm`, `G1` writing. Each stroke's pressed points are
+/// (millimetres), `G90` (absolute), work coordinates with their zero at the paper's top-left
+/// corner where the tip touches: X = the paper's x, Y = −y (`robot.json` `plotter.y_axis`
+/// `away`, the default: the machine's +Y runs up the page) or y (`toward`), Z = −H (positive
+/// up), `G0` travel at `lift_mm`, `G1` writing. Each stroke's pressed points are
 /// merged into straight moves (every point left out within [`GCODE_MERGE_TOLERANCE_MM`] of
 /// its move; no move shorter than [`IN_PLACE_MM`]), each with its own feed rate F (mm/min):
 /// its length over the time the timed stroke takes between its ends (`times`, from
@@ -749,7 +751,7 @@ const GCODE_MAX_SPAN: usize = 2000;
 /// // after the descent, slower than the write speed on average (it starts and ends at rest).
 /// let g1: Vec<&str> = text.lines().filter(|l| l.starts_with("G1 X")).collect();
 /// assert_eq!(g1.len(), 2);
-/// assert!(g1[1].starts_with("G1 X50.000000 Y60.000000 Z-3.000000 F") && !g1[1].ends_with("F1200.000000"));
+/// assert!(g1[1].starts_with("G1 X50.000000 Y-60.000000 Z-3.000000 F") && !g1[1].ends_with("F1200.000000"));
 /// ```
 ///
 /// # Errors
@@ -939,6 +941,7 @@ fn gcode_plan(
         warnings.push("G-code has no tilt axis: α is ignored".to_string());
     }
     warnings.push("G-code has no brush rotation axis: β is ignored".to_string());
+    let ya = cfg.plotter.y_axis;
     let write_f = cfg.write_speed_m_s * 60_000.0;
     let travel_f = cfg.travel_speed_m_s * 60_000.0;
     let mv = |rapid: bool, x_mm: Option<f64>, y_mm: Option<f64>, z_mm: Option<f64>, f_mm_min: Option<f64>| {
@@ -955,7 +958,7 @@ fn gcode_plan(
         if let (true, Some(st)) = (dips[i], station) {
             let [x, y] = st.paper_mm.unwrap_or([0.0, 0.0]);
             push(None, Some(format!("ink dip before stroke {}", i + 1)), Some(i));
-            push(Some(mv(true, Some(x), Some(y), None, Some(travel_f))), None, Some(i));
+            push(Some(mv(true, Some(x), Some(ya.y(y)), None, Some(travel_f))), None, Some(i));
             push(Some(mv(false, None, None, Some(-st.depth_mm), Some(travel_f * 0.5))), None, Some(i));
             if st.dwell_s > 0.0 {
                 let soak_f = DWELL_SINK_MM / st.dwell_s * 60.0;
@@ -965,10 +968,14 @@ fn gcode_plan(
             push(Some(up), None, Some(i));
         }
         push(None, Some(format!("stroke {}", i + 1)), Some(i));
-        push(Some(mv(true, Some(first.x_mm), Some(first.y_mm), None, Some(travel_f))), None, Some(i));
+        push(Some(mv(true, Some(first.x_mm), Some(ya.y(first.y_mm)), None, Some(travel_f))), None, Some(i));
         // The descent onto the first point at the write speed, then the merged moves.
-        push(Some(mv(false, Some(first.x_mm), Some(first.y_mm), Some(-first.h_mm), Some(write_f))), None, Some(i));
-        let xyz: Vec<[f64; 3]> = st.points.iter().map(|p| [p.x_mm, p.y_mm, -p.h_mm]).collect();
+        push(
+            Some(mv(false, Some(first.x_mm), Some(ya.y(first.y_mm)), Some(-first.h_mm), Some(write_f))),
+            None,
+            Some(i),
+        );
+        let xyz: Vec<[f64; 3]> = st.points.iter().map(|p| [p.x_mm, ya.y(p.y_mm), -p.h_mm]).collect();
         let t = times.strokes.get(i).and_then(Option::as_ref);
         let keep = gcode_merge(&xyz);
         for w in keep.windows(2) {
@@ -987,7 +994,7 @@ fn gcode_plan(
                 ));
             }
             let p = &st.points[b];
-            push(Some(mv(false, Some(p.x_mm), Some(p.y_mm), Some(-p.h_mm), Some(f))), None, Some(i));
+            push(Some(mv(false, Some(p.x_mm), Some(ya.y(p.y_mm)), Some(-p.h_mm), Some(f))), None, Some(i));
         }
         push(Some(up), None, Some(i));
     }

@@ -802,7 +802,8 @@ fn check_gcode(
         return Err(format!("more than one M2: {names:?}"));
     }
     let write_f = cfg.write_speed_m_s * 60_000.0;
-    let xyz = |p: &TrackPoint| [p.x_mm, p.y_mm, -p.h_mm];
+    // The plotter's work coordinates (robot.json `plotter.y_axis` `away`, the default): Y = −y.
+    let xyz = |p: &TrackPoint| [p.x_mm, -p.y_mm, -p.h_mm];
     // The stroke being written and the last of its points reached.
     let mut stroke: Option<usize> = None;
     let mut reached: Option<usize> = None;
@@ -810,7 +811,7 @@ fn check_gcode(
     let (mut g1, mut moves) = (0, 0);
     let (mut x, mut y) = (None::<f64>, None::<f64>);
     let over_pot = |x: Option<f64>, y: Option<f64>| {
-        x.is_some_and(|x| close(x, POT_MM[0])) && y.is_some_and(|y| close(y, POT_MM[1]))
+        x.is_some_and(|x| close(x, POT_MM[0])) && y.is_some_and(|y| close(y, -POT_MM[1]))
     };
     let finish = |stroke: Option<usize>, reached: Option<usize>| -> Result<(), String> {
         match stroke {
@@ -961,7 +962,7 @@ fn gcode_harness_catches_injected_commands() {
     let (first, rest) = text.split_once('\n').unwrap();
     let cases = [
         (format!("{first}\nG1 Z-40 F3000\n{rest}"), "G21, G90 first"),
-        (text.replacen("Y60.000000 F6000.000000\n", "Y60.000000 F6000.000000\nG1 Z-40 F3000\n", 1), "Z below"),
+        (text.replacen("Y-60.000000 F6000.000000\n", "Y-60.000000 F6000.000000\nG1 Z-40 F3000\n", 1), "Z below"),
         (format!("{first}\n(G1 Z-40)\n{rest}"), "G21, G90 first"),
         (text.replacen("G21 ; millimetres", "G21 (M3 S1000) ; millimetres", 1), "M3"),
         (text.replacen("M2", "M2\nG0 Z20", 1), "M2 last"),
@@ -974,7 +975,7 @@ fn gcode_harness_catches_injected_commands() {
             },
             "feed rate F1 where the timing gives",
         ),
-        (text.replacen("X50.000000 Y60.000000 Z-16.500000", "X50.000000 Y60.000000 Z-16.500000 E5", 1), "word E"),
+        (text.replacen("X50.000000 Y-60.000000 Z-16.500000", "X50.000000 Y-60.000000 Z-16.500000 E5", 1), "word E"),
     ];
     let texts: Vec<String> = std::iter::once(text.clone()).chain(cases.iter().map(|c| c.0.clone())).collect();
     let read = parse_gcode_external(&texts);

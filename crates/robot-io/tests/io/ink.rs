@@ -165,7 +165,7 @@ fn exports_carry_the_dips() {
     assert_eq!(ur.matches("movel(p[0.630000, 0.100000").count(), 2 * 4 - 2 * 2 + 2 * 2, "{ur}");
     let (g, warnings) = robot_io::export::gcode(&t, &times, &c, "t").unwrap();
     assert_eq!(g.matches("; ink dip before stroke").count(), 2);
-    assert!(g.contains("G0 X330.000000 Y150.000000") && g.contains("G1 Z-25.000000") && g.contains("; dwell 0.5 s"));
+    assert!(g.contains("G0 X330.000000 Y-150.000000") && g.contains("G1 Z-25.000000") && g.contains("; dwell 0.5 s"));
     assert!(!warnings.iter().any(|w| w.contains("ink")), "{warnings:?}");
     // Without paper_mm the plotter cannot find the pot: said, not guessed.
     let mut no_pot = c.clone();

@@ -211,6 +211,13 @@ fn exports_follow_the_documented_forms() {
     let times = robot_io::export::point_times(&prog, &timing).unwrap();
     let (g, warnings) = gcode(&small_track(), &times, &sparse(), "test").unwrap();
     assert!(g.contains("G21") && g.contains("G90") && g.trim_end().ends_with("M2"));
+    assert!(g.contains("G1 X40.000000 Y-60.000000 Z-15.000000 F1200.000000"), "{g}");
+    // Y toward the user: the paper's y as it is.
+    let toward = RobotConfig {
+        plotter: robot_io::program::PlotterConfig { y_axis: robot_io::program::YAxis::Toward },
+        ..sparse()
+    };
+    let (g, _) = gcode(&small_track(), &times, &toward, "test").unwrap();
     assert!(g.contains("G1 X40.000000 Y60.000000 Z-15.000000 F1200.000000"), "{g}");
     assert!(warnings.iter().any(|w| w.contains("α")) && warnings.iter().any(|w| w.contains("β")));
 }
