@@ -37,9 +37,9 @@ pub enum RobotCmd {
 /// How to reach a controller (`robot send`, `robot kinematics`).
 #[derive(clap::Args, Debug)]
 pub struct ControllerArgs {
-    /// Controller host.
+    /// Controller host (AUBO).
     #[arg(long)]
-    host: String,
+    host: Option<String>,
     /// Port (default: 30004 for framed and lines, 9012 for http).
     #[arg(long)]
     port: Option<u16>,
@@ -65,7 +65,8 @@ impl ControllerArgs {
         if !(1..=600_000).contains(&self.timeout_ms) {
             bail!("--timeout-ms must be between 1 and 600000, got {}", self.timeout_ms);
         }
-        Ok(format!("{}:{}", self.host, self.port.unwrap_or(self.transport.default_port())))
+        let host = self.host.as_deref().context("--host is required: the controller's address")?;
+        Ok(format!("{host}:{}", self.port.unwrap_or(self.transport.default_port())))
     }
 
     fn link(&self) -> Link {
@@ -120,9 +121,11 @@ pub struct RenderTraceArgs {
 pub struct ProgramArgs {
     /// `track.json` from `maobi write`.
     track: PathBuf,
-    /// `paper.json`: touched points (paper mm ↔ robot m).
+    /// `paper.json`: touched points (paper mm ↔ robot m). Not needed for a plotter
+    /// (`--format gcode`, `--controller grbl`): its paper is its work coordinates, and the
+    /// program is then checked and timed on a level sheet in front of the nominal arm.
     #[arg(long)]
-    paper: PathBuf,
+    paper: Option<PathBuf>,
     /// `robot.json`: speeds, heights, limits (defaults when omitted).
     #[arg(long)]
     robot: Option<PathBuf>,
@@ -179,6 +182,28 @@ pub struct ExportArgs {
 pub enum ControllerKind {
     /// An AUBO arm (ARCS): JSON-RPC over --transport framed, lines or http.
     Aubo,
+    /// A GRBL 1.1 brush plotter on --serial DEVICE or --tcp HOST:PORT (docs/robot.md, "GRBL
+    /// brush plotters"): maobi's G-code streamed live.
+    Grbl,
+}
+
+/// Where a GRBL plotter is, and how to meet its settings (`robot send --controller grbl`).
+#[derive(clap::Args, Debug)]
+pub struct GrblArgs {
+    /// GRBL: the serial device (`/dev/ttyUSB0`, `/dev/ttyACM0`, `COM3`; any character device,
+    /// a pseudo-terminal included).
+    #[arg(long, value_name = "DEVICE", conflicts_with = "tcp")]
+    serial: Option<String>,
+    /// GRBL: the serial baud rate.
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
+    /// GRBL: a board bridged over the network (an ESP32 or ser2net serial bridge), HOST:PORT.
+    #[arg(long, value_name = "HOST:PORT")]
+    tcp: Option<String>,
+    /// GRBL: where a feed exceeds the machine's maximum rate ($110-$112), slow every feed by one
+    /// factor so all fit (said so), instead of refusing.
+    #[arg(long)]
+    slow_to_machine: bool,
 }
 
 /// Arguments of `maobi robot send`.
@@ -191,6 +216,8 @@ pub struct SendArgs {
     controller: ControllerKind,
     #[command(flatten)]
     link: ControllerArgs,
+    #[command(flatten)]
+    grbl: GrblArgs,
     /// Check and print the plan without connecting.
     #[arg(long)]
     dry_run: bool,
@@ -280,9 +307,13 @@ struct Loaded {
     cfg: RobotConfig,
 }
 
-fn load(a: &ProgramArgs) -> Result<Loaded> {
+fn load(a: &ProgramArgs, plotter: bool) -> Result<Loaded> {
     let track = TrackFile::load(&a.track)?;
-    let frame = PaperFrame::load(&a.paper)?;
+    let frame = match &a.paper {
+        Some(p) => PaperFrame::load(p)?,
+        None if plotter => plotter_frame(&track),
+        None => bail!("--paper is required: paper.json, the touched points that place the sheet for the arm"),
+    };
     let cfg = match &a.robot {
         Some(p) => RobotConfig::load(p)?,
         None => RobotConfig::default(),
@@ -290,12 +321,30 @@ fn load(a: &ProgramArgs) -> Result<Loaded> {
     Ok(Loaded { track, frame, cfg })
 }
 
+/// The frame a plotter's program is checked and timed on: the sheet (or the char box, or the
+/// track) level in front of the nominal arm, as `maobi write` places it for its executed figure.
+/// A plotter moves in the paper's own millimetres: only the checks and speeds come from here.
+fn plotter_frame(t: &TrackFile) -> PaperFrame {
+    let [x0, y0, x1, y1] = match (t.sheet_mm, t.char_box_mm) {
+        (Some([w, h]), _) => [0.0, 0.0, w, h],
+        (None, Some([x, y, s])) => [x - s, y - s, x + 2.0 * s, y + 2.0 * s],
+        (None, None) => {
+            let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+            for p in t.strokes.iter().flat_map(|s| &s.points) {
+                b = [b[0].min(p.x_mm), b[1].min(p.y_mm), b[2].max(p.x_mm), b[3].max(p.y_mm)];
+            }
+            if b[0] > b[2] { [0.0, 0.0, 1.0, 1.0] } else { [b[0] - 10.0, b[1] - 10.0, b[2] + 10.0, b[3] + 10.0] }
+        }
+    };
+    robot_io::exec::level_frame_in_front([(x0 + x1) / 2.0, (y0 + y1) / 2.0], [x0, y0, x1, y1])
+}
+
 fn title(t: &TrackFile) -> String {
     t.char.clone().unwrap_or_else(|| "track".into())
 }
 
 fn check(a: CheckArgs) -> Result<()> {
-    let l = load(&a.program)?;
+    let l = load(&a.program, false)?;
     let (program, report) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     // Timed with the nominal AUBO-i5 (the simulator's arm); `send` times again with the
@@ -349,7 +398,7 @@ fn export(a: ExportArgs) -> Result<()> {
     if by_moves && !lua {
         bail!("--motion moves applies to --format aubo-lua (URScript writes process moves, G-code merged moves)");
     }
-    let l = load(&a.program)?;
+    let l = load(&a.program, a.format == "gcode")?;
     let arm = match &a.kinematics {
         Some(p) => Some(robot_io::export::ArmKinematics::load(p)?),
         None => None,
@@ -454,11 +503,24 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
             AuboRpc::new(&c.addr()?, c.link(), c.timeout(), motion)
                 .nominal_kinematics(a.nominal_kinematics, a.accept_nominal_kinematics),
         ),
+        ControllerKind::Grbl => {
+            let g = &a.grbl;
+            let endpoint = match (&g.serial, &g.tcp) {
+                (Some(path), None) => robot_grbl::Endpoint::Serial { path: path.clone(), baud: g.baud },
+                (None, Some(addr)) => robot_grbl::Endpoint::Tcp(addr.clone()),
+                _ => bail!("--controller grbl needs --serial DEVICE or --tcp HOST:PORT"),
+            };
+            if !(1..=600_000).contains(&c.timeout_ms) {
+                bail!("--timeout-ms must be between 1 and 600000, got {}", c.timeout_ms);
+            }
+            let fit = if g.slow_to_machine { robot_grbl::RateFit::Slow } else { robot_grbl::RateFit::Refuse };
+            Box::new(robot_grbl::GrblPlotter::new(endpoint, c.timeout(), fit))
+        }
     })
 }
 
 fn send(a: SendArgs) -> Result<()> {
-    let l = load(&a.program)?;
+    let l = load(&a.program, a.controller == ControllerKind::Grbl)?;
     let (program, _) =
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     let track = l.track.track();
@@ -474,9 +536,10 @@ fn send(a: SendArgs) -> Result<()> {
     let to = controller.describe();
     let prepared = controller.prepare(&plan)?;
     if a.dry_run {
+        let how = if a.controller == ControllerKind::Aubo { format!(" ({})", a.motion) } else { String::new() };
         println!(
-            "dry run: {} strokes, {} would be sent to {to} ({}); nothing connected",
-            prepared.strokes, prepared.summary, a.motion
+            "dry run: {} strokes, {} would be sent to {to}{how}; nothing connected",
+            prepared.strokes, prepared.summary
         );
         return Ok(());
     }

@@ -9,6 +9,7 @@ mod common;
 mod brush;
 mod calibrate_sheet;
 mod closed_loop;
+mod grbl;
 mod neural;
 mod newcomer;
 mod observe;
