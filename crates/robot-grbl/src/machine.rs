@@ -323,8 +323,8 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
     let mut prev: [Option<f64>; 3] = [None; 3];
     for (i, l) in program.lines.iter().enumerate() {
         if l.kind == LineKind::Feed && l.length_mm > 0.0 {
-            for k in 0..3 {
-                let (Some(a), Some(b)) = (prev[k], l.to[k]) else { continue };
+            for (k, (a, b)) in prev.iter().zip(&l.to).enumerate() {
+                let (Some(a), Some(b)) = (*a, *b) else { continue };
                 let v = l.feed_mm_min * (b - a).abs() / l.length_mm;
                 let Some(max) = info.setting(110 + k as u16) else { continue };
                 if v > max * (1.0 + 1e-9) {

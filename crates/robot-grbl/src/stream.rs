@@ -155,7 +155,8 @@ impl Grbl {
             if stop.load(Ordering::SeqCst) {
                 return Err(fault(self, Fault::Interrupted, acked, &last));
             }
-            while next < texts.len() && in_flight_bytes + texts[next].len() + 1 <= limit {
+            // The line and its `\n` must fit.
+            while next < texts.len() && in_flight_bytes + texts[next].len() < limit {
                 let mut line = texts[next].clone().into_bytes();
                 line.push(b'\n');
                 if let Err(e) = self.lines.write(&line) {
