@@ -41,6 +41,11 @@
 
 #![warn(unreachable_pub)]
 
+// The README's example runs as a doctest (`cargo test --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 mod codes;
 mod controller;
 mod link;

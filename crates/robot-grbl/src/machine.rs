@@ -36,7 +36,7 @@ impl Default for LinkOptions {
 }
 
 /// What the machine said of itself at connect.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MachineInfo {
     /// The version in its banner (`1.1h`).
     pub version: String,
@@ -256,7 +256,7 @@ pub enum RateFit {
 
 /// What the checks found: each passed check in words, and the factor the feeds are scaled by
 /// (1 unless [`RateFit::Slow`] slowed them).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Checked {
     /// The checks passed, in words.
     pub checks: Vec<String>,
@@ -391,4 +391,98 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
 
 fn join(v: &[f64]) -> String {
     v.iter().map(|x| format!("{x:.3}")).collect::<Vec<_>>().join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::response::Response;
+
+    const TEXT: &str = "; maobi writing program: 一\nG21 ; millimetres\nG90 ; absolute\nG0 Z5.000000\n; stroke 1\n\
+                        G0 X10.000000 Y-20.000000 F3000.000000\nG1 X10.000000 Y-20.000000 Z-2.000000 F600.000000\n\
+                        G1 X30.000000 Y-20.000000 Z-2.000000 F1200.000000\nG0 Z5.000000\nM2\n";
+
+    /// GRBL 1.1h's defaults (as `$$` prints them on the firmware under test), idle at 0, the
+    /// work zero at machine (-100, -5, -30).
+    fn machine() -> MachineInfo {
+        let dollars = "$0=10 $1=25 $2=0 $3=0 $4=0 $5=0 $6=0 $10=1 $11=0.010 $12=0.002 $13=0 $20=0 $21=0 $22=0 \
+                       $23=0 $24=25.000 $25=500.000 $26=250 $27=1.000 $30=1000 $31=0 $32=0 $100=250.000 \
+                       $101=250.000 $102=250.000 $110=500.000 $111=500.000 $112=500.000 $120=10.000 \
+                       $121=10.000 $122=10.000 $130=200.000 $131=200.000 $132=200.000";
+        let settings = dollars
+            .split(' ')
+            .map(|d| match Response::parse(d) {
+                Response::Setting(n, v) => (n, v),
+                r => panic!("{d}: {r:?}"),
+            })
+            .collect();
+        let Response::Status(status) = Response::parse("<Idle|MPos:0.000,0.000,0.000|FS:0,0>") else { panic!() };
+        let offsets = [("G54", vec![-100.0, -5.0, -30.0]), ("G92", vec![0.0; 3]), ("TLO", vec![0.0])]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        MachineInfo {
+            version: "1.1h".into(),
+            build: "1.1h.20190830:".into(),
+            planner_blocks: Some(15),
+            rx_buffer: 128,
+            settings,
+            offsets,
+            parser_state: "G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0".into(),
+            wcs: "G54".into(),
+            wco: [-100.0, -5.0, -30.0],
+            status,
+            messages: Vec::new(),
+        }
+    }
+
+    fn refused(info: &MachineInfo, p: &GcodeProgram) -> String {
+        match check_program(info, p, RateFit::Refuse) {
+            Err(GrblError::Refused(m)) => m,
+            r => panic!("not refused: {r:?}"),
+        }
+    }
+
+    #[test]
+    fn each_setting_the_program_cannot_run_with_is_named() {
+        let p = GcodeProgram::from_export(TEXT, 3000.0).unwrap();
+        // The defaults' 500 mm/min is below the 1200 mm/min along X.
+        let m = refused(&machine(), &p);
+        assert!(m.contains("$110=500.000") && m.contains("1200.000 mm/min") && m.contains("line 8"), "{m}");
+        let mut fast = machine();
+        for n in [110, 111, 112] {
+            fast.settings.insert(n, 2000.0);
+        }
+        let ok = check_program(&fast, &p, RateFit::Refuse).unwrap();
+        assert_eq!(ok.feed_scale, 1.0);
+        assert!(ok.checks.iter().any(|c| c.contains("soft limits off")), "{:?}", ok.checks);
+        // Slowed instead: by the worst axis's ratio.
+        let slow = check_program(&machine(), &p, RateFit::Slow).unwrap();
+        assert!((slow.feed_scale - 500.0 / 1200.0).abs() < 1e-12, "{}", slow.feed_scale);
+        // Soft limits: work X 10..30 at machine -90..-70 fits 200 mm, not 50.
+        fast.settings.insert(20, 1.0);
+        assert!(check_program(&fast, &p, RateFit::Refuse).is_ok());
+        fast.settings.insert(130, 50.0);
+        let m = refused(&fast, &p);
+        assert!(m.contains("$130=50.000") && m.contains("machine X -90.000 to -70.000"), "{m}");
+        // Z above the machine's top: the travel height 5 over a work zero at -2 is +3.
+        let mut high = fast.clone();
+        high.settings.insert(130, 200.0);
+        high.wco[2] = -2.0;
+        assert!(refused(&high, &p).contains("$132"));
+        // Inches, a G92 offset, an alarm, a hold.
+        let mut inch = fast.clone();
+        inch.settings.insert(13, 1.0);
+        assert!(refused(&inch, &p).contains("$13=0"));
+        let mut g92 = fast.clone();
+        g92.offsets.insert("G92".into(), vec![0.0, 0.0, 1.5]);
+        assert!(refused(&g92, &p).contains("G92.1"));
+        let mut alarm = fast.clone();
+        alarm.status.state = State::Alarm;
+        assert!(refused(&alarm, &p).contains("$X"));
+        let mut hold = fast;
+        hold.status.state = State::Hold;
+        hold.status.sub = Some(0);
+        assert!(refused(&hold, &p).contains("Hold:0"));
+    }
 }

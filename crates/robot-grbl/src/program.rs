@@ -72,10 +72,10 @@ impl GcodeProgram {
     ///             G1 X30.000000 Y-20.000000 Z-2.000000 F1200.000000\nG0 Z5.000000\nM2\n";
     /// let p = robot_grbl::GcodeProgram::from_export(text, 3000.0).unwrap();
     /// assert_eq!(p.lines.len(), 8);
-    /// assert_eq!(p.lines[5].text, "G1X10.000000Y-20.000000Z-2.000000F600.000000");
+    /// assert_eq!(p.lines[4].text, "G1X10.000000Y-20.000000Z-2.000000F600.000000");
     /// assert_eq!((p.strokes, p.lift_mm, p.min_z_mm), (1, 5.0, -2.0));
     /// // The 20 mm stroke at 1200 mm/min was planned to take 1 s.
-    /// assert!((p.lines[6].planned_s - 1.0).abs() < 1e-12);
+    /// assert!((p.lines[5].planned_s - 1.0).abs() < 1e-12);
     /// ```
     ///
     /// # Errors

@@ -104,6 +104,8 @@ fn a_small_sheet_streams_end_to_end_through_the_controller_seam() {
     assert!(seen.iter().any(|p| p.strokes_done == 1) && seen.last().unwrap().strokes_done == 2);
     assert!(seen.windows(2).all(|w| w[1].remaining_s.unwrap() <= w[0].remaining_s.unwrap() + 1e-9));
     let gp = plotter.program().unwrap().clone();
+    // Never below the deepest press the brush profile allows (no ink pot here).
+    assert!(gp.min_z_mm >= -profile.ranges.h_mm.max && gp.min_z_mm <= -2.9, "{}", gp.min_z_mm);
     // Every line answered `ok` (the relay counted them; 5 queries at connect), never more than
     // 127 bytes in flight, and the buffer was used (more than one line at a time).
     assert_eq!(m.seen.oks.load(Ordering::SeqCst), gp.lines.len() + 4);
