@@ -243,6 +243,9 @@ pub struct RobotConfig {
     pub limits: Limits,
     /// How pressed strokes are timed (docs/robot.md, "Motion: timing and the path buffer").
     pub timing: Timing,
+    /// The tool's mass (brush and holder), kg, when known: a controller that reports its
+    /// payload (a UR arm over RTDE) must report this one before anything moves.
+    pub payload_kg: Option<f64>,
     /// How a 3-axis plotter's work coordinates lie on the paper (the G-code export and
     /// `robot send --controller grbl`; docs/robot.md, "GRBL brush plotters").
     pub plotter: PlotterConfig,
@@ -280,6 +283,9 @@ impl YAxis {
         }
     }
 }
+
+/// The heaviest tool `payload_kg` may name, kg (a UR16e's rated payload; a brush weighs grams).
+pub const MAX_PAYLOAD_KG: f64 = 16.0;
 
 /// How pressed strokes are timed (`robot.json` → `timing`; every field optional): the write
 /// speed and acceleration and the joint speed and acceleration of [`RobotConfig`] bound the
@@ -328,6 +334,7 @@ impl Default for RobotConfig {
             limits: Limits::default(),
             timing: Timing::default(),
             plotter: PlotterConfig::default(),
+            payload_kg: None,
         }
     }
 }
@@ -350,6 +357,14 @@ impl RobotConfig {
     /// # Errors
     /// [`SettingError`] for the first bad field: its name and what is wrong.
     pub fn validate(&self) -> Result<(), SettingError> {
+        if let Some(m) = self.payload_kg
+            && !(m.is_finite() && (0.0..=MAX_PAYLOAD_KG).contains(&m))
+        {
+            return Err(SettingError::new(
+                "payload_kg",
+                format!("payload_kg = {} is not a mass from 0 to {MAX_PAYLOAD_KG} kg", number(m)),
+            ));
+        }
         self.check_controller_ranges()?;
         self.check_limits()?;
         self.check_approach_settings()?;

@@ -41,6 +41,20 @@ impl DhParams {
         theta_rad: [PI, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
     };
 
+    /// A Universal Robots UR5e's nominal parameters in this convention. UR publishes standard
+    /// DH rows (`Rz(θ)·Tz(d)·Tx(a)·Rx(α)`; "Parameters for calculations of kinematics and
+    /// dynamics", universal-robots.com FAQ 45257): d = 0.1625, 0, 0, 0.1333, 0.0997, 0.0996 m,
+    /// a = 0, −0.425, −0.3922, 0, 0, 0 m, α = π/2, 0, 0, π/2, −π/2, 0, θ = 0. Regrouped as
+    /// modified rows, each row takes the previous standard row's `a` and `α` (the last standard
+    /// row's are zero), so the same chain reads a = 0, 0, −0.425, −0.3922, 0, 0 and
+    /// α = 0, π/2, 0, 0, π/2, −π/2.
+    pub const UR5E: DhParams = DhParams {
+        a_m: [0.0, 0.0, -0.425, -0.3922, 0.0, 0.0],
+        alpha_rad: [0.0, FRAC_PI_2, 0.0, 0.0, FRAC_PI_2, -FRAC_PI_2],
+        d_m: [0.1625, 0.0, 0.0, 0.1333, 0.0997, 0.0996],
+        theta_rad: [0.0; 6],
+    };
+
     /// Checks that every value is finite, lengths within ±2 m and angles within ±2π; returns
     /// what is wrong, naming the array and the joint.
     ///
@@ -97,6 +111,12 @@ impl DhParams {
         }
         seeds.push([0.0, 0.4, -1.7, -0.5, -1.57, 0.0]);
         seeds.push([0.0, ready[1], ready[2], ready[3], -ready[4], 0.0]);
+        // A UR arm's tool-down pose ([`UR_HOME_JOINTS`]) and its turns about the base, last: an
+        // AUBO arm converges from the seeds above.
+        for q1 in [0.0, FRAC_PI_2, -FRAC_PI_2, PI - 0.1, -PI + 0.1] {
+            let h = UR_HOME_JOINTS;
+            seeds.push([q1, h[1], h[2], h[3], h[4], h[5]]);
+        }
         seeds.into_iter().find_map(|s| self.solve_from(&goal, tcp, s))
     }
 
@@ -144,6 +164,10 @@ pub const JOINT_LIMIT_RAD: f64 = 175.0 * PI / 180.0;
 /// The i5's tool-down "ready" joints in the controller's convention, rad: with
 /// [`DhParams::AUBO_I5`] the flange is at (0.549, −0.121, 0.263) m with its z pointing down.
 pub const READY_JOINTS: [f64; 6] = [0.0, -0.2618, 1.7453, 0.4363, FRAC_PI_2, 0.0];
+
+/// A UR arm's tool-down joints, rad (UR's convention, [`DhParams::UR5E`]): the upper arm up, the
+/// forearm forward, the tool pointing down.
+pub const UR_HOME_JOINTS: [f64; 6] = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
 
 /// [`DhParams::forward`] with the i5's nominal parameters.
 pub fn forward(q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {

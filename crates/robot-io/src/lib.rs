@@ -15,6 +15,8 @@
 //! * [`aubo`]: AUBO arms: the ARCS JSON-RPC client (the SDK's framed protocol with its login,
 //!   line-delimited JSON, or HTTP), a fault-tolerant runner (reconnect, lift, resume) and the
 //!   [`aubo::AuboRpc`] controller.
+//! * [`ur`]: Universal Robots e-Series arms driven live: URScript on the script port, RTDE for
+//!   progress and state, the dashboard server to stop ([`ur::UrArm`]).
 //! * [`export`]: ARCS Lua script, URScript, G-code.
 //! * [`exec`]: the pure motion executor (no sockets): a program executed as the controller
 //!   would move, sampled in time, tagged by stroke and ink dip, and turned back into brush
@@ -50,12 +52,14 @@ mod config;
 mod controller;
 pub mod exec;
 pub mod export;
+mod follow;
 pub mod frame;
 pub mod kinematics;
 pub mod pose;
 pub mod program;
 pub mod sim;
 pub mod timing;
+pub mod ur;
 pub mod wire;
 
 pub use config::SettingError;
@@ -64,6 +68,7 @@ pub use exec::{
     TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
 };
 pub use export::{ArmKinematics, aubo_lua, aubo_lua_path_buffer, gcode, gcode_chars, urscript};
+pub use follow::{MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M};
 pub use frame::{PaperFile, PaperFrame, TouchPoint};
 pub use pose::{Pose, brush_pose};
 pub use program::{

@@ -10,8 +10,8 @@ use crate::RobotError;
 pub use crate::config::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
     CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_INTERVAL_S,
-    MAX_LIFT_MM, MAX_STEP_LIMIT_MM, MIN_ACC, MIN_INTERVAL_S, MIN_JOINT_SPEED_RAD_S, MIN_LINEAR_SPEED_M_S,
-    MIN_SPEED_FRACTION, PlotterConfig, Reload, RobotConfig, Timing, YAxis, dip_plan, pressed_mm,
+    MAX_LIFT_MM, MAX_PAYLOAD_KG, MAX_STEP_LIMIT_MM, MIN_ACC, MIN_INTERVAL_S, MIN_JOINT_SPEED_RAD_S,
+    MIN_LINEAR_SPEED_M_S, MIN_SPEED_FRACTION, PlotterConfig, Reload, RobotConfig, Timing, YAxis, dip_plan, pressed_mm,
 };
 use crate::frame::PaperFrame;
 use crate::kinematics;

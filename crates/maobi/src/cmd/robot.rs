@@ -40,7 +40,7 @@ pub struct ControllerArgs {
     /// Controller host (AUBO).
     #[arg(long)]
     host: Option<String>,
-    /// Port (default: 30004 for framed and lines, 9012 for http).
+    /// Port (default: AUBO 30004 for framed and lines, 9012 for http; UR the script port 30002).
     #[arg(long)]
     port: Option<u16>,
     /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines
@@ -182,6 +182,9 @@ pub struct ExportArgs {
 pub enum ControllerKind {
     /// An AUBO arm (ARCS): JSON-RPC over --transport framed, lines or http.
     Aubo,
+    /// A Universal Robots e-Series arm: URScript on --port (30002), RTDE on --rtde-port (30004),
+    /// the dashboard server on --dashboard-port (29999).
+    Ur,
     /// A GRBL 1.1 brush plotter on --serial DEVICE or --tcp HOST:PORT (docs/robot.md, "GRBL
     /// brush plotters"): maobi's G-code streamed live.
     Grbl,
@@ -235,14 +238,43 @@ pub struct SendArgs {
     /// its forward kinematics must still agree with them before anything moves.
     #[arg(long)]
     accept_nominal_kinematics: bool,
+    #[command(flatten)]
+    ur: UrPortArgs,
+}
+
+/// A UR controller's RTDE and dashboard ports (its script port is --port).
+#[derive(clap::Args, Debug)]
+pub struct UrPortArgs {
+    /// UR: the RTDE port.
+    #[arg(long, default_value_t = robot_io::ur::RTDE_PORT)]
+    rtde_port: u16,
+    /// UR: the dashboard server's port.
+    #[arg(long, default_value_t = robot_io::ur::DASHBOARD_PORT)]
+    dashboard_port: u16,
 }
 
 /// Arguments of `maobi robot sim`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
-    /// Port to listen on (127.0.0.1).
-    #[arg(long, default_value_t = RPC_PORT)]
-    port: u16,
+    /// Which controller to stand in for: aubo (an AUBO-i5's JSON-RPC) or ur (a UR5e: URScript
+    /// on --port, RTDE on --rtde-port, the dashboard on --dashboard-port).
+    #[arg(long, value_enum, default_value = "aubo")]
+    controller: ControllerKind,
+    /// Port to listen on (127.0.0.1; default 30004 for aubo, the script port 30002 for ur).
+    #[arg(long)]
+    port: Option<u16>,
+    #[command(flatten)]
+    ur_ports: UrPortArgs,
+    /// UR: the installation's TCP offset along the flange axis, mm (maobi's program needs the
+    /// brush's length_mm: pen1 48).
+    #[arg(long, default_value_t = 0.0)]
+    tcp_offset_mm: f64,
+    /// UR: the installation's payload, kg.
+    #[arg(long, default_value_t = 0.0)]
+    payload_kg: f64,
+    /// UR: run the clock this many times faster than the wall clock (tests; 1 = real time).
+    #[arg(long, default_value_t = 1.0)]
+    time_scale: f64,
     /// Transports served on --port: framed (the AUBO SDK's protocol, with login; the default),
     /// lines (line-delimited JSON) or http (JSON-RPC over HTTP), repeated or a comma-separated
     /// list; with several, each connection's first bytes tell them apart. lines and http are
@@ -264,7 +296,8 @@ pub struct SimArgs {
     /// The password the framed login accepts.
     #[arg(long, default_value = robot_io::wire::DEFAULT_PASSWORD)]
     password: String,
-    /// Inject a fault: drop-after=N, delay-ms=D or queue-full-every=K (repeatable).
+    /// Inject a fault (repeatable). aubo: drop-after=N, delay-ms=D or queue-full-every=K; ur:
+    /// protective-stop-at-s=S, program-stop-at-s=S or pose-offset-at-s=S (20 mm off from then).
     #[arg(long)]
     fault: Vec<String>,
     /// Write the executed TCP path here (JSON lines), flushed after every move. If a write fails
@@ -516,6 +549,16 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
             let fit = if g.slow_to_machine { robot_grbl::RateFit::Slow } else { robot_grbl::RateFit::Refuse };
             Box::new(robot_grbl::GrblPlotter::new(endpoint, c.timeout(), fit))
         }
+        ControllerKind::Ur => {
+            c.addr()?; // the host and the timeout's range
+            let host = c.host.as_deref().unwrap_or_default();
+            let ports = robot_io::ur::UrPorts {
+                script: c.port.unwrap_or(robot_io::ur::SCRIPT_PORT),
+                rtde: a.ur.rtde_port,
+                dashboard: a.ur.dashboard_port,
+            };
+            Box::new(robot_io::ur::UrArm::new(host, ports, c.timeout()))
+        }
     })
 }
 
@@ -536,9 +579,8 @@ fn send(a: SendArgs) -> Result<()> {
     let to = controller.describe();
     let prepared = controller.prepare(&plan)?;
     if a.dry_run {
-        let how = if a.controller == ControllerKind::Aubo { format!(" ({})", a.motion) } else { String::new() };
         println!(
-            "dry run: {} strokes, {} would be sent to {to}{how}; nothing connected",
+            "dry run: {} strokes, {} would be sent to {to}; nothing connected",
             prepared.strokes, prepared.summary
         );
         return Ok(());
@@ -597,6 +639,9 @@ fn advice(e: RobotError, to: &str) -> anyhow::Error {
 }
 
 fn sim(a: SimArgs) -> Result<()> {
+    if a.controller == ControllerKind::Ur {
+        return sim_ur(&a);
+    }
     let mut faults = Faults::default();
     for f in &a.fault {
         let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
@@ -614,7 +659,8 @@ fn sim(a: SimArgs) -> Result<()> {
     if !(1..=86_400).contains(&a.idle_timeout_s) {
         bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
     }
-    let mut listen = vec![Listen { bind: format!("127.0.0.1:{}", a.port), transports: a.transports.clone() }];
+    let port = a.port.unwrap_or(RPC_PORT);
+    let mut listen = vec![Listen { bind: format!("127.0.0.1:{port}"), transports: a.transports.clone() }];
     for (port, t) in
         [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)]
     {
@@ -667,6 +713,77 @@ fn sim(a: SimArgs) -> Result<()> {
             eprintln!("error: {e}");
             reported = true;
         }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Ok(())
+}
+
+/// `maobi robot sim --controller ur`: the UR5e stand-in until Ctrl-C, its refusals on stderr.
+fn sim_ur(a: &SimArgs) -> Result<()> {
+    let mut faults = robot_io::sim::UrFaults::default();
+    for f in &a.fault {
+        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
+        let t: f64 = v
+            .parse()
+            .ok()
+            .filter(|t: &f64| t.is_finite() && *t >= 0.0)
+            .with_context(|| format!("--fault {f}: {v} is not a time in seconds"))?;
+        match k {
+            "protective-stop-at-s" => faults.protective_stop_at_s = Some(t),
+            "program-stop-at-s" => faults.program_stop_at_s = Some(t),
+            "pose-offset-at-s" => faults.pose_offset_at_s = Some(t),
+            _ => bail!(
+                "--fault {f}: unknown fault `{k}` for --controller ur (protective-stop-at-s, program-stop-at-s, pose-offset-at-s)"
+            ),
+        }
+    }
+    if !(1..=1024).contains(&a.max_connections) {
+        bail!("--max-connections must be between 1 and 1024, got {}", a.max_connections);
+    }
+    if !(1..=86_400).contains(&a.idle_timeout_s) {
+        bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
+    }
+    if !(a.tcp_offset_mm.is_finite() && a.tcp_offset_mm.abs() <= 500.0) {
+        bail!("--tcp-offset-mm must be within ±500 mm, got {}", a.tcp_offset_mm);
+    }
+    if !(a.payload_kg.is_finite() && (0.0..=16.0).contains(&a.payload_kg)) {
+        bail!("--payload-kg must be from 0 to 16 kg, got {}", a.payload_kg);
+    }
+    let listen = robot_io::sim::UrListen {
+        script: format!("127.0.0.1:{}", a.port.unwrap_or(robot_io::ur::SCRIPT_PORT)),
+        rtde: format!("127.0.0.1:{}", a.ur_ports.rtde_port),
+        dashboard: format!("127.0.0.1:{}", a.ur_ports.dashboard_port),
+    };
+    let options = robot_io::sim::UrSimOptions {
+        tcp_offset: [0.0, 0.0, a.tcp_offset_mm / 1000.0, 0.0, 0.0, 0.0],
+        payload_kg: a.payload_kg,
+        time_scale: a.time_scale,
+        faults,
+        max_connections: a.max_connections,
+        idle_timeout: Duration::from_secs(a.idle_timeout_s),
+        ..robot_io::sim::UrSimOptions::default()
+    };
+    let sim = robot_io::sim::UrSimulator::start(&listen, options).context("cannot start the UR simulator")?;
+    eprintln!(
+        "simulating a UR5e (TCP offset {} mm, payload {} kg, clock ×{}) on {} (URScript), {} (RTDE), {} (dashboard); Ctrl-C to stop",
+        a.tcp_offset_mm,
+        a.payload_kg,
+        a.time_scale,
+        sim.script_addr(),
+        sim.rtde_addr(),
+        sim.dashboard_addr()
+    );
+    let stop = Arc::new(AtomicBool::new(false));
+    let s2 = stop.clone();
+    ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
+    let mut shown = 0;
+    while !stop.load(Ordering::SeqCst) {
+        let errors = sim.errors();
+        // The list keeps the latest 64: show what is new.
+        for e in errors.iter().skip(shown.min(errors.len())) {
+            eprintln!("error: {e}");
+        }
+        shown = errors.len();
         std::thread::sleep(Duration::from_millis(50));
     }
     Ok(())

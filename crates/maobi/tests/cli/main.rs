@@ -24,4 +24,5 @@ mod safety;
 mod sheet;
 mod styles;
 mod transport;
+mod ur;
 mod write;

@@ -78,6 +78,8 @@ enum Want {
     Process { pose: Pose, a: f64, v: f64, blend_m: f64 },
     /// A stroke's pressed path as one path buffer (Lua).
     PathBuffer(Box<TimedStroke>),
+    /// The count of finished strokes published after a stroke's lift.
+    Progress(usize),
 }
 
 /// One entry of an arm plan: a comment line or a step with its stroke (`None`: the start).
@@ -111,12 +113,18 @@ impl ArmPlan {
 
 /// The plan of `program`: the start, then per stroke its dip (after a comment `ink dip before
 /// stroke N`), its approach (after `stroke N`), what `pressed` makes of its pressed moves, and
-/// its lift.
+/// its lift; with `progress`, the count of finished strokes published first (0) and after each
+/// lift.
 fn arm_plan(
     program: &Program,
+    progress: bool,
     mut pressed: impl FnMut(&StrokeProgram) -> Result<Vec<Want>, RobotError>,
 ) -> Result<ArmPlan, RobotError> {
-    let mut entries = vec![Entry::Step(None, Want::Move(program.start))];
+    let mut entries = vec![];
+    if progress {
+        entries.push(Entry::Step(None, Want::Progress(0)));
+    }
+    entries.push(Entry::Step(None, Want::Move(program.start)));
     for st in &program.strokes {
         let at = Some(st.index);
         if !st.dip.is_empty() {
@@ -127,6 +135,9 @@ fn arm_plan(
         entries.extend(st.approach.iter().map(|m| Entry::Step(at, Want::Move(*m))));
         entries.extend(pressed(st)?.into_iter().map(|w| Entry::Step(at, w)));
         entries.push(Entry::Step(at, Want::Move(st.lift)));
+        if progress {
+            entries.push(Entry::Step(at, Want::Progress(st.index + 1)));
+        }
     }
     Ok(ArmPlan {
         tcp_offset_m: program.tcp_offset_m,
@@ -140,7 +151,7 @@ fn arm_plan(
 
 /// The plan of a move-per-point program: every move as it is.
 fn moves_plan(program: &Program) -> ArmPlan {
-    arm_plan(program, |st| Ok(st.press.iter().map(|m| Want::Move(*m)).collect())).expect("no step can fail")
+    arm_plan(program, false, |st| Ok(st.press.iter().map(|m| Want::Move(*m)).collect())).expect("no step can fail")
 }
 
 /// A move as a Lua statement after `indent`; a joint move to a pose is solved near `qnear`
@@ -229,7 +240,7 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
                 open_block = true;
             }
             // Not in Lua plans.
-            Entry::Step(_, Want::Process { .. }) => {}
+            Entry::Step(_, Want::Process { .. } | Want::Progress(_)) => {}
         }
     }
     s.push_str("end\n");
@@ -290,7 +301,7 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
     })?;
     let timing = crate::timing::time_program(program, kin, cfg)?;
     let tcp = program.tcp();
-    let mut plan = arm_plan(program, |st| {
+    let mut plan = arm_plan(program, false, |st| {
         let Some(t) = timing.strokes.iter().find(|t| t.stroke == st.index) else {
             return Ok(st.press.iter().map(|m| Want::Move(*m)).collect());
         };
@@ -403,7 +414,7 @@ fn urscript_plan(program: &Program, timing: &ProgramTiming, cfg: &RobotConfig) -
     crate::program::check_blends(&compact)?;
     let originals: Vec<Vec<Pose>> = program.strokes.iter().map(pressed_path).collect();
     let mut k = 0;
-    arm_plan(&compact, |st| {
+    arm_plan(&compact, true, |st| {
         let path = &originals[k];
         let t = times.strokes.get(st.index).and_then(Option::as_ref);
         k += 1;
@@ -441,14 +452,18 @@ fn urscript_plan(program: &Program, timing: &ProgramTiming, cfg: &RobotConfig) -
     })
 }
 
-/// A URScript program: the first move a `movej` to a pose (the controller solves it),
-/// travel, dips, descents and lifts `movel`, and each pressed stroke as `movep` process moves
-/// (constant tool speed, blended) over its compacted points
+/// A URScript program, one `def maobi_program(): … end` as a UR controller runs it when it
+/// arrives on its script port: the tool (`set_tcp`), the first move a `movej` to a pose (the
+/// controller solves it), travel, dips, descents and lifts `movel`, and each pressed stroke as
+/// `movep` process moves (constant tool speed, blended) over its compacted points
 /// ([`crate::program::compact_program`]: every blend radius at most half the shorter of the
-/// two moves it joins, checked by [`crate::program::check_blends`]), each at the mean tool
-/// speed `timing` gives the stroke over that move (so it slows where the timed stroke slows).
-/// No joint angle is exported: `timing` only gives the speeds. The title goes, made inert
-/// ([`text::comment_text`]), into the first comment.
+/// two moves it joins, checked by [`crate::program::check_blends`], so neighbouring blends never
+/// overlap as UR's rule requires), each at the mean tool speed `timing` gives the stroke over
+/// that move (so it slows where the timed stroke slows). Arguments after the target are named in
+/// UR's order (`a`, `v`, `t=0`, `r`). The count of finished strokes goes into output integer
+/// register 24 ([`parse::URSCRIPT_PROGRESS_REGISTER`]) at the start (0) and after each lift, for
+/// a client following the run over RTDE. No joint angle is exported: `timing` only gives the
+/// speeds. The title goes, made inert ([`text::comment_text`]), into the first comment.
 ///
 /// # Examples
 /// ```
@@ -478,21 +493,30 @@ pub fn urscript(
     title: &str,
 ) -> Result<String, RobotError> {
     let plan = urscript_plan(program, timing, cfg)?;
-    let mut s = format!("# maobi writing program: {}\ndef maobi_write():\n", comment_text(title, Target::UrScript));
-    s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", len(program.tcp_offset_m)));
+    let s = urscript_text(&plan, title, parse::URSCRIPT_PROGRAM);
+    compare_arm(Target::UrScript, &parse::read_urscript(&s)?, &plan)?;
+    Ok(s)
+}
+
+/// The URScript text of a plan: `def <name>():`, the tool, the steps, `end`.
+fn urscript_text(plan: &ArmPlan, title: &str, name: &str) -> String {
+    let mut s = format!("# maobi writing program: {}\ndef {name}():\n", comment_text(title, Target::UrScript));
+    s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", len(plan.tcp_offset_m)));
     let pose_text = |pose: &Pose| format!("p[{}, {}]", lens(&pose.position()), lens(&pose.rotation_vector()));
+    // UR's argument orders: movej(q, a, v, t, r), movel(pose, a, v, t, r), movep(pose, a, v, r);
+    // every argument after the target named, t=0 (the speed decides the time).
     for e in &plan.entries {
         match e {
             Entry::Comment(c) => s.push_str(&format!("  # {c}\n")),
             Entry::Step(_, Want::Move(Move::Joint { q, a, v })) => {
-                s.push_str(&format!("  movej([{}], a={}, v={})\n", lens(q), rate(*a), rate(*v)))
+                s.push_str(&format!("  movej([{}], a={}, v={}, t=0, r=0)\n", lens(q), rate(*a), rate(*v)))
             }
             // A pose target: the UR controller solves the joints.
             Entry::Step(_, Want::Move(Move::JointPose { pose, a, v })) => {
-                s.push_str(&format!("  movej({}, a={}, v={})\n", pose_text(pose), rate(*a), rate(*v)))
+                s.push_str(&format!("  movej({}, a={}, v={}, t=0, r=0)\n", pose_text(pose), rate(*a), rate(*v)))
             }
             Entry::Step(_, Want::Move(Move::Line { pose, a, v, blend_m })) => s.push_str(&format!(
-                "  movel({}, a={}, v={}, r={})\n",
+                "  movel({}, a={}, v={}, t=0, r={})\n",
                 pose_text(pose),
                 rate(*a),
                 rate(*v),
@@ -505,12 +529,35 @@ pub fn urscript(
                 rate(*v),
                 rate(*blend_m)
             )),
+            Entry::Step(_, Want::Progress(k)) => {
+                s.push_str(&format!("  write_output_integer_register({}, {k})\n", parse::URSCRIPT_PROGRESS_REGISTER))
+            }
             // Not in URScript plans.
             Entry::Step(_, Want::PathBuffer(_)) => {}
         }
     }
-    s.push_str("end\nmaobi_write()\n");
-    compare_arm(Target::UrScript, &parse::read_urscript(&s)?, &plan)?;
+    s.push_str("end\n");
+    s
+}
+
+/// A URScript program that lifts the brush from `from` straight out of the paper to `to` (a
+/// stopped run's retreat: `def maobi_lift():`, the tool, one `movel` at `v`, `a`), checked as
+/// written.
+///
+/// # Errors
+/// [`RobotError::Unsafe`] when the text does not read back as that move.
+pub(crate) fn urscript_lift(tcp_offset_m: f64, to: &Pose, a: f64, v: f64) -> Result<String, RobotError> {
+    let plan = ArmPlan {
+        tcp_offset_m,
+        speed_fraction: 1.0,
+        kinematics: None,
+        eval_acc_speed: (0.0, 0.0),
+        start_qnear: None,
+        entries: vec![Entry::Step(None, Want::Move(Move::Line { pose: *to, a, v, blend_m: 0.0 }))],
+    };
+    let s = urscript_text(&plan, "lift", "maobi_lift");
+    let read = parse::read_urscript_named(&s, "maobi_lift").map_err(|at| parse::refused(Target::UrScript, None, at))?;
+    compare_arm(Target::UrScript, &read, &plan)?;
     Ok(s)
 }
 
@@ -668,6 +715,10 @@ fn compare_step(
             }
             same("the waypoint interval", b.interval_s, t.interval_s, 0.0)
         }
+        (ReadMove::Progress { strokes }, Want::Progress(w)) if strokes == w => Ok(()),
+        (ReadMove::Progress { strokes }, Want::Progress(w)) => {
+            Err(format!("the progress register reads {strokes} strokes where it is {w}"))
+        }
         _ => Err(format!("{} where the program has {}", read_kind(read), want_kind(want))),
     }
 }
@@ -679,6 +730,7 @@ fn read_kind(m: &ReadMove) -> &'static str {
         ReadMove::Line { .. } => "a line move",
         ReadMove::Process { .. } => "a process move",
         ReadMove::PathBuffer { .. } => "a path buffer",
+        ReadMove::Progress { .. } => "the progress register",
     }
 }
 
@@ -689,6 +741,7 @@ fn want_kind(m: &Want) -> &'static str {
         Want::Move(Move::Line { .. }) => "a line move",
         Want::Process { .. } => "a process move",
         Want::PathBuffer(_) => "a path buffer",
+        Want::Progress(_) => "the progress register",
     }
 }
 

@@ -12,7 +12,7 @@ use crate::kinematics::DhParams;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ReadMove {
     /// A joint move to joints the program gives: Lua `mc:moveJoint({q}, a, v, 0, 0)`,
-    /// URScript `movej([q], a=a, v=v)`.
+    /// URScript `movej([q], a=a, v=v, t=0, r=0)`.
     Joint {
         /// Target joints, rad.
         q: [f64; 6],
@@ -23,7 +23,7 @@ pub enum ReadMove {
     },
     /// A joint move to a TCP pose that the controller solves: Lua `inverseKinematics` from the
     /// current joints, refusing to move when it fails, then `mc:moveJoint(q, a, v, 0, 0)`;
-    /// URScript `movej(p[...], a=a, v=v)`.
+    /// URScript `movej(p[...], a=a, v=v, t=0, r=0)`.
     JointPose {
         /// Lua: the pose `[x, y, z, rx, ry, rz]` as AUBO writes it (m, rad, `R = Rz·Ry·Rx`);
         /// URScript: position (m) and rotation vector (rad).
@@ -38,7 +38,7 @@ pub enum ReadMove {
         qnear: Option<[f64; 6]>,
     },
     /// A linear TCP move: Lua `mc:moveLine({pose}, a, v, blend, 0)`, URScript
-    /// `movel(p[...], a=a, v=v, r=blend)`.
+    /// `movel(p[...], a=a, v=v, t=0, r=blend)`.
     Line {
         /// As in [`ReadMove::JointPose`].
         target: [f64; 6],
@@ -66,6 +66,12 @@ pub enum ReadMove {
     PathBuffer {
         /// Index into [`ReadProgram::path_buffers`].
         buffer: usize,
+    },
+    /// The count of finished strokes published after a stroke's lift (URScript
+    /// `write_output_integer_register(24, N)`), for a controller client following the run.
+    Progress {
+        /// Strokes finished.
+        strokes: usize,
     },
 }
 
@@ -568,22 +574,41 @@ fn read_path_buffer<'a>(
 }
 
 /// Reads back a URScript program as [`super::urscript`] writes it: header comments
-/// (`# text`), `def maobi_write():`, `set_tcp(p[0, 0, z, 0, 0, 0])`, then `movej([q], a=, v=)`,
-/// `movej(p[...], a=, v=)`, `movel(p[...], a=, v=, r=)`, `movep(p[...], a=, v=, r=)` and
-/// `  # text` comments, `end`, `maobi_write()`.
+/// (`# text`), `def maobi_program():`, `set_tcp(p[0, 0, z, 0, 0, 0])`, then
+/// `movej([q], a=, v=, t=0, r=0)`, `movej(p[...], a=, v=, t=0, r=0)`,
+/// `movel(p[...], a=, v=, t=0, r=)`, `movep(p[...], a=, v=, r=)`,
+/// `write_output_integer_register(24, N)` and `  # text` comments, each indented two spaces,
+/// and `end` as the last line.
 ///
 /// # Errors
-/// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
+/// [`RobotError::Unsafe`] naming the first line that is not exactly one of these (and the
+/// function, when the line calls one outside [`URSCRIPT_FUNCTIONS`]).
 pub fn read_urscript(text: &str) -> Result<ReadProgram, RobotError> {
     read_urscript_at(text).map_err(|at| refused(Target::UrScript, None, at))
 }
 
 fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
+    read_urscript_named(text, URSCRIPT_PROGRAM)
+}
+
+/// The name of the URScript program maobi writes (`def maobi_program():`).
+pub const URSCRIPT_PROGRAM: &str = "maobi_program";
+
+/// The output integer register a URScript program counts its finished strokes in (24: the first
+/// of the registers 24 to 47 that UR's script manual reserves for external RTDE clients).
+pub const URSCRIPT_PROGRESS_REGISTER: usize = 24;
+
+/// The URScript functions maobi writes, in the order the reader names them in a refusal.
+pub const URSCRIPT_FUNCTIONS: [&str; 5] = ["set_tcp", "write_output_integer_register", "movej", "movel", "movep"];
+
+/// [`read_urscript`] for the program `def <name>():` (`maobi_program`, or the lift a stopped
+/// run sends, `maobi_lift`).
+pub(crate) fn read_urscript_named(text: &str, name: &str) -> Result<ReadProgram, At> {
     let all = lines(text)?;
     let last = all.len();
     let mut it = all.into_iter().peekable();
     after_header(&mut it, "#", Target::UrScript)?;
-    expect(&mut it, "def maobi_write():", last)?;
+    expect(&mut it, &format!("def {name}():"), last)?;
     let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before set_tcp".into() })?;
     let tcp_offset_m = whole(l, |c| {
         c.lit("  set_tcp(p[0, 0, ")?;
@@ -591,7 +616,7 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
         c.lit(", 0, 0, 0])")?;
         Some(z)
     })
-    .ok_or_else(|| unexpected(n, l, "`  set_tcp(p[0, 0, z, 0, 0, 0])`"))?;
+    .ok_or_else(|| urscript_unexpected(n, l, "`  set_tcp(p[0, 0, z, 0, 0, 0])`"))?;
     let mut moves = Vec::new();
     loop {
         let Some((n, l)) = it.next() else {
@@ -603,14 +628,24 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
         if is_comment(l, "  ", "#", Target::UrScript) {
             continue;
         }
+        // UR's argument orders (the script manual): movej(q, a, v, t, r), movel(pose, a, v, t,
+        // r), movep(pose, a, v, r); maobi names every argument after the target, in that order,
+        // with t=0 (the speeds decide the time).
         let m = whole(l, |c| {
+            if c.lit("  write_output_integer_register(").is_some() {
+                let register = c.int()?;
+                c.lit(", ")?;
+                let strokes = c.int()?;
+                c.lit(")")?;
+                return (register == URSCRIPT_PROGRESS_REGISTER).then_some(ReadMove::Progress { strokes });
+            }
             if c.lit("  movej([").is_some() {
                 let q = c.nums::<6>()?;
                 c.lit("], a=")?;
                 let a = c.num()?;
                 c.lit(", v=")?;
                 let v = c.num()?;
-                c.lit(")")?;
+                c.lit(", t=0, r=0)")?;
                 Some(ReadMove::Joint { q, a, v })
             } else if c.lit("  movej(p[").is_some() {
                 let target = c.nums::<6>()?;
@@ -618,7 +653,7 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
                 let a = c.num()?;
                 c.lit(", v=")?;
                 let v = c.num()?;
-                c.lit(")")?;
+                c.lit(", t=0, r=0)")?;
                 Some(ReadMove::JointPose { target, a, v, qnear: None })
             } else {
                 let process = if c.lit("  movep(p[").is_some() {
@@ -632,6 +667,9 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
                 let a = c.num()?;
                 c.lit(", v=")?;
                 let v = c.num()?;
+                if !process {
+                    c.lit(", t=0")?;
+                }
                 c.lit(", r=")?;
                 let blend_m = c.num()?;
                 c.lit(")")?;
@@ -643,15 +681,36 @@ fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
             }
         })
         .ok_or_else(|| {
-            unexpected(n, l, "a move (`movel(p[...])`, `movep(p[...])`, `movej(...)`), a `#` comment or `end`")
+            urscript_unexpected(
+                n,
+                l,
+                "a move (`movel(p[...], a=, v=, t=0, r=)`, `movep(p[...], a=, v=, r=)`, `movej(..., a=, v=, t=0, r=0)`), `write_output_integer_register(24, N)`, a `#` comment or `end`",
+            )
         })?;
         moves.push((n, m));
     }
-    expect(&mut it, "maobi_write()", last)?;
     if let Some((n, l)) = it.next() {
-        return Err(unexpected(n, l, "nothing after `maobi_write()`"));
+        return Err(unexpected(n, l, "nothing after `end`"));
     }
     Ok(ReadProgram { tcp_offset_m, speed_fraction: None, moves, kinematics: None, path_buffers: Vec::new() })
+}
+
+/// [`unexpected`] for a URScript line, naming a called function outside the subset maobi
+/// writes.
+fn urscript_unexpected(line: usize, l: &str, want: &str) -> At {
+    let call = l.trim_start();
+    let name: String = call.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+    if !name.is_empty() && call[name.len()..].starts_with('(') && !URSCRIPT_FUNCTIONS.contains(&name.as_str()) {
+        return At {
+            line,
+            reason: format!(
+                "`{name}` is not in the URScript subset maobi writes ({}): {}",
+                URSCRIPT_FUNCTIONS.join(", "),
+                quote(l)
+            ),
+        };
+    }
+    unexpected(line, l, want)
 }
 
 /// Reads back G-code as [`super::gcode`] writes it: comment lines (`; text`), and the

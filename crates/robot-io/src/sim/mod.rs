@@ -20,6 +20,12 @@ pub use dispatch::{
 mod replay;
 mod server;
 mod session;
+mod ur;
+
+pub use ur::{
+    DASHBOARD_GREETING, MAX_DASHBOARD_LINE, MAX_PROGRAM_SAMPLES, MAX_RECIPE_FIELDS, MAX_SCRIPT_BYTES, UrFaults,
+    UrListen, UrSimOptions, UrSimulator,
+};
 
 pub use replay::{SendMotion, execute_as_sent, execute_as_sent_tagged};
 

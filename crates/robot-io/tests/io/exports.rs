@@ -135,7 +135,15 @@ fn exports_read_back_as_the_checked_program() {
     // URScript: the pressed moves compacted (stroke 1's (60, 61) lies on its neighbours' line),
     // each a process move.
     let compact = compact_program(&p, &cfg);
-    assert_eq!((lua.moves.len(), ur.moves.len()), (p.move_count(), compact.move_count()));
+    let ur_moves = ur.moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count();
+    assert_eq!((lua.moves.len(), ur_moves), (p.move_count(), compact.move_count()));
+    // The count of finished strokes after each lift, from 0.
+    let progress: Vec<usize> = ur
+        .moves
+        .iter()
+        .filter_map(|(_, m)| if let ReadMove::Progress { strokes } = m { Some(*strokes) } else { None })
+        .collect();
+    assert_eq!(progress, (0..=p.strokes.len()).collect::<Vec<_>>());
     assert!(compact.move_count() < p.move_count());
     let process = ur.moves.iter().filter(|(_, m)| matches!(m, ReadMove::Process { .. })).count();
     assert_eq!(process, compact.strokes.iter().map(|s| s.press.len()).sum::<usize>());
@@ -153,13 +161,13 @@ fn exports_read_back_as_the_checked_program() {
     let Move::JointPose { pose: start, .. } = p.start else { panic!("{:?}", p.start) };
     let near = |t: [f64; 6]| t.iter().zip(start.0).all(|(r, w)| (r - w).abs() <= 1e-8);
     assert!(matches!(lua.moves[0].1, ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua.moves[0]);
-    assert!(matches!(ur.moves[0].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[0]);
+    assert!(matches!(ur.moves[1].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[1]);
     // Joints given by the program (no longer built, still exported) read back too.
     let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.2, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
     let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
     assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
     let ur_q = read_urscript(&urscript(&joints, &timing(&joints, &cfg), &cfg, "q").unwrap()).unwrap();
-    assert!(matches!(ur_q.moves[0].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[0]);
+    assert!(matches!(ur_q.moves[1].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[1]);
     // A program whose start differs from the text's is refused.
     let e = verify_lua(&aubo_lua(&joints, "q").unwrap(), &p).unwrap_err().to_string();
     assert!(e.contains("line 9"), "{e}");
@@ -229,12 +237,30 @@ fn tampered_exports_are_refused() {
         ),
         (Target::Lua, lua.replacen("  do\n", "", 1), "line 9: expected a move"),
         (Target::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
-        (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "expected a move"),
+        (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "`popup` is not in the URScript subset"),
+        // UR's order is `t` before `r`: the other way round is refused.
+        (
+            Target::UrScript,
+            ur.replacen(&ur_line, &ur_line.replace(", t=0, r=", ", r=").replace(")", ", t=0)"), 1),
+            "expected a move",
+        ),
+        // The progress register and its count are the plan's.
+        (
+            Target::UrScript,
+            ur.replacen("write_output_integer_register(24, 1)", "write_output_integer_register(24, 2)", 1),
+            "progress register reads 2",
+        ),
+        (
+            Target::UrScript,
+            ur.replacen("write_output_integer_register(24, 1)", "write_output_integer_register(23, 1)", 1),
+            "expected a move",
+        ),
         (Target::UrScript, insert_after(&ur, &ur_line, &format!("{ur_line}\n")), "does not match"),
         (Target::UrScript, ur.replacen(&ur_line, &ur_line.replace("r=0.000000", "r=0.100000"), 1), "blend radius"),
         (Target::UrScript, ur.replacen("movel(p[0.", "movel(p[1.", 1), "x reads"),
-        (Target::UrScript, insert_after(&ur, "def maobi_write", "  # x\u{2028}movel(p[0])\n"), "U+2028"),
-        (Target::UrScript, ur.replace("maobi_write()\n", ""), "`maobi_write()`"),
+        (Target::UrScript, insert_after(&ur, "def maobi_program", "  # x\u{2028}movel(p[0])\n"), "U+2028"),
+        (Target::UrScript, format!("{ur}maobi_program()\n"), "nothing after `end`"),
+        (Target::UrScript, ur.replace("def maobi_program():", "def other():"), "`def maobi_program():`"),
     ];
     for (target, text, needle) in cases {
         let e = verify(target, &text).expect_err(needle);

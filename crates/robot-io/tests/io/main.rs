@@ -16,4 +16,5 @@ mod safety;
 mod sim_server;
 mod timing;
 mod transports;
+mod urscript_signatures;
 mod wire_golden;

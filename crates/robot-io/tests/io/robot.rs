@@ -202,7 +202,8 @@ fn exports_follow_the_documented_forms() {
     assert_eq!(lua.matches("mc:moveLine(").count() + lua.matches("mc:moveJoint(").count(), prog.move_count());
     let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &sparse()).unwrap();
     let ur = urscript(&prog, &timing, &sparse(), "test").unwrap();
-    assert!(ur.starts_with("# maobi") && ur.contains("def maobi_write():") && ur.trim_end().ends_with("maobi_write()"));
+    assert!(ur.starts_with("# maobi") && ur.contains("\ndef maobi_program():\n") && ur.ends_with("\nend\n"));
+    assert!(ur.contains("  write_output_integer_register(24, 0)\n") && ur.contains("t=0, r="));
     let movel = ur.lines().find(|l| l.trim_start().starts_with("movel(")).unwrap();
     let inside = movel.trim().trim_start_matches("movel(p[").split(']').next().unwrap();
     assert_eq!(inside.split(", ").count(), 6, "{movel}");
