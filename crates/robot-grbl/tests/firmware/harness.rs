@@ -260,6 +260,9 @@ pub enum Inject {
     ResetBelowZ(f64),
     /// Replace the first letter of the line sent after this many `ok`s by `Q` (noise).
     CorruptAfterOks(usize),
+    /// Pass nothing more from GRBL to the host after this many `ok`s (a link gone quiet: the
+    /// host's bytes still reach GRBL).
+    MuteAfterOks(usize),
 }
 
 /// What the relay saw.
@@ -404,6 +407,7 @@ impl Machine {
             let mut partial = 0usize;
             let mut from_grbl_line = Vec::new();
             let mut pending_corrupt = false;
+            let mut muted = false;
             while !stop.load(Ordering::SeqCst) {
                 let mut idle = true;
                 if let Some(h) = host.as_mut() {
@@ -470,6 +474,7 @@ impl Machine {
                                         match inject {
                                             Inject::CloseAfterOks(k) if oks == k => close_at = Some(i + 1),
                                             Inject::CorruptAfterOks(k) if oks == k => pending_corrupt = true,
+                                            Inject::MuteAfterOks(k) if oks == k => close_at = Some(i + 1),
                                             _ => {}
                                         }
                                     }
@@ -479,15 +484,19 @@ impl Machine {
                             }
                         }
                         // The host reads what came up to that `ok`, then the link is cut.
-                        let upto = close_at.unwrap_or(n);
+                        let upto = if muted { 0 } else { close_at.unwrap_or(n) };
                         if let Some(h) = host.as_mut()
                             && h.write_all(&buf[..upto]).is_err()
                         {
                             host = None;
                         }
                         if close_at.is_some() {
-                            std::thread::sleep(Duration::from_millis(300));
-                            host = None;
+                            if let Inject::MuteAfterOks(_) = inject {
+                                muted = true;
+                            } else {
+                                std::thread::sleep(Duration::from_millis(300));
+                                host = None;
+                            }
                             seen.injected.store(true, Ordering::SeqCst);
                         }
                     }
@@ -558,6 +567,43 @@ impl Drop for Machine {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// A serial-to-TCP bridge on loopback (as ser2net or an ESP32 bridge serves a board): accepts
+/// one connection and passes bytes between it and the machine's device until either side
+/// closes. Returns `HOST:PORT`.
+pub fn tcp_bridge(device: &str) -> String {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("a loopback port");
+    let addr = listener.local_addr().unwrap().to_string();
+    let mut tty = serialport::new(device, 115_200).timeout(Duration::from_millis(5)).open().expect("the device");
+    std::thread::spawn(move || {
+        let Ok((mut sock, _)) = listener.accept() else { return };
+        sock.set_read_timeout(Some(Duration::from_millis(5))).unwrap();
+        let mut buf = [0u8; 512];
+        loop {
+            match sock.read(&mut buf) {
+                Ok(0) => return,
+                Ok(n) => {
+                    if tty.write_all(&buf[..n]).is_err() {
+                        return;
+                    }
+                }
+                Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
+                Err(_) => return,
+            }
+            match tty.read(&mut buf) {
+                Ok(n) if n > 0 => {
+                    if sock.write_all(&buf[..n]).is_err() {
+                        return;
+                    }
+                }
+                Ok(_) => {}
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(_) => return,
+            }
+        }
+    });
+    addr
 }
 
 /// The machine position of a status report (`MPos`).

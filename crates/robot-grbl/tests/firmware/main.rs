@@ -197,7 +197,13 @@ fn faulted(
     let program = GcodeProgram::from_export(&text, cfg.travel_speed_m_s * 60_000.0).unwrap();
     let mut m = Machine::start(fw, SETUP);
     m.relay(inject);
-    let (mut g, info) = Grbl::connect(link(&m), opts()).unwrap();
+    // A quiet link is noticed after a second.
+    let o = if matches!(inject, Inject::MuteAfterOks(_)) {
+        LinkOptions { timeout: Duration::from_secs(1), ..opts() }
+    } else {
+        opts()
+    };
+    let (mut g, info) = Grbl::connect(link(&m), o).unwrap();
     let checked = robot_grbl::check_program(&info, &program, RateFit::Refuse).unwrap();
     let stop = AtomicBool::new(false);
     // Ctrl-C once the brush is pressing (the first report below the paper).
@@ -255,6 +261,39 @@ fn faults_mid_stream_stop_with_the_last_acknowledged_line_and_a_raised_brush() {
     assert!(s.to_string().contains(&format!("line {}", p.lines[3].source_line)), "{s}");
     let st = m.wait_idle(Duration::from_secs(10));
     assert!(st.starts_with("<Idle"), "{st}");
+    drop(m);
+    // The link gone quiet (GRBL's answers lost, its input still reaching it): reported lost
+    // after the time-out with the last acknowledged line. The feed hold reaches the machine;
+    // without an answer saying the hold is complete maobi does not reset (a reset in motion
+    // loses the position) nor lift, and says so.
+    let (s, mut m, p) = faulted(fw, 2, Inject::MuteAfterOks(7), false);
+    assert!(matches!(s.cause, Fault::Quiet(t) if t == 1.0), "{s}");
+    assert!(!s.safe.lifted && s.safe.how.contains("lift it by hand"), "{s}");
+    assert_eq!(s.last_acked.as_ref().map(|l| l.0), Some(p.lines[s.lines_acked - 1].source_line), "{s}");
+    let st = m.status();
+    assert!(st.starts_with("<Hold:0"), "the hold reached it: {st}");
+}
+
+#[test]
+fn a_board_bridged_over_tcp_writes_as_over_serial() {
+    let Some(fw) = fw("a_board_bridged_over_tcp_writes_as_over_serial") else { return };
+    let _g = guard();
+    let mut m = Machine::start(fw, SETUP);
+    m.relay(Inject::None);
+    let addr = harness::tcp_bridge(&m.device);
+    let (t, cfg) = (track(1), config());
+    let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
+    let (program, _) = build_program(&t, &BrushProfile::builtin("pen1").unwrap(), &frame, &cfg).unwrap();
+    let plan = Plan { program: &program, config: &cfg, track: &t, stroke_chars: None, title: "一" };
+    let mut plotter = GrblPlotter::new(Endpoint::Tcp(addr.clone()), Duration::from_secs(3), RateFit::Refuse);
+    assert_eq!(plotter.describe(), format!("GRBL at {addr} (TCP)"));
+    plotter.prepare(&plan).unwrap();
+    plotter.connect().unwrap();
+    let stop = AtomicBool::new(false);
+    let summary = plotter.run(&mut Watch { stop: &stop, progress: &mut |_| {} }).unwrap();
+    assert_eq!(summary.strokes_completed, vec![0]);
+    let lines = plotter.program().unwrap().lines.len();
+    assert_eq!(m.seen.oks.load(Ordering::SeqCst), lines + 4);
 }
 
 #[test]
