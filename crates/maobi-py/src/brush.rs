@@ -311,8 +311,8 @@ fn measurement_rows(obj: &Bound<'_, PyAny>) -> PyResult<Vec<Measurement>> {
         if r[2].abs() > std::f64::consts::TAU {
             return Err(bad(2, "a rotation within ±2π rad"));
         }
-        for k in 3..6 {
-            if !(r[k] > 0.0 && r[k] <= 2000.0) {
+        for (k, v) in r.iter().enumerate().skip(3) {
+            if !(*v > 0.0 && *v <= 2000.0) {
                 return Err(bad(k, "a positive length of at most 2000 mm"));
             }
         }

@@ -247,8 +247,11 @@ pub(crate) fn render_track<'py>(
     image_out(py, img)
 }
 
+/// An image's values, height and width.
+type Image = (Vec<f32>, usize, usize);
+
 /// Two images of one size, checked, as `f32`.
-fn pair(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>) -> PyResult<((Vec<f32>, usize, usize), Vec<f32>)> {
+fn pair(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>) -> PyResult<(Image, Vec<f32>)> {
     let ia = image(a, "a")?;
     let ib = image(b, "b")?;
     if (ia.1, ia.2) != (ib.1, ib.2) {

@@ -247,14 +247,22 @@ fn glyph_input(font: Option<&Bound<'_, PyAny>>, hanzi: Option<&Bound<'_, PyAny>>
 
 /// A pipeline error as a Python exception: a character no source covers is a `ValueError`
 /// naming the argument that could cover it.
-fn pipeline_err(e: pipeline::Error) -> PyErr {
-    match e {
+fn pipeline_err(e: Box<pipeline::Error>) -> PyErr {
+    match *e {
         pipeline::Error::Glyph(trajectory::GlyphError::Unknown { .. }) => value_err(format!(
             "text: {}: give font= (a CJK font file) or hanzi_data= (a hanzi-writer-data folder) that covers it",
             crate::errors::chain(&e)
         )),
         pipeline::Error::Profile(p) => crate::brush::profile_err("brush", p),
         e => lib_err("", e),
+    }
+}
+
+/// The glyph of `c` and its centre lines.
+fn prepare_char(input: &GlyphInput, c: char) -> PyResult<pipeline::Prepared> {
+    match input.load(c) {
+        Ok(l) => prepare_loaded(l, None).map_err(|e| pipeline_err(Box::new(e))),
+        Err(e) => Err(pipeline_err(Box::new(e))),
     }
 }
 
@@ -325,14 +333,10 @@ pub(crate) fn write<'py>(
     };
     let input = glyph_input(font, hanzi_data)?;
     let results = guarded(py, "write", move || {
-        let prepared = chars
-            .iter()
-            .map(|&c| input.load(c).and_then(|l| prepare_loaded(l, None)))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(pipeline_err)?;
+        let prepared = chars.iter().map(|&c| prepare_char(&input, c)).collect::<PyResult<Vec<_>>>()?;
         let opts = WriteOptions { size, alpha_rad, refine, ..WriteOptions::default() };
         let text = TextOptions { char_mm, ..TextOptions::default() };
-        let w = write_text(prepared, &profile, &opts, &text, &|| {}).map_err(pipeline_err)?;
+        let w = write_text(prepared, &profile, &opts, &text, &|| {}).map_err(|e| pipeline_err(Box::new(e)))?;
         w.results
             .into_iter()
             .map(|r| {
@@ -378,7 +382,7 @@ pub(crate) fn glyph<'py>(
     let size = size_arg(size_px)?;
     let input = glyph_input(font, hanzi_data)?;
     let img = guarded(py, "glyph", move || {
-        let (g, _) = input.load(c).map_err(pipeline_err)?;
+        let (g, _) = input.load(c).map_err(|e| pipeline_err(Box::new(e)))?;
         Ok(trajectory::raster::render_glyph(&g, size))
     })?;
     image_out(py, img)
