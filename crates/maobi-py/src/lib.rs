@@ -4,7 +4,7 @@
 //! layer (`python/maobi/`) re-exports it with type stubs; `docs/python.md` is the API.
 //!
 //! Every entry point that does real work releases the GIL and catches panics
-//! ([`guarded`]): a bug in maobi raises `maobi.MaobiError`, never a Rust panic in Python.
+//! (`errors::guarded`): a bug in maobi raises `maobi.MaobiError`, never a Rust panic in Python.
 
 mod arrays;
 mod brush;
