@@ -90,17 +90,12 @@ pub(crate) fn render_presses<'py>(
     let kind = model_arg(model)?;
     let ex = if extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let img = guarded(py, "render_presses", move || {
+        check_ranges(&pts, &profile, extrapolate)?;
         let mut stamps = Vec::with_capacity(pts.len());
-        for (i, p) in pts.iter().enumerate() {
-            if !p.is_pressed() {
-                continue;
-            }
-            let fp = profile.predict_oriented(&Press::new(p.h_mm, p.alpha_rad, p.beta_rad), ex).map_err(|e| match e {
-                ProfileError::OutOfRange { profile, quantity, value, min, max } => value_err(format!(
-                    "presses[{i}]: {quantity} = {value:.6} is outside the calibrated range [{min:.6}, {max:.6}] of brush `{profile}` (pass extrapolate=True to use it anyway)"
-                )),
-                e => crate::brush::profile_err(&format!("presses[{i}]"), e),
-            })?;
+        for (i, p) in pts.iter().enumerate().filter(|(_, p)| p.is_pressed()) {
+            let fp = profile
+                .predict_oriented(&Press::new(p.h_mm, p.alpha_rad, p.beta_rad), ex)
+                .map_err(|e| crate::brush::profile_err(&format!("presses[{i}]"), e))?;
             stamps.push(Stamp { footprint: fp, anchor: p.anchor(), beta_rad: p.beta_rad });
         }
         Ok(render_stamps(&stamps, kind.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size))
