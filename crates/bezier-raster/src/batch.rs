@@ -142,7 +142,74 @@ pub fn sweep_stamps_with(
 
 /// Renders stamps into a `width × height` image whose top-left corner is paper point
 /// `origin_mm`, at `px_per_mm`, composing by per-pixel max.
+///
+/// Many stamps are rendered in parallel on rayon's pool, one image per worker's share merged by
+/// per-pixel max: the composition does not depend on the order, and each share's rasteriser
+/// starts with the scratch size the serial one would have there, so the image is the same bit
+/// for bit at any thread count.
 pub fn render_stamps(
+    stamps: &[Stamp],
+    model: &dyn StrokeModel,
+    origin_mm: PointMm,
+    px_per_mm: f64,
+    width: u32,
+    height: u32,
+) -> Coverage {
+    let threads = rayon::current_num_threads();
+    let pixels = u64::from(width) * u64::from(height);
+    if threads < 2 || stamps.len() < 2 * PARALLEL_STAMPS || pixels > PARALLEL_MAX_PIXELS {
+        return render_stamps_serial(stamps, model, origin_mm, px_per_mm, width, height);
+    }
+    let paths: Vec<kurbo::BezPath> = stamps
+        .par_iter()
+        .map(|s| {
+            let anchor = PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm);
+            model.outline(&s.footprint, anchor, s.beta_rad)
+        })
+        .collect();
+    let share = stamps.len().div_ceil(threads).max(PARALLEL_STAMPS);
+    // The scratch mask's size when each share starts, as one rasteriser going through them all
+    // would have it: the running maximum of the boxes drawn so far.
+    let mut starts = Vec::new();
+    let mut size = (0u32, 0u32);
+    for (i, p) in paths.iter().enumerate() {
+        if i % share == 0 {
+            starts.push(size);
+        }
+        if let Some([_, _, bw, bh]) = crate::raster::stamp_box(p, px_per_mm, width, height) {
+            if bw > size.0 || bh > size.1 {
+                size = (size.0.max(bw), size.1.max(bh));
+            }
+        }
+    }
+    paths
+        .par_chunks(share)
+        .zip(starts)
+        .map(|(part, (mw, mh))| {
+            let mut r = Rasterizer::new();
+            r.grow_to(mw, mh);
+            debug_assert_eq!(r.mask_size(), (mw, mh));
+            let mut img = Coverage::new(width, height);
+            for p in part {
+                r.stamp(p, px_per_mm, &mut img);
+            }
+            img
+        })
+        .reduce_with(|mut a, b| {
+            a.max_with(&b);
+            a
+        })
+        .unwrap_or_else(|| Coverage::new(width, height))
+}
+
+/// Fewer stamps than this per worker are not worth an image of their own.
+const PARALLEL_STAMPS: usize = 256;
+/// Above this many pixels (64 MiB of f32) an image per worker costs more memory than it saves
+/// time: rendered serially.
+const PARALLEL_MAX_PIXELS: u64 = 1 << 24;
+
+/// [`render_stamps`] on the calling thread.
+fn render_stamps_serial(
     stamps: &[Stamp],
     model: &dyn StrokeModel,
     origin_mm: PointMm,

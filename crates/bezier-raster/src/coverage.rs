@@ -174,6 +174,11 @@ impl Coverage {
         Ok(Self { width, height, data })
     }
 
+    /// The pixel values, row-major, without a copy (what [`Coverage::data`] borrows).
+    pub fn into_vec(self) -> Vec<f32> {
+        self.data
+    }
+
     /// Width, px.
     pub fn width(&self) -> u32 {
         self.width

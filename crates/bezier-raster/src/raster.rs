@@ -48,6 +48,21 @@ fn to_skia(path_mm: &BezPath, px_per_mm: f64, ox: f64, oy: f64) -> Option<tiny_s
     b.finish()
 }
 
+/// The pixel box `[x0, y0, width, height]` that [`Rasterizer::stamp`] draws `path_mm` into on a
+/// `w × h` image (its bounding box widened by a pixel, clipped), `None` when empty.
+pub(crate) fn stamp_box(path_mm: &BezPath, px_per_mm: f64, w: u32, h: u32) -> Option<[u32; 4]> {
+    let bb = path_mm.bounding_box();
+    let (w, h) = (i64::from(w), i64::from(h));
+    let x0 = ((bb.x0 * px_per_mm).floor() as i64 - 1).clamp(0, w);
+    let y0 = ((bb.y0 * px_per_mm).floor() as i64 - 1).clamp(0, h);
+    let x1 = ((bb.x1 * px_per_mm).ceil() as i64 + 1).clamp(0, w);
+    let y1 = ((bb.y1 * px_per_mm).ceil() as i64 + 1).clamp(0, h);
+    if x1 <= x0 || y1 <= y0 || !bb.is_finite() {
+        return None;
+    }
+    Some([x0 as u32, y0 as u32, (x1 - x0) as u32, (y1 - y0) as u32])
+}
+
 impl Rasterizer {
     /// A rasteriser with no scratch space yet.
     pub fn new() -> Self {
@@ -56,6 +71,21 @@ impl Rasterizer {
             *v = i as f32 / 255.0;
         }
         Self { mask: None, lut }
+    }
+
+    /// The size of the scratch mask so far (`(0, 0)` before the first stamp): tiny-skia's
+    /// anti-aliasing at a footprint's edge can depend on it, so a rasteriser that is to draw
+    /// what another would draw after some stamps starts from the same size
+    /// ([`Rasterizer::grow_to`]).
+    pub(crate) fn mask_size(&self) -> (u32, u32) {
+        self.mask.as_ref().map_or((0, 0), |m| (m.width(), m.height()))
+    }
+
+    /// Grows the scratch mask to at least `w × h`, as stamps of those sizes would have.
+    pub(crate) fn grow_to(&mut self, w: u32, h: u32) {
+        if w > 0 && h > 0 {
+            self.scratch(w, h);
+        }
     }
 
     /// A scratch mask at least `w × h`, with its top-left `w × h` block cleared.
@@ -90,16 +120,7 @@ impl Rasterizer {
     /// Fills `path_mm` into `out` by per-pixel max (a stamp): only the path's bounding box is
     /// touched, so stamping many small footprints into a large image stays cheap.
     pub fn stamp(&mut self, path_mm: &BezPath, px_per_mm: f64, out: &mut Coverage) {
-        let bb = path_mm.bounding_box();
-        let (w, h) = (out.width() as i64, out.height() as i64);
-        let x0 = ((bb.x0 * px_per_mm).floor() as i64 - 1).clamp(0, w);
-        let y0 = ((bb.y0 * px_per_mm).floor() as i64 - 1).clamp(0, h);
-        let x1 = ((bb.x1 * px_per_mm).ceil() as i64 + 1).clamp(0, w);
-        let y1 = ((bb.y1 * px_per_mm).ceil() as i64 + 1).clamp(0, h);
-        if x1 <= x0 || y1 <= y0 || !bb.is_finite() {
-            return;
-        }
-        let (bw, bh) = ((x1 - x0) as u32, (y1 - y0) as u32);
+        let Some([x0, y0, bw, bh]) = stamp_box(path_mm, px_per_mm, out.width(), out.height()) else { return };
         let Some(path) = to_skia(path_mm, px_per_mm, x0 as f64, y0 as f64) else { return };
         let lut = self.lut;
         let mask = self.scratch(bw, bh);

@@ -205,6 +205,21 @@ impl ForwardModel {
     /// An upright brush's direction from its pressed history: towards the first history point
     /// (walking back) at least `reach` away, else the farthest if it is `min_motion_mm` away.
     fn dragged(&self, history: &[(f64, f64)], here: (f64, f64), reach: f64) -> Option<f64> {
+        // The walk below computes `hypot` at every point; most points lie well inside `reach`,
+        // so first find the answer when some point is at least `reach` away, skipping the
+        // `hypot` of every point whose squared distance is short of `reach²` by far more than
+        // both roundings (the same point, the same direction, in a fraction of the time).
+        let short = reach * reach * (1.0 - 1e-9);
+        for &q in history.iter().rev() {
+            let (dx, dy) = (q.0 - here.0, q.1 - here.1);
+            if dx * dx + dy * dy < short {
+                continue;
+            }
+            if dx.hypot(dy) >= reach {
+                return Some(direction(here, q));
+            }
+        }
+        // No point is `reach` away: the farthest one, as the full walk finds it.
         let mut far = (0.0f64, None);
         for &q in history.iter().rev() {
             let d = (q.0 - here.0).hypot(q.1 - here.1);

@@ -100,6 +100,11 @@ impl Tape {
         &self.images
     }
 
+    /// All images, as [`Tape::images`], without a copy (the tape cannot go backward after).
+    pub fn into_images(self) -> Vec<f32> {
+        self.images
+    }
+
     /// Image `i` (`size²` values).
     ///
     /// # Panics

@@ -399,24 +399,39 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let fm = opts.forward_model();
     let built = build_track_with(&p.paths, profile, &topts, &fm)?;
-    let render = render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, opts.size)?;
-    let reference = render_glyph(&p.glyph, opts.size);
+    // The plan's render and the glyph's are independent: rendered side by side on rayon's pool.
+    let (render, reference) = rayon::join(
+        || render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, opts.size),
+        || render_glyph(&p.glyph, opts.size),
+    );
+    let render = render?;
     let sim = similarity(&reference, &render)?;
     let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
     let millis = t0.elapsed().as_secs_f64() * 1e3;
-    let free_widths = if opts.free_widths {
-        let free = build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
-        let img = render_char(&free.track, profile, &fm, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
-        Some(similarity(&reference, &img)?)
-    } else {
-        None
-    };
-    let (executed, agreement, executed_img, executed_states) = if opts.execute {
-        let (states, img) = execute_and_render(&built.track, profile, opts, &char_box)
-            .map_err(|source| Error::Check { ch: p.glyph.ch.to_string(), source })?;
-        (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
-    } else {
-        (None, None, None, None)
+    // The free-width plan and the executed program are independent of each other: both at once.
+    let (free_widths, executed) = rayon::join(
+        || -> Result<Option<Similarity>> {
+            if !opts.free_widths {
+                return Ok(None);
+            }
+            let free =
+                build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
+            let img = render_char(&free.track, profile, &fm, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+            Ok(Some(similarity(&reference, &img)?))
+        },
+        || {
+            opts.execute
+                .then(|| execute_and_render(&built.track, profile, opts, &char_box))
+                .transpose()
+                .map_err(|source| Error::Check { ch: p.glyph.ch.to_string(), source })
+        },
+    );
+    let free_widths = free_widths?;
+    let (executed, agreement, executed_img, executed_states) = match executed? {
+        Some((states, img)) => {
+            (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
+        }
+        None => (None, None, None, None),
     };
     let report = CharReport {
         char: p.glyph.ch.to_string(),

@@ -52,6 +52,7 @@ mod image;
 mod options;
 mod problem;
 mod soft;
+mod soft_render;
 mod target;
 
 use std::time::Instant;
@@ -63,6 +64,7 @@ pub use error::RefineError;
 pub use generator::{GenMode, GenModel};
 pub use options::{Gradients, RefineOptions};
 pub use problem::{Directions, LossTerms, Problem};
+pub use soft_render::{SoftCanvas, soft_render, soft_render_vjp};
 pub use target::Target;
 
 /// A refined track and how the refinement went.

@@ -38,32 +38,50 @@ impl ImageModel for Analytic {
     fn image_term(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> (f64, Vec<[f64; 5]>) {
         let (sums, edges) = self.union_edges(r, fps, want_grad);
         let (image, q) = sums.residuals(r);
-        let mut per_fp = Vec::new();
-        if want_grad {
-            per_fp = edges
-                .par_iter()
-                .map(|list| {
-                    let mut g = [0.0f64; 5];
-                    for px in list {
-                        let qk = q[px.k as usize];
-                        if qk == 0.0 {
-                            continue;
-                        }
-                        // ∂U/∂c_i = Π_{j≠i}(1 − c_j) = Π/(1 − c_i), so ∂L/∂d = q/(1 − c)·∂c/∂d.
-                        let w = qk / px.one_minus_c * px.dc;
-                        for (gi, ai) in g.iter_mut().zip(&px.a) {
-                            *gi += w * ai;
-                        }
-                    }
-                    g
-                })
-                .collect();
-        }
+        let per_fp = if want_grad { per_footprint(&edges, &q) } else { Vec::new() };
         (image, per_fp)
     }
 }
 
+/// Each footprint's `∂L/∂(x, y, h, α, β)` from its soft edge's pixels, given per pixel
+/// `q = ∂L/∂U · Π(1 − c)`.
+fn per_footprint(edges: &[Vec<EdgePx>], q: &[f64]) -> Vec<[f64; 5]> {
+    edges
+        .par_iter()
+        .map(|list| {
+            let mut g = [0.0f64; 5];
+            for px in list {
+                let qk = q[px.k as usize];
+                if qk == 0.0 {
+                    continue;
+                }
+                // ∂U/∂c_i = Π_{j≠i}(1 − c_j) = Π/(1 − c_i), so ∂L/∂d = q/(1 − c)·∂c/∂d.
+                let w = qk / px.one_minus_c * px.dc;
+                for (gi, ai) in g.iter_mut().zip(&px.a) {
+                    *gi += w * ai;
+                }
+            }
+            g
+        })
+        .collect()
+}
+
 impl Analytic {
+    /// The soft union image `U` of `fps` on `r` and, for an upstream gradient `∂L/∂U` per pixel
+    /// (`r`'s ink is not read), each footprint's `∂L/∂(x, y, h, α, β)`: the vector–Jacobian
+    /// product of the soft render.
+    pub(crate) fn render_vjp(&self, r: &Raster<'_>, fps: &[Fp], upstream: Option<&[f64]>) -> (Vec<f64>, Vec<[f64; 5]>) {
+        let (sums, edges) = self.union_edges(r, fps, upstream.is_some());
+        let per_fp = match upstream {
+            Some(up) => {
+                let q: Vec<f64> = up.iter().enumerate().map(|(k, g)| g * sums.keep(k)).collect();
+                per_footprint(&edges, &q)
+            }
+            None => Vec::new(),
+        };
+        (sums.image(), per_fp)
+    }
+
     /// The soft union's per-pixel sums and, when `want_edges`, per footprint the pixels of its
     /// soft edge (`0 < c < 1`) with what the gradient pass needs ([`EdgePx`]), in visiting
     /// order, so that pass neither scans the footprint's box again nor solves for `t*` again.
@@ -131,8 +149,13 @@ impl Analytic {
                             -sb * gu - cb * gv,
                             glt * f.dh[0] + glh * f.dh[1] + glr * f.dh[2],
                             glt * f.da[0] + glh * f.da[1] + glr * f.da[2],
-                            // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u.
-                            gu * v - gv * u,
+                            // Turning the footprint: ∂u/∂β = v, ∂v/∂β = −u (and, for a
+                            // profile whose lengths depend on β, their partials).
+                            if f.db == [0.0; 3] {
+                                gu * v - gv * u
+                            } else {
+                                gu * v - gv * u + glt * f.db[0] + glh * f.db[1] + glr * f.db[2]
+                            },
                         ],
                     });
                 }
@@ -228,6 +251,7 @@ mod tests {
                     shape,
                     dh: [0.0; 3],
                     da: [0.0; 3],
+                    db: [0.0; 3],
                     i0: box_.0,
                     i1: box_.1,
                     j0: box_.2,

@@ -34,6 +34,8 @@ pub(crate) struct Fp {
     pub(crate) dh: [f64; 3],
     /// `∂(lt, lh, lr)/∂α`.
     pub(crate) da: [f64; 3],
+    /// `∂(lt, lh, lr)/∂β` (zero in refinement, whose image term turns the footprint only).
+    pub(crate) db: [f64; 3],
     /// Pixel bounds, inclusive: columns `i0..=i1`, rows `j0..=j1` (empty when `i0 > i1`).
     pub(crate) i0: i64,
     pub(crate) i1: i64,
@@ -66,7 +68,7 @@ pub(crate) struct UnionSums {
 impl UnionSums {
     /// `Π(1 − c)` at pixel `k`.
     #[inline]
-    fn keep(&self, k: usize) -> f64 {
+    pub(crate) fn keep(&self, k: usize) -> f64 {
         match &self.saturated {
             Some(sat) if sat[k] > 0 => 0.0,
             _ => self.log_keep[k].exp(),

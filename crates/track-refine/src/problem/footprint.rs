@@ -40,7 +40,7 @@ impl Problem<'_> {
                 let da = terms.map(|t| t.alpha_rad.unwrap_or(0.0));
                 let shape = Shape { lt, lh, lr };
                 let [i0, i1, j0, j1] = pixel_box(t, e, (x, y), beta, &shape);
-                Fp { x, y, h, alpha, beta, shape, dh, da, i0, i1, j0, j1 }
+                Fp { x, y, h, alpha, beta, shape, dh, da, db: [0.0; 3], i0, i1, j0, j1 }
             })
             .collect()
     }
@@ -91,7 +91,20 @@ impl Problem<'_> {
 /// The inclusive pixel box `[i0, i1, j0, j1]` on `t` (clipped to it; empty when `i0 > i1`) of
 /// a footprint's band `u ∈ [−e, L + e]`, `|v| ≤ lr + e` (`e` the edge half-width, mm), the
 /// footprint at `(x, y)` mm pointing along `beta` rad.
-fn pixel_box(t: &Target, e: f64, (x, y): (f64, f64), beta: f64, shape: &Shape) -> [i64; 4] {
+fn pixel_box(t: &Target, e: f64, at: (f64, f64), beta: f64, shape: &Shape) -> [i64; 4] {
+    pixel_box_on(t.origin_mm, t.mm_per_px, (t.width, t.height), e, at, beta, shape)
+}
+
+/// [`pixel_box`] on a raster of `size` px whose top-left corner is `origin` mm, `mm_per_px`.
+pub(crate) fn pixel_box_on(
+    origin: brush_model::PointMm,
+    mm_per_px: f64,
+    size: (u32, u32),
+    e: f64,
+    (x, y): (f64, f64),
+    beta: f64,
+    shape: &Shape,
+) -> [i64; 4] {
     let (sb, cb) = beta.sin_cos();
     // Local box u ∈ [−e, L + e], |v| ≤ lr + e, rotated onto the paper.
     let (ul, uh, vh) = (-e, shape.length() + e, shape.lr + e);
@@ -104,13 +117,13 @@ fn pixel_box(t: &Target, e: f64, (x, y): (f64, f64), beta: f64, shape: &Shape) -
         ymax = ymax.max(py);
     }
     let col = |v: f64, up: bool| {
-        let f = (v - t.origin_mm.x_mm) / t.mm_per_px - 0.5;
+        let f = (v - origin.x_mm) / mm_per_px - 0.5;
         if up { f.floor() as i64 } else { f.ceil() as i64 }
     };
     let row = |v: f64, up: bool| {
-        let f = (v - t.origin_mm.y_mm) / t.mm_per_px - 0.5;
+        let f = (v - origin.y_mm) / mm_per_px - 0.5;
         if up { f.floor() as i64 } else { f.ceil() as i64 }
     };
-    let (w, hgt) = (t.width as i64, t.height as i64);
+    let (w, hgt) = (size.0 as i64, size.1 as i64);
     [col(xmin, false).max(0), col(xmax, true).min(w - 1), row(ymin, false).max(0), row(ymax, true).min(hgt - 1)]
 }

@@ -5,6 +5,8 @@
 
 mod aim;
 mod footprint;
+
+pub(crate) use footprint::pixel_box_on;
 mod layout;
 mod regularise;
 
