@@ -22,7 +22,7 @@ use crate::controller::{
 use crate::follow::{Commanded, Expect, Sent, check_pose_from, distance_m, program_box, show};
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
-use crate::program::{Move, Program, RobotConfig, compact_program};
+use crate::program::{Program, RobotConfig, compact_program};
 use dashboard::Dashboard;
 use rtde::{RtdeClient, Value};
 
@@ -727,20 +727,6 @@ impl UrRun<'_> {
             if Instant::now() > end {
                 return Err(RobotError::Timeout("the lift".into()));
             }
-        }
-    }
-}
-
-/// Where a move ends, if it is a pose.
-trait Target {
-    fn target(&self) -> Option<Pose>;
-}
-
-impl Target for Move {
-    fn target(&self) -> Option<Pose> {
-        match *self {
-            Move::Line { pose, .. } | Move::JointPose { pose, .. } => Some(pose),
-            Move::Joint { .. } => None,
         }
     }
 }
