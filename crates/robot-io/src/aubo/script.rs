@@ -16,7 +16,7 @@ use crate::controller::{
     Controller, Plan, Position, Preflight, Prepared, Progress, RunSummary, Watch, expected_seconds,
 };
 use crate::export::{PROGRESS_VARIABLE, aubo_lua, aubo_lua_path_buffer};
-use crate::follow::{Commanded, Expect, Sent, check_pose, distance_m, program_box};
+use crate::follow::{Commanded, Expect, Sent, check_pose, distance_m, lift_words, program_box, run_stopped};
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{Move, Program, RobotConfig, compact_program};
@@ -389,37 +389,17 @@ impl ScriptRun<'_> {
     /// Stops the script (`RuntimeMachine.stop`), waits for the arm, and, when the reports are
     /// trusted, lifts the brush out of the paper from where it stopped.
     fn stop(mut self, cause: RobotError, trusted: bool) -> RobotError {
-        let mut words = match self.client.call("RuntimeMachine.stop", Value::Null) {
+        let words = match self.client.call("RuntimeMachine.stop", Value::Null) {
             Ok(_) => "the script was stopped (RuntimeMachine.stop)".to_string(),
             Err(e) => format!("RuntimeMachine.stop failed ({e})"),
         };
         let _ = self.client.wait_idle(&self.robot, Duration::from_secs(10));
-        let mut at = None;
-        let lifted = if !trusted {
-            words.push_str("; the arm's reports are not trusted: nothing more sent; check the arm");
-            false
+        let lift = if trusted {
+            self.lift().map_err(|e| format!("could not lift the brush ({e}): it may still touch the paper"))
         } else {
-            match self.lift() {
-                Ok((w, pose)) => {
-                    words = format!("{words}; {w}");
-                    at = Some(Box::new(Position::Tcp(pose)));
-                    true
-                }
-                Err(e) => {
-                    words = format!("{words}; could not lift the brush ({e}): it may still touch the paper");
-                    false
-                }
-            }
+            Err("the arm's reports are not trusted: nothing more sent; check the arm".into())
         };
-        RobotError::RunStopped {
-            cause: Box::new(cause),
-            completed: self.done,
-            total: self.total(),
-            reconnects: 0,
-            lifted,
-            lift: words,
-            at,
-        }
+        run_stopped(cause, self.done, self.total(), words, lift)
     }
 
     fn lift(&mut self) -> Result<(String, Pose), RobotError> {
@@ -437,12 +417,7 @@ impl ScriptRun<'_> {
         self.client.wait_idle(&self.robot, Duration::from_secs_f64(10.0 + 4.0 * (lift_m + 0.05) / m_speed(&m)))?;
         let end = self.client.tcp_pose(&self.robot)?;
         check_pose(&end, &Expect::At(to), Some(&self.ready.near), "after the lift")?;
-        let from = if depth_mm >= 0.0 {
-            format!("{depth_mm:.1} mm below the paper")
-        } else {
-            format!("{:.1} mm above the paper", -depth_mm)
-        };
-        Ok((format!("brush lifted from {from} to the safe height ({:.1} mm above it)", lift_m * 1000.0), end))
+        Ok((lift_words(depth_mm, self.ready.config.lift_mm), end))
     }
 }
 
