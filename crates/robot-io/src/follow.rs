@@ -281,6 +281,34 @@ pub(crate) fn check_pose_from(
     }
 }
 
+/// What a lift from `depth_mm` (below the paper; negative above it) to `lift_mm` above it did,
+/// in words.
+pub(crate) fn lift_words(depth_mm: f64, lift_mm: f64) -> String {
+    let from = if depth_mm >= 0.0 {
+        format!("{depth_mm:.1} mm below the paper")
+    } else {
+        format!("{:.1} mm above the paper", -depth_mm)
+    };
+    format!("brush lifted from {from} to the safe height ({lift_mm:.1} mm above it)")
+}
+
+/// [`RobotError::RunStopped`] after a controller stopped a run (`stop`: what the stop did, in
+/// words) and then lifted the brush (`Ok`: what the lift did and where the arm was seen after
+/// it) or did not (`Err`: why, in words).
+pub(crate) fn run_stopped(
+    cause: RobotError,
+    completed: usize,
+    total: usize,
+    stop: String,
+    lift: Result<(String, Pose), String>,
+) -> RobotError {
+    let (lifted, words, at) = match lift {
+        Ok((w, pose)) => (true, format!("{stop}; {w}"), Some(Box::new(crate::controller::Position::Tcp(pose)))),
+        Err(why) => (false, format!("{stop}; {why}"), None),
+    };
+    RobotError::RunStopped { cause: Box::new(cause), completed, total, reconnects: 0, lifted, lift: words, at }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -67,6 +67,16 @@ pub enum Move {
     },
 }
 
+impl Move {
+    /// The TCP pose the move ends at (`None` for a joint move to joints).
+    pub fn target(&self) -> Option<Pose> {
+        match *self {
+            Move::Line { pose, .. } | Move::JointPose { pose, .. } => Some(pose),
+            Move::Joint { .. } => None,
+        }
+    }
+}
+
 /// The moves of one stroke, in the order they run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StrokeProgram {

@@ -35,6 +35,11 @@ use crate::kinematics::{DhParams, JOINT_LIMIT_RAD};
 use crate::pose::Pose;
 use crate::program::{Move, Program, RobotConfig, StrokeProgram};
 
+/// How far a path buffer's first waypoint may lie from the arm's joints when the buffer is
+/// moved, rad: the runner and the Lua script check it before `movePathBuffer`, and the
+/// simulator refuses a buffer that does not start where the arm is.
+pub const PATH_START_TOLERANCE_RAD: f64 = 5e-3;
+
 /// How much path length a turn of the tool counts for, m per rad: a turn in place has a
 /// length, so it has a speed and a duration.
 pub const TURN_LENGTH_M: f64 = 0.01;

@@ -43,10 +43,15 @@ pub struct ControllerArgs {
     /// Port (default: AUBO 30004 for framed and lines, 9012 for http; UR the script port 30002).
     #[arg(long)]
     port: Option<u16>,
-    /// How to talk to the controller: framed (the AUBO SDK's protocol, with login), lines
-    /// (line-delimited JSON, positional params) or http (JSON-RPC over HTTP).
-    #[arg(long, default_value = "framed")]
-    transport: Transport,
+    /// How to talk to an AUBO controller: framed (the AUBO SDK's protocol, with login), lines
+    /// (line-delimited JSON, positional params), http (JSON-RPC over HTTP), or script (`robot
+    /// send` only: the program as one Lua script on --script-port, followed over framed
+    /// JSON-RPC on --port).
+    #[arg(long, default_value = "framed", value_parser = parse_transport)]
+    transport: SendTransport,
+    /// AUBO: the script port --transport script sends to.
+    #[arg(long, default_value_t = SCRIPT_PORT)]
+    script_port: u16,
     /// User for the framed transport's login.
     #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
     user: String,
@@ -66,15 +71,51 @@ impl ControllerArgs {
             bail!("--timeout-ms must be between 1 and 600000, got {}", self.timeout_ms);
         }
         let host = self.host.as_deref().context("--host is required: the controller's address")?;
-        Ok(format!("{host}:{}", self.port.unwrap_or(self.transport.default_port())))
+        Ok(format!("{host}:{}", self.port.unwrap_or(self.rpc_transport().default_port())))
+    }
+
+    /// The JSON-RPC transport (a script is followed over the framed one).
+    fn rpc_transport(&self) -> Transport {
+        match self.transport {
+            SendTransport::Rpc(t) => t,
+            SendTransport::Script => Transport::Framed,
+        }
     }
 
     fn link(&self) -> Link {
-        Link { transport: self.transport, user: self.user.clone(), password: self.password.clone() }
+        Link { transport: self.rpc_transport(), user: self.user.clone(), password: self.password.clone() }
     }
 
     fn timeout(&self) -> Duration {
         Duration::from_millis(self.timeout_ms)
+    }
+}
+
+/// `--transport`: one of AUBO's JSON-RPC transports, or its script port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SendTransport {
+    /// JSON-RPC, move by move.
+    Rpc(Transport),
+    /// The program as one Lua script.
+    Script,
+}
+
+impl std::fmt::Display for SendTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SendTransport::Rpc(t) => write!(f, "{t}"),
+            SendTransport::Script => write!(f, "script"),
+        }
+    }
+}
+
+fn parse_transport(s: &str) -> Result<SendTransport, String> {
+    match s {
+        "script" => Ok(SendTransport::Script),
+        _ => s
+            .parse::<Transport>()
+            .map(SendTransport::Rpc)
+            .map_err(|_| format!("unknown transport `{s}`: expected framed, lines, http or script")),
     }
 }
 
@@ -290,6 +331,10 @@ pub struct SimArgs {
     /// Also serve the framed transport alone on this port.
     #[arg(long)]
     framed_port: Option<u16>,
+    /// Also serve AUBO's script port here (AUBO's is 30002): scripts ending in a blank line run
+    /// in Lua 5.4 on the simulated arm. UNAUTHENTICATED, like the controller's.
+    #[arg(long)]
+    script_port: Option<u16>,
     /// The user the framed login accepts.
     #[arg(long, default_value = robot_io::wire::DEFAULT_USER)]
     user: String,
@@ -459,8 +504,8 @@ fn export(a: ExportArgs) -> Result<()> {
         }
         "aubo-lua" => {
             let text = robot_io::export::aubo_lua_path_buffer(&program, &kin, &l.cfg, &t)?;
-            let buffers = text.matches("mc:movePathBuffer(name)").count();
-            let calls = text.lines().filter(|l| l.trim_start().starts_with("mc:move")).count();
+            let buffers = text.matches("movePathBuffer(name)").count();
+            let calls = text.lines().filter(|l| l.trim_start().starts_with("move")).count();
             (text, format!("{buffers} path buffers, {calls} motion calls"))
         }
         "urscript" => {
@@ -504,10 +549,13 @@ fn export(a: ExportArgs) -> Result<()> {
 
 fn kinematics(a: KinematicsArgs) -> Result<()> {
     let c = &a.controller;
+    if c.transport == SendTransport::Script {
+        bail!("--transport script runs programs; the kinematics are read over framed, lines or http");
+    }
     let addr = c.addr()?;
     check_output_file("-o", &a.output, a.force)?;
     let (mut client, names) = robot_io::aubo::AuboClient::open(&addr, &c.link(), c.timeout())
-        .with_context(|| format!("connecting to {addr} ({})", c.transport))?;
+        .with_context(|| format!("connecting to {addr} ({})", c.rpc_transport()))?;
     let robot = match &a.robot_name {
         Some(r) => r.clone(),
         None => names.first().cloned().with_context(|| format!("{addr}: the controller reports no robot"))?,
@@ -516,7 +564,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
         client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
     let arm = robot_io::export::ArmKinematics {
         robot: robot.clone(),
-        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.transport),
+        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.rpc_transport()),
         real: true,
         kinematics: params,
     };
@@ -532,6 +580,16 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
     let c = &a.link;
     let motion = if a.motion == "moves" { Motion::Moves } else { Motion::PathBuffer };
     Ok(match a.controller {
+        ControllerKind::Aubo if c.transport == SendTransport::Script => Box::new(
+            robot_io::aubo::AuboScript::new(
+                &c.addr()?,
+                &format!("{}:{}", c.host.as_deref().unwrap_or_default(), c.script_port),
+                c.link(),
+                c.timeout(),
+                motion,
+            )
+            .nominal_kinematics(a.nominal_kinematics, a.accept_nominal_kinematics),
+        ),
         ControllerKind::Aubo => Box::new(
             AuboRpc::new(&c.addr()?, c.link(), c.timeout(), motion)
                 .nominal_kinematics(a.nominal_kinematics, a.accept_nominal_kinematics),
@@ -703,12 +761,22 @@ fn sim(a: SimArgs) -> Result<()> {
     if sim.addrs().iter().any(|(ts, _)| ts.iter().any(|t| *t != Transport::Framed)) {
         eprintln!("warning: the lines and http transports have no login: anyone who reaches them can move the arm");
     }
+    if let Some(p) = a.script_port {
+        let addr = sim.serve_scripts(&format!("127.0.0.1:{p}")).context("cannot serve the script port")?;
+        eprintln!("scripts (Lua 5.4, ending in a blank line) on {addr}: no login, like the controller's");
+    }
     let stop = Arc::new(AtomicBool::new(false));
     let s2 = stop.clone();
     // Ctrl-C and SIGTERM both stop the loop (the trace file is flushed after every move).
     ctrlc::set_handler(move || s2.store(true, Ordering::SeqCst)).context("cannot install the Ctrl-C handler")?;
     let mut reported = false;
+    let mut shown = 0;
     while !stop.load(Ordering::SeqCst) {
+        let errors = sim.script_errors();
+        for e in errors.iter().skip(shown.min(errors.len())) {
+            eprintln!("error: script: {e}");
+        }
+        shown = errors.len();
         if !reported && let Some(e) = sim.trace_error() {
             eprintln!("error: {e}");
             reported = true;

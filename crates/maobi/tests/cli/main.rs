@@ -6,6 +6,7 @@
 
 mod common;
 
+mod aubo_script;
 mod brush;
 mod calibrate_sheet;
 mod closed_loop;

@@ -262,7 +262,7 @@ fn lua_path_buffers_use_the_kinematics_read_from_the_controller() {
     assert!(
         text.contains("getKinematicsParam(true)") && text.contains("local want = {a = {0.000000, 0.000000, 0.408000")
     );
-    assert_eq!(text.matches("mc:movePathBuffer(name)").count(), 2);
+    assert_eq!(text.matches("    movePathBuffer(name)").count(), 2);
     // The flag gives the same program, with a warning.
     let o = export(&["--accept-nominal-kinematics"]);
     ok(&o);
@@ -271,7 +271,7 @@ fn lua_path_buffers_use_the_kinematics_read_from_the_controller() {
     // A move per point of the compacted track instead: no joints, no kinematics needed.
     let said = ok(&export(&["--motion", "moves"]));
     let moves = std::fs::read_to_string(&lua).unwrap();
-    assert!(!moves.contains("pathBuffer") && moves.contains("mc:moveLine("), "{said}");
+    assert!(!moves.contains("pathBuffer") && moves.contains("\n  moveLine("), "{said}");
     let points: usize =
         serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&track).unwrap()).unwrap()["strokes"]
             .as_array()
@@ -279,7 +279,7 @@ fn lua_path_buffers_use_the_kinematics_read_from_the_controller() {
             .iter()
             .map(|st| st.as_array().unwrap().len())
             .sum();
-    assert!(moves.matches("mc:moveLine(").count() < points, "{said}");
+    assert!(moves.matches("  moveLine(").count() < points, "{said}");
     fails(
         &maobi(&[
             "robot",

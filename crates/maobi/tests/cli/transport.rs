@@ -81,7 +81,7 @@ fn send_writes_yong_over_every_transport_and_resumes_after_a_drop() {
     fails(&send(&["--port", &p, "--password", "nope"]), "login as `aubo` refused");
     // An unknown transport names the choices.
     let o = send(&["--transport", "tcp"]);
-    assert!(String::from_utf8_lossy(&o.stderr).contains("expected framed, lines or http"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("expected framed, lines, http or script"));
     // The simulator's help says which transports have no login.
     let help = ok(&maobi(&["robot", "sim", "--help"]));
     assert!(help.contains("UNAUTHENTICATED"), "{help}");

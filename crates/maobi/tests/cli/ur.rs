@@ -103,7 +103,8 @@ fn urs_own_rtde_client_records_yong_as_maobis_program_writes_it() {
     ok(&maobi(&["write", "永", "--size", "128", "--out", s(&out)]));
     let track = out.join("track.json");
     let paper_json = paper();
-    let ur = Ur::start("10", &[]);
+    // 永 takes about 190 s on the stand-in's clock: ×20.
+    let ur = Ur::start("20", &[]);
     let csv = dir.path().join("rtde.txt");
     let mut rec = Command::new("python3")
         .args(["-c", RECORD, s(&rtde_client()), &ur.rtde, s(&csv)])

@@ -932,7 +932,7 @@ pub fn send_script(addr: &str, script: &str, timeout: Duration) -> Result<(), Ro
 
 /// Refuses a script the script port would not take as one script: one containing the
 /// terminator `\r\n\r\n` or a NUL byte.
-fn check_script(script: &str) -> Result<(), RobotError> {
+pub(crate) fn check_script(script: &str) -> Result<(), RobotError> {
     let line_of = |at: usize| script[..at].matches('\n').count() + 1;
     let (at, what) = if let Some(at) = script.find("\r\n\r\n") {
         (at, "the script terminator \"\\r\\n\\r\\n\" (the script port would run what follows as a second script)")

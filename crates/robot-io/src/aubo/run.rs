@@ -667,10 +667,10 @@ impl Runner<'_, '_> {
         let s = self.session();
         let q = s.client.joint_positions(&s.robot)?;
         let off = q.iter().zip(&t.joints[0]).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        if !(off <= crate::sim::PATH_START_TOLERANCE_RAD) {
+        if !(off <= crate::timing::PATH_START_TOLERANCE_RAD) {
             return Err(RobotError::UnexpectedState(format!(
                 "before the path buffer of {what}: the controller reports joints {q:?} rad, {off:.4} rad from the buffer's first waypoint (at most {} rad): another branch of the inverse kinematics",
-                crate::sim::PATH_START_TOLERANCE_RAD
+                crate::timing::PATH_START_TOLERANCE_RAD
             )));
         }
         let n = st.press.len();

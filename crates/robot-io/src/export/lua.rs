@@ -1,5 +1,7 @@
-//! The fixed lines of an ARCS Lua path-buffer program, shared by the writer and the reader so
-//! that both hold exactly the same text.
+//! The fixed lines of an ARCS Lua program in the form of AUBO's script documentation
+//! (`return function(api) local _ENV = require('aubo').sched.select_robot(1) … end`, the robot's
+//! methods as globals), shared by the writer and the reader so that both hold exactly the same
+//! text.
 
 use super::text::{LENGTH_FLOOR, num};
 use crate::kinematics::DhParams;
@@ -18,18 +20,26 @@ fn list(v: &[f64]) -> String {
     v.iter().map(|x| num(*x, LENGTH_FLOOR)).collect::<Vec<_>>().join(", ")
 }
 
-/// The binding of `sleep` as AUBO's Lua examples make it (`sched`, else `require("aubo").sched`),
-/// refusing to run where the controller's Lua has none.
-pub(crate) fn sleep_lines() -> Vec<String> {
+/// The program's first lines: the robot's environment selected as AUBO's script documentation
+/// and its examples do, and `sleep` bound from `sched` (refusing to run where the controller's
+/// Lua has none, before anything moves).
+pub(crate) fn head_lines() -> Vec<String> {
     vec![
-        "  local maobi_sched = sched".into(),
-        "  if maobi_sched == nil then".into(),
-        "    local found, aubo = pcall(require, \"aubo\")".into(),
-        "    if found and type(aubo) == \"table\" then maobi_sched = aubo.sched end".into(),
-        "  end".into(),
-        "  if type(maobi_sched) ~= \"table\" or type(maobi_sched.sleep) ~= \"function\" then error(\"maobi: this controller's Lua has no sched.sleep: nothing was moved\") end".into(),
-        "  local sleep = maobi_sched.sleep".into(),
+        "return function(api)".into(),
+        "  local _ENV = require('aubo').sched.select_robot(1)".into(),
+        "  local sched = require('aubo').sched".into(),
+        "  local sleep = sched.sleep".into(),
+        "  if type(sleep) ~= \"function\" then error(\"maobi: this controller's Lua has no sched.sleep: nothing was moved\") end".into(),
     ]
+}
+
+/// The name of the named integer variable a program counts its finished strokes in
+/// (`setInt32`; read over RPC with `RegisterControl.getInt32`).
+pub const PROGRESS_VARIABLE: &str = "maobi_strokes";
+
+/// The line that publishes `strokes` finished strokes.
+pub(crate) fn progress_line(strokes: usize) -> String {
+    format!("  setInt32(\"{PROGRESS_VARIABLE}\", {strokes})")
 }
 
 /// The line that holds the parameters the waypoints were computed with.
@@ -51,7 +61,7 @@ pub(crate) const WANT_PREFIX: &str = "    local want = {a = {";
 pub(crate) fn kinematics_check_lines() -> Vec<String> {
     let tol = num(KINEMATICS_TOLERANCE, 0.0);
     [
-        "    local k = robot:getRobotConfig():getKinematicsParam(true)".to_string(),
+        "    local k = getKinematicsParam(true)".to_string(),
         "    if type(k) ~= \"table\" then error(\"maobi: getKinematicsParam(true) gave no table: nothing was moved\") end".into(),
         "    for _, key in ipairs({\"a\", \"alpha\", \"d\", \"theta\"}) do".into(),
         "      local got = k[key]".into(),
@@ -89,21 +99,21 @@ pub(crate) fn waypoint_line(q: &[f64; 6]) -> String {
 /// The evaluation line: joint accelerations and speeds (six each), the interval.
 pub(crate) fn eval_line(acc: f64, speed: f64, interval_s: f64) -> String {
     let six = |v: f64| vec![num(v, 0.0); 6].join(", ");
-    format!("    mc:pathBufferEval(name, {{{}}}, {{{}}}, {})", six(acc), six(speed), num(interval_s, 0.0))
+    format!("    pathBufferEval(name, {{{}}}, {{{}}}, {})", six(acc), six(speed), num(interval_s, 0.0))
 }
 
 /// The wait for the buffer to become valid and for the approach to end.
 pub(crate) fn valid_wait_lines() -> Vec<String> {
     vec![
         "    local polls = 0".into(),
-        "    while not mc:pathBufferValid(name) do".into(),
+        "    while not pathBufferValid(name) do".into(),
         "      polls = polls + 1".into(),
         format!(
             "      if polls > {VALID_POLLS} then error(\"maobi: a path buffer did not become valid within 5 s: its stroke was not written\") end"
         ),
         "      sleep(0.01)".into(),
         "    end".into(),
-        "    while mc:getExecId() ~= -1 do sleep(0.01) end".into(),
+        "    while getExecId() ~= -1 do sleep(0.01) end".into(),
     ]
 }
 
@@ -117,23 +127,19 @@ pub(crate) const START_PREFIX: &str = "    local q0 = {";
 
 /// The check of the arm's joints against the first waypoint, then the move.
 pub(crate) fn start_check_lines() -> Vec<String> {
-    let tol = num(crate::sim::PATH_START_TOLERANCE_RAD, 0.0);
+    let tol = num(crate::timing::PATH_START_TOLERANCE_RAD, 0.0);
     vec![
-        "    local q = robot:getRobotState():getJointPositions()".into(),
+        "    local q = getJointPositions()".into(),
         "    for i = 1, 6 do".into(),
         format!(
             "      if type(q) ~= \"table\" or type(q[i]) ~= \"number\" or not (math.abs(q[i] - q0[i]) <= {tol}) then error(\"maobi: the arm is not at the path buffer's first waypoint: its stroke was not written\") end"
         ),
         "    end".into(),
-        "    mc:movePathBuffer(name)".into(),
+        "    movePathBuffer(name)".into(),
     ]
 }
 
 /// After the lift: the wait for the arm, and the buffer freed.
 pub(crate) fn free_lines() -> Vec<String> {
-    vec![
-        "    while mc:getExecId() ~= -1 do sleep(0.01) end".into(),
-        "    mc:pathBufferFree(name)".into(),
-        "  end".into(),
-    ]
+    vec!["    while getExecId() ~= -1 do sleep(0.01) end".into(), "    pathBufferFree(name)".into(), "  end".into()]
 }

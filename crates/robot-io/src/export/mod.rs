@@ -18,7 +18,7 @@ pub mod text;
 mod timed;
 
 pub use arm::ArmKinematics;
-pub use lua::KINEMATICS_TOLERANCE;
+pub use lua::{KINEMATICS_TOLERANCE, PROGRESS_VARIABLE};
 pub use timed::{PointTimes, point_times};
 
 use brush_model::Track;
@@ -151,61 +151,54 @@ fn arm_plan(
 
 /// The plan of a move-per-point program: every move as it is.
 fn moves_plan(program: &Program) -> ArmPlan {
-    arm_plan(program, false, |st| Ok(st.press.iter().map(|m| Want::Move(*m)).collect())).expect("no step can fail")
+    arm_plan(program, true, |st| Ok(st.press.iter().map(|m| Want::Move(*m)).collect())).expect("no step can fail")
 }
 
 /// A move as a Lua statement after `indent`; a joint move to a pose is solved near `qnear`
 /// (rad), or near the joints the arm reports.
 fn lua_move_text(m: &Move, indent: &str, qnear: Option<&[f64; 6]>) -> String {
-    let near = qnear.map_or("robot:getRobotState():getJointPositions()".to_string(), |q| format!("{{{}}}", lens(q)));
+    let near = qnear.map_or("getJointPositions()".to_string(), |q| format!("{{{}}}", lens(q)));
     match m {
-        Move::Joint { q, a, v } => format!("{indent}mc:moveJoint({{{}}}, {}, {}, 0, 0)\n", lens(q), rate(*a), rate(*v)),
-        // The controller solves the joints from where the arm is, and the script stops
-        // (`error`) rather than move when it cannot; `do ... end` keeps `q` and `ret` local.
+        Move::Joint { q, a, v } => format!("{indent}moveJoint({{{}}}, {}, {}, 0, 0)\n", lens(q), rate(*a), rate(*v)),
+        // The controller solves the joints (its Lua `inverseKinematics(qnear, pose) -> table,
+        // int`), and the script stops (`error`) rather than move when it cannot; `do ... end`
+        // keeps `q` and `ret` local.
         Move::JointPose { pose, a, v } => format!(
-            "{indent}do\n{indent}  local q, ret = robot:getRobotAlgorithm():inverseKinematics({near}, {{{}}})\n{indent}  if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end\n{indent}  mc:moveJoint(q, {}, {}, 0, 0)\n{indent}end\n",
+            "{indent}do\n{indent}  local q, ret = inverseKinematics({near}, {{{}}})\n{indent}  if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end\n{indent}  moveJoint(q, {}, {}, 0, 0)\n{indent}end\n",
             lens(&pose.0),
             rate(*a),
             rate(*v)
         ),
         Move::Line { pose, a, v, blend_m } => {
-            format!("{indent}mc:moveLine({{{}}}, {}, {}, {}, 0)\n", lens(&pose.0), rate(*a), rate(*v), rate(*blend_m))
+            format!("{indent}moveLine({{{}}}, {}, {}, {}, 0)\n", lens(&pose.0), rate(*a), rate(*v), rate(*blend_m))
         }
     }
 }
 
-/// The Lua text of a plan.
+/// The Lua text of a plan, in the form of AUBO's script documentation: `return function(api)`,
+/// the robot's environment (`local _ENV = require('aubo').sched.select_robot(1)`), then the
+/// robot's methods as globals (`setTcpOffset`, `moveLine(pose, a, v, blend_radius, duration)`, …).
 fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
     let mut s = String::new();
     s.push_str(&format!(
         "-- maobi writing program: {}\n-- {what}. Generated; do not edit by hand.\n",
         comment_text(title, Target::Lua),
     ));
-    s.push_str("return function(api)\n");
-    s.push_str("  local robot_name = api:getRobotNames()[1]\n");
-    s.push_str("  local robot = api:getRobotInterface(robot_name)\n");
-    if let Some(k) = &plan.kinematics {
-        for l in lua::sleep_lines() {
-            s.push_str(&l);
-            s.push('\n');
-        }
-        s.push_str("  do\n");
-        s.push_str(&lua::want_line(k));
-        s.push('\n');
-        for l in lua::kinematics_check_lines() {
-            s.push_str(&l);
-            s.push('\n');
-        }
-    }
-    s.push_str(&format!("  robot:getRobotConfig():setTcpOffset({{0, 0, {}, 0, 0, 0}})\n", len(plan.tcp_offset_m)));
-    s.push_str("  local mc = robot:getMotionControl()\n");
-    s.push_str(&format!("  mc:setSpeedFraction({})\n", rate(plan.speed_fraction)));
     let lines = |s: &mut String, v: Vec<String>| {
         for l in v {
             s.push_str(&l);
             s.push('\n');
         }
     };
+    lines(&mut s, lua::head_lines());
+    if let Some(k) = &plan.kinematics {
+        s.push_str("  do\n");
+        s.push_str(&lua::want_line(k));
+        s.push('\n');
+        lines(&mut s, lua::kinematics_check_lines());
+    }
+    s.push_str(&format!("  setTcpOffset({{0, 0, {}, 0, 0, 0}})\n", len(plan.tcp_offset_m)));
+    s.push_str(&format!("  setSpeedFraction({})\n", rate(plan.speed_fraction)));
     // After a path buffer, the lift goes inside its block, then the buffer is freed.
     let mut open_block = false;
     for e in &plan.entries {
@@ -222,9 +215,9 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
                 s.push_str("  do\n");
                 s.push_str(&lua::name_line(t.stroke));
                 s.push('\n');
-                s.push_str(&format!("    mc:pathBufferAlloc(name, 2, {})\n", t.joints.len()));
+                s.push_str(&format!("    pathBufferAlloc(name, 2, {})\n", t.joints.len()));
                 for piece in t.joints.chunks(PATH_APPEND_WAYPOINTS) {
-                    s.push_str("    mc:pathBufferAppend(name, {\n");
+                    s.push_str("    pathBufferAppend(name, {\n");
                     for q in piece {
                         s.push_str(&lua::waypoint_line(q));
                         s.push('\n');
@@ -239,16 +232,23 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
                 lines(&mut s, lua::start_check_lines());
                 open_block = true;
             }
+            Entry::Step(_, Want::Progress(k)) => {
+                s.push_str(&lua::progress_line(*k));
+                s.push('\n');
+            }
             // Not in Lua plans.
-            Entry::Step(_, Want::Process { .. } | Want::Progress(_)) => {}
+            Entry::Step(_, Want::Process { .. }) => {}
         }
     }
     s.push_str("end\n");
     s
 }
 
-/// An ARCS Lua script (`return function(api) ... end`) that sets the tool offset and speed
-/// fraction and runs every move of `program`, one statement per move. For a blending
+/// An ARCS Lua script in the form of AUBO's script documentation (`return function(api) local
+/// _ENV = require('aubo').sched.select_robot(1) … end`, the robot's methods as globals) that sets
+/// the tool offset and speed fraction and runs every move of `program`, one statement per move,
+/// publishing the count of finished strokes (`setInt32("maobi_strokes", N)`) at the start and
+/// after each lift. For a blending
 /// controller give it a compacted program ([`crate::program::compact_program`], checked by
 /// [`crate::program::check_blends`]); [`aubo_lua_path_buffer`] sends each pressed stroke as
 /// one path buffer instead. The title goes, made inert ([`text::comment_text`]), into the
@@ -264,7 +264,7 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
 /// let frame = level_frame_in_front([50.0, 60.0], [0.0, 0.0, 210.0, 297.0]);
 /// let (program, _) = build_program(&track, &profile, &frame, &RobotConfig::default()).unwrap();
 /// let lua = aubo_lua(&program, "一 -- a title stays a comment").unwrap();
-/// assert!(lua.contains("return function(api)"));
+/// assert!(lua.contains("local _ENV = require('aubo').sched.select_robot(1)"));
 /// // The text reads back as the checked program.
 /// verify_lua(&lua, &program).unwrap();
 /// ```
@@ -301,7 +301,7 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
     })?;
     let timing = crate::timing::time_program(program, kin, cfg)?;
     let tcp = program.tcp();
-    let mut plan = arm_plan(program, false, |st| {
+    let mut plan = arm_plan(program, true, |st| {
         let Some(t) = timing.strokes.iter().find(|t| t.stroke == st.index) else {
             return Ok(st.press.iter().map(|m| Want::Move(*m)).collect());
         };
@@ -338,7 +338,7 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
 /// waypoints at a fixed interval), `pathBufferAppend` in pieces of
 /// [`PATH_APPEND_WAYPOINTS`], `pathBufferEval` with `limits.max_joint_acc_rad_s2` and
 /// `max_joint_speed_rad_s`, `pathBufferValid` polled (at most 5 s), the arm's joints checked
-/// within [`crate::sim::PATH_START_TOLERANCE_RAD`] of the first waypoint, `movePathBuffer`,
+/// within [`crate::timing::PATH_START_TOLERANCE_RAD`] of the first waypoint, `movePathBuffer`,
 /// the lift, `pathBufferFree`. The dips, approaches and lifts stay `moveLine`s and the first
 /// move a joint move to a pose the controller solves.
 ///
@@ -363,7 +363,7 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
 /// let (program, _) = build_program(&track, &profile, &frame, &cfg).unwrap();
 /// // The nominal i5 here; a real arm's parameters come from its controller.
 /// let lua = aubo_lua_path_buffer(&program, &DhParams::AUBO_I5, &cfg, "一").unwrap();
-/// assert!(lua.contains("mc:pathBufferAlloc(name, 2, ") && lua.contains("getKinematicsParam(true)"));
+/// assert!(lua.contains("pathBufferAlloc(name, 2, ") && lua.contains("getKinematicsParam(true)"));
 /// verify_lua_path_buffer(&lua, &program, &DhParams::AUBO_I5, &cfg).unwrap();
 /// ```
 ///

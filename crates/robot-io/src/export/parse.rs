@@ -11,7 +11,7 @@ use crate::kinematics::DhParams;
 /// A move of an exported arm program (ARCS Lua or URScript), as read back from its text.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ReadMove {
-    /// A joint move to joints the program gives: Lua `mc:moveJoint({q}, a, v, 0, 0)`,
+    /// A joint move to joints the program gives: Lua `moveJoint({q}, a, v, 0, 0)`,
     /// URScript `movej([q], a=a, v=v, t=0, r=0)`.
     Joint {
         /// Target joints, rad.
@@ -22,7 +22,7 @@ pub enum ReadMove {
         v: f64,
     },
     /// A joint move to a TCP pose that the controller solves: Lua `inverseKinematics` from the
-    /// current joints, refusing to move when it fails, then `mc:moveJoint(q, a, v, 0, 0)`;
+    /// current joints, refusing to move when it fails, then `moveJoint(q, a, v, 0, 0)`;
     /// URScript `movej(p[...], a=a, v=v, t=0, r=0)`.
     JointPose {
         /// Lua: the pose `[x, y, z, rx, ry, rz]` as AUBO writes it (m, rad, `R = Rz·Ry·Rx`);
@@ -37,7 +37,7 @@ pub enum ReadMove {
         /// waypoints' branch); `None`: the joints the arm reports.
         qnear: Option<[f64; 6]>,
     },
-    /// A linear TCP move: Lua `mc:moveLine({pose}, a, v, blend, 0)`, URScript
+    /// A linear TCP move: Lua `moveLine({pose}, a, v, blend, 0)`, URScript
     /// `movel(p[...], a=a, v=v, t=0, r=blend)`.
     Line {
         /// As in [`ReadMove::JointPose`].
@@ -61,14 +61,15 @@ pub enum ReadMove {
         /// Blend radius, m.
         blend_m: f64,
     },
-    /// A path buffer run (Lua `mc:movePathBuffer(name)` after its allocation, waypoints,
+    /// A path buffer run (Lua `movePathBuffer(name)` after its allocation, waypoints,
     /// evaluation and checks): the index of the buffer in [`ReadProgram::path_buffers`].
     PathBuffer {
         /// Index into [`ReadProgram::path_buffers`].
         buffer: usize,
     },
-    /// The count of finished strokes published after a stroke's lift (URScript
-    /// `write_output_integer_register(24, N)`), for a controller client following the run.
+    /// The count of finished strokes published at the start and after each stroke's lift
+    /// (URScript `write_output_integer_register(24, N)`, Lua `setInt32("maobi_strokes", N)`),
+    /// for a client following the run.
     Progress {
         /// Strokes finished.
         strokes: usize,
@@ -90,7 +91,7 @@ pub struct ReadPathBuffer {
     pub speed_rad_s: [f64; 6],
     /// The waypoint interval given to `pathBufferEval`, s.
     pub interval_s: f64,
-    /// The joints the arm must report (within [`crate::sim::PATH_START_TOLERANCE_RAD`])
+    /// The joints the arm must report (within [`crate::timing::PATH_START_TOLERANCE_RAD`])
     /// before `movePathBuffer`, rad.
     pub start_q: [f64; 6],
 }
@@ -293,16 +294,17 @@ fn after_header<'a>(
 pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller cannot reach the first pose";
 
 /// Reads back an ARCS Lua program as [`super::aubo_lua`] or [`super::aubo_lua_path_buffer`]
-/// writes it: header comments (`-- text`), `return function(api)`, the robot lookups, for a
-/// path-buffer program the `sleep` binding and the kinematics check (`local want = {a = {…},
-/// alpha = {…}, d = {…}, theta = {…}}` and its fixed lines), `setTcpOffset({0, 0, z, 0, 0,
-/// 0})`, the motion-control lookup, `setSpeedFraction(f)`, then moves, path-buffer blocks
-/// (`do`, `local name = "maobi_stroke_N"`, `pathBufferAlloc(name, 2, n)`, `pathBufferAppend`
-/// pieces of at most 1,000 waypoints, `pathBufferEval`, the waits, `local q0 = {…}` and the
-/// joints check, `movePathBuffer`, the lift `moveLine`, the wait, `pathBufferFree`, `end`;
-/// only after the kinematics check) and `  -- text` comments, `end`. Numbers are
-/// `-?d+.d{6,20}` (sizes and stroke numbers whole); comment text must be inert (see
-/// [`super::text::comment_text`]).
+/// writes it, in the form of AUBO's script documentation: header comments (`-- text`),
+/// `return function(api)`, `local _ENV = require('aubo').sched.select_robot(1)`, the `sched` and
+/// `sleep` bindings and their check, for a path-buffer program the kinematics check (`do`,
+/// `local want = {a = {…}, alpha = {…}, d = {…}, theta = {…}}` and its fixed lines),
+/// `setTcpOffset({0, 0, z, 0, 0, 0})`, `setSpeedFraction(f)`, then moves, the progress
+/// (`setInt32("maobi_strokes", N)`), path-buffer blocks (`do`, `local name =
+/// "maobi_stroke_N"`, `pathBufferAlloc(name, 2, n)`, `pathBufferAppend` pieces of at most 1,000
+/// waypoints, `pathBufferEval`, the waits, `local q0 = {…}` and the joints check,
+/// `movePathBuffer`, the lift `moveLine`, the wait, `pathBufferFree`, `end`; only after the
+/// kinematics check) and `  -- text` comments, `end`. Numbers are `-?d+.d{6,20}` (sizes and
+/// stroke numbers whole); comment text must be inert (see [`super::text::comment_text`]).
 ///
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
@@ -315,20 +317,12 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     let last = all.len();
     let mut it = all.into_iter().peekable();
     after_header(&mut it, "--", Target::Lua)?;
-    for want in [
-        "return function(api)",
-        "  local robot_name = api:getRobotNames()[1]",
-        "  local robot = api:getRobotInterface(robot_name)",
-    ] {
-        expect(&mut it, want, last)?;
+    for want in lua::head_lines() {
+        expect(&mut it, &want, last)?;
     }
-    // A path-buffer program: `sleep` bound, then the controller's kinematics checked.
-    let sleep = lua::sleep_lines();
-    let kinematics = if it.peek().is_some_and(|(_, l)| *l == sleep[0]) {
-        for want in &sleep {
-            expect(&mut it, want, last)?;
-        }
-        expect(&mut it, "  do", last)?;
+    // A path-buffer program: the controller's kinematics checked first.
+    let kinematics = if it.peek().is_some_and(|(_, l)| *l == "  do") {
+        it.next();
         let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before the kinematics".into() })?;
         let k = whole(l, |c| {
             c.lit(lua::WANT_PREFIX)?;
@@ -353,21 +347,20 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     };
     let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setTcpOffset".into() })?;
     let tcp_offset_m = whole(l, |c| {
-        c.lit("  robot:getRobotConfig():setTcpOffset({0, 0, ")?;
+        c.lit("  setTcpOffset({0, 0, ")?;
         let z = c.num()?;
         c.lit(", 0, 0, 0})")?;
         Some(z)
     })
-    .ok_or_else(|| unexpected(n, l, "`  robot:getRobotConfig():setTcpOffset({0, 0, z, 0, 0, 0})`"))?;
-    expect(&mut it, "  local mc = robot:getMotionControl()", last)?;
+    .ok_or_else(|| unexpected(n, l, "`  setTcpOffset({0, 0, z, 0, 0, 0})`"))?;
     let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setSpeedFraction".into() })?;
     let speed_fraction = whole(l, |c| {
-        c.lit("  mc:setSpeedFraction(")?;
+        c.lit("  setSpeedFraction(")?;
         let f = c.num()?;
         c.lit(")")?;
         Some(f)
     })
-    .ok_or_else(|| unexpected(n, l, "`  mc:setSpeedFraction(f)`"))?;
+    .ok_or_else(|| unexpected(n, l, "`  setSpeedFraction(f)`"))?;
     let mut moves = Vec::new();
     let mut path_buffers = Vec::new();
     loop {
@@ -397,8 +390,8 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
                 continue;
             }
             let (qnear, pose) = whole(l, |c| {
-                c.lit("    local q, ret = robot:getRobotAlgorithm():inverseKinematics(")?;
-                let qnear = if c.lit("robot:getRobotState():getJointPositions()").is_some() {
+                c.lit("    local q, ret = inverseKinematics(")?;
+                let qnear = if c.lit("getJointPositions()").is_some() {
                     None
                 } else {
                     c.lit("{")?;
@@ -411,7 +404,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
                 c.lit("})")?;
                 Some((qnear, p))
             })
-            .ok_or_else(|| unexpected(m, l, "`    local q, ret = ...inverseKinematics(qnear, {pose})`"))?;
+            .ok_or_else(|| unexpected(m, l, "`    local q, ret = inverseKinematics(qnear, {pose})`"))?;
             expect(
                 &mut it,
                 &format!(
@@ -421,17 +414,28 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
             )?;
             let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
             let (a, v) = whole(l, |c| {
-                c.lit("    mc:moveJoint(q, ")?;
+                c.lit("    moveJoint(q, ")?;
                 let [a, v] = c.nums::<2>()?;
                 c.lit(", 0, 0)")?;
                 Some((a, v))
             })
-            .ok_or_else(|| unexpected(m, l, "`    mc:moveJoint(q, a, v, 0, 0)`"))?;
+            .ok_or_else(|| unexpected(m, l, "`    moveJoint(q, a, v, 0, 0)`"))?;
             expect(&mut it, "  end", last)?;
             ReadMove::JointPose { target: pose, a, v, qnear }
+        } else if let Some(k) = whole(l, |c| {
+            c.lit(&format!("  setInt32(\"{}\", ", lua::PROGRESS_VARIABLE))?;
+            let k = c.int()?;
+            c.lit(")")?;
+            Some(k)
+        }) {
+            ReadMove::Progress { strokes: k }
         } else {
             lua_move(l, "  ").ok_or_else(|| {
-                unexpected(n, l, "a move (`mc:moveLine`, `mc:moveJoint`, `do`), a `--` comment or `end`")
+                unexpected(
+                    n,
+                    l,
+                    "a move (`moveLine`, `moveJoint`, `do`), `setInt32(\"maobi_strokes\", N)`, a `--` comment or `end`",
+                )
             })?
         };
         moves.push((n, m));
@@ -442,19 +446,18 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     Ok(ReadProgram { tcp_offset_m, speed_fraction: Some(speed_fraction), moves, kinematics, path_buffers })
 }
 
-/// A Lua `mc:moveJoint({q}, a, v, 0, 0)` or `mc:moveLine({pose}, a, v, blend, 0)` after
-/// `indent`.
+/// A Lua `moveJoint({q}, a, v, 0, 0)` or `moveLine({pose}, a, v, blend, 0)` after `indent`.
 fn lua_move(l: &str, indent: &str) -> Option<ReadMove> {
     whole(l, |c| {
         c.lit(indent)?;
-        if c.lit("mc:moveJoint({").is_some() {
+        if c.lit("moveJoint({").is_some() {
             let q = c.nums::<6>()?;
             c.lit("}, ")?;
             let [a, v] = c.nums::<2>()?;
             c.lit(", 0, 0)")?;
             Some(ReadMove::Joint { q, a, v })
         } else {
-            c.lit("mc:moveLine({")?;
+            c.lit("moveLine({")?;
             let target = c.nums::<6>()?;
             c.lit("}, ")?;
             let [a, v, blend_m] = c.nums::<3>()?;
@@ -484,12 +487,12 @@ fn read_path_buffer<'a>(
     let name = lua::buffer_name(stroke);
     let (n, l) = it.next().ok_or_else(|| ends("pathBufferAlloc"))?;
     let size = whole(l, |c| {
-        c.lit("    mc:pathBufferAlloc(name, 2, ")?;
+        c.lit("    pathBufferAlloc(name, 2, ")?;
         let k = c.int()?;
         c.lit(")")?;
         Some(k)
     })
-    .ok_or_else(|| unexpected(n, l, "`    mc:pathBufferAlloc(name, 2, SIZE)`"))?;
+    .ok_or_else(|| unexpected(n, l, "`    pathBufferAlloc(name, 2, SIZE)`"))?;
     if !(2..=crate::timing::MAX_STROKE_WAYPOINTS).contains(&size) {
         return Err(At {
             line: n,
@@ -501,7 +504,7 @@ fn read_path_buffer<'a>(
     }
     let mut waypoints: Vec<[f64; 6]> = Vec::new();
     let (mut n, mut l) = it.next().ok_or_else(|| ends("pathBufferAppend"))?;
-    while l == "    mc:pathBufferAppend(name, {" {
+    while l == "    pathBufferAppend(name, {" {
         let mut piece = 0;
         loop {
             let (m, w) = it.next().ok_or_else(|| ends("the end of pathBufferAppend"))?;
@@ -539,7 +542,7 @@ fn read_path_buffer<'a>(
         });
     }
     let (acc_rad_s2, speed_rad_s, interval_s) = whole(l, |c| {
-        c.lit("    mc:pathBufferEval(name, {")?;
+        c.lit("    pathBufferEval(name, {")?;
         let a = c.nums::<6>()?;
         c.lit("}, {")?;
         let v = c.nums::<6>()?;
@@ -548,9 +551,7 @@ fn read_path_buffer<'a>(
         c.lit(")")?;
         Some((a, v, t))
     })
-    .ok_or_else(|| {
-        unexpected(n, l, "`    mc:pathBufferAppend(name, {` or `    mc:pathBufferEval(name, {a}, {v}, t)`")
-    })?;
+    .ok_or_else(|| unexpected(n, l, "`    pathBufferAppend(name, {` or `    pathBufferEval(name, {a}, {v}, t)`"))?;
     for want in lua::valid_wait_lines() {
         expect(it, &want, last)?;
     }
@@ -566,7 +567,7 @@ fn read_path_buffer<'a>(
         expect(it, &want, last)?;
     }
     let (n, l) = it.next().ok_or_else(|| ends("the lift"))?;
-    let lift = lua_move(l, "    ").ok_or_else(|| unexpected(n, l, "the lift `    mc:moveLine({pose}, a, v, 0, 0)`"))?;
+    let lift = lua_move(l, "    ").ok_or_else(|| unexpected(n, l, "the lift `    moveLine({pose}, a, v, 0, 0)`"))?;
     for want in lua::free_lines() {
         expect(it, &want, last)?;
     }

@@ -36,17 +36,22 @@ pub struct BlendRefused {
 
 /// Whether the blend radius `blend_m` at the end of a move of length `before_m` into one of
 /// length `after_m` (m) is one a controller accepts: at most half of each (so neighbouring
-/// blends never overlap). A radius of 0 is always accepted.
+/// blends never overlap). A radius of 0 is always accepted. The check allows 1 nm
+/// ([`BLEND_SLACK_M`]): a printed program (a script) gives its lengths to the digits its numbers
+/// keep, and a radius of exactly half a move may read back a few tenths of a nanometre over.
 ///
 /// # Errors
 /// [`BlendRefused`] naming the radius and the shorter move.
 pub fn check_blend(blend_m: f64, before_m: f64, after_m: f64) -> Result<(), BlendRefused> {
     let shorter_m = before_m.min(after_m);
-    if blend_m > 0.0 && blend_m > 0.5 * shorter_m + 1e-12 {
+    if blend_m > 0.0 && blend_m > 0.5 * shorter_m + BLEND_SLACK_M {
         return Err(BlendRefused { blend_m, shorter_m });
     }
     Ok(())
 }
+
+/// The slack of [`check_blend`], m.
+pub const BLEND_SLACK_M: f64 = 1e-9;
 
 /// Dense points along a chain's path, m apart at most (or the move's length / 1000).
 const DENSE_M: f64 = TRACE_STEP_M / 4.0;

@@ -84,6 +84,8 @@ pub(super) struct Shared {
     login_digest: String,
     next_session: AtomicU64,
     pub(super) connections: AtomicUsize,
+    /// The script port's runtime: whether a script runs, its named variables, its stop request.
+    pub(super) script: super::script::ScriptState,
 }
 
 /// What to do with a request's answer.
@@ -131,6 +133,7 @@ impl Shared {
             options,
             next_session: AtomicU64::new(1),
             connections: AtomicUsize::new(0),
+            script: super::script::ScriptState::default(),
         })
     }
 
@@ -566,6 +569,12 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
     if !method.ends_with(".MotionControl.moveLine") {
         shared.flush();
     }
+    // The script runtime's calls (RuntimeMachine, RegisterControl).
+    match super::script::handle(method, params, shared) {
+        Some(Ok(r)) => return ok(&id, r),
+        Some(Err(m)) => return err(&id, -32602, &m),
+        None => {}
+    }
     match method {
         "getRobotNames" => return ok(&id, json!([SIM_ROBOT])),
         "getAxisNames" => return ok(&id, json!([])),
@@ -743,8 +752,7 @@ pub const MAX_BUFFER_NAME: usize = 64;
 /// The only path buffer type the simulator executes: 2, a cubic spline through joint
 /// waypoints at a fixed interval.
 pub const PATH_BUFFER_SPLINE: i64 = 2;
-/// How far a path buffer's first waypoint may lie from the arm's joints when it is moved, rad.
-pub const PATH_START_TOLERANCE_RAD: f64 = 5e-3;
+use crate::timing::PATH_START_TOLERANCE_RAD;
 
 /// The path buffer services: the SDK's names and params (`pyaubo_sdk` 0.24.1: `pathBufferAlloc`
 /// `{name, size, type}`, `pathBufferAppend` `{name, waypoints}`, `pathBufferEval`

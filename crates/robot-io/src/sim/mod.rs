@@ -12,16 +12,18 @@
 mod blend;
 mod dispatch;
 
-pub use blend::{BlendMove, BlendRefused, blended_line_motion, check_blend};
+pub use blend::{BLEND_SLACK_M, BlendMove, BlendRefused, blended_line_motion, check_blend};
 pub use dispatch::{
     MAX_BLEND_CHAIN, MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
-    PATH_START_TOLERANCE_RAD, ramped_joint_motion, ramped_line_motion,
+    ramped_joint_motion, ramped_line_motion,
 };
 mod replay;
+mod script;
 mod server;
 mod session;
 mod ur;
 
+pub use script::{LUA_MEMORY_BYTES, MAX_INSTRUCTIONS, MAX_LUA_SCRIPT_BYTES, MAX_NAMED_INTS, MAX_SCRIPT_TIME};
 pub use ur::{
     DASHBOARD_GREETING, MAX_DASHBOARD_LINE, MAX_PROGRAM_SAMPLES, MAX_RECIPE_FIELDS, MAX_SCRIPT_BYTES, UrFaults,
     UrListen, UrSimOptions, UrSimulator,

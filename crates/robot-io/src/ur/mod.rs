@@ -19,10 +19,10 @@ use crate::RobotError;
 use crate::controller::{
     Controller, Plan, Position, Preflight, Prepared, Progress, RunSummary, Watch, expected_seconds,
 };
-use crate::follow::{Commanded, Expect, Sent, check_pose_from, distance_m, program_box, show};
+use crate::follow::{Commanded, Expect, Sent, check_pose_from, distance_m, lift_words, program_box, run_stopped, show};
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
-use crate::program::{Move, Program, RobotConfig, compact_program};
+use crate::program::{Program, RobotConfig, compact_program};
 use dashboard::Dashboard;
 use rtde::{RtdeClient, Value};
 
@@ -640,7 +640,7 @@ impl UrRun<'_> {
     fn stop(&mut self, stop: Stop) -> RobotError {
         let Stop { cause, no_lift } = stop;
         let stopped = self.conn.dashboard.command("stop");
-        let mut words = match &stopped {
+        let words = match &stopped {
             Ok(a) if a.starts_with("Stopped") => "the program was stopped (dashboard `stop`)".to_string(),
             Ok(a) => format!("the dashboard answered {a:?} to `stop`"),
             Err(e) => format!("the dashboard `stop` failed ({e})"),
@@ -660,32 +660,28 @@ impl UrRun<'_> {
                 Err(_) => break,
             }
         }
-        let mut at = Some(Box::new(Position::Tcp(last.pose)));
-        let lifted = match no_lift {
-            Some(why) => {
-                words = format!("{words}; {why}");
-                false
-            }
-            None => match self.lift(&last) {
-                Ok(w) => {
-                    words = format!("{words}; {w}");
-                    at = Some(Box::new(Position::Tcp(self.conn.state.pose)));
-                    true
-                }
-                Err(e) => {
-                    words = format!("{words}; could not lift the brush ({e}): it may still touch the paper");
-                    false
-                }
-            },
+        let lift = match no_lift {
+            Some(why) => Err(why),
+            None => self
+                .lift(&last)
+                .map(|w| (w, self.conn.state.pose))
+                .map_err(|e| format!("could not lift the brush ({e}): it may still touch the paper")),
         };
-        RobotError::RunStopped {
-            cause: Box::new(cause),
-            completed: self.done,
-            total: self.total(),
-            reconnects: 0,
-            lifted,
-            lift: words,
-            at,
+        let seen = last.pose;
+        match run_stopped(cause, self.done, self.total(), words, lift) {
+            // Not lifted: still where the arm was last seen.
+            RobotError::RunStopped { cause, completed, total, reconnects, lifted, lift, at: None } => {
+                RobotError::RunStopped {
+                    cause,
+                    completed,
+                    total,
+                    reconnects,
+                    lifted,
+                    lift,
+                    at: Some(Box::new(Position::Tcp(seen))),
+                }
+            }
+            e => e,
         }
     }
 
@@ -717,30 +713,11 @@ impl UrRun<'_> {
             playing |= s.runtime_state == RUNTIME_PLAYING;
             if s.runtime_state == RUNTIME_STOPPED && (playing || distance_m(&s.pose, &to) < crate::POSE_TOLERANCE_M) {
                 check_pose_from(&s.pose, &Expect::At(to), Some(&self.ready.near), "after the lift", RTDE_POSE)?;
-                let from = if depth_mm >= 0.0 {
-                    format!("{depth_mm:.1} mm below the paper")
-                } else {
-                    format!("{:.1} mm above the paper", -depth_mm)
-                };
-                return Ok(format!("brush lifted from {from} to the safe height ({:.1} mm above it)", lift_m * 1000.0));
+                return Ok(lift_words(depth_mm, self.ready.config.lift_mm));
             }
             if Instant::now() > end {
                 return Err(RobotError::Timeout("the lift".into()));
             }
-        }
-    }
-}
-
-/// Where a move ends, if it is a pose.
-trait Target {
-    fn target(&self) -> Option<Pose>;
-}
-
-impl Target for Move {
-    fn target(&self) -> Option<Pose> {
-        match *self {
-            Move::Line { pose, .. } | Move::JointPose { pose, .. } => Some(pose),
-            Move::Joint { .. } => None,
         }
     }
 }

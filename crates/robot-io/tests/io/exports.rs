@@ -135,8 +135,10 @@ fn exports_read_back_as_the_checked_program() {
     // URScript: the pressed moves compacted (stroke 1's (60, 61) lies on its neighbours' line),
     // each a process move.
     let compact = compact_program(&p, &cfg);
-    let ur_moves = ur.moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count();
-    assert_eq!((lua.moves.len(), ur_moves), (p.move_count(), compact.move_count()));
+    let moves = |r: &robot_io::export::parse::ReadProgram| {
+        r.moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count()
+    };
+    assert_eq!((moves(&lua), moves(&ur)), (p.move_count(), compact.move_count()));
     // The count of finished strokes after each lift, from 0.
     let progress: Vec<usize> = ur
         .moves
@@ -152,7 +154,9 @@ fn exports_read_back_as_the_checked_program() {
     // Lua carries the poses as the program has them, to the bit here.
     let Move::Line { pose, v, .. } = p.strokes[1].press[1] else { panic!() };
     let n = 1 + p.strokes[0].moves().count() + p.strokes[1].dip.len() + p.strokes[1].approach.len() + 1;
-    let ReadMove::Line { target, v: read_v, .. } = lua.moves[n].1 else { panic!("{:?}", lua.moves[n]) };
+    let lua_moves: Vec<ReadMove> =
+        lua.moves.iter().map(|(_, m)| *m).filter(|m| !matches!(m, ReadMove::Progress { .. })).collect();
+    let ReadMove::Line { target, v: read_v, .. } = lua_moves[n] else { panic!("{:?}", lua_moves[n]) };
     for k in 0..6 {
         assert!((target[k] - pose.0[k]).abs() <= 1e-9 * pose.0[k].abs().max(1e-3), "{target:?} {pose:?}");
     }
@@ -160,17 +164,17 @@ fn exports_read_back_as_the_checked_program() {
     // The first move: a joint move to a pose the controller solves, in both languages.
     let Move::JointPose { pose: start, .. } = p.start else { panic!("{:?}", p.start) };
     let near = |t: [f64; 6]| t.iter().zip(start.0).all(|(r, w)| (r - w).abs() <= 1e-8);
-    assert!(matches!(lua.moves[0].1, ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua.moves[0]);
+    assert!(matches!(lua_moves[0], ReadMove::JointPose { target, .. } if near(target)), "{:?}", lua_moves[0]);
     assert!(matches!(ur.moves[1].1, ReadMove::JointPose { .. }), "{:?}", ur.moves[1]);
     // Joints given by the program (no longer built, still exported) read back too.
     let joints = Program { start: Move::Joint { q: [0.1, -0.2, 1.5, 0.3, 1.2, 0.0], a: 1.0, v: 0.5 }, ..p.clone() };
     let lua_q = read_lua(&aubo_lua(&joints, "q").unwrap()).unwrap();
-    assert!(matches!(lua_q.moves[0].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[0]);
+    assert!(matches!(lua_q.moves[1].1, ReadMove::Joint { q, .. } if q[2] == 1.5), "{:?}", lua_q.moves[1]);
     let ur_q = read_urscript(&urscript(&joints, &timing(&joints, &cfg), &cfg, "q").unwrap()).unwrap();
     assert!(matches!(ur_q.moves[1].1, ReadMove::Joint { v, .. } if v == 0.5), "{:?}", ur_q.moves[1]);
     // A program whose start differs from the text's is refused.
     let e = verify_lua(&aubo_lua(&joints, "q").unwrap(), &p).unwrap_err().to_string();
-    assert!(e.contains("line 9"), "{e}");
+    assert!(e.contains("line 11"), "{e}");
     let g = read_gcode(&gcode(&small_track(), &times(&cfg), &cfg, "十").unwrap().0).unwrap();
     let pressed =
         g.iter().filter(|(_, s)| matches!(s, GcodeStatement::Move { rapid: false, x_mm: Some(_), .. })).count();
@@ -198,7 +202,7 @@ fn tampered_exports_are_refused() {
         let i = text.find(prefix).unwrap();
         text[i..i + text[i..].find('\n').unwrap()].to_string()
     };
-    let lua_line = first_line(&lua, "  mc:moveLine(");
+    let lua_line = first_line(&lua, "  moveLine(");
     let ur_line = first_line(&ur, "  movel(");
     let g_line = first_line(&g, "G1 X");
     let cases: Vec<(Target, String, &str)> = vec![
@@ -211,7 +215,7 @@ fn tampered_exports_are_refused() {
         (Target::Gcode, g.replacen("\n", "\r\n", 1), "U+000D"),
         (Target::Gcode, format!("{g}G1 Z-40.000000 F1.000000\n"), "nothing after `M2`"),
         (Target::Gcode, g.replace("M2\n", ""), "does not end with `M2`"),
-        (Target::Lua, insert_after(&lua, "  mc:setSpeedFraction", "  os.execute(\"x\")\n"), "line 9: expected a move"),
+        (Target::Lua, insert_after(&lua, "  setSpeedFraction", "  os.execute(\"x\")\n"), "line 10: expected a move"),
         (Target::Lua, insert_after(&lua, "-- maobi", "--[[\n"), "line 2: a comment that is not inert"),
         (Target::Lua, insert_after(&lua, &lua_line, "  --[[ x ]] os.exit()\n"), "expected a move"),
         (Target::Lua, insert_after(&lua, &lua_line, &format!("{lua_line}\n")), "does not match"),
@@ -219,23 +223,32 @@ fn tampered_exports_are_refused() {
         (Target::Lua, lua.replacen("setSpeedFraction(1.000000)", "setSpeedFraction(0.000000)", 1), "speed fraction"),
         (Target::Lua, lua.replacen("0.048000", "0.148000", 1), "tool offset"),
         (Target::Lua, format!("{lua}os.exit()\n"), "nothing after the final `end`"),
-        (Target::Lua, lua.replacen("  mc:moveLine(", "  mc:moveLine( ", 1), "expected a move"),
+        (Target::Lua, lua.replacen("  moveLine(", "  moveLine( ", 1), "expected a move"),
+        // The progress counts the strokes finished, from 0.
+        (
+            Target::Lua,
+            lua.replacen("setInt32(\"maobi_strokes\", 1)", "setInt32(\"maobi_strokes\", 3)", 1),
+            "progress register reads 3",
+        ),
+        (Target::Lua, lua.replacen("setInt32(\"maobi_strokes\", 1)", "setInt32(\"maobi\", 1)", 1), "expected a move"),
+        // AUBO's documented environment, exactly.
+        (Target::Lua, lua.replacen("select_robot(1)", "select_robot(2)", 1), "line 4: expected"),
         (Target::Lua, lua.replacen("\n", "\r\n\r\n", 1), "U+000D"),
         (
             Target::Lua,
             lua.replacen("(ret ~= nil and ret ~= 0) then error(", "(ret ~= nil and ret ~= 1) then error(", 1),
-            "line 11: expected",
+            "line 13: expected",
         ),
         (
             Target::Lua,
             lua.replacen(
-                "    mc:moveJoint(q, ",
-                "    mc:moveJoint({0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.000000}, ",
+                "    moveJoint(q, ",
+                "    moveJoint({0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.000000}, ",
                 1,
             ),
-            "line 12",
+            "line 14",
         ),
-        (Target::Lua, lua.replacen("  do\n", "", 1), "line 9: expected a move"),
+        (Target::Lua, lua.replacen("  do\n", "", 1), "line 11: expected a move"),
         (Target::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
         (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "`popup` is not in the URScript subset"),
         // UR's order is `t` before `r`: the other way round is refused.
@@ -285,7 +298,7 @@ fn numbers_that_would_print_as_something_else_refuse_the_export() {
     let arm: [(Change, &str, bool); 4] = [
         (|p| p.speed_fraction = 1e-300, "the speed fraction reads 0 where it is 1e-300", false),
         (|p| slow_line(p, 1e-300), "the speed reads 0 where it is 1e-300", true),
-        (|p| p.tcp_offset_m = f64::NAN, "expected `  robot:getRobotConfig():setTcpOffset", true),
+        (|p| p.tcp_offset_m = f64::NAN, "expected `  setTcpOffset", true),
         (|p| slow_line(p, f64::INFINITY), "expected a move", false),
     ];
     let t = timing(&base, &cfg);
@@ -352,13 +365,13 @@ fn tampered_path_buffer_lua_is_refused() {
     changed[1] = "1.000000".into();
     let q0 = lua.lines().find(|l| l.starts_with("    local q0 = {")).unwrap();
     let want = lua.lines().find(|l| l.starts_with("    local want = {")).unwrap();
-    let eval = lua.lines().find(|l| l.starts_with("    mc:pathBufferEval(")).unwrap();
+    let eval = lua.lines().find(|l| l.starts_with("    pathBufferEval(")).unwrap();
     // The start solved near the first waypoint; the form that asks the arm's joints instead.
     let ik = lua.lines().find(|l| l.contains("inverseKinematics(")).unwrap();
     let (start, near_end) = (ik.find("inverseKinematics(").unwrap() + 18, ik.find("}, {").unwrap());
-    let from_arm = format!("{}robot:getRobotState():getJointPositions(){}", &ik[..start], &ik[near_end + 1..]);
-    let kin_block_start = lua.find("  local maobi_sched = sched\n").unwrap();
-    let kin_block_end = lua.find("  robot:getRobotConfig():setTcpOffset").unwrap();
+    let from_arm = format!("{}getJointPositions(){}", &ik[..start], &ik[near_end + 1..]);
+    let kin_block_start = lua.find("  do\n    local want").unwrap();
+    let kin_block_end = lua.find("  setTcpOffset").unwrap();
     let cases: Vec<(String, &str)> = vec![
         (lua.replacen(waypoint, &changed.join(", "), 1), "waypoint 0, joint 2 reads 1"),
         (lua.replacen(waypoint, &format!("{waypoint}\n{waypoint}"), 1), "more waypoints than the"),
@@ -369,7 +382,7 @@ fn tampered_path_buffer_lua_is_refused() {
         (lua.replacen("<= 0.000001)", "<= 0.100000)", 1), "expected `        if type(got[i])"),
         (lua.replacen("if polls > 500 then", "if polls > 5000000 then", 1), "expected `      if polls > 500"),
         (lua.replacen("<= 0.005000)", "<= 6.000000)", 1), "expected `      if type(q) ~= \"table\""),
-        (lua.replacen("    mc:pathBufferFree(name)\n", "", 1), "expected `    mc:pathBufferFree(name)`"),
+        (lua.replacen("    pathBufferFree(name)\n", "", 1), "expected `    pathBufferFree(name)`"),
         (lua.replacen("maobi_stroke_1\"", "maobi_stroke_2\"", 1), "named `maobi_stroke_2`"),
         (lua.replacen(ik, &ik.replacen("inverseKinematics({", "inverseKinematics({1", 1), 1), "solved near, joint 1"),
         (lua.replacen(ik, &from_arm, 1), "solved near other joints than the plan's"),

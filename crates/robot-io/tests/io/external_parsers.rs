@@ -1,8 +1,9 @@
 //! Every export format read by a parser that is not ours (issue 26: "an external parser for
 //! every export format"). The ARCS Lua script (a move per point, or a path buffer per stroke:
 //! issue 27) is compiled by the real Lua compiler (`luac5.4 -p`) and run by the real
-//! interpreter (`lua5.4`) against a stub of the ARCS `api` object that records every call (its
-//! kinematics, the arm's joints and `sched.sleep` set per case); the G-code (merged moves, feed
+//! interpreter (`lua5.4`) against a stub of the ARCS script environment (`require('aubo')`,
+//! `sched.select_robot(1)` and the robot's methods as globals, as AUBO documents them) that
+//! records every call (its kinematics, the arm's joints and `sched.sleep` set per case); the G-code (merged moves, feed
 //! rates from the timing) is parsed by the `gcodeparser` package from PyPI.
 //! Without a tool a test prints `SKIPPED <name>: <why>` and returns (`.ci/run` installs them).
 //! URScript has no offline parser outside a UR controller or URSim (docs/robot.md says so).
@@ -93,7 +94,7 @@ const HOSTILE_TITLES: &[&str] = &[
     "--[[\nos.exit(3)\n]]",
     "--[==[\nos.exit(3)\n]==]",
     "十\nreturn function() os.exit(3) end",
-    "十\napi:getRobotInterface('rob1'):getMotionControl():moveLine({0, 0, 0, 0, 0, 0}, 1, 1, 0, 0)",
+    "十\nmoveLine({0, 0, 0, 0, 0, 0}, 1, 1, 0, 0)",
     "a\u{2028}os.exit(3)\u{2029}b",
     "a\u{85}os.exit(3)",
     "a\u{0}os.exit(3)\u{1b}[2J",
@@ -180,12 +181,18 @@ const HOME_Q: [f64; 6] = [0.0, -0.2618, 1.7453, 0.4363, 1.5, 0.0];
 /// The joints the stub's inverse kinematics answers, rad.
 const IK_Q: [f64; 6] = [0.1, -0.2, 1.3, 0.4, 1.5, -0.6];
 
-/// The stub of the ARCS script API (the methods the exported script calls, as the ARCS
-/// documentation names them) and the driver that loads the script from standard input and
-/// calls the function it returns with the stub. Every call, getters included, is written to
-/// standard output as one JSON line `{"call": NAME, "args": [...]}`; numbers as `%.17g` (they
-/// read back to the bit). `IK_MODE` picks what `inverseKinematics` answers. The stub is also a
-/// global `api`, so code that escaped into the script's top level could reach it.
+/// A stub of the ARCS script environment the exported script runs in, with the bindings and
+/// signatures of AUBO's documented script examples and SDK headers (`require('aubo')`,
+/// `aubo.sched.select_robot(1)` returning the robot's environment, `sched.sleep`, the robot's
+/// methods as globals in it: `setTcpOffset(pose)`, `setSpeedFraction(f)`, `moveLine(pose, a, v,
+/// blend_radius, duration)`, `moveJoint(q, a, v, blend_radius, duration)`,
+/// `inverseKinematics(qnear, pose) -> table, int`, `getJointPositions()`,
+/// `getKinematicsParam(real)`, the path buffer calls, `getExecId()`, `setInt32(key, value)`),
+/// and the driver that loads the script from standard input and calls the function it returns.
+/// Every call, getters included, is written to standard output as one JSON line `{"call":
+/// NAME, "args": [...]}`; numbers as `%.17g` (they read back to the bit). `IK_MODE` picks what
+/// `inverseKinematics` answers. The robot's methods are also real globals, so code that escaped
+/// into the script's top level could reach them.
 const LUA_DRIVER: &str = r##"
 local function num(v)
   if math.type(v) == nil then error("not a number: " .. tostring(v)) end
@@ -214,44 +221,46 @@ local function rec(name, ...)
 end
 local function copy(t) local o = {} for i = 1, #t do o[i] = t[i] end return o end
 local joints = copy(HOME_Q)
-local function method(obj, name, f)
-  obj[name] = function(self, ...)
-    if self ~= obj then error(name .. " called without its object") end
+-- The robot's environment: its methods as globals, falling back to the base library.
+local env = setmetatable({}, {__index = _G})
+local function method(name, f)
+  env[name] = function(...)
     rec(name, ...)
     return f(...)
   end
+  _G[name] = env[name]
 end
-local mc, cfg, alg, state, robot, api = {}, {}, {}, {}, {}, {}
 -- Path buffers: appended waypoints by name; the one appended and not yet moved.
-local buffers, pending, polls = {}, nil, {}
-method(mc, "setSpeedFraction", function() return 0 end)
-method(mc, "moveLine", function() return 0 end)
-method(mc, "moveJoint", function(q) joints = copy(q) return 0 end)
-method(mc, "pathBufferAlloc", function(name) buffers[name] = {} polls[name] = 0 return 0 end)
-method(mc, "pathBufferAppend", function(name, w)
+local buffers, pending, polls, ints = {}, nil, {}, {}
+method("setTcpOffset", function() return 0 end)
+method("setSpeedFraction", function() return 0 end)
+method("moveLine", function() return 0 end)
+method("moveJoint", function(q) joints = copy(q) return 0 end)
+method("pathBufferAlloc", function(name) buffers[name] = {} polls[name] = 0 return 0 end)
+method("pathBufferAppend", function(name, w)
   for i = 1, #w do table.insert(buffers[name], copy(w[i])) end
   pending = name
   return 0
 end)
-method(mc, "pathBufferEval", function() return 0 end)
+method("pathBufferEval", function() return 0 end)
 -- Valid from the second poll on, so the wait loop runs.
-method(mc, "pathBufferValid", function(name) polls[name] = polls[name] + 1 return polls[name] > 1 end)
-method(mc, "movePathBuffer", function(name)
+method("pathBufferValid", function(name) polls[name] = polls[name] + 1 return polls[name] > 1 end)
+method("movePathBuffer", function(name)
   local b = buffers[name]
   joints = copy(b[#b])
   pending = nil
   return 0
 end)
-method(mc, "pathBufferFree", function(name) buffers[name] = nil return 0 end)
-method(mc, "getExecId", function() return -1 end)
-method(cfg, "setTcpOffset", function() return 0 end)
-method(cfg, "getKinematicsParam", function() return KIN end)
+method("pathBufferFree", function(name) buffers[name] = nil return 0 end)
+method("getExecId", function() return -1 end)
+method("getKinematicsParam", function() return KIN end)
+method("setInt32", function(key, v) ints[key] = v end)
 -- ARM_MODE "follows": the approach brought the arm to the buffer's first waypoint.
-method(state, "getJointPositions", function()
+method("getJointPositions", function()
   if ARM_MODE == "follows" and pending ~= nil then return copy(buffers[pending][1]) end
   return copy(joints)
 end)
-method(alg, "inverseKinematics", function()
+method("inverseKinematics", function()
   if IK_MODE == "status" then return copy(IK_Q), 0
   elseif IK_MODE == "joints" then return copy(IK_Q)
   elseif IK_MODE == "refused" then return copy(IK_Q), -23
@@ -260,21 +269,17 @@ method(alg, "inverseKinematics", function()
   end
   error("unknown IK_MODE")
 end)
-method(robot, "getRobotConfig", function() return cfg end)
-method(robot, "getMotionControl", function() return mc end)
-method(robot, "getRobotAlgorithm", function() return alg end)
-method(robot, "getRobotState", function() return state end)
-method(api, "getRobotNames", function() return {"rob1"} end)
-method(api, "getRobotInterface", function(name)
-  if name ~= "rob1" then error("no robot " .. tostring(name)) end
-  return robot
-end)
-_G.api = api
-if HAVE_SCHED then _G.sched = {sleep = function(t) rec("sleep", t) end} end
+local sched = {select_robot = function(n)
+  rec("select_robot", n)
+  if n ~= 1 then error("no robot " .. tostring(n)) end
+  return env
+end}
+if HAVE_SCHED then sched.sleep = function(t) rec("sleep", t) end end
+package.loaded["aubo"] = {sched = sched}
 local chunk = assert(load(io.read("a"), "=export", "t"))
 local main = chunk()
 if type(main) ~= "function" then error("the script does not return a function") end
-main(api)
+main({})
 io.write('{"call":"done","args":[]}\n')
 "##;
 
@@ -361,10 +366,15 @@ fn expected_calls(program: &Program) -> Vec<Call> {
     let mut out = vec![
         call("setTcpOffset", vec![Arg::List(vec![0.0, 0.0, program.tcp_offset_m, 0.0, 0.0, 0.0])]),
         call("setSpeedFraction", vec![Arg::Num(program.speed_fraction)]),
+        progress(0),
     ];
     let mut joints = HOME_Q;
-    let moves = std::iter::once(&program.start).chain(program.strokes.iter().flat_map(|s| s.moves()));
-    for m in moves {
+    // Each stroke's last move is followed by the count of strokes finished.
+    let moves = std::iter::once((&program.start, None)).chain(program.strokes.iter().flat_map(|s| {
+        let n = s.moves().count();
+        s.moves().enumerate().map(move |(i, m)| (m, (i + 1 == n).then_some(s.index + 1)))
+    }));
+    for (m, done) in moves {
         match *m {
             Move::Joint { q, a, v } => {
                 joints = q;
@@ -386,8 +396,16 @@ fn expected_calls(program: &Program) -> Vec<Call> {
                 vec![Arg::List(pose.0.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(blend_m), Arg::Num(0.0)],
             )),
         }
+        if let Some(k) = done {
+            out.push(progress(k));
+        }
     }
     out
+}
+
+/// The call publishing `strokes` finished strokes.
+fn progress(strokes: usize) -> Call {
+    Call { name: "setInt32".into(), args: vec![Arg::Text("maobi_strokes".into()), Arg::Num(strokes as f64)] }
 }
 
 /// The calls that change the arm or its settings (not the getters).
@@ -397,7 +415,7 @@ fn effects(calls: &[Call]) -> Vec<Call> {
         .filter(|c| {
             matches!(
                 c.name.as_str(),
-                "setTcpOffset" | "setSpeedFraction" | "inverseKinematics" | "moveLine" | "moveJoint"
+                "setTcpOffset" | "setSpeedFraction" | "inverseKinematics" | "moveLine" | "moveJoint" | "setInt32"
             )
         })
         .cloned()
@@ -458,9 +476,9 @@ fn lua_exports_compile_and_run_as_the_checked_program_under_real_lua() {
             assert!(ran.status.success(), "{mode}: {}", ran.stderr);
             let calls = parse_calls(&ran.stdout);
             assert_eq!(calls.last().map(|c| c.name.as_str()), Some("done"), "{mode}");
-            assert_eq!(calls[0].name, "getRobotNames", "{mode}");
+            assert_eq!(calls[0].name, "select_robot", "{mode}");
             let want = expected_calls(&p);
-            assert_eq!(want.len(), 2 + p.move_count() + 1, "one IK call for the start");
+            assert_eq!(want.len(), 2 + p.move_count() + 1 + 1 + p.strokes.len(), "one IK call, the progress");
             if let Err(e) = same_calls(&effects(&calls), &want) {
                 panic!("{mode}: {e}");
             }
@@ -483,7 +501,7 @@ fn lua_script_stops_before_moving_when_the_controller_cannot_solve_the_first_pos
         assert!(!ran.status.success(), "{mode}: {}", ran.stdout);
         assert!(ran.stderr.contains("cannot reach the first pose"), "{mode}: {}", ran.stderr);
         let got = effects(&parse_calls(&ran.stdout));
-        assert!(same_calls(&got, &want[..3]).is_ok(), "{mode}: {got:?}");
+        assert!(same_calls(&got, &want[..4]).is_ok(), "{mode}: {got:?}");
         assert!(!ran.stdout.contains("\"done\""), "{mode}");
     }
 }
@@ -520,9 +538,7 @@ fn lua_harness_catches_injected_code() {
     let (first, rest) = script.split_once('\n').unwrap();
     let exits = format!("{first}\nos.exit(3)\n{rest}");
     assert_eq!(run_lua(&exits, "status").status.code(), Some(3));
-    let moves = format!(
-        "{first}\napi:getRobotInterface('rob1'):getMotionControl():moveLine({{0.3, 0.1, 0.0, 3.14, 0, 0}}, 1, 1, 0, 0)\n{rest}"
-    );
+    let moves = format!("{first}\nmoveLine({{0.3, 0.1, 0.0, 3.14, 0, 0}}, 1, 1, 0, 0)\n{rest}");
     let ran = run_lua(&moves, "status");
     assert!(ran.status.success(), "{}", ran.stderr);
     let e = same_calls(&effects(&parse_calls(&ran.stdout)), &expected_calls(&p)).unwrap_err();
@@ -560,6 +576,7 @@ fn expected_path_buffer_calls(program: &Program, kin: &DhParams, cfg: &RobotConf
         call("inverseKinematics", vec![Arg::List(timing.strokes[0].joints[0].to_vec()), Arg::List(pose.0.to_vec())]),
         call("moveJoint", vec![Arg::List(IK_Q.to_vec()), Arg::Num(a), Arg::Num(v), Arg::Num(0.0), Arg::Num(0.0)]),
     ];
+    out.insert(3, progress(0));
     let lim = cfg.limits;
     for st in &program.strokes {
         out.extend(st.dip.iter().chain(&st.approach).map(line));
@@ -581,6 +598,7 @@ fn expected_path_buffer_calls(program: &Program, kin: &DhParams, cfg: &RobotConf
         out.push(call("movePathBuffer", vec![name()]));
         out.push(line(&st.lift));
         out.push(call("pathBufferFree", vec![name()]));
+        out.push(progress(st.index + 1));
     }
     out
 }
@@ -599,6 +617,7 @@ fn path_buffer_effects(calls: &[Call]) -> Vec<Call> {
         "pathBufferEval",
         "movePathBuffer",
         "pathBufferFree",
+        "setInt32",
     ];
     calls.iter().filter(|c| KINDS.contains(&c.name.as_str())).cloned().collect()
 }

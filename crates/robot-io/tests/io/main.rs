@@ -13,6 +13,7 @@ mod path_buffer;
 mod robot;
 mod runner_faults;
 mod safety;
+mod script_port;
 mod sim_server;
 mod timing;
 mod transports;

@@ -197,9 +197,10 @@ fn the_safety_envelope_refuses_before_anything_moves() {
 fn exports_follow_the_documented_forms() {
     let (prog, _) = build_program(&small_track(), &pen1(), &paper(), &sparse()).unwrap();
     let lua = aubo_lua(&prog, "test").unwrap();
-    assert!(lua.contains("return function(api)") && lua.trim_end().ends_with("end"));
-    assert!(lua.contains("setTcpOffset({0, 0, 0.048000, 0, 0, 0})") && lua.contains("mc:setSpeedFraction(1.000000)"));
-    assert_eq!(lua.matches("mc:moveLine(").count() + lua.matches("mc:moveJoint(").count(), prog.move_count());
+    assert!(lua.contains("\nreturn function(api)\n  local _ENV = require('aubo').sched.select_robot(1)\n"));
+    assert!(lua.ends_with("\nend\n"));
+    assert!(lua.contains("\n  setTcpOffset({0, 0, 0.048000, 0, 0, 0})\n  setSpeedFraction(1.000000)\n"));
+    assert_eq!(lua.matches("moveLine(").count() + lua.matches("moveJoint(").count(), prog.move_count());
     let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &sparse()).unwrap();
     let ur = urscript(&prog, &timing, &sparse(), "test").unwrap();
     assert!(ur.starts_with("# maobi") && ur.contains("\ndef maobi_program():\n") && ur.ends_with("\nend\n"));

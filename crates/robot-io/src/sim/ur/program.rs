@@ -9,15 +9,13 @@ use crate::export::parse::{ReadMove, URSCRIPT_PROGRAM, URSCRIPT_PROGRESS_REGISTE
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED};
-use crate::sim::{BlendMove, MAX_BLEND_CHAIN, blended_line_motion, ramped_joint_motion, ramped_line_motion};
+use crate::sim::{
+    BLEND_SLACK_M, BlendMove, MAX_BLEND_CHAIN, blended_line_motion, ramped_joint_motion, ramped_line_motion,
+};
 use crate::ur::pose_from_ur;
 
 /// The programs the stand-in runs: maobi's program and the lift a stopped run sends.
 pub(super) const PROGRAM_NAMES: [&str; 2] = [URSCRIPT_PROGRAM, "maobi_lift"];
-
-/// The slack of the blend check, m: the program prints lengths to 1e-12 m and radii to 1e-9
-/// relative.
-const BLEND_SLACK_M: f64 = 1e-9;
 
 /// Most samples one program's path holds (64 MiB): a longer program is refused.
 pub const MAX_PROGRAM_SAMPLES: usize = 1 << 20;
