@@ -484,3 +484,79 @@ impl Drop for Stage {
         }
     }
 }
+
+/// `p` made absolute without following what does not exist yet: the longest existing ancestor
+/// canonicalised (symlinks resolved), the rest appended with `.` and `..` folded.
+fn resolved(p: &Path) -> PathBuf {
+    let abs = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        std::env::current_dir().map_or_else(|_| p.to_path_buf(), |d| d.join(p))
+    };
+    let mut base = abs.clone();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(c) = std::fs::canonicalize(&base) {
+            base = c;
+            break;
+        }
+        match (base.file_name().map(|n| n.to_os_string()), base.parent().map(Path::to_path_buf)) {
+            (Some(n), Some(parent)) => {
+                rest.push(n);
+                base = parent;
+            }
+            _ => break,
+        }
+    }
+    for n in rest.into_iter().rev() {
+        match n.to_str() {
+            Some(".") => {}
+            Some("..") => {
+                base.pop();
+            }
+            _ => base.push(n),
+        }
+    }
+    base
+}
+
+/// Refuses an output folder or file that is one of the run's inputs, lies inside one, or
+/// holds one (replacing it would delete what the run reads). `inputs` pairs each input's flag
+/// with its path; paths are compared after resolving symlinks.
+///
+/// # Errors
+/// Naming both flags and paths.
+pub fn check_output_apart(out_flag: &str, out: &Path, inputs: &[(&str, &Path)]) -> Result<()> {
+    let o = resolved(out);
+    for (flag, input) in inputs {
+        let i = resolved(input);
+        let how = if o == i {
+            "is"
+        } else if o.starts_with(&i) {
+            "lies inside"
+        } else if i.starts_with(&o) {
+            "holds"
+        } else {
+            continue;
+        };
+        bail!(
+            "{out_flag} {}: {how} the input {flag} {} (writing there would replace what this run reads): name another output",
+            out.display(),
+            input.display()
+        );
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `root/rel` ([`write_atomic`]) after checking that `rel` is a relative path
+/// of plain names (no `..`, no root, no prefix), so that the file stays under `root`.
+///
+/// # Errors
+/// A `rel` that could leave `root`; as [`write_atomic`].
+pub fn write_under(root: &Path, rel: &Path, bytes: &[u8]) -> Result<()> {
+    use std::path::Component;
+    if rel.as_os_str().is_empty() || !rel.components().all(|c| matches!(c, Component::Normal(_))) {
+        bail!("refusing to write {} outside the output folder {}", rel.display(), root.display());
+    }
+    write_atomic(&root.join(rel), bytes)
+}

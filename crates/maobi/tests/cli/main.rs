@@ -23,4 +23,5 @@ mod safety;
 mod sheet;
 mod styles;
 mod transport;
+mod untrusted;
 mod write;
