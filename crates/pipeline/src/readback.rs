@@ -22,7 +22,7 @@ pub enum ReadBackError {
         source: std::io::Error,
     },
     /// The file is larger than any maobi writes.
-    #[error("{} is larger than {} MiB: not a {what} maobi writes", path.display(), max_bytes >> 20)]
+    #[error("{} is larger than {} MiB: not {what}", path.display(), max_bytes >> 20)]
     TooLarge {
         /// The file.
         path: PathBuf,

@@ -133,11 +133,12 @@ pub fn write_text_each<T: Send, E: From<crate::Error> + Send>(
         })
         .collect::<Result<_>>()
         .map_err(E::from)?;
+    // Each glyph is dropped once its character is written.
     let kept: Vec<T> = prepared
-        .par_iter()
-        .zip(layout.boxes.par_iter())
+        .into_par_iter()
+        .zip(layout.boxes.clone().into_par_iter())
         .enumerate()
-        .map(|(i, (p, b))| each(i, write_char(p, profile, *b, opts).map_err(E::from)?))
+        .map(|(i, (p, b))| each(i, write_char(&p, profile, b, opts).map_err(E::from)?))
         .collect::<Result<_, E>>()?;
     Ok((layout, kept, brush_char_mm))
 }

@@ -890,7 +890,7 @@ fn earlier_rounds(p: &Path) -> Result<Vec<serde_json::Value>> {
     if !p.exists() {
         return Ok(Vec::new());
     }
-    let bytes = pipeline::read_bounded(p, MAX_SHEET_SUMMARY_BYTES, "sheet's summary.json").context("--observed")?;
+    let bytes = pipeline::read_bounded(p, MAX_SHEET_SUMMARY_BYTES, "a sheet's summary.json").context("--observed")?;
     let v: serde_json::Value = serde_json::from_slice(&bytes).with_context(|| {
         format!("--observed: {} is not the summary.json of `maobi write` (cut short, or not JSON)", p.display())
     })?;

@@ -120,10 +120,10 @@ fn a_sheets_track_json_is_validated_before_anything_is_read() {
     // A character image of another size names its file, before the photo is read.
     let sized = dir.path().join("bad-size");
     copy_dir(&sheet, &sized);
-    image::GrayImage::from_pixel(100, 100, image::Luma([255])).save(sized.join("02-口/render.png")).unwrap();
+    image::GrayImage::from_pixel(100, 80, image::Luma([255])).save(sized.join("02-口/render.png")).unwrap();
     fails(
         &maobi(&["observe", s(&photo), "--sheet", s(&sized), "-o", s(&dir.path().join("o"))]),
-        "02-口/render.png is 100×100 px: expected a square of 64..=4096 px",
+        "02-口/render.png is 100×80 px: expected a square of 64..=4096 px",
     );
     image::GrayImage::from_pixel(96, 96, image::Luma([255])).save(sized.join("02-口/render.png")).unwrap();
     fails(
