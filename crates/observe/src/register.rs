@@ -1,7 +1,7 @@
 //! The registration marks found in a photo and the photo → paper homography.
 
 use bezier_raster::binary::components;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::{Homography, InkMap, ObserveError};
 
@@ -43,7 +43,7 @@ pub struct KnownMark {
 }
 
 /// One mark as found.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MarkFit {
     /// Its name.
     pub role: String,

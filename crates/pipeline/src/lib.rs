@@ -54,8 +54,8 @@ pub use marks::{
     MarkError, MarkRole, mark_strokes, registration_marks,
 };
 pub use observation::{
-    MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedDiagnosis,
-    ObservedMark, ObservedRegistration, ObservedScores, ObservedSheet, ObservedStroke, PhotoMap,
+    MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
+    ObservedScores, ObservedSheet,
 };
 pub use placement::{
     BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use observe::{Diagnosis, Homography, MarkFit};
 use serde::{Deserialize, Serialize};
 
 use crate::readback::{ReadBackError, check_num, read_bounded};
@@ -66,31 +67,9 @@ pub struct ObservedRegistration {
     /// What of the lens is modelled.
     pub lens_distortion: String,
     /// Paper mm → photo px.
-    pub paper_to_photo: PhotoMap,
+    pub paper_to_photo: Homography,
     /// Every mark as found.
-    pub marks: Vec<ObservedMark>,
-}
-
-/// A 3 × 3 homography, row major.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct PhotoMap {
-    /// The matrix.
-    pub m: [[f64; 3]; 3],
-}
-
-/// One registration mark as found.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ObservedMark {
-    /// Which mark.
-    pub role: String,
-    /// The centre of its ink in the (reduced) photo, px.
-    pub photo_px: [f64; 2],
-    /// Its centre mapped onto the paper by the fit to all marks, less where the sheet puts it, mm.
-    pub error_mm: [f64; 2],
-    /// Its centre mapped by the fit to the other marks, less where the sheet puts it, mm.
-    pub leave_one_out_mm: f64,
-    /// Its ink's area, mm².
-    pub area_mm2: f64,
+    pub marks: Vec<MarkFit>,
 }
 
 /// CSIM, SSIM and IoU of observed ink against an image.
@@ -125,39 +104,9 @@ pub struct ObservedChar {
     /// The observed ink against the plan.
     pub vs_plan: ObservedScores,
     /// What the brush did differently from the plan.
-    pub diagnosis: ObservedDiagnosis,
+    pub diagnosis: Diagnosis,
     /// The diagnosis in one line.
     pub verdict: String,
-}
-
-/// A character's strokes observed against their plan (see `observe::Diagnosis`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ObservedDiagnosis {
-    /// Per stroke.
-    pub strokes: Vec<ObservedStroke>,
-    /// Observed width ÷ planned width over all probes.
-    pub width_ratio: Option<f64>,
-    /// Median observed ink beyond the planned ink at the strokes' ends, mm.
-    pub end_beyond_mm: Option<f64>,
-    /// Median lateral shift, mm.
-    pub lateral_mm: Option<f64>,
-}
-
-/// One stroke observed against its plan (see `observe::StrokeDiagnosis`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ObservedStroke {
-    /// Its index in the character.
-    pub stroke: usize,
-    /// Width probes.
-    pub probes: usize,
-    /// Median observed width ÷ median planned width.
-    pub width_ratio: Option<f64>,
-    /// Ink beyond the plan at the start, mm.
-    pub start_beyond_mm: Option<f64>,
-    /// Ink beyond the plan at the end, mm.
-    pub end_beyond_mm: Option<f64>,
-    /// Lateral shift, mm.
-    pub lateral_mm: Option<f64>,
 }
 
 const WHAT: &str = "the summary.json of `maobi observe`";

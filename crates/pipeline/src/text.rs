@@ -94,6 +94,21 @@ pub fn write_text(
 ///
 /// # Errors
 /// As [`write_text`] (converted into `E`), and the first error `each` returns.
+///
+/// # Examples
+/// ```
+/// use pipeline::{TextOptions, WriteOptions, prepare, write_text_each};
+/// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
+/// let chars = ['十', '口'].map(|c| prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap());
+/// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
+/// // Keep only each character's plan CSIM (a caller would write its images here).
+/// let (layout, csim, _) =
+///     write_text_each(chars.to_vec(), &pen1, &opts, &TextOptions::default(), &|_, r| {
+///         Ok::<_, pipeline::Error>(r.report.plan.csim)
+///     })?;
+/// assert_eq!((layout.boxes.len(), csim.len()), (2, 2));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_text_each<T: Send, E: From<crate::Error> + Send>(
     prepared: Vec<Prepared>,
     profile: &BrushProfile,

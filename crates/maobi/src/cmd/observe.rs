@@ -7,8 +7,8 @@ use anyhow::{Context, Result, bail};
 use bezier_raster::Coverage;
 use observe::{Frame, KnownMark, Photo, Registration, diagnose, ink_map, rectify, register};
 use pipeline::{
-    Mark, MarkRole, OBSERVATION_VERSION, Observation, ObservedChar, ObservedDiagnosis, ObservedMark,
-    ObservedRegistration, ObservedSheet, ObservedStroke, PhotoMap, SheetTrack, similarity,
+    Mark, MarkRole, OBSERVATION_VERSION, Observation, ObservedChar, ObservedRegistration, ObservedSheet, SheetTrack,
+    similarity,
 };
 
 use crate::common::{
@@ -204,7 +204,7 @@ pub fn run(args: Args) -> Result<()> {
             vs_glyph: glyph.into(),
             vs_plan: vs_plan.into(),
             verdict: d.verdict(&sheet.track.brush.name),
-            diagnosis: observed_diagnosis(&d),
+            diagnosis: d,
         });
     }
     let mean_plan = chars.iter().map(|o| o.vs_plan.csim).sum::<f64>() / chars.len().max(1) as f64;
@@ -236,27 +236,6 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The diagnosis as the observation records it.
-fn observed_diagnosis(d: &observe::Diagnosis) -> ObservedDiagnosis {
-    ObservedDiagnosis {
-        strokes: d
-            .strokes
-            .iter()
-            .map(|s| ObservedStroke {
-                stroke: s.stroke,
-                probes: s.probes,
-                width_ratio: s.width_ratio,
-                start_beyond_mm: s.start_beyond_mm,
-                end_beyond_mm: s.end_beyond_mm,
-                lateral_mm: s.lateral_mm,
-            })
-            .collect(),
-        width_ratio: d.width_ratio,
-        end_beyond_mm: d.end_beyond_mm,
-        lateral_mm: d.lateral_mm,
-    }
-}
-
 /// The typed observation `summary.json` holds.
 fn observation(
     args: &Args,
@@ -280,18 +259,8 @@ fn observation(
             photo_reduced_by: photo.reduced_by,
             corner_shift: reg.corner_shift,
             lens_distortion: "not modelled".into(),
-            paper_to_photo: PhotoMap { m: reg.paper_to_photo.m },
-            marks: reg
-                .marks
-                .iter()
-                .map(|m| ObservedMark {
-                    role: m.role.clone(),
-                    photo_px: m.photo_px,
-                    error_mm: m.error_mm,
-                    leave_one_out_mm: m.leave_one_out_mm,
-                    area_mm2: m.area_mm2,
-                })
-                .collect(),
+            paper_to_photo: reg.paper_to_photo,
+            marks: reg.marks.clone(),
         },
         chars,
     }

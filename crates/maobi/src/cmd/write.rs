@@ -18,7 +18,7 @@ use crate::generator::committed_gen_model;
 
 use crate::common::{
     OutputLock, RendererArgs, Stage, check_output_apart, check_output_folder, check_range, load_brush, parse_method,
-    parse_model, print_json, progress, recover_leftovers, write_atomic,
+    parse_model, print_json, progress, recover_leftovers, write_atomic, write_atomic_with,
 };
 
 /// The `--execution` argument: how the executed figure runs the program.
@@ -460,7 +460,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if single && marks_on {
         // The marks make one character a sheet of one: its track.json is the sheet's.
-        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+        write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
     if single && observed.is_some() {
         // The rounds live in summary.json.
@@ -470,7 +470,7 @@ pub fn run(args: Args) -> Result<()> {
         let img = sheet_png(&results, &sheet_track, &profile, &opts.forward_model(), args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
-        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+        write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
     let preview = crate::cmd::preview::sheet_preview(&sheet_track, None, None)?;
     write_atomic(&stage.path().join("preview.html"), preview.as_bytes())?;

@@ -57,6 +57,15 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
 /// symlink is written through (its target is replaced, the link stays); folders, FIFOs, sockets
 /// and devices are refused ([`output_target`]). Ctrl-C removes the temporary file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |w| Ok(w.write_all(bytes)?))
+}
+
+/// As [`write_atomic`], the bytes written by `fill` into a buffered writer (a large output is
+/// never held whole in memory).
+///
+/// # Errors
+/// As [`write_atomic`], and `fill`'s.
+pub fn write_atomic_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     let target = output_target(path)?;
     let path = target.as_path();
     let dir = match path.parent() {
@@ -70,7 +79,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = tempfile::NamedTempFile::new_in(dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
     let _guard = TempGuard::new(tmp.path());
-    tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        fill(&mut w).and_then(|()| Ok(w.flush()?)).with_context(|| format!("cannot write {}", path.display()))?;
+    }
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
