@@ -140,9 +140,8 @@ fn check_layout(path: &Path, l: &CalibrationLayout) -> Result<()> {
     for (i, m) in l.marks.iter().enumerate() {
         let [x, y] = m.centre_mm;
         let sizes = [m.half_length_mm, m.half_width_mm];
-        if !(x.is_finite() && y.is_finite() && (0.0..=w).contains(&x) && (0.0..=h).contains(&y))
-            || !sizes.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= MAX_CELL_MM)
-        {
+        let on = x.is_finite() && y.is_finite() && (0.0..=w).contains(&x) && (0.0..=h).contains(&y);
+        if !(on && sizes.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= MAX_CELL_MM)) {
             return bad(format!("marks[{i}]"), "expected a mark on the sheet, its half sizes 0..=250 mm".into());
         }
     }
