@@ -25,7 +25,7 @@ pub fn run(args: &[String]) -> Result<()> {
         .current_dir(&root)
         .arg("train")
         .args(RECIPE)
-        .args(["-o", "crates/neural-gen/data/pen1.safetensors"])
+        .args(["-o", "crates/neural-gen/data/pen1.safetensors", "--force"])
         .status()?;
     if !st.success() {
         bail!("training failed");

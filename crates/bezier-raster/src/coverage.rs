@@ -51,6 +51,10 @@ pub enum ImageFileError {
         /// Height, px.
         height: u32,
     },
+    /// A JPEG file that ends before its image data does (no end-of-image marker after its last
+    /// scan): a copy or download cut short. Its decoder would fill the rest in silently.
+    #[error("the JPEG file ends before its image data does (truncated: copy it again)")]
+    Truncated,
     /// A side of zero pixels.
     #[error("image is {width}×{height} px; each side must be 1..={MAX_SIDE} px")]
     BadSize {
@@ -70,8 +74,37 @@ pub enum ImageFileError {
 pub fn decode_image(path: &Path) -> Result<image::DynamicImage, ImageFileError> {
     image_header(path)?;
     let mut reader = image::ImageReader::open(path)?.with_guessed_format()?;
+    if reader.format() == Some(image::ImageFormat::Jpeg) && !jpeg_is_complete(path)? {
+        return Err(ImageFileError::Truncated);
+    }
     reader.limits(image_limits());
     reader.decode().map_err(ImageFileError::Decode)
+}
+
+/// Whether a JPEG file has an end-of-image marker (FF D9) after its last start-of-scan (FF DA).
+/// Inside a scan's data an FF byte is always followed by 00 or a restart marker, so neither
+/// pair occurs there by chance. Read in pieces; nothing is kept.
+fn jpeg_is_complete(path: &Path) -> Result<bool, ImageFileError> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path)?;
+    let mut buf = vec![0u8; 1 << 16];
+    let (mut prev, mut complete) = (0u8, false);
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            return Ok(complete);
+        }
+        for &b in &buf[..n] {
+            if prev == 0xFF {
+                match b {
+                    0xDA => complete = false,
+                    0xD9 => complete = true,
+                    _ => {}
+                }
+            }
+            prev = b;
+        }
+    }
 }
 
 /// Checks, from the file and its header only, that an image file can be decoded by

@@ -1,7 +1,7 @@
 //! Observed strokes against planned ones: width, ends, lateral offset.
 
 use bezier_raster::Coverage;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::Frame;
 
@@ -20,7 +20,7 @@ const END_OUTLIER_MM: f64 = 6.0;
 const END_SHARE: f64 = 0.2;
 
 /// One stroke observed against its plan.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StrokeDiagnosis {
     /// Its index in the character.
     pub stroke: usize,
@@ -38,7 +38,7 @@ pub struct StrokeDiagnosis {
 }
 
 /// A character's strokes observed against their plan.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Diagnosis {
     /// Per stroke.
     pub strokes: Vec<StrokeDiagnosis>,

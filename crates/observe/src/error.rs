@@ -65,6 +65,18 @@ pub enum ObserveError {
         /// The limit, mm.
         limit_mm: f64,
     },
+    /// A mark is not where the other marks put it.
+    #[error(
+        "the {role} registration mark is {error_mm:.2} mm from where the other marks put it (limit {limit_mm} mm): a mark out of place (did the paper move while the marks were written?), or paper that is not flat"
+    )]
+    Misplaced {
+        /// The mark farthest from where the others put it.
+        role: String,
+        /// Its distance, mm.
+        error_mm: f64,
+        /// The limit, mm.
+        limit_mm: f64,
+    },
     /// The marks' edges are too soft.
     #[error(
         "the photo is blurred: the registration marks' edges are {edge_mm:.2} mm wide (10–90 %), over the {limit_mm} mm limit (hold the camera still and focus on the paper)"

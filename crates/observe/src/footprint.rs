@@ -69,6 +69,7 @@ pub struct FootprintMeasure {
 ///     marks: vec![],
 ///     residual_rms_mm: 0.0,
 ///     residual_max_mm: 0.0,
+///     leave_one_out_max_mm: 0.0,
 ///     edge_mm: 0.0,
 ///     px_per_mm: 6.0,
 ///     corner_shift: 0,

@@ -1,10 +1,10 @@
 //! A plane-to-plane projective map (homography), fitted by the normalised DLT.
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A homography: `(x, y) ↦ (h·(x, y, 1))` dehomogenised; here paper mm → photo px.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Homography {
     /// The 3×3 matrix, row major, scaled so that its bottom-right entry is 1 where it can be.
     pub m: [[f64; 3]; 3],

@@ -43,7 +43,9 @@ pub use footprint::{FOOTPRINT_MAX_PX_PER_MM, FOOTPRINT_MIN_PX_PER_MM, FootprintM
 pub use homography::Homography;
 pub use photo::{InkMap, MAX_PHOTO_SIDE, Photo, ink_map};
 pub use rectify::{Frame, rectify};
-pub use register::{BLUR_LIMIT_MM, KnownMark, MarkFit, RESIDUAL_LIMIT_MM, Registration, register};
+pub use register::{
+    BLUR_LIMIT_MM, KnownMark, LEAVE_ONE_OUT_LIMIT_MM, MarkFit, RESIDUAL_LIMIT_MM, Registration, register,
+};
 
 // The README's example runs as a doctest.
 #[cfg(doctest)]

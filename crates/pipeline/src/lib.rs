@@ -27,9 +27,12 @@ mod closed_loop;
 mod error;
 mod glyphs;
 mod marks;
+mod observation;
 mod placement;
 mod prepare;
+mod readback;
 mod sheet;
+mod sheet_file;
 mod text;
 mod write;
 
@@ -50,16 +53,23 @@ pub use marks::{
     MARK_CLEARANCE_MM, MARK_DEPTH_FRACTION, MARK_GAP_MM, MARK_MARGIN_MM, MARK_SPACING_MM, MARK_TRAVEL_MM, Mark,
     MarkError, MarkRole, mark_strokes, registration_marks,
 };
+pub use observation::{
+    MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
+    ObservedScores, ObservedSheet,
+};
 pub use placement::{
     BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
     write_placed,
 };
 pub use prepare::{ANALYSIS_PX, Prepared, TemplateReport, prepare, prepare_with_template};
+pub use readback::{ReadBackError, char_folder, fingerprint, read_bounded};
 pub use sheet::{
     BRUSH_FIT_CLAMPED_SHARE, BRUSH_FIT_SIZE_FACTOR, BrushFit, BrushMiss, Flow, GAP_FRACTION, Grid, Layout,
     MAX_SHEET_MM, Sheet, SheetChar, SheetError, SheetTrack, auto_layout, layout_on_sheet, parse_sheet, sheet_image,
+    sheet_image_of,
 };
-pub use text::{TextOptions, WrittenText, write_text};
+pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
+pub use text::{TextOptions, WrittenText, write_text, write_text_each};
 pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;

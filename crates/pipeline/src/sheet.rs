@@ -551,9 +551,25 @@ pub fn sheet_image(
     layout: &Layout,
     size_px: u32,
 ) -> Result<Coverage, brush_model::ProfileError> {
+    let tracks: Vec<&Track> = results.iter().map(|r| &r.track).collect();
+    sheet_image_of(&tracks, profile, fm, model, layout, size_px)
+}
+
+/// As [`sheet_image`] from the characters' tracks alone.
+///
+/// # Errors
+/// When the profile refuses a press.
+pub fn sheet_image_of(
+    tracks: &[&Track],
+    profile: &BrushProfile,
+    fm: &brush_model::ForwardModel,
+    model: ModelKind,
+    layout: &Layout,
+    size_px: u32,
+) -> Result<Coverage, brush_model::ProfileError> {
     let mut all = Track::default();
-    for r in results {
-        all.strokes.extend(r.track.strokes.iter().cloned());
+    for t in tracks {
+        all.strokes.extend(t.strokes.iter().cloned());
     }
     let px_per_mm = size_px as f64 / layout.char_mm;
     let (wp, hp) = layout.image_px(size_px);

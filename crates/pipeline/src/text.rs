@@ -79,12 +79,49 @@ pub fn write_text(
     text: &TextOptions,
     on_char: &(dyn Fn() + Sync),
 ) -> Result<WrittenText> {
+    let (layout, results, brush_char_mm) = write_text_each(prepared, profile, opts, text, &|_, r| {
+        on_char();
+        Ok::<_, crate::Error>(r)
+    })?;
+    Ok(WrittenText { layout, results, brush_char_mm })
+}
+
+/// As [`write_text`], but each character's result goes to `each` (with its index) as soon as it
+/// is written, and only what `each` returns is kept: a caller that writes a character's files
+/// and keeps its report and track writes a long text in bounded memory (the results of the
+/// characters in flight, one per thread, and what `each` keeps). Returns the layout, what
+/// `each` returned in writing order, and the box side that suits the brush.
+///
+/// # Errors
+/// As [`write_text`] (converted into `E`), and the first error `each` returns.
+///
+/// # Examples
+/// ```
+/// use pipeline::{TextOptions, WriteOptions, prepare, write_text_each};
+/// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
+/// let chars = ['十', '口'].map(|c| prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap());
+/// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
+/// // Keep only each character's plan CSIM (a caller would write its images here).
+/// let (layout, csim, _) =
+///     write_text_each(chars.to_vec(), &pen1, &opts, &TextOptions::default(), &|_, r| {
+///         Ok::<_, pipeline::Error>(r.report.plan.csim)
+///     })?;
+/// assert_eq!((layout.boxes.len(), csim.len()), (2, 2));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_text_each<T: Send, E: From<crate::Error> + Send>(
+    prepared: Vec<Prepared>,
+    profile: &BrushProfile,
+    opts: &WriteOptions,
+    text: &TextOptions,
+    each: &(dyn Fn(usize, CharResult) -> Result<T, E> + Sync),
+) -> Result<(Layout, Vec<T>, f64), E> {
     let all: Vec<_> = prepared.iter().flat_map(|p| p.paths.iter().cloned()).collect();
     let brush_char_mm = trajectory::auto_char_mm(&all, profile, opts.alpha_rad);
     let search = |p: &Prepared| text.search_templates && p.method == Method::Template;
     // One template character on its own: its box size is searched too.
     let single_searched = match (&prepared[..], &text.layout, text.char_mm) {
-        ([p], None, None) if search(p) => Some(searched_placement(p, profile, opts)?),
+        ([p], None, None) if search(p) => Some(searched_placement(p, profile, opts).map_err(E::from)?),
         _ => None,
     };
     let layout = match &text.layout {
@@ -109,15 +146,14 @@ pub fn write_text(
             None if search(&p) => Ok(p.placed(&searched_splits(&p, profile, opts, char_mm)?)),
             None => Ok(p),
         })
-        .collect::<Result<_>>()?;
-    let results: Vec<CharResult> = prepared
-        .par_iter()
-        .zip(layout.boxes.par_iter())
-        .map(|(p, b)| {
-            let r = write_char(p, profile, *b, opts);
-            on_char();
-            r
-        })
-        .collect::<Result<_>>()?;
-    Ok(WrittenText { layout, results, brush_char_mm })
+        .collect::<Result<_>>()
+        .map_err(E::from)?;
+    // Each glyph is dropped once its character is written.
+    let kept: Vec<T> = prepared
+        .into_par_iter()
+        .zip(layout.boxes.clone().into_par_iter())
+        .enumerate()
+        .map(|(i, (p, b))| each(i, write_char(&p, profile, b, opts).map_err(E::from)?))
+        .collect::<Result<_, E>>()?;
+    Ok((layout, kept, brush_char_mm))
 }

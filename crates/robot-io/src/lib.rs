@@ -291,6 +291,20 @@ pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
 /// track of 44 strokes is about 10 MiB).
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
 
+/// A sheet `track.json`'s characters, as far as [`TrackFile::load`] checks them.
+#[derive(Deserialize)]
+struct SheetChars {
+    #[serde(default)]
+    chars: Option<Vec<SheetCharRange>>,
+}
+
+/// One character's stroke range in a sheet `track.json`.
+#[derive(Deserialize)]
+struct SheetCharRange {
+    #[serde(default)]
+    strokes: Option<[usize; 2]>,
+}
+
 /// `track.json` as `maobi write` writes it for one character and reads it back: the brush
 /// profile and the strokes, with where the character sits. A sheet's `track.json` (more fields,
 /// which this type ignores) reads through it too.
@@ -324,7 +338,46 @@ impl TrackFile {
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let t: TrackFile = load_json(path)?;
         t.brush.validate(&path.display().to_string())?;
+        // A sheet's character boundaries, checked against what they index: `stroke_chars` (the
+        // ink reload rule's) against the strokes and the sheet's `chars`.
+        let chars: SheetChars = load_json(path)?;
+        t.check_stroke_chars(chars.chars.as_deref()).map_err(|message| RobotError::Config {
+            file: path.to_path_buf(),
+            message: format!("field `stroke_chars`: {message}"),
+        })?;
         Ok(t)
+    }
+
+    /// `stroke_chars`, when there: one entry per stroke, the characters in writing order (each
+    /// the last one or the next, from 0); with the sheet's `chars`, each entry one of them and
+    /// each character's stroke range its own (the marks' strokes before them count as the
+    /// first character's).
+    fn check_stroke_chars(&self, chars: Option<&[SheetCharRange]>) -> Result<(), String> {
+        let Some(sc) = &self.stroke_chars else { return Ok(()) };
+        let n = self.strokes.len();
+        if sc.len() != n {
+            return Err(format!("{} entries for {n} strokes: expected one per stroke", sc.len()));
+        }
+        let mut last = 0;
+        for (s, &c) in sc.iter().enumerate() {
+            if c != last && c != last + 1 || (s == 0 && c != 0) {
+                return Err(format!(
+                    "stroke {s} is given character {c} after character {last}: expected the characters in writing order from 0"
+                ));
+            }
+            last = c;
+        }
+        let Some(chars) = chars else { return Ok(()) };
+        if let Some(s) = sc.iter().position(|&c| c >= chars.len()) {
+            return Err(format!("stroke {s} names character {}, the sheet has {}", sc[s], chars.len()));
+        }
+        for (i, c) in chars.iter().enumerate() {
+            let Some([a, b]) = c.strokes else { continue };
+            if a > b || b > n || sc[a..b].iter().any(|&x| x != i) {
+                return Err(format!("character {i}'s strokes [{a}, {b}) are not all its own (of {n} strokes)"));
+            }
+        }
+        Ok(())
     }
 
     /// The strokes as a [`Track`].

@@ -110,7 +110,58 @@ fn load_layout(cal: &Path) -> Result<(PathBuf, CalibrationLayout)> {
     if layout.presses.is_empty() {
         bail!("--layout: {} lists no presses", path.display());
     }
+    check_layout(&path, &layout)?;
     Ok((path, layout))
+}
+
+/// The largest press cell a calibration layout read back may hold, mm a side (each is measured
+/// at up to 10 px per mm: 2,500 px).
+const MAX_CELL_MM: f64 = 250.0;
+
+/// The most presses a calibration layout read back may list.
+const MAX_PRESSES: usize = 10_000;
+
+/// Checks what a calibration layout read back may hold before anything is sized from it: the
+/// sheet, the number of presses and marks, every press's cell (finite, on the sheet, at most
+/// [`MAX_CELL_MM`] a side) and its press values.
+fn check_layout(path: &Path, l: &CalibrationLayout) -> Result<()> {
+    let bad =
+        |field: String, what: String| -> Result<()> { bail!("--layout: {}: field `{field}`: {what}", path.display()) };
+    let (w, h) = (l.sheet.width_mm, l.sheet.height_mm);
+    if !([w, h].iter().all(|v| v.is_finite() && (10.0..=pipeline::MAX_SHEET_MM).contains(v))) {
+        return bad("sheet".into(), format!("{w}×{h} mm: expected sides of 10..={} mm", pipeline::MAX_SHEET_MM));
+    }
+    if l.presses.len() > MAX_PRESSES {
+        return bad("presses".into(), format!("{} presses: expected at most {MAX_PRESSES}", l.presses.len()));
+    }
+    if l.marks.len() > 6 {
+        return bad("marks".into(), format!("{} marks: a sheet has at most 6", l.marks.len()));
+    }
+    for (i, m) in l.marks.iter().enumerate() {
+        let [x, y] = m.centre_mm;
+        let sizes = [m.half_length_mm, m.half_width_mm];
+        let on = x.is_finite() && y.is_finite() && (0.0..=w).contains(&x) && (0.0..=h).contains(&y);
+        if !(on && sizes.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= MAX_CELL_MM)) {
+            return bad(format!("marks[{i}]"), "expected a mark on the sheet, its half sizes 0..=250 mm".into());
+        }
+    }
+    for (i, p) in l.presses.iter().enumerate() {
+        let [x0, y0, x1, y1] = p.cell_mm;
+        let on = [x0, y0, x1, y1].iter().all(|v| v.is_finite()) && x0 >= 0.0 && y0 >= 0.0 && x1 <= w && y1 <= h;
+        if !(on && x1 > x0 && y1 > y0 && x1 - x0 <= MAX_CELL_MM && y1 - y0 <= MAX_CELL_MM) {
+            return bad(
+                format!("presses[{i}].cell_mm"),
+                format!(
+                    "[{x0}, {y0}, {x1}, {y1}] mm: expected a cell on the {w}×{h} mm sheet, at most {MAX_CELL_MM} mm a side"
+                ),
+            );
+        }
+        let values = [p.h_mm, p.alpha_rad, p.beta_rad, p.root_mm[0], p.root_mm[1]];
+        if !values.iter().all(|v| v.is_finite()) {
+            return bad(format!("presses[{i}]"), "expected finite h_mm, alpha_rad, beta_rad and root_mm".into());
+        }
+    }
+    Ok(())
 }
 
 /// The sheet photo measured: the marks found, every press's footprint fitted on the paper; the

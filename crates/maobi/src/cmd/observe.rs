@@ -6,10 +6,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use bezier_raster::Coverage;
 use observe::{Frame, KnownMark, Photo, Registration, diagnose, ink_map, rectify, register};
-use pipeline::{Mark, MarkRole, SheetTrack, similarity};
-use serde_json::json;
+use pipeline::{
+    Mark, MarkRole, OBSERVATION_VERSION, Observation, ObservedChar, ObservedRegistration, ObservedSheet, SheetTrack,
+    similarity,
+};
 
-use crate::common::{OutputLock, Stage, check_output_folder, print_json, recover_leftovers, write_atomic};
+use crate::common::{
+    OutputLock, Stage, check_output_apart, check_output_folder, print_json, recover_leftovers, write_atomic,
+    write_under,
+};
 
 /// Below this CSIM of the observed ink against the plan (mean over the characters) the photo is
 /// taken to be of another sheet.
@@ -37,16 +42,6 @@ pub struct Args {
     json: bool,
 }
 
-/// One character of the sheet as planned.
-struct Planned {
-    name: String,
-    frame: Frame,
-    reference: Coverage,
-    plan: Coverage,
-    paths: Vec<Vec<[f64; 2]>>,
-}
-
-/// Reads the sheet folder: its track.json (with marks) and each character's images.
 /// `marks` in the order `observe::register` takes them, the four corners first, then the others;
 /// `None` when a corner is missing.
 pub(super) fn known_marks(marks: &[Mark]) -> Option<Vec<KnownMark>> {
@@ -69,76 +64,150 @@ pub(super) fn known_marks(marks: &[Mark]) -> Option<Vec<KnownMark>> {
     )
 }
 
-fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> {
+/// The sheet folder read back: its validated track.json (and that file's bytes, for the
+/// fingerprint), the marks in `observe::register`'s order, and each character's frame and
+/// paths (images are read one character at a time, [`Planned::images`]).
+pub(super) struct SheetFolder {
+    /// The folder, absolute.
+    pub dir: PathBuf,
+    pub track: SheetTrack,
+    pub track_bytes: Vec<u8>,
+    pub marks: Vec<KnownMark>,
+    chars: Vec<Planned>,
+}
+
+/// One character of the sheet as planned.
+struct Planned {
+    name: String,
+    /// Its folder (the sheet's own for a sheet of one).
+    dir: PathBuf,
+    frame: Frame,
+    paths: Vec<Vec<[f64; 2]>>,
+}
+
+impl Planned {
+    /// Its reference.png and render.png (sizes checked against the frame before decoding).
+    fn images(&self) -> Result<(Coverage, Coverage)> {
+        let load = |f: &str| -> Result<Coverage> {
+            let p = self.dir.join(f);
+            let img = Coverage::load(&p).with_context(|| format!("--sheet: cannot read {}", p.display()))?;
+            if (img.width(), img.height()) != (self.frame.width, self.frame.height) {
+                bail!(
+                    "--sheet: {} is {}×{} px, expected {}×{} px (the size of the sheet's first reference.png)",
+                    p.display(),
+                    img.width(),
+                    img.height(),
+                    self.frame.width,
+                    self.frame.height
+                );
+            }
+            Ok(img)
+        };
+        Ok((load("reference.png")?, load("render.png")?))
+    }
+}
+
+/// Reads and validates the sheet folder `dir` (`flag` names it in errors).
+pub(super) fn load_sheet(flag: &str, dir: &Path) -> Result<SheetFolder> {
+    let dir =
+        std::fs::canonicalize(dir).with_context(|| format!("{flag}: cannot read the folder {}", dir.display()))?;
     let path = dir.join("track.json");
-    let text = std::fs::read_to_string(&path).with_context(|| format!("--sheet: cannot read {}", path.display()))?;
-    let track: SheetTrack = serde_json::from_str(&text).with_context(|| {
-        format!("--sheet: {} is not a sheet's track.json (written by `maobi write … --sheet …`)", path.display())
-    })?;
+    let (track, track_bytes) = SheetTrack::load(&path).with_context(|| flag.to_string())?;
     if track.marks.is_empty() {
         bail!(
-            "--sheet: {} has no registration marks (written with --no-marks?): write the sheet again with marks",
+            "{flag}: {} has no registration marks (written with --no-marks?): write the sheet again with marks",
             path.display()
         );
     }
     let Some(known) = known_marks(&track.marks) else {
-        bail!("--sheet: {} lacks one of the four corner registration marks", path.display());
+        bail!("{flag}: {} lacks one of the four corner registration marks", path.display());
     };
+    if known.len() < 5 {
+        bail!("{flag}: {} has only the four corner registration marks (a sheet has six)", path.display());
+    }
     let single = track.chars.len() == 1;
     let h_min = track.brush.ranges.h_mm.min;
+    // Every character's images have the first one's size (one --size for the sheet), read from
+    // its header before anything is decoded.
+    let first = if single { dir.clone() } else { dir.join(pipeline::char_folder(0, &track.chars[0].char)) };
+    let side = image_side(flag, &first.join("reference.png"))?;
     let mut chars = Vec::new();
     for (i, c) in track.chars.iter().enumerate() {
-        let name = format!("{:02}-{}", i + 1, c.char);
-        let cdir = if single { dir.to_path_buf() } else { dir.join(&name) };
-        let load = |f: &str| {
-            let p = cdir.join(f);
-            Coverage::load(&p).with_context(|| format!("--sheet: cannot read {}", p.display()))
-        };
-        let (reference, plan) = (load("reference.png")?, load("render.png")?);
+        let name = pipeline::char_folder(i, &c.char);
+        let cdir = if single { dir.clone() } else { dir.join(&name) };
         let [x0, y0, size] = c.char_box_mm;
-        let frame = Frame {
-            x0_mm: x0,
-            y0_mm: y0,
-            px_per_mm: reference.width() as f64 / size,
-            width: reference.width(),
-            height: reference.height(),
-        };
+        for f in ["reference.png", "render.png"] {
+            let p = cdir.join(f);
+            if image_side(flag, &p)? != side {
+                bail!(
+                    "{flag}: {} is not the size of {} ({side}×{side} px): every character image of a sheet has one size",
+                    p.display(),
+                    first.join("reference.png").display()
+                );
+            }
+        }
+        let frame = Frame { x0_mm: x0, y0_mm: y0, px_per_mm: side as f64 / size, width: side, height: side };
         let paths = track.strokes[c.strokes[0]..c.strokes[1]]
             .iter()
             // The inking part of each stroke (the entry glide with only the tip touching leaves
             // nothing).
             .map(|s| s.points.iter().filter(|p| p.h_mm >= h_min).map(|p| [p.x_mm, p.y_mm]).collect())
             .collect();
-        chars.push(Planned { name, frame, reference, plan, paths });
+        chars.push(Planned { name, dir: cdir, frame, paths });
     }
-    Ok((track, known, chars))
+    Ok(SheetFolder { dir, track, track_bytes, marks: known, chars })
+}
+
+/// The side of a character image of the sheet, from its header: square and within
+/// [`pipeline::OBSERVED_PX`].
+fn image_side(flag: &str, p: &Path) -> Result<u32> {
+    let (w, h) =
+        bezier_raster::coverage::image_header(p).with_context(|| format!("{flag}: cannot read {}", p.display()))?;
+    let [lo, hi] = pipeline::OBSERVED_PX;
+    if w != h || !(lo..=hi).contains(&w) {
+        bail!(
+            "{flag}: {} is {w}×{h} px: expected a square of {lo}..={hi} px (a character image of the sheet)",
+            p.display()
+        );
+    }
+    Ok(w)
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let (track, marks, chars) = load_sheet(&args.sheet)?;
-    let img = bezier_raster::coverage::decode_image(&args.photo)
-        .with_context(|| format!("PHOTO {}", args.photo.display()))?;
-    let photo = Photo::from_image(&img).with_context(|| format!("PHOTO {}", args.photo.display()))?;
-    let ink = ink_map(&photo).with_context(|| format!("PHOTO {}", args.photo.display()))?;
-    let reg = register(&ink, &marks).with_context(|| format!("PHOTO {}", args.photo.display()))?;
-    let mut observed = Vec::new();
-    let mut reports = Vec::new();
-    for c in &chars {
+    check_output_apart("--output", &args.output, &[("--sheet", &args.sheet), ("PHOTO", &args.photo)])?;
+    let sheet = load_sheet("--sheet", &args.sheet)?;
+    let photo_err = || format!("PHOTO {}", args.photo.display());
+    let img = bezier_raster::coverage::decode_image(&args.photo).with_context(photo_err)?;
+    let photo = Photo::from_image(&img).with_context(photo_err)?;
+    drop(img);
+    let ink = ink_map(&photo).with_context(photo_err)?;
+    let reg = register(&ink, &sheet.marks).with_context(photo_err)?;
+    let _lock = OutputLock::acquire("--output", &args.output)?;
+    recover_leftovers(&args.output)?;
+    check_output_folder("--output", &args.output, args.force)?;
+    // One character at a time: its observed.png goes to the staging folder at once (removed
+    // again if the photo turns out to be of another sheet).
+    let stage = Stage::new(&args.output)?;
+    let mut chars = Vec::new();
+    for (c, sc) in sheet.chars.iter().zip(&sheet.track.chars) {
+        let (reference, plan) = c.images()?;
         let obs = rectify(&ink, &reg, &c.frame);
-        let glyph = similarity(&c.reference, &obs)?;
-        let plan = similarity(&c.plan, &obs)?;
-        let d = diagnose(&obs, &c.plan, &c.frame, &c.paths);
-        reports.push(json!({
-            "char": c.name,
-            "vs_glyph": glyph,
-            "vs_plan": plan,
-            "diagnosis": d,
-            "verdict": d.verdict(&track.brush.name),
-        }));
-        observed.push((obs, plan.csim));
+        let glyph = similarity(&reference, &obs)?;
+        let vs_plan = similarity(&plan, &obs)?;
+        let d = diagnose(&obs, &plan, &c.frame, &c.paths);
+        write_under(stage.path(), &Path::new(&c.name).join("observed.png"), &obs.encode_png()?)?;
+        chars.push(ObservedChar {
+            char: sc.char.clone(),
+            folder: c.name.clone(),
+            size_px: c.frame.width,
+            vs_glyph: glyph.into(),
+            vs_plan: vs_plan.into(),
+            verdict: d.verdict(&sheet.track.brush.name),
+            diagnosis: d,
+        });
     }
-    let mean_plan = observed.iter().map(|o| o.1).sum::<f64>() / observed.len().max(1) as f64;
+    let mean_plan = chars.iter().map(|o| o.vs_plan.csim).sum::<f64>() / chars.len().max(1) as f64;
     if mean_plan < MIN_PLAN_CSIM {
         bail!(
             "PHOTO {}: the ink does not match the characters of {} (CSIM against the plan {mean_plan:.2}, below {MIN_PLAN_CSIM}): a photo of another sheet?",
@@ -146,31 +215,20 @@ pub fn run(args: Args) -> Result<()> {
             args.sheet.display()
         );
     }
-    let summary = summary_json(&args, &track, &reg, &photo, &reports);
-    let _lock = OutputLock::acquire("--output", &args.output)?;
-    recover_leftovers(&args.output)?;
-    check_output_folder("--output", &args.output, args.force)?;
-    let stage = Stage::new(&args.output)?;
-    for (c, (obs, _)) in chars.iter().zip(&observed) {
-        write_atomic(&stage.path().join(&c.name).join("observed.png"), &obs.encode_png()?)?;
-    }
+    let summary = observation(&args, &sheet, &reg, &photo, chars);
     write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     stage.install("--output", &args.output, args.force)?;
     if args.json {
         print_json(&summary)?;
     } else {
         println!(
-            "marks: residual {:.2} mm RMS, {:.2} mm max; photo {:.1} px/mm, edges {:.2} mm",
-            reg.residual_rms_mm, reg.residual_max_mm, reg.px_per_mm, reg.edge_mm
+            "marks: residual {:.2} mm RMS, {:.2} mm max, each against the others at most {:.2} mm; photo {:.1} px/mm, edges {:.2} mm",
+            reg.residual_rms_mm, reg.residual_max_mm, reg.leave_one_out_max_mm, reg.px_per_mm, reg.edge_mm
         );
-        for r in &reports {
+        for r in &summary.chars {
             println!(
                 "{}: CSIM vs glyph {:.4}, vs plan {:.4}; IoU vs plan {:.4}; {}",
-                r["char"].as_str().unwrap_or(""),
-                r["vs_glyph"]["csim"].as_f64().unwrap_or(f64::NAN),
-                r["vs_plan"]["csim"].as_f64().unwrap_or(f64::NAN),
-                r["vs_plan"]["iou"].as_f64().unwrap_or(f64::NAN),
-                r["verdict"].as_str().unwrap_or("")
+                r.folder, r.vs_glyph.csim, r.vs_plan.csim, r.vs_plan.iou, r.verdict
             );
         }
         println!("outputs in {}", args.output.display());
@@ -178,29 +236,32 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn summary_json(
+/// The typed observation `summary.json` holds.
+fn observation(
     args: &Args,
-    track: &SheetTrack,
+    sheet: &SheetFolder,
     reg: &Registration,
     photo: &Photo,
-    reports: &[serde_json::Value],
-) -> serde_json::Value {
-    json!({
-        "photo": args.photo.display().to_string(),
-        "sheet": args.sheet.display().to_string(),
-        "text": track.char,
-        "brush": track.brush.name,
-        "registration": {
-            "residual_rms_mm": reg.residual_rms_mm,
-            "residual_max_mm": reg.residual_max_mm,
-            "edge_mm": reg.edge_mm,
-            "photo_px_per_mm": reg.px_per_mm,
-            "photo_reduced_by": photo.reduced_by,
-            "corner_shift": reg.corner_shift,
-            "lens_distortion": "not modelled",
-            "paper_to_photo": reg.paper_to_photo,
-            "marks": reg.marks,
+    chars: Vec<ObservedChar>,
+) -> Observation {
+    Observation {
+        version: OBSERVATION_VERSION,
+        photo: args.photo.display().to_string(),
+        sheet: ObservedSheet { path: sheet.dir.clone(), track_fingerprint: pipeline::fingerprint(&sheet.track_bytes) },
+        text: sheet.track.chars.iter().map(|c| c.char.as_str()).collect(),
+        brush: sheet.track.brush.name.clone(),
+        registration: ObservedRegistration {
+            residual_rms_mm: reg.residual_rms_mm,
+            residual_max_mm: reg.residual_max_mm,
+            leave_one_out_max_mm: reg.leave_one_out_max_mm,
+            edge_mm: reg.edge_mm,
+            photo_px_per_mm: reg.px_per_mm,
+            photo_reduced_by: photo.reduced_by,
+            corner_shift: reg.corner_shift,
+            lens_distortion: "not modelled".into(),
+            paper_to_photo: reg.paper_to_photo,
+            marks: reg.marks.clone(),
         },
-        "chars": reports,
-    })
+        chars,
+    }
 }

@@ -349,7 +349,12 @@ pub struct SimArgs {
     /// (a full disk) the file ends there, the failure is reported and the simulator goes on.
     #[arg(long)]
     trace: Option<PathBuf>,
-    /// Most connections served at once (1 to 1024); further ones are closed at once.
+    /// The trace file's size limit, MiB (1 to 65536): the file ends there and the simulator
+    /// says so on stderr (and goes on).
+    #[arg(long, default_value_t = 256, requires = "trace")]
+    trace_max_mib: u64,
+    /// Most connections served at once (1 to 1024); when all are taken, a new one takes the
+    /// place of the one longest without a request answered (at least 1 s), or is closed at once.
     #[arg(long, default_value_t = 16)]
     max_connections: usize,
     /// Close a connection that sends nothing for this many seconds (1 to 86400).
@@ -714,6 +719,9 @@ fn sim(a: SimArgs) -> Result<()> {
     if !(1..=1024).contains(&a.max_connections) {
         bail!("--max-connections must be between 1 and 1024, got {}", a.max_connections);
     }
+    if !(1..=65_536).contains(&a.trace_max_mib) {
+        bail!("--trace-max-mib must be between 1 and 65536, got {}", a.trace_max_mib);
+    }
     if !(1..=86_400).contains(&a.idle_timeout_s) {
         bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
     }
@@ -734,6 +742,7 @@ fn sim(a: SimArgs) -> Result<()> {
         max_connections: a.max_connections,
         idle_timeout: Duration::from_secs(a.idle_timeout_s),
         trace_path: a.trace.clone(),
+        trace_max_bytes: a.trace_max_mib << 20,
         kinematics_param: !a.no_kinematics_param,
         kinematics: arm.as_ref().map_or(robot_io::kinematics::DhParams::AUBO_I5, |k| k.kinematics),
         ..SimOptions::default()

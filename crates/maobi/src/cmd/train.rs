@@ -6,8 +6,8 @@ use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
 
 use crate::common::{
-    BrushArg, OutputLock, StepProgress, TempGuard, check_range, load_brush, output_gate, output_target, signal_count,
-    test_hook,
+    BrushArg, OutputLock, StepProgress, TempGuard, check_output_file, check_range, load_brush, output_gate,
+    output_target, signal_count, test_hook,
 };
 
 /// Arguments of `maobi train`.
@@ -45,12 +45,19 @@ pub struct Args {
     /// it to --resume after an interruption), removed once the run has finished.
     #[arg(short, long)]
     output: PathBuf,
+    /// Replace a finished model at -o (its weights or config); without it an existing one is
+    /// refused before any training.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_args(&args)?;
     let _lock = OutputLock::acquire("-o", &args.output)?;
+    check_output_file("-o", &args.output, args.force)?;
+    check_output_file("-o", &neural_gen::config_path(&args.output), args.force)
+        .context("the config beside the weights")?;
     let checkpoint = checkpoint_path(&args.output);
     // The checkpoints are written to these and renamed (neural_gen::Generator::save).
     crate::common::remove_on_interrupt(&checkpoint.with_extension("safetensors.tmp"));

@@ -6,9 +6,9 @@ use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
 use brush_model::BrushProfile;
 use pipeline::{
-    BrushFit, BrushMiss, CharReport, CharResult, Flow, GlyphInput, Grid, Layout, Prepared, Sheet, SheetError,
-    SheetTrack, TextOptions, WriteOptions, WrittenText, auto_layout, layout_on_sheet, parse_sheet, prepare_loaded,
-    rerender_with_generator, write_text,
+    BrushFit, BrushMiss, CharReport, CharResult, Flow, GlyphInput, Grid, Layout, Observation, Prepared, Sheet,
+    SheetError, SheetTrack, TextOptions, WriteOptions, WrittenText, auto_layout, layout_on_sheet, parse_sheet,
+    prepare_loaded, rerender_with_generator, write_text, write_text_each,
 };
 use rayon::prelude::*;
 use serde_json::json;
@@ -17,8 +17,8 @@ use trajectory::Method;
 use crate::generator::committed_gen_model;
 
 use crate::common::{
-    OutputLock, RendererArgs, Stage, check_output_folder, check_range, load_brush, parse_method, parse_model,
-    print_json, progress, recover_leftovers, write_atomic,
+    OutputLock, RendererArgs, Stage, check_output_apart, check_output_folder, check_range, load_brush, parse_method,
+    parse_model, print_json, progress, recover_leftovers, write_atomic, write_atomic_with,
 };
 
 /// The `--execution` argument: how the executed figure runs the program.
@@ -277,6 +277,14 @@ pub fn run(args: Args) -> Result<()> {
         Some(dir) => Some(load_observed(dir, &chars, sheet_layout.as_ref())?),
         None => None,
     };
+    let mut inputs: Vec<(&str, &Path)> = args.font.iter().map(|f| ("--font", f.as_path())).collect();
+    inputs.extend(args.image.as_deref().map(|p| ("--image", p)));
+    inputs.extend(args.hanzi_data.as_deref().map(|p| ("--hanzi-data", p)));
+    if let Some(o) = &observed {
+        inputs.push(("--observed", o.dir.as_path()));
+        inputs.push(("--observed's sheet", o.sheet_dir.as_path()));
+    }
+    check_output_apart("--output", &args.output, &inputs)?;
     let auto = match args.brush.as_deref() {
         Some("auto") => observed.is_none(),
         Some(_) => false,
@@ -369,37 +377,53 @@ pub fn run(args: Args) -> Result<()> {
     };
     let pb = progress(chars.len() as u64, "write");
     let kept = observed.as_ref().map(|_| prepared.clone());
-    let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
-    pb.finish_and_clear();
-    let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
-    let mut warm_started = false;
-    if let (Some(residuals), Some(ro), Some(prepared)) = (&residuals, refine, &kept) {
-        opts.refine = Some(ro);
-        // With the brush the last attempt was written with, each refinement starts from the
-        // last attempt's track (the residual was measured there).
-        let last = observed.as_ref().filter(|o| same_brush(&o.track.brush, &profile)).map(|o| o.attempts());
-        warm_started = last.is_some();
-        let starts: Option<Vec<&[brush_model::Stroke]>> = last.as_ref().map(|a| a.iter().map(|a| a.strokes).collect());
-        pipeline::refine_observed(&mut results, prepared, residuals, starts.as_deref(), &profile, &opts, &ro)
-            .context("--observed: refining against the observed residual")?;
-    }
-    let char_mm = lay.char_mm;
-    if args.renderer.neural() {
-        let g = args.renderer.generator()?;
-        rerender_with_generator(&mut results, &g, &profile, args.size).context("--renderer neural")?;
-    }
-    let single = results.len() == 1;
+    let single = chars.len() == 1;
     // Everything goes to a staging folder beside --output, swapped in at the end: a run never
     // mixes with an older one, and a failed or interrupted run leaves the old folder as it was.
     let stage = Stage::new(&args.output)?;
-    for (i, r) in results.iter().enumerate() {
-        let dir = if single {
-            stage.path().to_path_buf()
-        } else {
-            stage.path().join(format!("{:02}-{}", i + 1, r.report.char))
-        };
-        write_outputs(&dir, r, &profile, sheet.as_ref().map(|_| &lay))?;
-    }
+    let char_dir = |i: usize, r: &CharResult| {
+        if single { stage.path().to_path_buf() } else { stage.path().join(pipeline::char_folder(i, &r.report.char)) }
+    };
+    let on_sheet = sheet.as_ref().and(text.layout.clone());
+    // Without --observed or the neural renderer (which work on all the characters' results
+    // together), each character's files are written as soon as it is done and only its report
+    // and track are kept: a long text is written in bounded memory.
+    let stream = observed.is_none() && !args.renderer.neural();
+    let (lay, results, brush_mm, warm_started) = if stream {
+        let (lay, kept, brush_mm) = write_text_each(prepared, &profile, &opts, &text, &|i, r| {
+            write_outputs(&char_dir(i, &r), &r, &profile, on_sheet.as_ref())?;
+            pb.inc(1);
+            Ok::<_, anyhow::Error>(Written::from(r))
+        })?;
+        (lay, kept, brush_mm, false)
+    } else {
+        let written = write_text(prepared, &profile, &opts, &text, &|| pb.inc(1))?;
+        let WrittenText { layout: lay, mut results, brush_char_mm: brush_mm } = written;
+        let mut warm_started = false;
+        if let (Some(residuals), Some(ro), Some(prepared)) = (&residuals, refine, &kept) {
+            opts.refine = Some(ro);
+            // With the brush the last attempt was written with, each refinement starts from the
+            // last attempt's track (the residual was measured there).
+            let last = observed.as_ref().filter(|o| same_brush(&o.track.brush, &profile)).map(|o| o.attempts());
+            warm_started = last.is_some();
+            let starts: Option<Vec<&[brush_model::Stroke]>> =
+                last.as_ref().map(|a| a.iter().map(|a| a.strokes).collect());
+            pipeline::refine_observed(&mut results, prepared, residuals, starts.as_deref(), &profile, &opts, &ro)
+                .context("--observed: refining against the observed residual")?;
+        }
+        if args.renderer.neural() {
+            let g = args.renderer.generator()?;
+            rerender_with_generator(&mut results, &g, &profile, args.size).context("--renderer neural")?;
+        }
+        let mut kept = Vec::new();
+        for (i, r) in results.into_iter().enumerate() {
+            write_outputs(&char_dir(i, &r), &r, &profile, on_sheet.as_ref())?;
+            kept.push(Written::from(r));
+        }
+        (lay, kept, brush_mm, warm_started)
+    };
+    pb.finish_and_clear();
+    let char_mm = lay.char_mm;
     let reports: Vec<&CharReport> = results.iter().map(|r| &r.report).collect();
     let mut summary = summary_json(&args, &chars, &lay, flow, &profile, &reports, brush_mm);
     summary["brush_choice"] = json!(choice.as_ref().or(next_choice.as_ref()));
@@ -436,7 +460,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if single && marks_on {
         // The marks make one character a sheet of one: its track.json is the sheet's.
-        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+        write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
     if single && observed.is_some() {
         // The rounds live in summary.json.
@@ -446,7 +470,7 @@ pub fn run(args: Args) -> Result<()> {
         let img = sheet_png(&results, &sheet_track, &profile, &opts.forward_model(), args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
-        write_atomic(&stage.path().join("track.json"), serde_json::to_string_pretty(&sheet_track)?.as_bytes())?;
+        write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
     let preview = crate::cmd::preview::sheet_preview(&sheet_track, None, None)?;
     write_atomic(&stage.path().join("preview.html"), preview.as_bytes())?;
@@ -663,6 +687,19 @@ fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json
 }
 
 /// One character's files in `dir` (created by the first write, under the output gate).
+/// What is kept of a character once its files are written: its report, track and box.
+struct Written {
+    report: CharReport,
+    track: brush_model::Track,
+    char_box: trajectory::CharBox,
+}
+
+impl From<CharResult> for Written {
+    fn from(r: CharResult) -> Self {
+        Written { report: r.report, track: r.track, char_box: r.char_box }
+    }
+}
+
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
     write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
     write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
@@ -715,7 +752,7 @@ fn same_brush(a: &BrushProfile, b: &BrushProfile) -> bool {
 /// the exports show them), at the characters' image scale. The marks lie in the margin, apart
 /// from the characters; their ink is joined to the characters' as a union.
 fn sheet_png(
-    results: &[CharResult],
+    results: &[Written],
     sheet_track: &SheetTrack,
     profile: &BrushProfile,
     fm: &brush_model::ForwardModel,
@@ -723,7 +760,8 @@ fn sheet_png(
     lay: &Layout,
     size: u32,
 ) -> Result<bezier_raster::Coverage> {
-    let mut img = pipeline::sheet_image(results, profile, fm, model, lay, size).context("sheet.png")?;
+    let tracks: Vec<&brush_model::Track> = results.iter().map(|r| &r.track).collect();
+    let mut img = pipeline::sheet_image_of(&tracks, profile, fm, model, lay, size).context("sheet.png")?;
     if sheet_track.mark_strokes > 0 {
         let marks = brush_model::Track { strokes: sheet_track.strokes[..sheet_track.mark_strokes].to_vec() };
         let (wp, hp) = lay.image_px(size);
@@ -749,10 +787,10 @@ fn sheet_png(
 struct ObservedRun {
     /// `--observed`.
     dir: PathBuf,
-    /// The sheet folder it observed.
+    /// The sheet folder it observed (absolute, as the observation records it).
     sheet_dir: PathBuf,
     /// Its summary.json.
-    summary: serde_json::Value,
+    summary: Observation,
     /// The observed sheet's track.json.
     track: SheetTrack,
     /// Each character's observed.png, in the sheet's order.
@@ -762,33 +800,31 @@ struct ObservedRun {
     earlier: Vec<serde_json::Value>,
 }
 
-/// Reads `--observed DIR` and the sheet it observed; refuses when TEXT or the layout differ from
-/// that sheet's.
+/// The most rounds a corrected sheet's summary.json may list.
+const MAX_ROUNDS: usize = 100;
+
+/// The largest summary.json of a sheet read back (for its rounds), bytes.
+const MAX_SHEET_SUMMARY_BYTES: u64 = 16 << 20;
+
+/// Below this share of its pixels at coverage ≥ ½, an observed character holds no ink.
+const MIN_OBSERVED_INK_SHARE: f64 = 0.002;
+
+/// Reads `--observed DIR` and the sheet it observed; refuses when the sheet is not the one
+/// observed (its fingerprint) or TEXT or the layout differ from it.
 fn load_observed(dir: &Path, chars: &[char], layout: Option<&Layout>) -> Result<ObservedRun> {
-    let read_json = |p: &Path, what: &str| -> Result<serde_json::Value> {
-        let text = std::fs::read_to_string(p).with_context(|| format!("--observed: cannot read {}", p.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("--observed: {} is not {what}", p.display()))
-    };
     let sp = dir.join("summary.json");
-    let summary = read_json(&sp, "the summary.json of `maobi observe`")?;
-    let Some(sheet) = summary["sheet"].as_str() else {
-        bail!(
-            "--observed: {} names no sheet (field `sheet`): is {} an output of `maobi observe`?",
-            sp.display(),
-            dir.display()
-        );
-    };
-    let sheet_dir = PathBuf::from(sheet);
-    let tp = sheet_dir.join("track.json");
-    let text = std::fs::read_to_string(&tp).with_context(|| {
+    let summary = Observation::load(&sp).context("--observed")?;
+    let sheet_dir = summary.sheet.path.clone();
+    let tp = summary.track_path();
+    let (track, bytes) = SheetTrack::load(&tp).with_context(|| {
         format!(
-            "--observed: {} observed the sheet {}, whose track.json cannot be read",
+            "--observed: {} observed the sheet {} (field `sheet.path` of {})",
             dir.display(),
-            sheet_dir.display()
+            sheet_dir.display(),
+            sp.display()
         )
     })?;
-    let track: SheetTrack = serde_json::from_str(&text)
-        .with_context(|| format!("--observed: {} is not a sheet's track.json", tp.display()))?;
+    summary.check_sheet(&sp, &track, &tp, &bytes).context("--observed")?;
     let text_now: String = chars.iter().collect();
     let seen: String = track.chars.iter().map(|c| c.char.as_str()).collect();
     if seen != text_now {
@@ -817,36 +853,59 @@ fn load_observed(dir: &Path, chars: &[char], layout: Option<&Layout>) -> Result<
             );
         }
     }
-    let listed = summary["chars"].as_array().map_or(0, Vec::len);
-    if listed != track.chars.len() {
-        bail!(
-            "--observed: {} lists {listed} character(s), its sheet {} has {}",
-            sp.display(),
-            sheet_dir.display(),
-            track.chars.len()
-        );
-    }
     let mut observed = Vec::new();
-    for (i, c) in track.chars.iter().enumerate() {
-        let p = dir.join(format!("{:02}-{}", i + 1, c.char)).join("observed.png");
+    for (i, c) in summary.chars.iter().enumerate() {
+        let p = dir.join(&c.folder).join("observed.png");
+        let (w, h) = bezier_raster::coverage::image_header(&p)
+            .with_context(|| format!("--observed: cannot read {}", p.display()))?;
+        if (w, h) != (c.size_px, c.size_px) {
+            bail!(
+                "--observed: {} is {w}×{h} px, expected {side}×{side} px (chars[{i}].size_px of {})",
+                p.display(),
+                sp.display(),
+                side = c.size_px,
+            );
+        }
         let img =
             bezier_raster::Coverage::load(&p).with_context(|| format!("--observed: cannot read {}", p.display()))?;
-        if img.width() != img.height() {
+        let inked = img.data().iter().filter(|&&v| v >= 0.5).count();
+        if (inked as f64) < MIN_OBSERVED_INK_SHARE * img.data().len() as f64 {
             bail!(
-                "--observed: {} is {}×{} px, expected a square (the character's box)",
+                "--observed: {} holds no ink ({inked} inked px of {}): no ink was seen of {:?} (was it written? is the photo of this sheet?)",
                 p.display(),
-                img.width(),
-                img.height()
+                img.data().len(),
+                c.char
             );
         }
         observed.push(img);
     }
-    let earlier = std::fs::read_to_string(sheet_dir.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| v["rounds"].as_array().cloned())
-        .unwrap_or_default();
+    let earlier = earlier_rounds(&sheet_dir.join("summary.json"))?;
     Ok(ObservedRun { dir: dir.to_path_buf(), sheet_dir, summary, track, observed, earlier })
+}
+
+/// The rounds a corrected sheet's summary.json lists (none when the sheet has no summary.json
+/// or lists none): a summary that is there must be whole JSON, its `rounds` a list of at most
+/// [`MAX_ROUNDS`] objects.
+fn earlier_rounds(p: &Path) -> Result<Vec<serde_json::Value>> {
+    if !p.exists() {
+        return Ok(Vec::new());
+    }
+    let bytes = pipeline::read_bounded(p, MAX_SHEET_SUMMARY_BYTES, "a sheet's summary.json").context("--observed")?;
+    let v: serde_json::Value = serde_json::from_slice(&bytes).with_context(|| {
+        format!("--observed: {} is not the summary.json of `maobi write` (cut short, or not JSON)", p.display())
+    })?;
+    let rounds = match v.get("rounds") {
+        None | Some(serde_json::Value::Null) => return Ok(Vec::new()),
+        Some(serde_json::Value::Array(r)) => r,
+        Some(_) => bail!("--observed: {}: field `rounds`: expected a list of rounds", p.display()),
+    };
+    if rounds.len() > MAX_ROUNDS {
+        bail!("--observed: {}: field `rounds`: {} rounds, expected at most {MAX_ROUNDS}", p.display(), rounds.len());
+    }
+    if let Some(i) = rounds.iter().position(|r| !r.is_object()) {
+        bail!("--observed: {}: field `rounds[{i}]`: expected an object", p.display());
+    }
+    Ok(rounds.clone())
 }
 
 impl ObservedRun {
@@ -957,24 +1016,24 @@ impl ObservedRun {
         ilc: bool,
         from_last: bool,
     ) -> (serde_json::Value, serde_json::Value) {
-        let chars = self.summary["chars"].as_array().cloned().unwrap_or_default();
-        let mean = |k: &str| {
-            chars.iter().map(|c| c["vs_glyph"][k].as_f64().unwrap_or(f64::NAN)).sum::<f64>() / chars.len().max(1) as f64
+        let chars = &self.summary.chars;
+        let mean = |f: fn(&pipeline::ObservedScores) -> f64| {
+            chars.iter().map(|c| f(&c.vs_glyph)).sum::<f64>() / chars.len().max(1) as f64
         };
         let this = json!({
             "round": self.earlier.len(),
             "sheet": self.sheet_dir.display().to_string(),
             "observed": self.dir.display().to_string(),
             "brush": self.track.brush.name,
-            "observed_vs_glyph_mean": {"csim": mean("csim"), "ssim": mean("ssim"), "iou": mean("iou")},
+            "observed_vs_glyph_mean": {"csim": mean(|s| s.csim), "ssim": mean(|s| s.ssim), "iou": mean(|s| s.iou)},
             "chars": chars.iter().map(|c| json!({
-                "char": c["char"],
-                "vs_glyph": c["vs_glyph"],
-                "vs_plan": c["vs_plan"],
-                "width_ratio": c["diagnosis"]["width_ratio"],
-                "end_beyond_mm": c["diagnosis"]["end_beyond_mm"],
-                "lateral_mm": c["diagnosis"]["lateral_mm"],
-                "verdict": c["verdict"],
+                "char": c.folder,
+                "vs_glyph": c.vs_glyph,
+                "vs_plan": c.vs_plan,
+                "width_ratio": c.diagnosis.width_ratio,
+                "end_beyond_mm": c.diagnosis.end_beyond_mm,
+                "lateral_mm": c.diagnosis.lateral_mm,
+                "verdict": c.verdict,
             })).collect::<Vec<_>>(),
             "correction": c,
             "brush_after": corrected.name,

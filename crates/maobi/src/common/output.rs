@@ -57,6 +57,15 @@ pub fn output_target(path: &Path) -> Result<PathBuf> {
 /// symlink is written through (its target is replaced, the link stays); folders, FIFOs, sockets
 /// and devices are refused ([`output_target`]). Ctrl-C removes the temporary file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |w| Ok(w.write_all(bytes)?))
+}
+
+/// As [`write_atomic`], the bytes written by `fill` into a buffered writer (a large output is
+/// never held whole in memory).
+///
+/// # Errors
+/// As [`write_atomic`], and `fill`'s.
+pub fn write_atomic_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     let target = output_target(path)?;
     let path = target.as_path();
     let dir = match path.parent() {
@@ -70,7 +79,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = tempfile::NamedTempFile::new_in(dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
     let _guard = TempGuard::new(tmp.path());
-    tmp.write_all(bytes).with_context(|| format!("cannot write {}", path.display()))?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        fill(&mut w).and_then(|()| Ok(w.flush()?)).with_context(|| format!("cannot write {}", path.display()))?;
+    }
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
@@ -483,4 +495,80 @@ impl Drop for Stage {
             let _ = std::fs::remove_dir_all(&self.path);
         }
     }
+}
+
+/// `p` made absolute without following what does not exist yet: the longest existing ancestor
+/// canonicalised (symlinks resolved), the rest appended with `.` and `..` folded.
+fn resolved(p: &Path) -> PathBuf {
+    let abs = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        std::env::current_dir().map_or_else(|_| p.to_path_buf(), |d| d.join(p))
+    };
+    let mut base = abs.clone();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(c) = std::fs::canonicalize(&base) {
+            base = c;
+            break;
+        }
+        match (base.file_name().map(|n| n.to_os_string()), base.parent().map(Path::to_path_buf)) {
+            (Some(n), Some(parent)) => {
+                rest.push(n);
+                base = parent;
+            }
+            _ => break,
+        }
+    }
+    for n in rest.into_iter().rev() {
+        match n.to_str() {
+            Some(".") => {}
+            Some("..") => {
+                base.pop();
+            }
+            _ => base.push(n),
+        }
+    }
+    base
+}
+
+/// Refuses an output folder or file that is one of the run's inputs, lies inside one, or
+/// holds one (replacing it would delete what the run reads). `inputs` pairs each input's flag
+/// with its path; paths are compared after resolving symlinks.
+///
+/// # Errors
+/// Naming both flags and paths.
+pub fn check_output_apart(out_flag: &str, out: &Path, inputs: &[(&str, &Path)]) -> Result<()> {
+    let o = resolved(out);
+    for (flag, input) in inputs {
+        let i = resolved(input);
+        let how = if o == i {
+            "is"
+        } else if o.starts_with(&i) {
+            "lies inside"
+        } else if i.starts_with(&o) {
+            "holds"
+        } else {
+            continue;
+        };
+        bail!(
+            "{out_flag} {}: {how} the input {flag} {} (writing there would replace what this run reads): name another output",
+            out.display(),
+            input.display()
+        );
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `root/rel` ([`write_atomic`]) after checking that `rel` is a relative path
+/// of plain names (no `..`, no root, no prefix), so that the file stays under `root`.
+///
+/// # Errors
+/// A `rel` that could leave `root`; as [`write_atomic`].
+pub fn write_under(root: &Path, rel: &Path, bytes: &[u8]) -> Result<()> {
+    use std::path::Component;
+    if rel.as_os_str().is_empty() || !rel.components().all(|c| matches!(c, Component::Normal(_))) {
+        bail!("refusing to write {} outside the output folder {}", rel.display(), root.display());
+    }
+    write_atomic(&root.join(rel), bytes)
 }

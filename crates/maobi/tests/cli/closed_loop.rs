@@ -277,10 +277,31 @@ fn write_observed_refuses_another_sheet() {
     let dir = tempfile::tempdir().unwrap();
     let sheet = dir.path().join("sheet");
     ok(&maobi(&["write", "十口", "--sheet", "A5", "--size", "64", "-o", s(&sheet)]));
-    // A stand-in for observe's output: only what write reads before refusing.
+    // A stand-in for observe's output (a valid observation of the sheet, no images): what
+    // write reads before refusing.
     let seen = dir.path().join("seen");
     std::fs::create_dir_all(&seen).unwrap();
-    let summary = serde_json::json!({"sheet": s(&sheet), "chars": [{}, {}]});
+    let scores = serde_json::json!({"csim": 0.9, "ssim": 0.8, "iou": 0.8});
+    let diagnosis = serde_json::json!({"strokes": [], "width_ratio": null, "end_beyond_mm": null, "lateral_mm": null});
+    let chars: Vec<serde_json::Value> = ["十", "口"]
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            serde_json::json!({"char": c, "folder": pipeline::char_folder(i, c), "size_px": 64, "vs_glyph": scores,
+                "vs_plan": scores, "diagnosis": diagnosis, "verdict": ""})
+        })
+        .collect();
+    let summary = serde_json::json!({
+        "version": pipeline::OBSERVATION_VERSION, "photo": "photo.jpg", "text": "十口", "brush": "pen1",
+        "sheet": {
+            "path": std::fs::canonicalize(&sheet).unwrap(),
+            "track_fingerprint": pipeline::fingerprint(&std::fs::read(sheet.join("track.json")).unwrap()),
+        },
+        "registration": {"residual_rms_mm": 0.0, "residual_max_mm": 0.0, "leave_one_out_max_mm": 0.0, "edge_mm": 0.3,
+            "photo_px_per_mm": 6.0, "photo_reduced_by": 1, "corner_shift": 0, "lens_distortion": "not modelled",
+            "paper_to_photo": {"m": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]}, "marks": []},
+        "chars": chars,
+    });
     std::fs::write(seen.join("summary.json"), summary.to_string()).unwrap();
     let out = dir.path().join("out");
     fails(

@@ -25,5 +25,6 @@ mod safety;
 mod sheet;
 mod styles;
 mod transport;
+mod untrusted;
 mod ur;
 mod write;

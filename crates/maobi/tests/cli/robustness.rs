@@ -650,8 +650,12 @@ fn an_unfinished_train_never_replaces_the_model() {
     assert_eq!(names(dir.path()), ["loss.csv", "loss.png", "w.json", "w.safetensors"], "the checkpoint is removed");
     // A different run that fails (a full disk) or is interrupted just before its outputs move
     // into place: the finished model and its loss files stay; the checkpoint is beside them.
+    // Without --force a finished model is not replaced, before any training.
     let mut other = train.to_vec();
     other.extend(["--seed", "7"]);
+    fails(&maobi(&other), "already exists; give --force");
+    assert!(read() == first);
+    other.push("--force");
     let o = hooked(&other, "fail:train-install", &marker);
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{e}");

@@ -73,6 +73,8 @@ struct PathBuffer {
 struct TraceFile {
     path: String,
     out: std::io::BufWriter<std::fs::File>,
+    /// Bytes written so far.
+    written: u64,
 }
 
 /// What every connection of one simulator shares.
@@ -104,7 +106,7 @@ impl Shared {
                 let path = p.display().to_string();
                 let f = std::fs::File::create(p)
                     .map_err(|source| RobotError::Io { context: format!("trace file {path}"), source })?;
-                Some(TraceFile { path, out: std::io::BufWriter::new(f) })
+                Some(TraceFile { path, out: std::io::BufWriter::new(f), written: 0 })
             }
             None => None,
         };
@@ -262,19 +264,40 @@ impl Shared {
         }
         let mut file = self.trace_file.lock().unwrap_or_else(PoisonError::into_inner);
         let Some(f) = file.as_mut() else { return };
+        let max = self.options.trace_max_bytes;
+        let mut full = false;
+        let mut line = Vec::new();
         let written = samples
             .iter()
             .try_for_each(|t| {
-                serde_json::to_writer(&mut f.out, t).map_err(std::io::Error::from)?;
-                f.out.write_all(b"\n")
+                if full {
+                    return Ok(());
+                }
+                line.clear();
+                serde_json::to_writer(&mut line, t).map_err(std::io::Error::from)?;
+                line.push(b'\n');
+                if f.written + line.len() as u64 > max {
+                    full = true;
+                    return Ok(());
+                }
+                f.written += line.len() as u64;
+                f.out.write_all(&line)
             })
             .and_then(|()| f.out.flush());
-        if let Err(e) = written {
-            let message =
-                format!("trace file {}: {e}; it ends here (its last line may be cut), the simulator goes on", f.path);
-            *file = None;
-            self.lock().trace_error = Some(message);
-        }
+        let message = match written {
+            Err(e) => {
+                format!("trace file {}: {e}; it ends here (its last line may be cut), the simulator goes on", f.path)
+            }
+            Ok(()) if full => format!(
+                "trace file {}: reached its size limit of {} MiB ({} bytes); it ends there, the simulator goes on",
+                f.path,
+                max >> 20,
+                f.written
+            ),
+            Ok(()) => return,
+        };
+        *file = None;
+        self.lock().trace_error = Some(message);
     }
 }
 

@@ -20,6 +20,7 @@ pub use dispatch::{
 mod replay;
 mod script;
 mod server;
+pub use server::EVICT_AFTER;
 mod session;
 mod ur;
 
@@ -83,7 +84,9 @@ pub struct SimOptions {
     pub user: String,
     /// The password the framed login accepts (compared by its digest, as a controller would).
     pub password: String,
-    /// Most connections served at once; a further one is closed as soon as it is accepted.
+    /// Most connections served at once; a further one takes the place of the connection that
+    /// has gone longest without a request answered (at least [`EVICT_AFTER`]), or is closed as
+    /// soon as it is accepted when none has.
     pub max_connections: usize,
     /// A connection that sends nothing for this long is closed.
     pub idle_timeout: Duration,
@@ -93,6 +96,9 @@ pub struct SimOptions {
     pub trace_path: Option<PathBuf>,
     /// Most trace samples kept in memory (the latest; [`Simulator::trace`]).
     pub trace_window: usize,
+    /// The trace file's size limit, bytes: the sample that would pass it is not written, the
+    /// file ends there and [`Simulator::trace_error`] says so; the simulator keeps serving.
+    pub trace_max_bytes: u64,
     /// How long a motion request from another session waits for the session that owns motion
     /// to close its connection before it is refused (a client that reconnects after a dropped
     /// link may be faster than the simulator noticing that the old connection closed).
@@ -110,7 +116,8 @@ pub struct SimOptions {
 
 impl Default for SimOptions {
     /// No faults; the controller's default user `aubo`, password `123456`; 16 connections,
-    /// 60 s idle time-out; no trace file, the last 262 144 samples (16 MiB) kept in memory; a
+    /// 60 s idle time-out; no trace file (at most 256 MiB when one is asked for), the last
+    /// 262 144 samples (16 MiB) kept in memory; a
     /// second session's motion request waits 1 s for the owner to go; the i5's nominal
     /// kinematics ([`crate::kinematics::DhParams::AUBO_I5`]), reported by
     /// `getKinematicsParam`.
@@ -123,6 +130,7 @@ impl Default for SimOptions {
             idle_timeout: Duration::from_secs(60),
             trace_path: None,
             trace_window: 1 << 18,
+            trace_max_bytes: 256 << 20,
             owner_wait: Duration::from_secs(1),
             kinematics: crate::kinematics::DhParams::AUBO_I5,
             kinematics_param: true,
@@ -180,8 +188,12 @@ impl Simulator {
         if listen.iter().any(|l| l.transports.is_empty()) {
             return Err(config("a port must serve at least one transport"));
         }
-        if options.max_connections == 0 || options.idle_timeout.is_zero() || options.trace_window == 0 {
-            return Err(config("max_connections, idle_timeout and trace_window must be positive"));
+        if options.max_connections == 0
+            || options.idle_timeout.is_zero()
+            || options.trace_window == 0
+            || options.trace_max_bytes == 0
+        {
+            return Err(config("max_connections, idle_timeout, trace_window and trace_max_bytes must be positive"));
         }
         options.kinematics.validate().map_err(|m| config(&format!("kinematics: {m}")))?;
         let shared = Arc::new(dispatch::Shared::new(options)?);

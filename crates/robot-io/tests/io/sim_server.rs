@@ -399,3 +399,88 @@ fn the_simulator_moves_and_answers_with_the_kinematics_it_is_given() {
     .unwrap();
     assert!(e.to_string().contains("kinematics: a[0]"), "{e}");
 }
+
+#[test]
+fn idle_connections_give_their_place_to_a_new_client() {
+    // Issue 43: as many idle sockets as places once locked every well-formed client out until
+    // they timed out. Now the one longest without an answer gives its place up (after
+    // EVICT_AFTER); one that is answering keeps it.
+    let options = SimOptions { max_connections: 3, ..SimOptions::default() };
+    let sim = start(&[Transport::Framed], options);
+    let mut busy = framed(&sim);
+    let mut idle: Vec<TcpStream> = (0..2).map(|_| TcpStream::connect(sim.addr).unwrap()).collect();
+    for _ in 0..200 {
+        if sim.connections() == 3 {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert_eq!(sim.connections(), 3);
+    std::thread::sleep(robot_io::sim::EVICT_AFTER + Duration::from_millis(200));
+    assert_eq!(busy.robot_names().unwrap(), ["rob1"]);
+    // Two newcomers, each served: the two idle sockets are closed for them, the busy one stays.
+    let mut a = framed(&sim);
+    let mut b = framed(&sim);
+    assert_eq!(a.robot_names().unwrap(), ["rob1"]);
+    assert_eq!(b.robot_names().unwrap(), ["rob1"]);
+    for s in &mut idle {
+        assert!(read_to_close(s).0, "an idle connection kept its place");
+    }
+    assert_eq!(busy.robot_names().unwrap(), ["rob1"]);
+    // All three answering within the last second: a fourth is closed at once.
+    let mut extra = TcpStream::connect(sim.addr).unwrap();
+    let _ = extra.write_all(&robot_io::wire::encode_frame(b"{}").unwrap());
+    assert_eq!(read_to_close(&mut extra), (true, Vec::new()));
+}
+
+#[test]
+fn whitespace_does_not_keep_a_connection_alive() {
+    let options = SimOptions { idle_timeout: Duration::from_millis(400), ..SimOptions::default() };
+    let sim = start(&[Transport::Lines], options);
+    let mut s = TcpStream::connect(sim.addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+    let t0 = std::time::Instant::now();
+    let mut closed = false;
+    let mut buf = [0u8; 64];
+    // A space every 100 ms for up to 3 s: closed after the idle time-out all the same.
+    while t0.elapsed() < Duration::from_secs(3) {
+        if s.write_all(b" ").is_err() {
+            closed = true;
+            break;
+        }
+        match s.read(&mut buf) {
+            Ok(0) => {
+                closed = true;
+                break;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::ConnectionReset => {
+                closed = true;
+                break;
+            }
+            _ => std::thread::sleep(Duration::from_millis(50)),
+        }
+    }
+    assert!(closed && t0.elapsed() < Duration::from_millis(1500), "open after {:?}", t0.elapsed());
+}
+
+#[test]
+fn the_trace_file_stops_at_its_size_limit_and_says_so() {
+    let dir = std::env::temp_dir().join(format!("maobi-sim-trace-limit-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join("trace.jsonl");
+    let options = SimOptions { trace_path: Some(path.clone()), trace_max_bytes: 20_000, ..SimOptions::default() };
+    let sim = start(&[Transport::Framed], options);
+    let mut c = framed(&sim);
+    assert_eq!(line_to(&mut c, HOME_POSE_NEAR, 0.1).unwrap(), 0);
+    assert_eq!(line_to(&mut c, moved(HOME_POSE_NEAR, -0.05), 0.1).unwrap(), 0);
+    let e = sim.trace_error().expect("the limit is reported");
+    assert!(e.contains("size limit") && e.contains("goes on"), "{e}");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.len() <= 20_000 && text.ends_with('\n'), "{} bytes", text.len());
+    assert!(text.lines().all(|l| serde_json::from_str::<Value>(l).is_ok()), "whole lines only");
+    // It goes on moving.
+    let p = moved(HOME_POSE_NEAR, 0.01);
+    assert_eq!(line_to(&mut c, p, 0.1).unwrap(), 0);
+    assert_eq!(c.tcp_pose("rob1").unwrap().0, p);
+    let _ = std::fs::remove_dir_all(&dir);
+}
