@@ -250,14 +250,15 @@ fn two_rounds(tracks: Tracks) {
         assert_eq!(round["track"], "built with the corrected brush", "{round}");
         assert_eq!(round["brush_after"], rounds[0]["brush_after"], "{round}");
         fails(&maobi(&["write", FAST.chars, "--sheet", "A4", "--brush-only", "-o", s(&only)]), "--observed");
-        // A damaged trailing reach in the observed sheet's rounds is refused by name, and
-        // nothing is written.
-        let sheet_summary = c.sheets[1].join("summary.json");
-        let mut damaged = json(&sheet_summary);
-        damaged["rounds"][0]["correction"]["trail_reach"] = serde_json::json!(7.5);
-        std::fs::write(&sheet_summary, damaged.to_string()).unwrap();
+        // The corrected sheet's track carries the brush as fitted, its hairs included; a
+        // damaged trailing reach there is refused by name, and nothing is written.
+        let sheet_track = c.sheets[1].join("track.json");
+        let mut damaged = json(&sheet_track);
+        assert_eq!(damaged["brush"]["hairs"], json(&c.sheets[1].join("brush.json"))["hairs"]);
+        damaged["brush"]["hairs"]["trail_reach"] = serde_json::json!(7.5);
+        std::fs::write(&sheet_track, damaged.to_string()).unwrap();
         let out = dir.join("damaged");
-        fails(&rewrite(&c.observed[1], &[], &out), "rounds[0].correction.trail_reach is 7.5");
+        fails(&rewrite(&c.observed[1], &[], &out), "hairs.trail_reach");
         assert!(!out.exists());
     }
 }
