@@ -58,7 +58,7 @@ struct Report {
     variants: Vec<Variant>,
 }
 
-fn read_set(spec: &str) -> Result<Vec<char>> {
+pub(crate) fn read_set(spec: &str) -> Result<Vec<char>> {
     if spec == "embedded" {
         return Ok(glyph::embedded_chars());
     }
