@@ -121,15 +121,7 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             "--chars" => chars = Some(val()?.chars().filter(|c| !c.is_whitespace()).collect()),
             "--set" => set = Some(val()?.clone()),
-            "--lines" => {
-                let v = val()?;
-                let (x, y) = v.split_once('-').with_context(|| format!("--lines {v}: expected A-B"))?;
-                let (x, y): (usize, usize) = (x.parse()?, y.parse()?);
-                if x == 0 || y < x {
-                    bail!("--lines {v}: expected 1 <= A <= B");
-                }
-                lines = Some((x, y));
-            }
+            "--lines" => lines = Some(crate::io::parse_lines(val()?)?),
             "--world" => specs.push(val()?.clone()),
             "--refine" => refine = true,
             "--size" => size = val()?.parse().context("--size")?,
@@ -286,7 +278,7 @@ fn judge_char(
         strip(dir, c, "unrefined", &built, specs, &inks)?;
     }
     let refined = if refine {
-        let ro = Some(track_refine_defaults());
+        let ro = Some(pipeline::RefineOptions::default());
         let r = write_placed(&p, profile, &WriteOptions { refine: ro, ..opts }, BoxRule::Auto)?;
         let (j, inks) = judge(&r, profile, worlds)?;
         if let Some(dir) = images {
@@ -297,10 +289,6 @@ fn judge_char(
         None
     };
     Ok(CharFigures { char: c.to_string(), char_mm: built.char_box.size_mm, unrefined, refined })
-}
-
-fn track_refine_defaults() -> pipeline::RefineOptions {
-    pipeline::RefineOptions::default()
 }
 
 /// The figures of one written character under the model and each world, and each world's ink.

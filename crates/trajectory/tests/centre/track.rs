@@ -297,10 +297,8 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
     );
 }
 
-#[test]
-fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trail_derives() {
-    // 永 upright: the closed loop plans with the brush whose trailing reach it fitted to the
-    // observed ink.
+/// pen1, 永's median centre lines and upright track options in its automatic box.
+fn yong_upright() -> (BrushProfile, Vec<trajectory::StrokePath>, TrackOptions) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
     let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
@@ -310,6 +308,14 @@ fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trai
         alpha_rad: 0.0,
         sizing: Sizing::Brush,
     };
+    (pen1, paths, opts)
+}
+
+#[test]
+fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trail_derives() {
+    // 永 upright: the closed loop plans with the brush whose trailing reach it fitted to the
+    // observed ink.
+    let (pen1, paths, opts) = yong_upright();
     let own = build_track(&paths, &pen1, &opts).unwrap().track;
     let mut short = pen1.clone();
     short.hairs.trail_reach = 0.3;
@@ -342,15 +348,7 @@ fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trai
 /// needed anything up to twice that (its track swept with hairs needing 1.9 mm).
 #[test]
 fn glides_pressed_past_the_contact_depth_point_every_footprint_as_any_touch_would() {
-    let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
-    let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
-    let opts = TrackOptions {
-        char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm },
-        spacing_mm: DEFAULT_SPACING_MM,
-        alpha_rad: 0.0,
-        sizing: Sizing::Brush,
-    };
+    let (pen1, paths, opts) = yong_upright();
     let with_contact = |c: f64| {
         let mut p = pen1.clone();
         p.hairs.contact_h_mm = c;
