@@ -185,6 +185,28 @@ pub fn character_figures() -> Result<Figures> {
     Ok(f)
 }
 
+/// World figures: the gate characters planned with pen1 at 256², executed as sent and inked by
+/// each of [`crate::worlds::GATE_WORLDS`] (worlds that disagree with the model: hairs that need
+/// a press, another trail, the mismatched brush): mean executed CSIM and IoU, mean and worst
+/// agreement with the plan; and `worlds/pressure_shortfall`, how far the worse of the two
+/// pressure worlds falls below the model's own executed CSIM (the plan must not depend on what
+/// the hairs do below a press).
+pub fn world_figures() -> Result<Figures> {
+    let rows = crate::worlds::gate_rows(GATE_CHARS, &crate::worlds::GATE_WORLDS, 256)?;
+    let mut f = Figures::new();
+    for (world, csim, iou, agreement, worst) in &rows[1..] {
+        let key = |m: &str| format!("worlds/{world}/{m}");
+        f.insert(key("executed_csim"), fig(*csim, 0.003, Better::Higher));
+        f.insert(key("executed_iou"), fig(*iou, 0.005, Better::Higher));
+        f.insert(key("agreement_csim"), fig(*agreement, 0.003, Better::Higher));
+        f.insert(key("agreement_csim_worst"), fig(*worst, 0.005, Better::Higher));
+    }
+    let pressure = rows.iter().filter(|r| r.0.starts_with("pressure:")).map(|r| r.1).fold(f64::INFINITY, f64::min);
+    let shortfall = rows[0].1 - pressure;
+    f.insert("worlds/pressure_shortfall".into(), fig(shortfall, 0.002, Better::Lower));
+    Ok(f)
+}
+
 /// The committed pen1 generator (`crates/neural-gen/data/pen1.*`, the one the `maobi` binary
 /// compiles in).
 fn committed_generator() -> Result<neural_gen::Generator> {
@@ -221,6 +243,7 @@ pub fn run(args: &[String]) -> Result<()> {
         ("characters", character_figures()?),
         ("generator", generator_figures()?),
         ("refine", crate::refine_gate::refine_figures()?),
+        ("worlds", world_figures()?),
     ];
     println!("{:<48} {:>12} {:>12} {:>10}", "figure", "baseline", "now", "Δ");
     let mut failures = Vec::new();

@@ -28,3 +28,13 @@ pub fn char_bar(len: usize, what: &str) -> ProgressBar {
     pb.set_message(what.to_string());
     pb
 }
+
+/// `--lines A-B`: the 1-based, inclusive line range of a character set.
+pub fn parse_lines(v: &str) -> Result<(usize, usize)> {
+    let (x, y) = v.split_once('-').with_context(|| format!("--lines {v}: expected A-B"))?;
+    let (x, y): (usize, usize) = (x.parse()?, y.parse()?);
+    if x == 0 || y < x {
+        anyhow::bail!("--lines {v}: expected 1 <= A <= B");
+    }
+    Ok((x, y))
+}

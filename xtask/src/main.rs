@@ -9,12 +9,14 @@ mod bench;
 mod fixtures;
 mod gates;
 mod io;
+mod picture;
 mod refine_gate;
 mod skeleton_counts;
 mod skeleton_train;
 mod styles;
 mod tidy;
 mod train_fixture;
+mod worlds;
 
 const HELP: &str = "\
 cargo xtask <task>
@@ -38,6 +40,10 @@ Tasks:
                        have the values the code gives them
   bench [--quick]      run the criterion benchmarks and the dataset throughput; print one table
                        (also target/bench-summary.md)
+  worlds --chars TEXT|--set FILE [...]
+                       the executed figure under worlds that disagree with the model (hairs
+                       that need a press, another trail, a mismatched brush; `cargo xtask
+                       worlds --help`)
 ";
 
 fn main() -> ExitCode {
@@ -55,6 +61,7 @@ fn main() -> ExitCode {
         Some("styles") => styles::run(&args[1..]),
         Some("tidy") => tidy::run(&args[1..]),
         Some("train-fixture") => train_fixture::run(&args[1..]),
+        Some("worlds") => worlds::run(&args[1..]),
         Some(other) => Err(anyhow::anyhow!("unknown task `{other}`\n\n{HELP}")),
     };
     match result {

@@ -58,7 +58,7 @@ struct Report {
     variants: Vec<Variant>,
 }
 
-fn read_set(spec: &str) -> Result<Vec<char>> {
+pub(crate) fn read_set(spec: &str) -> Result<Vec<char>> {
     if spec == "embedded" {
         return Ok(glyph::embedded_chars());
     }
@@ -105,15 +105,7 @@ pub fn run(args: &[String]) -> Result<()> {
             }
             "--hanzi-data" => hanzi = Some(PathBuf::from(val()?)),
             "--set" => set = val()?.clone(),
-            "--lines" => {
-                let v = val()?;
-                let (x, y) = v.split_once('-').with_context(|| format!("--lines {v}: expected A-B"))?;
-                let (x, y): (usize, usize) = (x.parse()?, y.parse()?);
-                if x == 0 || y < x {
-                    bail!("--lines {v}: expected 1 <= A <= B");
-                }
-                lines = Some((x, y));
-            }
+            "--lines" => lines = Some(crate::io::parse_lines(val()?)?),
             "--opts" => variants.push(val()?.clone()),
             "--px" => px = val()?.parse().context("--px")?,
             "--json" => json = PathBuf::from(val()?),

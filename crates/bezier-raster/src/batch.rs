@@ -77,10 +77,11 @@ impl Compositor {
 }
 
 /// The stamps of a brush track: the footprints the forward model of the moving brush
-/// ([`ForwardModel`], docs/brush-model.md) leaves along each stroke's swept path, with their
-/// directions derived from the motion and tilt, in writing order. Points with `h ≤ 0` are off the
-/// paper; points and samples lighter than the profile's lightest calibrated press (the tip only
-/// touching, or the brush easing up or down) leave nothing when `extrapolation` refuses them.
+/// ([`ForwardModel`], docs/brush-model.md; its hairs as `profile.hairs` describes them) leaves
+/// along each stroke's swept path, with their directions derived from the motion and tilt, in
+/// writing order. Points with `h ≤ 0` are off the paper; points and samples lighter than the
+/// profile's lightest calibrated press (a glide, or the brush easing up or down) leave nothing
+/// when `extrapolation` refuses them.
 ///
 /// # Errors
 /// [`ProfileError`] for the first track point pressed at least the profile's lightest press that
@@ -90,43 +91,19 @@ pub fn track_stamps(
     profile: &BrushProfile,
     extrapolation: Extrapolation,
 ) -> Result<Vec<Stamp>, ProfileError> {
-    track_stamps_with(track, profile, extrapolation, &ForwardModel::default())
-}
-
-/// [`track_stamps`] through `model` instead of the default forward model (the closed loop
-/// predicts a brush whose tip trails otherwise: another [`ForwardModel::trail_reach`]).
-///
-/// # Errors
-/// As [`track_stamps`].
-pub fn track_stamps_with(
-    track: &Track,
-    profile: &BrushProfile,
-    extrapolation: Extrapolation,
-    model: &ForwardModel,
-) -> Result<Vec<Stamp>, ProfileError> {
-    // Lighter than the calibrated range (the tip only touching while the brush turns over) is
-    // no error: such a sample leaves no footprint.
+    // Lighter than the calibrated range (a glide while the brush turns over) is no error: such
+    // a sample leaves no footprint.
     for p in track.points().filter(|p| p.h_mm >= profile.ranges.h_mm.min) {
         profile.predict_oriented(&p.press(), extrapolation)?;
     }
-    Ok(track.strokes.iter().flat_map(|s| sweep_stamps_with(&s.points, profile, extrapolation, model)).collect())
+    Ok(track.strokes.iter().flat_map(|s| sweep_stamps(&s.points, profile, extrapolation)).collect())
 }
 
 /// The stamps the forward model leaves along one sequence of brush states (a stroke, or a
 /// whole executed path with lifts in it: states with `h ≤ 0` are off the paper). Presses the
 /// profile refuses leave nothing.
 pub fn sweep_stamps(states: &[TrackPoint], profile: &BrushProfile, extrapolation: Extrapolation) -> Vec<Stamp> {
-    sweep_stamps_with(states, profile, extrapolation, &ForwardModel::default())
-}
-
-/// [`sweep_stamps`] through `model` instead of the default forward model.
-pub fn sweep_stamps_with(
-    states: &[TrackPoint],
-    profile: &BrushProfile,
-    extrapolation: Extrapolation,
-    model: &ForwardModel,
-) -> Vec<Stamp> {
-    model
+    ForwardModel::default()
         .sweep(profile, states, extrapolation)
         .stamps
         .iter()

@@ -57,10 +57,7 @@ mod dataset;
 mod models;
 mod raster;
 
-pub use batch::{
-    Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, sweep_stamps_with, track_stamps,
-    track_stamps_with,
-};
+pub use batch::{Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps};
 pub use canvas::StrokeCanvas;
 pub use coverage::{Coverage, ImageFileError, RasterError};
 pub use dataset::{DatasetSpec, Sample};

@@ -44,8 +44,8 @@ pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
 pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements, write_measurements};
 pub use motion::{DEPTH_EDGE_TOLERANCE_MM, ForwardModel, Sweep, TILT_THRESHOLD_RAD, TRAIL_REACH};
 pub use profile::{
-    BrushProfile, Clamp, Extrapolation, InverseH, MAX_BRUSH_MM, MAX_FOOTPRINT_PER_LENGTH, MAX_PROFILE_BYTES,
-    PROFILE_VERSION, PressRanges, ProfileError, Range, Source,
+    BrushProfile, CONTACT_H_MM, Clamp, Extrapolation, HairMotion, InverseH, MAX_BRUSH_MM, MAX_FOOTPRINT_PER_LENGTH,
+    MAX_PROFILE_BYTES, OLDEST_PROFILE_VERSION, PROFILE_VERSION, PressRanges, ProfileError, Range, Source,
 };
 pub use regression::{FitError, FitReport, Form, LinearModel, OutputFit, Terms, fit, fit_general, fit_paper};
 pub use units::{Brush, PointMm, Press, Stroke, Track, TrackPoint, deg_to_rad, rad_to_deg, wrap_angle_rad};

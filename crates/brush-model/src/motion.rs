@@ -22,18 +22,29 @@
 //!   whatever the motion;
 //! * **upright**: the hairs are dragged. The tip lies on the path the brush has already pressed
 //!   along since it touched down: walking back along that path, the first point at least
-//!   `trail_reach` footprint lengths away in a straight line. This is a spatial lag: after a
-//!   reversal (逆锋, a backward move then forward) the tip stays ahead until the brush has passed
-//!   it, and on curves the tail stays on the stroke. While the pressed path is still shorter
-//!   than that, the tip points at its farthest point once that is `min_motion_mm` away; before
-//!   the brush has moved that far it keeps its last direction, and right at touch-down it trails
-//!   the motion that follows (the first `min_motion_mm` of travel sets the hairs).
+//!   the profile's [`HairMotion::trail_reach`] footprint lengths away in a straight line. This
+//!   is a spatial lag: after a reversal (逆锋, a backward move then forward) the tip stays ahead
+//!   until the brush has passed it, and on curves the tail stays on the stroke. While the pressed
+//!   path is still shorter than that, the tip points at its farthest point once that is
+//!   `min_motion_mm` away; before the brush has moved that far it keeps its last direction, and
+//!   right at touch-down it trails the motion that follows (the first `min_motion_mm` of pressed
+//!   travel sets the hairs).
 //!
-//! Lifting to `h ≤ 0` ends the contact: the hairs straighten, the history is forgotten.
+//! The hairs follow motion only from the profile's [`HairMotion::contact_h_mm`] on: a state
+//! pressed lighter (`0 < h < contact_h_mm`) touches the paper but neither inks nor turns the
+//! hairs. They keep the bend they had and move with the brush (the pressed path so far is
+//! carried along rigidly), so a brush that eases up, glides and presses again starts from the
+//! old bend, and only pressed motion pulls the tip round. Lifting to `h ≤ 0` ends the contact:
+//! the hairs straighten, the history is forgotten. With `contact_h_mm = 0` every touch turns
+//! the hairs (the model before profile version 2).
+//!
+//! The hair parameters belong to the brush ([`BrushProfile::hairs`]); a [`ForwardModel`] holds
+//! only how finely the path is sampled and the tilt threshold, so every sweep of a profile
+//! follows that brush's hairs.
 
 use std::f64::consts::FRAC_PI_2;
 
-use crate::profile::{BrushProfile, Extrapolation, ProfileError};
+use crate::profile::{BrushProfile, Extrapolation, HairMotion, ProfileError};
 use crate::units::{Press, Stroke, Track, TrackPoint, wrap_angle_rad};
 
 /// The forward model's constants. [`ForwardModel::default`] holds the values documented in
@@ -60,9 +71,6 @@ use crate::units::{Press, Stroke, Track, TrackPoint, wrap_angle_rad};
 pub struct ForwardModel {
     /// Tilt at and above which the footprint points along the lean direction β, rad.
     pub tilt_threshold_rad: f64,
-    /// An upright brush's tip lies on the pressed path this fraction of a footprint length
-    /// behind the brush (straight-line distance).
-    pub trail_reach: f64,
     /// Travel before a dragged brush's direction follows the motion, mm.
     pub min_motion_mm: f64,
     /// Largest distance between path samples, mm.
@@ -76,8 +84,8 @@ pub struct ForwardModel {
 /// Default tilt threshold: 2° (below it a tilt hardly bends the bundle, so the drag decides).
 pub const TILT_THRESHOLD_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
-/// Default trailing reach, as a fraction of the footprint length. Chosen on the tuning set
-/// (docs/trajectory.md, Track building).
+/// The nominal trailing reach ([`HairMotion::trail_reach`]), as a fraction of the footprint
+/// length. Chosen on the tuning set (docs/trajectory.md, Track building).
 pub const TRAIL_REACH: f64 = 0.5;
 
 /// How far outside the profile's calibrated depth range a pressed state may lie and still count
@@ -92,7 +100,6 @@ impl Default for ForwardModel {
     fn default() -> Self {
         Self {
             tilt_threshold_rad: TILT_THRESHOLD_RAD,
-            trail_reach: TRAIL_REACH,
             min_motion_mm: 0.3,
             step_mm: 0.1,
             step_rad: 0.5f64.to_radians(),
@@ -160,40 +167,56 @@ impl ForwardModel {
     }
 
     /// The footprints the brush leaves moving through `states` (one stroke, or a whole executed
-    /// path with lifts in it: states with `h ≤ 0` are off the paper).
+    /// path with lifts in it: states with `h ≤ 0` are off the paper), its hairs moving as
+    /// `profile.hairs` says.
     ///
     /// `extrapolation` is passed to the profile; a press it refuses leaves no footprint and
     /// its direction is `None`.
     pub fn sweep(&self, profile: &BrushProfile, states: &[TrackPoint], extrapolation: Extrapolation) -> Sweep {
+        let hairs = profile.hairs;
         let samples = self.samples(states);
         let mut directions = vec![None; states.len()];
         let mut stamps = Vec::with_capacity(samples.len());
-        // The pressed path since touch-down (positions), and the current direction.
+        // The pressed path since touch-down (positions, less `shift`: how far the brush has
+        // carried its bent hairs while touching without a press), and the current direction.
         let mut history: Vec<(f64, f64)> = Vec::new();
+        let mut shift = (0.0, 0.0);
+        let mut prev: Option<(f64, f64)> = None;
         let mut last: Option<f64> = None;
         for (i, s) in samples.iter().enumerate() {
             let p = s.p;
             if !p.is_pressed() {
                 history.clear();
+                shift = (0.0, 0.0);
+                prev = None;
                 last = None;
                 continue;
             }
-            let p = at_range_edge(profile, p, extrapolation);
             let here = (p.x_mm, p.y_mm);
+            if !follows(&hairs, &p) {
+                // Touching without a press: the hairs keep their bend and move with the brush.
+                if let Some(q) = prev {
+                    shift = (shift.0 + here.0 - q.0, shift.1 + here.1 - q.1);
+                }
+                prev = Some(here);
+                continue;
+            }
+            prev = Some(here);
+            let p = at_range_edge(profile, p, extrapolation);
             let Ok(len) = footprint_length(profile, &p, extrapolation) else {
-                history.push(here);
+                history.push((here.0 - shift.0, here.1 - shift.1));
                 continue;
             };
             let dir = if self.is_tilted(&p) {
                 p.beta_rad
             } else {
-                self.dragged(&history, here, self.trail_reach * len)
+                self.dragged(&history, shift, here, hairs.trail_reach * len)
                     .or(last)
-                    .or_else(|| self.ahead(&samples[i..], here))
+                    .or_else(|| self.ahead(&hairs, &samples[i..], here))
                     .unwrap_or(FRAC_PI_2)
             };
             last = Some(dir);
-            history.push(here);
+            history.push((here.0 - shift.0, here.1 - shift.1));
             if let Some(v) = s.vertex {
                 directions[v] = Some(dir);
             }
@@ -204,13 +227,15 @@ impl ForwardModel {
 
     /// An upright brush's direction from its pressed history: towards the first history point
     /// (walking back) at least `reach` away, else the farthest if it is `min_motion_mm` away.
-    fn dragged(&self, history: &[(f64, f64)], here: (f64, f64), reach: f64) -> Option<f64> {
+    /// `history` holds positions less `shift` (see [`ForwardModel::sweep`]).
+    fn dragged(&self, history: &[(f64, f64)], shift: (f64, f64), here: (f64, f64), reach: f64) -> Option<f64> {
         // The walk below computes `hypot` at every point; most points lie well inside `reach`,
         // so first find the answer when some point is at least `reach` away, skipping the
         // `hypot` of every point whose squared distance is short of `reach²` by far more than
         // both roundings (the same point, the same direction, in a fraction of the time).
         let short = reach * reach * (1.0 - 1e-9);
-        for &q in history.iter().rev() {
+        for &(x, y) in history.iter().rev() {
+            let q = (x + shift.0, y + shift.1);
             let (dx, dy) = (q.0 - here.0, q.1 - here.1);
             if dx * dx + dy * dy < short {
                 continue;
@@ -221,7 +246,8 @@ impl ForwardModel {
         }
         // No point is `reach` away: the farthest one, as the full walk finds it.
         let mut far = (0.0f64, None);
-        for &q in history.iter().rev() {
+        for &(x, y) in history.iter().rev() {
+            let q = (x + shift.0, y + shift.1);
             let d = (q.0 - here.0).hypot(q.1 - here.1);
             if d >= reach {
                 return Some(direction(here, q));
@@ -237,9 +263,9 @@ impl ForwardModel {
     }
 
     /// At touch-down: opposite to the first `min_motion_mm` of the coming pressed motion.
-    fn ahead(&self, rest: &[Sample], here: (f64, f64)) -> Option<f64> {
+    fn ahead(&self, hairs: &HairMotion, rest: &[Sample], here: (f64, f64)) -> Option<f64> {
         for s in rest.iter().skip(1) {
-            if !s.p.is_pressed() {
+            if !follows(hairs, &s.p) {
                 return None;
             }
             let q = (s.p.x_mm, s.p.y_mm);
@@ -295,6 +321,12 @@ impl ForwardModel {
         }
         out
     }
+}
+
+/// Whether the hairs follow the motion of a state: in contact and pressed at least
+/// `contact_h_mm`.
+fn follows(hairs: &HairMotion, p: &TrackPoint) -> bool {
+    p.is_pressed() && p.h_mm >= hairs.contact_h_mm
 }
 
 /// `p` with a depth within [`DEPTH_EDGE_TOLERANCE_MM`] outside the calibrated range set to the
@@ -451,6 +483,66 @@ mod tests {
         let path = [pt(0.0, 0.0, 12.0), pt(0.0, 5.0, 12.0), pt(0.0, 5.0, 18.0)];
         let s = m.sweep(&pen1(), &path, Extrapolation::Refuse);
         assert!((s.directions[2].unwrap() + FRAC_PI_2).abs() < 1e-9);
+    }
+
+    /// pen1 whose hairs follow motion from `contact_h_mm`.
+    fn pen1_contact(contact_h_mm: f64) -> BrushProfile {
+        BrushProfile { hairs: HairMotion { contact_h_mm, ..HairMotion::NOMINAL }, ..pen1() }
+    }
+
+    /// A reverse entry pressed back from x = 10 to 0, eased up to `glide_h` at the start,
+    /// glided forward to x = 12 and pressed again along +x to 40: the directions of the
+    /// footprints from the press again on.
+    fn after_a_glide(profile: &BrushProfile, glide_h: f64) -> Vec<(f64, f64)> {
+        let path = [
+            pt(10.0, 0.0, 12.0),
+            pt(0.0, 0.0, 12.0),
+            pt(0.0, 0.0, glide_h),
+            pt(12.0, 0.0, glide_h),
+            pt(12.0, 0.0, 12.0),
+            pt(40.0, 0.0, 12.0),
+        ];
+        let s = ForwardModel::default().sweep(profile, &path, Extrapolation::Refuse);
+        s.stamps.iter().filter(|p| p.x_mm >= 12.0).map(|p| (p.x_mm, wrap(p.beta_rad))).collect()
+    }
+
+    /// The assumption the profile carries: a glide at 0.01 mm turns the hairs over only when
+    /// they follow any touch (`contact_h_mm = 0`, the rule before); hairs that need 1 mm keep the
+    /// entry's forward bend through such a glide, and point forward (β = 0) until pressed motion
+    /// has pulled them round; a glide pressed past the contact depth turns them.
+    #[test]
+    fn hairs_turn_only_from_the_contact_depth() {
+        let trailing = |d: &[(f64, f64)]| d.iter().all(|&(_, b)| (b.abs() - std::f64::consts::PI).abs() < 1e-9);
+        assert!(trailing(&after_a_glide(&pen1_contact(0.0), 0.01)));
+        assert!(trailing(&after_a_glide(&pen1_contact(1.0), 2.0)));
+        let stiff = after_a_glide(&pen1_contact(1.0), 0.01);
+        // Pressed again at x = 12, the tip still lies ahead: the old bend, carried along.
+        assert!(stiff[0].1.abs() < 1e-9, "{:?}", &stiff[..3]);
+        let reach = TRAIL_REACH * 1.25 * 12.0;
+        let forward: Vec<f64> = stiff.iter().filter(|d| d.1.abs() < 1e-9).map(|d| d.0).collect();
+        let until = forward.iter().copied().fold(0.0, f64::max);
+        // (until the carried entry, x 12–22, is nearer ahead than the new pressed path behind)
+        assert!(until > 16.0 && until < 12.0 + reach + 0.2, "forward until x = {until}");
+        assert!(trailing(&stiff.iter().copied().filter(|d| d.0 > 12.0 + reach + 0.2).collect::<Vec<_>>()));
+        // A press straight from such a glide on a fresh stroke takes the motion that follows.
+        let path = [pt(0.0, 0.0, 0.01), pt(0.0, 5.0, 0.01), pt(0.0, 5.0, 12.0), pt(0.0, 15.0, 12.0)];
+        let s = ForwardModel::default().sweep(&pen1_contact(1.0), &path, Extrapolation::Refuse);
+        assert!((s.directions[2].unwrap() + FRAC_PI_2).abs() < 1e-9, "{:?}", s.directions);
+    }
+
+    /// With every touch following (contact 0) the rule is the one before the contact depth: a
+    /// glide at 0.01 mm extends the pressed path.
+    #[test]
+    fn a_contact_depth_of_zero_is_the_old_rule() {
+        let path =
+            [pt(10.0, 0.0, 12.0), pt(0.0, 0.0, 12.0), pt(0.0, 0.0, 0.01), pt(0.0, 8.0, 0.01), pt(0.0, 8.0, 12.0)];
+        let m = ForwardModel::default();
+        let zero = m.sweep(&pen1_contact(0.0), &path, Extrapolation::Refuse);
+        // Pressed at (0, 8) after gliding down the page: the tip points back up the glide.
+        assert!((zero.directions[4].unwrap() + FRAC_PI_2).abs() < 1e-9, "{:?}", zero.directions);
+        let one = m.sweep(&pen1_contact(1.0), &path, Extrapolation::Refuse);
+        // Hairs needing 1 mm kept the entry's bend (tip ahead along +x, β = 0).
+        assert!(one.directions[4].unwrap().abs() < 1e-9, "{:?}", one.directions);
     }
 
     /// A stroke pressed at pen1's shallowest calibrated depth, read back as an arm executes it

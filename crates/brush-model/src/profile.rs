@@ -14,8 +14,20 @@ use crate::footprint::Footprint;
 use crate::regression::{FitReport, LinearModel, Terms};
 use crate::units::{Brush, Press, wrap_angle_rad};
 
-/// The profile format version this crate reads and writes.
-pub const PROFILE_VERSION: u32 = 1;
+/// The profile format version this crate writes. Version 2 added [`BrushProfile::hairs`]; a
+/// version 1 file is still read (its hairs take [`HairMotion::NOMINAL`]) and written back as
+/// version 2.
+pub const PROFILE_VERSION: u32 = 2;
+
+/// The oldest profile format version this crate reads.
+pub const OLDEST_PROFILE_VERSION: u32 = 1;
+
+/// The depth from which a brush's hairs follow its motion when nothing measured it, mm: the
+/// nominal built-ins' and every profile's without a `hairs` field (a guess, not a
+/// measurement: friction needs a press, and a brush whose hairs need about a millimetre of it
+/// is the top of the range docs/brush-model.md, "Hairs that need a press", considers). The
+/// closed loop fits it from a photo (docs/closed-loop.md).
+pub const CONTACT_H_MM: f64 = 1.0;
 
 /// The longest brush a profile may describe, mm (a metre: far beyond any writing brush).
 pub const MAX_BRUSH_MM: f64 = 1000.0;
@@ -216,6 +228,44 @@ pub struct InverseH {
     pub clamped: Clamp,
 }
 
+/// How a brush's hairs follow its motion (the forward model's drag rule, docs/brush-model.md,
+/// "The moving brush"): parameters of the brush, fitted from a photo by the closed loop as its
+/// footprint lengths are.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HairMotion {
+    /// An upright brush's tip lies on the path it pressed along this fraction of a footprint
+    /// length behind it (straight-line distance), in (0, 1].
+    #[serde(default = "default_trail_reach")]
+    pub trail_reach: f64,
+    /// The depth from which the hairs follow motion, mm: pressed lighter (`0 < h <
+    /// contact_h_mm`), the brush touches the paper but neither inks nor turns its hairs, which
+    /// keep their bend and move with it. 0 means any touch turns them (the forward model's
+    /// rule before profile version 2).
+    #[serde(default = "default_contact_h_mm")]
+    pub contact_h_mm: f64,
+}
+
+impl HairMotion {
+    /// Hairs as the nominal built-ins describe them: the tip [`crate::TRAIL_REACH`] footprint
+    /// lengths back, following motion from [`CONTACT_H_MM`].
+    pub const NOMINAL: HairMotion = HairMotion { trail_reach: crate::motion::TRAIL_REACH, contact_h_mm: CONTACT_H_MM };
+}
+
+impl Default for HairMotion {
+    fn default() -> Self {
+        Self::NOMINAL
+    }
+}
+
+fn default_trail_reach() -> f64 {
+    HairMotion::NOMINAL.trail_reach
+}
+
+fn default_contact_h_mm() -> f64 {
+    HairMotion::NOMINAL.contact_h_mm
+}
+
 /// A brush profile.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -232,6 +282,10 @@ pub struct BrushProfile {
     pub ranges: PressRanges,
     /// Footprint lengths as linear functions of `(h, α, β)`.
     pub model: LinearModel,
+    /// How the hairs follow the brush's motion (absent before version 2:
+    /// [`HairMotion::NOMINAL`]).
+    #[serde(default)]
+    pub hairs: HairMotion,
     /// The fit that produced the model, when calibrated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fit: Option<FitReport>,
@@ -308,6 +362,7 @@ impl BrushProfile {
                 beta_rad: Range::new(0.0, 5f64.to_radians()),
             },
             model: LinearModel { lt_mm: lt, lh_mm: lh, lr_mm: lr },
+            hairs: HairMotion::NOMINAL,
             fit: None,
         }
     }
@@ -321,6 +376,7 @@ impl BrushProfile {
             brush,
             ranges,
             model: fit.linear_model(),
+            hairs: HairMotion::NOMINAL,
             fit: Some(fit),
         }
     }
@@ -344,14 +400,16 @@ impl BrushProfile {
         Self::from_json(&text, &path.display().to_string())
     }
 
-    /// Parses and validates a profile; `source_name` labels errors.
+    /// Parses and validates a profile; `source_name` labels errors. A version 1 profile is
+    /// read with [`HairMotion::NOMINAL`] and comes back as version [`PROFILE_VERSION`].
     ///
     /// # Errors
     /// As [`BrushProfile::load`].
     pub fn from_json(text: &str, source_name: &str) -> Result<Self, ProfileError> {
-        let p: BrushProfile = serde_json::from_str(text)
+        let mut p: BrushProfile = serde_json::from_str(text)
             .map_err(|source| ProfileError::Json { source_name: source_name.to_string(), source })?;
         p.validate(source_name)?;
+        p.version = PROFILE_VERSION;
         Ok(p)
     }
 
@@ -365,21 +423,26 @@ impl BrushProfile {
     /// # Errors
     /// [`ProfileError::Invalid`] naming the first bad field.
     pub fn validate(&self, source_name: &str) -> Result<(), ProfileError> {
-        self.check_identity().and_then(|()| self.check_ranges()).and_then(|()| self.check_model()).map_err(
-            |(field, reason)| ProfileError::Invalid {
+        self.check_identity()
+            .and_then(|()| self.check_ranges())
+            .and_then(|()| self.check_model())
+            .and_then(|()| self.check_hairs())
+            .map_err(|(field, reason)| ProfileError::Invalid {
                 source_name: source_name.to_string(),
                 field: field.to_string(),
                 reason,
-            },
-        )
+            })
     }
 
     /// Version, name and brush size.
     fn check_identity(&self) -> Result<(), BadField> {
-        if self.version != PROFILE_VERSION {
+        if !(OLDEST_PROFILE_VERSION..=PROFILE_VERSION).contains(&self.version) {
             return Err((
                 "version",
-                format!("unsupported version {} (this build reads {PROFILE_VERSION})", self.version),
+                format!(
+                    "unsupported version {} (this build reads {OLDEST_PROFILE_VERSION} to {PROFILE_VERSION})",
+                    self.version
+                ),
             ));
         }
         if self.name.trim().is_empty() {
@@ -457,6 +520,23 @@ impl BrushProfile {
                     ));
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// The hair motion: a trailing reach in (0, 1], a contact depth from 0 up to the bundle's
+    /// length.
+    fn check_hairs(&self) -> Result<(), BadField> {
+        let r = self.hairs.trail_reach;
+        if !(r.is_finite() && r > 0.0 && r <= 1.0) {
+            return Err(("hairs.trail_reach", format!("must be a share of the footprint's length in (0, 1], got {r}")));
+        }
+        let c = self.hairs.contact_h_mm;
+        if !(c.is_finite() && c >= 0.0 && c <= self.brush.length_mm) {
+            return Err((
+                "hairs.contact_h_mm",
+                format!("must be a depth in mm from 0 up to brush.length_mm ({}), got {c}", self.brush.length_mm),
+            ));
         }
         Ok(())
     }

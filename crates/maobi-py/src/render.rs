@@ -228,7 +228,6 @@ pub(crate) fn render_track<'py>(
         pipeline::render_char(
             &t.track(),
             &profile,
-            &brush_model::ForwardModel::default(),
             kind,
             Extrapolation::Refuse,
             &b,

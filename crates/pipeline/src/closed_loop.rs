@@ -4,10 +4,12 @@
 //! rendered through the corrected profile matches the observed ink) and the track ([`Residual`],
 //! [`ilc_target`], [`refine_observed`]: iterative learning control, the model's prediction of
 //! the last attempt shifted by what the photo showed, and the next track refined so that the
-//! model plus that residual matches the glyph).
+//! model plus that residual matches the glyph). The brush fit also finds how the hairs follow
+//! the motion (the profile's [`HairMotion`]: the trailing reach and the depth from which they
+//! turn), so the corrected profile carries everything the next attempt is planned with.
 
-use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, track_stamps_with};
-use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Stroke, Terms, Track};
+use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, track_stamps};
+use brush_model::{BrushProfile, Extrapolation, ForwardModel, HairMotion, PointMm, Stroke, Terms, Track};
 use numerics::{NelderMead, nelder_mead};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -41,7 +43,6 @@ const FIT_ITERS: usize = 40;
 /// ten times fewer footprints.
 const FIT_MODEL: ForwardModel = ForwardModel {
     tilt_threshold_rad: brush_model::TILT_THRESHOLD_RAD,
-    trail_reach: brush_model::TRAIL_REACH,
     min_motion_mm: 0.3,
     step_mm: 1.0,
     step_rad: 0.5 * std::f64::consts::PI / 180.0,
@@ -49,9 +50,15 @@ const FIT_MODEL: ForwardModel = ForwardModel {
 };
 
 /// The trailing reaches (an upright brush's tip on the path this fraction of a footprint length
-/// back: [`ForwardModel::trail_reach`]) the brush fit tries beside the forward model's own
-/// ([`brush_model::TRAIL_REACH`]).
+/// back: [`HairMotion::trail_reach`]) the brush fit tries beside the profile's own.
 pub const TRAIL_CANDIDATES: [f64; 5] = [0.2, 0.3, 0.4, 0.5, 0.6];
+
+/// The depths from which the hairs follow motion ([`HairMotion::contact_h_mm`], mm) the brush
+/// fit tries beside the profile's own, ascending; those at or past the profile's lightest
+/// calibrated press are left out. A photo tells them apart only where the last attempt moved
+/// the brush touching the paper between two of them (a glide lighter than one and deeper than
+/// the other), so among depths that explain the ink equally the lightest is kept.
+pub const CONTACT_CANDIDATES_MM: [f64; 7] = [0.0, 0.25, 0.5, 1.0, 2.0, 3.0, 4.0];
 
 /// What the closed loop's correction can refuse.
 #[derive(Debug, Error)]
@@ -157,14 +164,15 @@ pub struct BrushCorrection {
     /// [`MIN_CORRECTION_GAIN`] of the error; the factors above are then 1 and the spread 0):
     /// `[width factor, length factor, spread mm, ink error]`.
     pub not_taken: Option<[f64; 4]>,
-    /// The trailing reach under which the factors were fitted ([`TRAIL_CANDIDATES`]): the
-    /// forward model's ([`brush_model::TRAIL_REACH`]) unless another explained the ink better by
-    /// at least [`MIN_CORRECTION_GAIN`] of what remained. Fitted so that a brush whose tip
-    /// trails otherwise does not bias the lengths; the next attempt's track is planned
-    /// (`trajectory::build_track_with`) and refined (`RefineOptions::trail_reach`) and its
-    /// residual predicted ([`Residual::of`]) with it, and the next round's fit starts from it
-    /// ([`fit_brush_from`]).
-    pub trail_reach: f64,
+    /// The hair motion the factors were fitted under, written into the corrected profile by
+    /// [`BrushCorrection::apply`] (`None`: the profile's own is kept). [`fit_brush`] sets it:
+    /// the profile's own trailing reach and contact depth unless another candidate
+    /// ([`TRAIL_CANDIDATES`], [`CONTACT_CANDIDATES_MM`]) explained the ink better by at least
+    /// [`MIN_CORRECTION_GAIN`] of what remained. Fitted so that hairs that trail or turn
+    /// otherwise do not bias the lengths; the corrected profile carries it, so the next
+    /// attempt's track is planned, refined, rendered and its residual predicted with it, and the
+    /// next round's fit starts from it.
+    pub hairs: Option<HairMotion>,
 }
 
 impl BrushCorrection {
@@ -176,12 +184,13 @@ impl BrushCorrection {
         ink_error_before: 0.0,
         ink_error_after: 0.0,
         not_taken: None,
-        trail_reach: brush_model::TRAIL_REACH,
+        hairs: None,
     };
 
     /// `profile` with this correction applied to its model (every coefficient of `lt` and
     /// `lh` times the length factor and of `lr` times the width factor, the spread added to
-    /// each intercept), named `name`, checked as a loaded profile is.
+    /// each intercept) and its hairs (when [`BrushCorrection::hairs`] is set), named `name`,
+    /// checked as a loaded profile is.
     ///
     /// # Errors
     /// [`ClosedLoopError::Profile`] when the corrected model predicts a length out of bounds at
@@ -213,6 +222,9 @@ impl BrushCorrection {
         out.model.lt_mm = scale(profile.model.lt_mm, self.length_factor);
         out.model.lh_mm = scale(profile.model.lh_mm, self.length_factor);
         out.model.lr_mm = scale(profile.model.lr_mm, self.width_factor);
+        if let Some(h) = self.hairs {
+            out.hairs = h;
+        }
         // The fit statistics were the old model's.
         out.fit = None;
         out.validate(name).map_err(ClosedLoopError::Profile)?;
@@ -254,9 +266,11 @@ fn correction_of(base: &BrushProfile, corrected: &BrushProfile) -> Result<[(f64,
 }
 
 /// `to` with the correction that turns `base` into `corrected` (every round's width and length
-/// factors and spreads so far) carried over, named `name`: the brush `to` as the robot's ink,
-/// paper and hairs would make it write, on the assumption that they change `to`'s footprints as
-/// they changed `base`'s (the factors scale every term, the spreads add to the intercepts).
+/// factors and spreads so far) carried over, and `corrected`'s hairs, named `name`: the brush
+/// `to` as the robot's ink, paper and hairs would make it write, on the assumption that they
+/// change `to`'s footprints as they changed `base`'s (the factors scale every term, the spreads
+/// add to the intercepts) and that its hairs trail the same share of a footprint and follow
+/// from the same depth.
 ///
 /// # Errors
 /// [`ClosedLoopError::NotACorrection`] when `corrected` is not `base` with per-length factors
@@ -295,6 +309,7 @@ pub fn carry_correction(
     out.model.lt_mm = scale(to.model.lt_mm, lt);
     out.model.lh_mm = scale(to.model.lh_mm, lh);
     out.model.lr_mm = scale(to.model.lr_mm, lr);
+    out.hairs = corrected.hairs;
     out.fit = None;
     out.validate(name).map_err(ClosedLoopError::Profile)?;
     Ok(out)
@@ -385,28 +400,8 @@ fn check_attempt(a: &LastAttempt<'_>) -> Result<(), ClosedLoopError> {
     Ok(())
 }
 
-/// [`predict_attempt`] through a brush whose tip trails `trail_reach` footprint lengths back
-/// ([`ForwardModel::trail_reach`]; the forward model's own gives [`predict_attempt`] exactly).
-///
-/// # Errors
-/// As [`predict_attempt`].
-pub fn predict_attempt_with(
-    a: &LastAttempt<'_>,
-    profile: &BrushProfile,
-    model: ModelKind,
-    side: u32,
-    trail_reach: f64,
-) -> Result<Coverage, ClosedLoopError> {
-    let fm = ForwardModel { trail_reach, ..ForwardModel::default() };
-    let track = Track { strokes: a.strokes.to_vec() };
-    let stamps = track_stamps_with(&track, profile, Extrapolation::Allow, &fm)
-        .map_err(|source| ClosedLoopError::Predict { ch: a.ch.to_string(), source })?;
-    let b = a.char_box;
-    Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), side as f64 / b.size_mm, side, side))
-}
-
 /// The last attempt as `profile` predicts it: its commanded strokes through the forward model
-/// over its box at `side²` px.
+/// (the profile's footprints and hairs) over its box at `side²` px.
 ///
 /// # Errors
 /// [`ClosedLoopError::Predict`] when the profile refuses a press (extrapolation is allowed, so
@@ -417,22 +412,19 @@ pub fn predict_attempt(
     model: ModelKind,
     side: u32,
 ) -> Result<Coverage, ClosedLoopError> {
-    predict_attempt_with(a, profile, model, side, brush_model::TRAIL_REACH)
+    let track = Track { strokes: a.strokes.to_vec() };
+    let stamps = track_stamps(&track, profile, Extrapolation::Allow)
+        .map_err(|source| ClosedLoopError::Predict { ch: a.ch.to_string(), source })?;
+    let b = a.char_box;
+    Ok(render_stamps(&stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), side as f64 / b.size_mm, side, side))
 }
 
 /// The last attempt through `profile` as the brush fit sees it ([`FIT_MODEL`]'s sampling) at
 /// `side²` px; `None` when the profile refuses a press.
-fn fit_render(
-    a: &LastAttempt<'_>,
-    profile: &BrushProfile,
-    model: ModelKind,
-    side: u32,
-    trail_reach: f64,
-) -> Option<Coverage> {
-    let fm = ForwardModel { trail_reach, ..FIT_MODEL };
+fn fit_render(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind, side: u32) -> Option<Coverage> {
     let mut stamps = Vec::new();
     for s in a.strokes {
-        for p in fm.sweep(profile, &s.points, Extrapolation::Allow).stamps {
+        for p in FIT_MODEL.sweep(profile, &s.points, Extrapolation::Allow).stamps {
             let footprint = profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?;
             stamps.push(Stamp { footprint, anchor: p.anchor(), beta_rad: p.beta_rad });
         }
@@ -445,10 +437,15 @@ fn fit_render(
 /// (width factor, length factor, spread) from (1, 1, 0), minimising the mean squared
 /// difference between each character's observed ink and its commanded strokes rendered through
 /// the corrected profile (both at up to [`FIT_PX`] px a side; the forward model sampled every
-/// 1 mm instead of 0.1 mm), within [`FACTOR_RANGE`] and
-/// [`SPREAD_RANGE_MM`]. Deterministic. A correction that explains less than
-/// [`MIN_CORRECTION_GAIN`] of the profile's ink error is not taken: the identity is returned,
-/// with the fitted values in [`BrushCorrection::not_taken`].
+/// 1 mm instead of 0.1 mm), within [`FACTOR_RANGE`] and [`SPREAD_RANGE_MM`]; under each
+/// trailing reach of [`TRAIL_CANDIDATES`] and the profile's own (with the profile's contact
+/// depth), then under each contact depth of [`CONTACT_CANDIDATES_MM`] and the profile's own
+/// (with the reach kept). A reach or a depth other than the profile's is kept only when it
+/// explains at least [`MIN_CORRECTION_GAIN`] of the ink error the profile's own leaves after its
+/// fit; the hairs kept are [`BrushCorrection::hairs`]. Deterministic. A correction whose factors
+/// and spread explain less than [`MIN_CORRECTION_GAIN`] of the profile's ink error is not taken:
+/// the factors are the identity's, the fitted values in [`BrushCorrection::not_taken`] (the
+/// hairs are still the fitted ones).
 ///
 /// # Errors
 /// [`ClosedLoopError::Empty`], [`ClosedLoopError::NotSquare`], [`ClosedLoopError::NoStrokes`]
@@ -479,23 +476,6 @@ pub fn fit_brush(
     profile: &BrushProfile,
     model: ModelKind,
 ) -> Result<BrushCorrection, ClosedLoopError> {
-    fit_brush_from(attempts, profile, model, brush_model::TRAIL_REACH)
-}
-
-/// [`fit_brush`] for a profile whose brush is known to trail `base_trail_reach` footprint
-/// lengths back (the reach an earlier round fitted it under, carried with the corrected
-/// profile): that reach takes the forward model's place as the one another must beat by
-/// [`MIN_CORRECTION_GAIN`] (it is tried beside [`TRAIL_CANDIDATES`]). With
-/// [`brush_model::TRAIL_REACH`] it is [`fit_brush`].
-///
-/// # Errors
-/// As [`fit_brush`].
-pub fn fit_brush_from(
-    attempts: &[LastAttempt<'_>],
-    profile: &BrushProfile,
-    model: ModelKind,
-    base_trail_reach: f64,
-) -> Result<BrushCorrection, ClosedLoopError> {
     if attempts.is_empty() {
         return Err(ClosedLoopError::Empty);
     }
@@ -506,12 +486,12 @@ pub fn fit_brush_from(
     for (a, &s) in attempts.iter().zip(&sides) {
         predict_attempt(a, profile, model, s)?;
     }
-    let error_of = |p: &BrushProfile, trail_reach: f64| -> f64 {
+    let error_of = |p: &BrushProfile| -> f64 {
         let per: Vec<f64> = attempts
             .par_iter()
             .zip(sides.par_iter())
             .zip(observed.par_iter())
-            .map(|((a, &s), obs)| match fit_render(a, p, model, s, trail_reach) {
+            .map(|((a, &s), obs)| match fit_render(a, p, model, s) {
                 Some(img) => {
                     img.data().iter().zip(obs).map(|(&u, &o)| (u as f64 - o as f64).powi(2)).sum::<f64>()
                         / obs.len() as f64
@@ -521,46 +501,52 @@ pub fn fit_brush_from(
             .collect();
         per.iter().sum::<f64>() / per.len() as f64
     };
-    let loss = |x: &[f64; 3], trail_reach: f64| -> f64 {
+    let loss = |x: &[f64; 3], hairs: HairMotion| -> f64 {
         let inside = |v: f64, r: [f64; 2]| (r[0]..=r[1]).contains(&v);
         if !(inside(x[0], FACTOR_RANGE) && inside(x[1], FACTOR_RANGE) && inside(x[2], SPREAD_RANGE_MM)) {
             return f64::INFINITY;
         }
-        let c =
-            BrushCorrection { width_factor: x[0], length_factor: x[1], spread_mm: x[2], ..BrushCorrection::IDENTITY };
+        let c = BrushCorrection {
+            width_factor: x[0],
+            length_factor: x[1],
+            spread_mm: x[2],
+            hairs: Some(hairs),
+            ..BrushCorrection::IDENTITY
+        };
         match c.apply(profile, &profile.name) {
-            Ok(p) => error_of(&p, trail_reach),
+            Ok(p) => error_of(&p),
             Err(_) => f64::INFINITY,
         }
     };
     let opts = NelderMead { min_spread: Some(1e-5), ..NelderMead::new([0.15, 0.15, 0.2], FIT_ITERS) };
-    // The factors fitted under each trailing reach: (reach, the profile's error, x, error).
-    let mut reaches = TRAIL_CANDIDATES.to_vec();
-    if !reaches.contains(&base_trail_reach) {
-        reaches.push(base_trail_reach);
-    }
-    let fits: Vec<(f64, f64, [f64; 3], f64)> = reaches
+    let fit_under = |hairs: HairMotion| -> HairFit {
+        let (x, after) = nelder_mead(|x: &[f64; 3]| loss(x, hairs), [1.0, 1.0, 0.0], &opts);
+        HairFit { hairs, before: loss(&[1.0, 1.0, 0.0], hairs), x, after }
+    };
+    // The trailing reach, under the profile's contact depth.
+    let own = fit_under(profile.hairs);
+    let reaches = TRAIL_CANDIDATES
         .iter()
-        .map(|&t| {
-            let (x, after) = nelder_mead(|x: &[f64; 3]| loss(x, t), [1.0, 1.0, 0.0], &opts);
-            (t, loss(&[1.0, 1.0, 0.0], t), x, after)
-        })
-        .collect();
-    let own = fits.iter().copied().find(|f| f.0 == base_trail_reach).unwrap_or((
-        base_trail_reach,
-        loss(&[1.0, 1.0, 0.0], base_trail_reach),
-        [1.0, 1.0, 0.0],
-        f64::INFINITY,
-    ));
-    let best = fits.iter().copied().min_by(|a, b| a.3.total_cmp(&b.3)).unwrap_or(own);
-    // Another reach only when it explains enough of what the model's own leaves.
-    let (trail_reach, before, x, after) = if best.3 < (1.0 - MIN_CORRECTION_GAIN) * own.3 { best } else { own };
+        .filter(|&&r| r != profile.hairs.trail_reach)
+        .map(|&trail_reach| fit_under(HairMotion { trail_reach, ..profile.hairs }));
+    let by_reach = own.or_better(reaches);
+    // The contact depth, under that reach. A depth that renders every attempt as the kept one
+    // does at the fit so far cannot be told apart from it on these photos: not fitted again.
+    let kept = by_reach.hairs;
+    let same = loss(&by_reach.x, kept);
+    let depths = CONTACT_CANDIDATES_MM
+        .iter()
+        .filter(|&&c| c != kept.contact_h_mm && c < profile.ranges.h_mm.min)
+        .map(|&contact_h_mm| HairMotion { contact_h_mm, ..kept })
+        .filter(|&h| loss(&by_reach.x, h) != same)
+        .map(fit_under);
+    let HairFit { hairs, before, x, after } = by_reach.or_better(depths);
     if !(after < (1.0 - MIN_CORRECTION_GAIN) * before) {
         return Ok(BrushCorrection {
             ink_error_before: before,
             ink_error_after: before,
             not_taken: Some([x[0], x[1], x[2], after]),
-            trail_reach,
+            hairs: Some(hairs),
             ..BrushCorrection::IDENTITY
         });
     }
@@ -571,8 +557,34 @@ pub fn fit_brush_from(
         ink_error_before: before,
         ink_error_after: after,
         not_taken: None,
-        trail_reach,
+        hairs: Some(hairs),
     })
+}
+
+/// The brush fit under one hair motion: the profile's ink error under it, the fitted (width
+/// factor, length factor, spread) and the error after.
+#[derive(Clone, Copy, Debug)]
+struct HairFit {
+    hairs: HairMotion,
+    before: f64,
+    x: [f64; 3],
+    after: f64,
+}
+
+impl HairFit {
+    /// The best of `others` when it explains at least [`MIN_CORRECTION_GAIN`] of the error this
+    /// one leaves, else this one; among equals the first (so, the candidates ascending, the
+    /// lightest contact depth).
+    fn or_better(self, others: impl Iterator<Item = HairFit>) -> HairFit {
+        let best = others.fold(None::<HairFit>, |b, f| match b {
+            Some(b) if b.after <= f.after => Some(b),
+            _ => Some(f),
+        });
+        match best {
+            Some(b) if b.after < (1.0 - MIN_CORRECTION_GAIN) * self.after => b,
+            _ => self,
+        }
+    }
 }
 
 /// What the photo showed beyond the model: the observed ink minus the model's prediction of
@@ -589,21 +601,15 @@ pub struct Residual {
 impl Residual {
     /// The residual of one attempt: `observed − predict_attempt(profile)`, at the observed
     /// image's side. Take `profile` as the corrected one, so the residual holds only what the
-    /// corrected brush does not explain, and `trail_reach` the reach it was fitted under
-    /// ([`BrushCorrection::trail_reach`]), so the trail's ink is predicted, not left in it.
+    /// corrected brush (its footprints and its fitted hairs) does not explain.
     ///
     /// # Errors
     /// As [`predict_attempt`]; [`ClosedLoopError::NotSquare`] or
     /// [`ClosedLoopError::NoStrokes`] for an unusable attempt.
-    pub fn of(
-        a: &LastAttempt<'_>,
-        profile: &BrushProfile,
-        model: ModelKind,
-        trail_reach: f64,
-    ) -> Result<Self, ClosedLoopError> {
+    pub fn of(a: &LastAttempt<'_>, profile: &BrushProfile, model: ModelKind) -> Result<Self, ClosedLoopError> {
         check_attempt(a)?;
         let side = a.observed.width();
-        let predicted = predict_attempt_with(a, profile, model, side, trail_reach)?;
+        let predicted = predict_attempt(a, profile, model, side)?;
         let values = a.observed.data().iter().zip(predicted.data()).map(|(&o, &p)| o - p).collect();
         Ok(Self { side, values })
     }
@@ -715,49 +721,10 @@ mod tests {
         assert!((r.mean_abs() - 0.625).abs() < 1e-12);
     }
 
-    #[test]
-    fn a_brush_whose_tip_trails_less_is_fitted_under_its_own_trail() {
-        let pen1 = BrushProfile::builtin("pen1").unwrap();
-        // Half a circle of radius 20 mm, upright, pressed 12–15 mm: where the tip lies on the
-        // path behind decides which way each footprint points round the curve.
-        let mut pts = Vec::new();
-        for i in 0..=200 {
-            let t = f64::from(i) / 200.0;
-            let a = std::f64::consts::PI * t;
-            let (x, y) = (40.0 - 20.0 * a.cos(), 30.0 + 20.0 * a.sin());
-            pts.push(brush_model::TrackPoint { x_mm: x, y_mm: y, h_mm: 12.0 + 3.0 * t, alpha_rad: 0.0, beta_rad: 0.0 });
-        }
-        let strokes = vec![Stroke { points: pts }];
-        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
-        let truth = BrushCorrection { width_factor: 1.2, ..BrushCorrection::IDENTITY }.apply(&pen1, "world").unwrap();
-        let ink = |trail_reach: f64| {
-            let model = ForwardModel { trail_reach, ..ForwardModel::default() };
-            let stamps: Vec<Stamp> = model
-                .sweep(&truth, &strokes[0].points, Extrapolation::Allow)
-                .stamps
-                .iter()
-                .map(|p| Stamp {
-                    footprint: truth.predict_oriented(&p.press(), Extrapolation::Allow).unwrap(),
-                    anchor: p.anchor(),
-                    beta_rad: p.beta_rad,
-                })
-                .collect();
-            render_stamps(&stamps, ModelKind::Bsm.model(), PointMm::new(0.0, 0.0), 96.0 / 80.0, 96, 96)
-        };
-        for reach in [0.3, brush_model::TRAIL_REACH] {
-            let observed = ink(reach);
-            let a = LastAttempt { ch: "~", char_box, strokes: &strokes, observed: &observed };
-            let fit = fit_brush(&[a], &pen1, ModelKind::Bsm).unwrap();
-            assert_eq!(fit.trail_reach, reach, "{fit:?}");
-            assert!((fit.width_factor - 1.2).abs() < 0.05 && (fit.length_factor - 1.0).abs() < 0.05, "{fit:?}");
-        }
-    }
-
-    #[test]
-    fn the_fitted_trail_is_predicted_and_carried_into_the_next_fit() {
-        let pen1 = BrushProfile::builtin("pen1").unwrap();
-        // Half a circle of radius 20 mm, upright, pressed 12–15 mm.
-        let pts: Vec<brush_model::TrackPoint> = (0..=200)
+    /// Half a circle of radius 20 mm, upright, pressed 12–15 mm: where the tip lies on the path
+    /// behind decides which way each footprint points round the curve.
+    fn half_circle() -> Vec<Stroke> {
+        let pts = (0..=200)
             .map(|i| {
                 let t = f64::from(i) / 200.0;
                 let a = std::f64::consts::PI * t;
@@ -770,23 +737,104 @@ mod tests {
                 }
             })
             .collect();
-        let strokes = vec![Stroke { points: pts }];
+        vec![Stroke { points: pts }]
+    }
+
+    /// `profile` with other hairs.
+    fn with_hairs(profile: &BrushProfile, trail_reach: f64, contact_h_mm: f64) -> BrushProfile {
+        BrushProfile { hairs: HairMotion { trail_reach, contact_h_mm }, ..profile.clone() }
+    }
+
+    #[test]
+    fn a_brush_whose_tip_trails_less_is_fitted_under_its_own_trail() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let strokes = half_circle();
+        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
+        let wide = BrushCorrection { width_factor: 1.2, ..BrushCorrection::IDENTITY }.apply(&pen1, "world").unwrap();
+        let blank = Coverage::new(96, 96);
+        let a = LastAttempt { ch: "~", char_box, strokes: &strokes, observed: &blank };
+        for reach in [0.3, brush_model::TRAIL_REACH] {
+            let truth = with_hairs(&wide, reach, pen1.hairs.contact_h_mm);
+            let observed = predict_attempt(&a, &truth, ModelKind::Bsm, 96).unwrap();
+            let fit = fit_brush(&[LastAttempt { observed: &observed, ..a }], &pen1, ModelKind::Bsm).unwrap();
+            assert_eq!(fit.hairs.map(|h| h.trail_reach), Some(reach), "{fit:?}");
+            assert!((fit.width_factor - 1.2).abs() < 0.05 && (fit.length_factor - 1.0).abs() < 0.05, "{fit:?}");
+            // The corrected profile carries the fitted hairs.
+            assert_eq!(fit.apply(&pen1, "c").unwrap().hairs.trail_reach, reach);
+        }
+    }
+
+    #[test]
+    fn the_fitted_trail_is_predicted_and_carried_into_the_next_fit() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let strokes = half_circle();
         let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
         let blank = Coverage::new(96, 96);
         let a = LastAttempt { ch: "~", char_box, strokes: &strokes, observed: &blank };
         let own = predict_attempt(&a, &pen1, ModelKind::Bsm, 96).unwrap();
-        let same = predict_attempt_with(&a, &pen1, ModelKind::Bsm, 96, brush_model::TRAIL_REACH).unwrap();
-        assert_eq!(own.data(), same.data());
         // The brush trailing 0.3: its ink is predicted, so the residual of that ink is nil.
-        let observed = predict_attempt_with(&a, &pen1, ModelKind::Bsm, 96, 0.3).unwrap();
+        let short = with_hairs(&pen1, 0.3, pen1.hairs.contact_h_mm);
+        let observed = predict_attempt(&a, &short, ModelKind::Bsm, 96).unwrap();
         assert_ne!(own.data(), observed.data());
         let a = LastAttempt { observed: &observed, ..a };
-        assert!(Residual::of(&a, &pen1, ModelKind::Bsm, 0.3).unwrap().mean_abs() < 1e-9);
-        assert!(Residual::of(&a, &pen1, ModelKind::Bsm, brush_model::TRAIL_REACH).unwrap().mean_abs() > 1e-3);
+        assert!(Residual::of(&a, &short, ModelKind::Bsm).unwrap().mean_abs() < 1e-9);
+        assert!(Residual::of(&a, &pen1, ModelKind::Bsm).unwrap().mean_abs() > 1e-3);
         // A profile already fitted under 0.3 keeps it (the reach carried), with little to correct.
-        let fit = fit_brush_from(&[a], &pen1, ModelKind::Bsm, 0.3).unwrap();
-        assert_eq!(fit.trail_reach, 0.3, "{fit:?}");
+        let fit = fit_brush(&[a], &short, ModelKind::Bsm).unwrap();
+        assert_eq!(fit.hairs, Some(short.hairs), "{fit:?}");
         assert!((fit.width_factor - 1.0).abs() < 0.05 && (fit.length_factor - 1.0).abs() < 0.05, "{fit:?}");
+    }
+
+    /// Corners (折) written with a reverse entry along x and a turn-over glide at 0.5 mm, then
+    /// pressed again and pulled down the page, by a brush 20 % wider whose hairs follow only from
+    /// 0.8 mm: the glide leaves them pointing along +x past the down stroke's edge, and
+    /// the fit finds a contact depth past the glide (the lightest candidate that explains the
+    /// ink, 1 mm) under a profile that said any touch turns them; a profile whose depth the
+    /// glide already passes keeps its own, as the photo cannot tell those apart.
+    #[test]
+    fn the_contact_depth_is_fitted_from_wedges_a_light_glide_left() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let pt = |x_mm: f64, y_mm: f64, h_mm: f64| brush_model::TrackPoint {
+            x_mm,
+            y_mm,
+            h_mm,
+            alpha_rad: 0.0,
+            beta_rad: 0.0,
+        };
+        let strokes: Vec<Stroke> = [5.0, 45.0]
+            .iter()
+            .map(|&y| Stroke {
+                points: vec![
+                    pt(30.0, y, 13.0),
+                    pt(15.0, y, 13.0),
+                    pt(15.0, y, 0.5),
+                    pt(27.0, y, 0.5),
+                    pt(27.0, y, 12.0),
+                    pt(27.0, y + 20.0, 12.0),
+                ],
+            })
+            .collect();
+        let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 80.0 };
+        let blank = Coverage::new(96, 96);
+        let a = LastAttempt { ch: "三", char_box, strokes: &strokes, observed: &blank };
+        let wide = BrushCorrection { width_factor: 1.2, ..BrushCorrection::IDENTITY }.apply(&pen1, "world").unwrap();
+        let truth = with_hairs(&wide, brush_model::TRAIL_REACH, 0.8);
+        let observed = predict_attempt(&a, &truth, ModelKind::Bsm, 96).unwrap();
+        let a = LastAttempt { observed: &observed, ..a };
+        let touch = with_hairs(&pen1, brush_model::TRAIL_REACH, 0.0);
+        assert_ne!(predict_attempt(&a, &touch, ModelKind::Bsm, 96).unwrap().data(), observed.data());
+        let fit = fit_brush(&[a], &touch, ModelKind::Bsm).unwrap();
+        let hairs = fit.hairs.unwrap();
+        assert_eq!((hairs.contact_h_mm, hairs.trail_reach), (1.0, brush_model::TRAIL_REACH), "{fit:?}");
+        assert!((fit.width_factor - 1.2).abs() < 0.05 && fit.ink_error_after < 0.5 * fit.ink_error_before, "{fit:?}");
+        // Hairs said to follow from 0.25 mm cannot be told from hairs following from 0.5 on a
+        // glide at 0.5: those are kept, and the wedges stay in the error.
+        let light = with_hairs(&pen1, brush_model::TRAIL_REACH, 0.25);
+        let kept = fit_brush(&[a], &light, ModelKind::Bsm).unwrap().hairs.unwrap();
+        assert!(kept.contact_h_mm > 0.5, "{kept:?}");
+        // The nominal profile's own depth (1 mm) already explains the wedges: kept.
+        let nominal = fit_brush(&[a], &pen1, ModelKind::Bsm).unwrap();
+        assert_eq!(nominal.hairs.map(|h| h.contact_h_mm), Some(pen1.hairs.contact_h_mm), "{nominal:?}");
     }
 
     #[test]
@@ -821,10 +869,7 @@ mod tests {
         assert!(matches!(fit_brush(&[a], &pen1, ModelKind::Bsm), Err(ClosedLoopError::NotSquare { .. })));
         let sq = Coverage::new(10, 10);
         let none = LastAttempt { strokes: &[], observed: &sq, ..a };
-        assert!(matches!(
-            Residual::of(&none, &pen1, ModelKind::Bsm, brush_model::TRAIL_REACH),
-            Err(ClosedLoopError::NoStrokes { .. })
-        ));
+        assert!(matches!(Residual::of(&none, &pen1, ModelKind::Bsm), Err(ClosedLoopError::NoStrokes { .. })));
         // A correction that makes a length non-positive is refused.
         let bad = BrushCorrection { spread_mm: -50.0, ..BrushCorrection::IDENTITY };
         assert!(matches!(bad.apply(&pen1, "x"), Err(ClosedLoopError::Profile(_))));

@@ -43,9 +43,9 @@ pub use calibration_sheet::{
     calibration_sheet, calibration_sheet_image, press_stroke,
 };
 pub use closed_loop::{
-    BrushCorrection, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, MIN_CORRECTION_GAIN, Residual,
-    SPREAD_RANGE_MM, TRAIL_CANDIDATES, carry_correction, choose_corrected_brush, fit_brush, fit_brush_from, ilc_target,
-    predict_attempt, predict_attempt_with, refine_observed,
+    BrushCorrection, CONTACT_CANDIDATES_MM, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, MIN_CORRECTION_GAIN,
+    Residual, SPREAD_RANGE_MM, TRAIL_CANDIDATES, carry_correction, choose_corrected_brush, fit_brush, ilc_target,
+    predict_attempt, refine_observed,
 };
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};

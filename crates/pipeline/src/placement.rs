@@ -4,7 +4,7 @@
 use bezier_raster::Coverage;
 use brush_model::{BrushProfile, Extrapolation, Track};
 use robot_io::program::{RobotConfig, build_program};
-use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track_with, raster::render_glyph};
+use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track, raster::render_glyph};
 
 use crate::write::{level_frame_for, render_char};
 use crate::{CharResult, Prepared, Result, WriteOptions, write_char};
@@ -176,10 +176,8 @@ fn plan_score(
     let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm };
     let topts =
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-    let fm = opts.forward_model();
-    let built = build_track_with(&with_splits(&p.paths, split), profile, &topts, &fm)?;
-    let img =
-        render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
+    let built = build_track(&with_splits(&p.paths, split), profile, &topts)?;
+    let img = render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, CHAR_BOX_SEARCH_PX)?;
     Ok((stroke_metrics::csim(reference.as_gray(), img.as_gray())?, built.track))
 }
 

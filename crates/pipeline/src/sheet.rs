@@ -538,21 +538,20 @@ impl Layout {
 }
 
 /// Every written character's track on one image of the whole sheet, at the scale of the
-/// characters' own images (`size_px` per char box side), the footprints through `fm` (the
-/// forward model the characters were written with: [`crate::WriteOptions::forward_model`]).
+/// characters' own images (`size_px` per char box side), the footprints through the forward
+/// model with `profile`'s hairs.
 ///
 /// # Errors
 /// When the profile refuses a press (it accepted them when the characters were written).
 pub fn sheet_image(
     results: &[CharResult],
     profile: &BrushProfile,
-    fm: &brush_model::ForwardModel,
     model: ModelKind,
     layout: &Layout,
     size_px: u32,
 ) -> Result<Coverage, brush_model::ProfileError> {
     let tracks: Vec<&Track> = results.iter().map(|r| &r.track).collect();
-    sheet_image_of(&tracks, profile, fm, model, layout, size_px)
+    sheet_image_of(&tracks, profile, model, layout, size_px)
 }
 
 /// As [`sheet_image`] from the characters' tracks alone.
@@ -562,7 +561,6 @@ pub fn sheet_image(
 pub fn sheet_image_of(
     tracks: &[&Track],
     profile: &BrushProfile,
-    fm: &brush_model::ForwardModel,
     model: ModelKind,
     layout: &Layout,
     size_px: u32,
@@ -573,7 +571,7 @@ pub fn sheet_image_of(
     }
     let px_per_mm = size_px as f64 / layout.char_mm;
     let (wp, hp) = layout.image_px(size_px);
-    let stamps = bezier_raster::track_stamps_with(&all, profile, Extrapolation::Refuse, fm)?;
+    let stamps = bezier_raster::track_stamps(&all, profile, Extrapolation::Refuse)?;
     Ok(bezier_raster::render_stamps(
         &stamps,
         model.model(),

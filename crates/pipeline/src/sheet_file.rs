@@ -29,7 +29,7 @@ impl SheetTrack {
     /// # Errors
     /// [`ReadBackError`] naming `path` and, where one is at fault, the field.
     pub fn load(path: &Path) -> Result<(SheetTrack, Vec<u8>), ReadBackError> {
-        const WHAT: &str = "a sheet's track.json (written by `maobi write … --sheet …`)";
+        const WHAT: &str = "a sheet's track.json (as a sheet write saves it)";
         let bytes = read_bounded(path, MAX_SHEET_TRACK_BYTES, WHAT)?;
         let track: SheetTrack = serde_json::from_slice(&bytes).map_err(|source| ReadBackError::Json {
             path: path.to_path_buf(),

@@ -3,13 +3,13 @@
 
 use std::time::Instant;
 
-use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, sweep_stamps, sweep_stamps_with, track_stamps_with};
-use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Track, TrackPoint};
+use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, sweep_stamps, track_stamps};
+use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
 use track_refine::{LossTerms, RefineOptions, Target};
-use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track_with, chamfer_pct, raster::render_glyph};
+use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, raster::render_glyph};
 
 use crate::{Error, Prepared, Result, TemplateReport};
 
@@ -41,19 +41,6 @@ pub struct WriteOptions {
     /// [`track_refine::Gradients::Generator`] (the caller loads it once and shares it).
     #[cfg(feature = "generator")]
     pub generator: Option<std::sync::Arc<track_refine::GenModel>>,
-    /// The trailing reach the track's directions are derived with
-    /// ([`brush_model::ForwardModel::trail_reach`], `trajectory::build_track_with`) and its
-    /// plan, executed path and refined track are rendered with: the forward model's own unless
-    /// the closed loop fitted another (`BrushCorrection::trail_reach`).
-    pub trail_reach: f64,
-}
-
-impl WriteOptions {
-    /// The forward model the track is built and rendered with (the default one with
-    /// [`WriteOptions::trail_reach`]).
-    pub fn forward_model(&self) -> ForwardModel {
-        ForwardModel { trail_reach: self.trail_reach, ..ForwardModel::default() }
-    }
 }
 
 impl std::fmt::Debug for WriteOptions {
@@ -67,8 +54,7 @@ impl std::fmt::Debug for WriteOptions {
             .field("free_widths", &self.free_widths)
             .field("execute", &self.execute)
             .field("execution", &self.execution)
-            .field("refine", &self.refine)
-            .field("trail_reach", &self.trail_reach);
+            .field("refine", &self.refine);
         #[cfg(feature = "generator")]
         d.field("generator", &self.generator.as_ref().map(|_| "a generator"));
         d.finish()
@@ -89,7 +75,6 @@ impl Default for WriteOptions {
             refine: None,
             #[cfg(feature = "generator")]
             generator: None,
-            trail_reach: brush_model::TRAIL_REACH,
         }
     }
 }
@@ -371,22 +356,21 @@ fn render_over(stamps: &[Stamp], model: ModelKind, b: &CharBox, size: u32) -> Co
     render_stamps(stamps, model.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size)
 }
 
-/// Renders a track through the forward model `fm` (the default one, or
-/// [`WriteOptions::forward_model`] for a brush fitted to trail otherwise) over a char box onto a
-/// `size²` image of the box.
+/// Renders a track through the forward model (its hairs as `profile.hairs` describes them: a
+/// brush the closed loop fitted trails as fitted) over a char box onto a `size²` image of the
+/// box.
 ///
 /// # Errors
 /// When the profile refuses a point.
 pub fn render_char(
     track: &Track,
     profile: &BrushProfile,
-    fm: &ForwardModel,
     model: ModelKind,
     ex: Extrapolation,
     b: &CharBox,
     size: u32,
 ) -> Result<Coverage> {
-    Ok(render_over(&track_stamps_with(track, profile, ex, fm)?, model, b, size))
+    Ok(render_over(&track_stamps(track, profile, ex)?, model, b, size))
 }
 
 /// Builds, renders and scores one prepared character placed at `char_box`.
@@ -397,11 +381,10 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let t0 = Instant::now();
     let topts =
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
-    let fm = opts.forward_model();
-    let built = build_track_with(&p.paths, profile, &topts, &fm)?;
+    let built = build_track(&p.paths, profile, &topts)?;
     // The plan's render and the glyph's are independent: rendered side by side on rayon's pool.
     let (render, reference) = rayon::join(
-        || render_char(&built.track, profile, &fm, opts.model, Extrapolation::Refuse, &char_box, opts.size),
+        || render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size),
         || render_glyph(&p.glyph, opts.size),
     );
     let render = render?;
@@ -415,8 +398,8 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
                 return Ok(None);
             }
             let free =
-                build_track_with(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts }, &fm)?;
-            let img = render_char(&free.track, profile, &fm, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
+                build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
+            let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
             Ok(Some(similarity(&reference, &img)?))
         },
         || {
@@ -481,7 +464,7 @@ fn execute_and_render(
 ) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
     let states =
         execute_track_with(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
-    let stamps = sweep_stamps_with(&states, profile, Extrapolation::Refuse, &opts.forward_model());
+    let stamps = sweep_stamps(&states, profile, Extrapolation::Refuse);
     let img = render_over(&stamps, opts.model, char_box, opts.size);
     Ok((states, img))
 }
@@ -520,15 +503,7 @@ pub(crate) fn refine_result(
         track_refine::Gradients::Generator => return Err(Error::NoGenerator),
     }
     .map_err(|source| Error::Refine { ch: p.glyph.ch, source })?;
-    let render = render_char(
-        &refined.track,
-        profile,
-        &opts.forward_model(),
-        opts.model,
-        Extrapolation::Refuse,
-        &r.char_box,
-        opts.size,
-    )?;
+    let render = render_char(&refined.track, profile, opts.model, Extrapolation::Refuse, &r.char_box, opts.size)?;
     let planned_after = similarity(&r.reference, &render)?;
     let planned_before = r.report.plan.similarity();
     let mut rejected = None;
@@ -714,35 +689,33 @@ mod tests {
         assert_eq!(r.executed_states.as_ref(), Some(&plain));
     }
 
-    /// A brush fitted to trail otherwise (the closed loop's `trail_reach`) is the one the plan,
-    /// the executed path and the refined track are rendered with, not the forward model's own.
+    /// A brush fitted to trail otherwise (the closed loop fits `hairs.trail_reach` into the
+    /// profile) is the one the plan, the executed path and the refined track are rendered with.
     #[test]
-    fn the_plan_is_rendered_with_the_options_trail() {
+    fn the_plan_is_rendered_with_the_profiles_trail() {
         let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let mut short = pen1.clone();
+        short.hairs.trail_reach = 0.3;
         // 心's hook and dots curve: where the tip trails decides which way their footprints point.
         let p = crate::prepare(trajectory::glyph::embedded('心').unwrap(), Some(Method::Medians)).unwrap();
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 120.0 };
         let base = WriteOptions { size: 96, free_widths: false, ..WriteOptions::default() };
         let r5 = write_char(&p, &pen1, b, &base).unwrap();
-        let opts = WriteOptions {
-            trail_reach: 0.3,
-            refine: Some(RefineOptions { iterations: 2, ..RefineOptions::default() }),
-            ..base
-        };
-        let r3 = write_char(&p, &pen1, b, &opts).unwrap();
-        let fm = opts.forward_model();
-        assert_eq!(fm.trail_reach, 0.3);
-        let by = |fm: &ForwardModel, t: &Track| {
-            render_char(t, &pen1, fm, opts.model, Extrapolation::Refuse, &b, 96).unwrap()
+        let opts = WriteOptions { refine: Some(RefineOptions { iterations: 2, ..RefineOptions::default() }), ..base };
+        let r3 = write_char(&p, &short, b, &opts).unwrap();
+        let by = |profile: &BrushProfile, t: &Track| {
+            render_char(t, profile, opts.model, Extrapolation::Refuse, &b, 96).unwrap()
         };
         // The refined track's render is the one kept, through the fitted reach.
         assert!(r3.report.refine.as_ref().unwrap().rejected.is_none());
-        assert_eq!(r3.render.data(), by(&fm, &r3.track).data());
-        assert_ne!(r3.render.data(), by(&ForwardModel::default(), &r3.track).data());
-        let stamps = sweep_stamps_with(r3.executed_states.as_ref().unwrap(), &pen1, Extrapolation::Refuse, &fm);
+        assert_eq!(r3.render.data(), by(&short, &r3.track).data());
+        assert_ne!(r3.render.data(), by(&pen1, &r3.track).data());
+        let stamps = sweep_stamps(r3.executed_states.as_ref().unwrap(), &short, Extrapolation::Refuse);
         let executed = render_over(&stamps, opts.model, &b, 96);
         assert_eq!(r3.executed.as_ref().unwrap().data(), executed.data());
-        // Without a fitted reach, the forward model's own.
-        assert_eq!(r5.render.data(), by(&ForwardModel::default(), &r5.track).data());
+        // The nominal brush trails as the forward model's own.
+        assert_eq!(r5.render.data(), by(&pen1, &r5.track).data());
+        // The track carries the brush as it was written with.
+        assert_eq!(r3.track_file(&short, None).brush.hairs.trail_reach, 0.3);
     }
 }

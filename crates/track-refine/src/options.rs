@@ -69,17 +69,6 @@ pub struct RefineOptions {
     /// Where the image term and its gradient come from (the judge is never this: callers
     /// score with the analytic renderer and the executed simulation).
     pub gradients: Gradients,
-    /// The drag rule's trailing reach the footprints' directions are derived with
-    /// ([`brush_model::ForwardModel::trail_reach`]): the forward model's own
-    /// ([`brush_model::TRAIL_REACH`]) unless the closed loop fitted the brush under another
-    /// (`pipeline::BrushCorrection::trail_reach`). Written only when it differs from the model's.
-    #[serde(skip_serializing_if = "is_model_trail")]
-    pub trail_reach: f64,
-}
-
-/// Whether `r` is the forward model's own trailing reach (then it is not serialised).
-fn is_model_trail(r: &f64) -> bool {
-    *r == brush_model::TRAIL_REACH
 }
 
 /// Where the footprint images of the image term and their gradients come from.
@@ -127,7 +116,6 @@ impl Default for RefineOptions {
             aim_far: true,
             aim_reach: false,
             gradients: Gradients::Analytic,
-            trail_reach: brush_model::TRAIL_REACH,
         }
     }
 }
@@ -161,9 +149,6 @@ impl RefineOptions {
             if !(v.is_finite() && (0.0..=1e6).contains(&v)) {
                 return bad(name, v.to_string(), "a finite value in [0, 1e6]");
             }
-        }
-        if !(self.trail_reach.is_finite() && self.trail_reach > 0.0 && self.trail_reach <= 1.0) {
-            return bad("trail_reach", self.trail_reach.to_string(), "a share of the footprint's length in (0, 1]");
         }
         if self.rederive_every == 0 {
             return bad("rederive_every", "0".into(), "at least 1 step");

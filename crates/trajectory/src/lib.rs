@@ -69,7 +69,9 @@ pub use skeleton::{
     PairSample, Skeleton, SkeletonModelError, SkeletonModels,
 };
 pub use template::{Registration, StrokeFit, TemplateOptions};
-pub use track::{BuiltTrack, DEFAULT_SPACING_MM, GLIDE_H_MM, Sizing, TrackOptions, build_track, build_track_with};
+pub use track::{
+    BuiltTrack, DEFAULT_SPACING_MM, GLIDE_CONTACT_FACTOR, GLIDE_H_MM, Sizing, TrackOptions, build_track, glide_h_mm,
+};
 
 /// The analysis raster (px per em box) the `maobi` pipeline uses for widths and skeletons.
 /// Chosen on the tuning set (docs/trajectory.md, Tuned constants).

@@ -96,10 +96,33 @@ fn length_model(profile: &BrushProfile, alpha: f64, beta: f64) -> (f64, f64) {
     (at(1.0) - at(0.0), at(0.0))
 }
 
-/// Depth while the brush turns over at a stroke's head, mm: the tip touches the paper (so the
-/// hairs are dragged round) but presses far less than any calibrated press, so it leaves no
-/// footprint in the model (a real brush leaves at most a hairline there).
+/// The lightest glide, mm: a brush whose hairs follow any touch (`hairs.contact_h_mm = 0`)
+/// glides with its tip only touching the paper, far lighter than any calibrated press, so it
+/// leaves no footprint in the model (a real brush leaves at most a hairline there).
 pub const GLIDE_H_MM: f64 = 0.01;
+
+/// How much deeper than its hairs' contact depth (`BrushProfile::hairs.contact_h_mm`) the brush
+/// glides: a light press, so the glide turns the hairs even when they need up to this factor
+/// more press than the profile says. Hand-set (docs/trajectory.md, "Track building").
+pub const GLIDE_CONTACT_FACTOR: f64 = 2.0;
+
+/// The depth the brush glides at while it turns over at a piece's head and into a short head,
+/// mm: [`GLIDE_CONTACT_FACTOR`] times the hairs' contact depth (so the glide is pressed and
+/// drags the hairs round, not only touching), at least [`GLIDE_H_MM`], at most the lightest
+/// calibrated press (a brush whose hairs need more than that cannot turn them without ink).
+/// Lighter than the calibrated range it leaves no footprint in the model.
+///
+/// # Examples
+/// ```
+/// use trajectory::brush_model::BrushProfile;
+/// let mut pen1 = BrushProfile::builtin("pen1").unwrap();
+/// assert_eq!(trajectory::glide_h_mm(&pen1), 2.0 * pen1.hairs.contact_h_mm);
+/// pen1.hairs.contact_h_mm = 0.0;
+/// assert_eq!(trajectory::glide_h_mm(&pen1), trajectory::GLIDE_H_MM);
+/// ```
+pub fn glide_h_mm(profile: &BrushProfile) -> f64 {
+    (GLIDE_CONTACT_FACTOR * profile.hairs.contact_h_mm).max(GLIDE_H_MM).min(profile.ranges.h_mm.min)
+}
 
 /// Builds the brush track of a character from its stroke centre lines.
 ///
@@ -116,12 +139,14 @@ pub const GLIDE_H_MM: f64 = 0.01;
 ///    kaiti's blunt stroke heads want: the root on the station, the belly `lh` ahead sized to
 ///    the glyph's half-width there, pressed lighter (or not at all) where the tip would reach
 ///    past the piece's end. When that leaves only the head pressed (a piece shorter than the
-///    lightest footprint), the brush glides back to it with its tip only touching
-///    ([`GLIDE_H_MM`]) and presses there, so the head trails forward along the piece too.
-/// 2. **Turn.** At the start the brush eases up until only its tip touches ([`GLIDE_H_MM`], no
-///    ink), glides forward along the stroke to the first station where its lightest press fits
-///    behind it, and presses again: turning the hairs over under pressure would sweep the tail
-///    out behind the stroke's head.
+///    lightest footprint), the brush glides back to it pressed lightly ([`glide_h_mm`]) and
+///    presses there, so the head trails forward along the piece too.
+/// 2. **Turn.** At the start the brush eases up to a light press ([`glide_h_mm`]: deeper than
+///    its hairs need to follow the motion, lighter than any footprint, so no ink), glides
+///    forward along the stroke to the first station where its lightest press fits behind it,
+///    and presses again: turning the hairs over under a writing press would sweep the tail out
+///    behind the stroke's head, and a glide lighter than the hairs' contact depth would leave
+///    them pointing forward.
 /// 3. **Writing.** Forward to the piece's end, the hairs trailing; each belly (`lh` behind the
 ///    anchor) is sized to the glyph's half-width there through the inverse model, and no press
 ///    is so long that its tail passes the piece's start (pressed lighter until it fits).
@@ -157,28 +182,13 @@ pub fn build_track(
     profile: &BrushProfile,
     opts: &TrackOptions,
 ) -> Result<BuiltTrack, ProfileError> {
-    build_track_with(paths, profile, opts, &ForwardModel::default())
-}
-
-/// [`build_track`] with the directions derived by `model` (its `tilt_threshold_rad` set out of
-/// reach, as there) instead of the default forward model: the closed loop plans with the
-/// trailing reach it fitted to the observed ink (`pipeline::BrushCorrection::trail_reach`).
-/// With `ForwardModel::default()` it is [`build_track`].
-///
-/// # Errors
-/// As [`build_track`].
-pub fn build_track_with(
-    paths: &[StrokePath],
-    profile: &BrushProfile,
-    opts: &TrackOptions,
-    model: &ForwardModel,
-) -> Result<BuiltTrack, ProfileError> {
     let placer = Placer::new(profile, opts);
     let k = opts.char_box.mm_per_em();
     let mut counts = Clamped::default();
     let mut strokes = Vec::with_capacity(paths.len());
-    // Directions as an upright brush would leave them (the tilt threshold out of reach).
-    let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..*model };
+    // Directions as an upright brush would leave them (the tilt threshold out of reach), its
+    // hairs as the profile describes them.
+    let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..ForwardModel::default() };
     for path in paths {
         if path.points.is_empty() {
             continue;
@@ -260,6 +270,7 @@ struct Placer<'a> {
     l_slope: f64,
     l_off: f64,
     lowest: f64,
+    glide_h: f64,
 }
 
 impl<'a> Placer<'a> {
@@ -270,7 +281,7 @@ impl<'a> Placer<'a> {
             Sizing::Brush => profile.ranges.h_mm.min,
             Sizing::Unconstrained => 1e-3,
         };
-        Self { profile, opts, beta_shape, l_slope, l_off, lowest }
+        Self { profile, opts, beta_shape, l_slope, l_off, lowest, glide_h: glide_h_mm(profile) }
     }
 
     fn extrapolation(&self) -> Extrapolation {
@@ -350,17 +361,17 @@ impl<'a> Placer<'a> {
                 h_in.min(fit)
             } else if j == 0 {
                 // The head must be inked even when the piece is shorter than any footprint. When
-                // no other entry station is pressed, the brush glides back to the head with its
-                // tip only touching (no ink) instead of coming down on it from the air: so the
+                // no other entry station is pressed, the brush glides back to the head pressed
+                // lightly (no ink) instead of coming down on it from the air: so the
                 // head's footprint trails forward along the piece by the drag rule, as the
                 // entry's do, rather than pointing whichever way the model or a real brush
                 // happens to leave an upright brush pressed straight down and lifted again.
                 if !out.is_empty() && out.iter().all(|p| p.h_mm <= 0.0) {
                     for p in &mut out {
-                        p.h_mm = GLIDE_H_MM;
+                        p.h_mm = self.glide_h;
                     }
                     // Down in place at the head.
-                    out.push(at(t, GLIDE_H_MM));
+                    out.push(at(t, self.glide_h));
                 }
                 self.lowest
             } else {
@@ -369,10 +380,10 @@ impl<'a> Placer<'a> {
             out.push(at(t, h));
         }
         if resume + 1 < stations.len() {
-            // 2. Turn: ease up at the start until the tip only touches, glide along the stroke to
-            //    where writing resumes (the hairs turn over, dragged along the path).
+            // 2. Turn: ease up at the start to a light press, glide along the stroke to where
+            //    writing resumes (the hairs turn over, dragged along the path).
             for &t in &stations[..=resume] {
-                out.push(at(t, GLIDE_H_MM));
+                out.push(at(t, self.glide_h));
             }
             // 3. Writing, the hairs trailing.
             for j in resume..stations.len() {

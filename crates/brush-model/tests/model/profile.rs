@@ -112,3 +112,33 @@ fn oriented_prediction_ignores_the_writing_direction() {
     // h is still checked.
     assert!(p.predict_oriented(&Press::from_degrees(25.0, 5.0, 90.0), Extrapolation::Refuse).is_err());
 }
+
+/// A version 1 profile (no `hairs`) still reads, with the nominal hair motion, and comes back as
+/// the current version; bad hair values are named.
+#[test]
+fn version_1_profiles_read_with_nominal_hairs() {
+    use brush_model::{HairMotion, PROFILE_VERSION};
+    let mut v = pen1_json();
+    assert_eq!(v["version"], serde_json::json!(PROFILE_VERSION));
+    assert_eq!(v["hairs"]["contact_h_mm"], serde_json::json!(brush_model::CONTACT_H_MM));
+    v.as_object_mut().unwrap().remove("hairs");
+    v["version"] = serde_json::json!(1);
+    let p = BrushProfile::from_json(&v.to_string(), "old.json").unwrap();
+    assert_eq!((p.version, p.hairs), (PROFILE_VERSION, HairMotion::NOMINAL));
+    assert_eq!(p, BrushProfile::builtin("pen1").unwrap());
+    // One field of the two given: the other takes its nominal value.
+    let mut v = pen1_json();
+    v["hairs"] = serde_json::json!({"trail_reach": 0.3});
+    let p = BrushProfile::from_json(&v.to_string(), "p.json").unwrap();
+    assert_eq!((p.hairs.trail_reach, p.hairs.contact_h_mm), (0.3, brush_model::CONTACT_H_MM));
+    for (field, bad) in [("trail_reach", 0.0), ("trail_reach", 1.5), ("contact_h_mm", -0.1), ("contact_h_mm", 60.0)] {
+        let mut v = pen1_json();
+        v["hairs"][field] = serde_json::json!(bad);
+        let e = BrushProfile::from_json(&v.to_string(), "p.json").unwrap_err();
+        assert!(e.to_string().contains(&format!("hairs.{field}")), "{e}");
+    }
+    let mut v = pen1_json();
+    v["hairs"]["stiffness"] = serde_json::json!(1.0);
+    let e = BrushProfile::from_json(&v.to_string(), "p.json").unwrap_err();
+    assert!(chain(&e).contains("stiffness"), "{}", chain(&e));
+}

@@ -317,16 +317,14 @@ pub fn run(args: Args) -> Result<()> {
     // residual, what the brush that wrote the last attempt (corrected) does not explain (ILC),
     // with --refine's options or, without --refine, its defaults; --brush-only leaves the track
     // lever out. The next attempt is planned, refined and its residual predicted with the
-    // brush's fitted trail (the forward model's own without --observed).
-    let trail_reach = correction.as_ref().map_or(brush_model::TRAIL_REACH, |c| c.trail_reach);
+    // corrected brush, its fitted hairs included.
     let refine = match (args.refine.options()?, &observed) {
         (Some(r), _) => Some(r),
         (None, Some(_)) if !args.brush_only => Some(track_refine::RefineOptions::default()),
         _ => None,
-    }
-    .map(|r| track_refine::RefineOptions { trail_reach, ..r });
+    };
     let residuals = match (&observed, refine) {
-        (Some(o), Some(_)) => Some(o.residuals(&profile, args.model, trail_reach)?),
+        (Some(o), Some(_)) => Some(o.residuals(&profile, args.model)?),
         _ => None,
     };
     // After the re-fit, the brush for the next attempt: the one whose corrected footprints
@@ -364,7 +362,6 @@ pub fn run(args: Args) -> Result<()> {
         alpha_rad,
         refine: write_refine,
         generator,
-        trail_reach,
         ..WriteOptions::default()
     };
     let text = TextOptions {
@@ -467,7 +464,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     }
     if !single {
-        let img = sheet_png(&results, &sheet_track, &profile, &opts.forward_model(), args.model, &lay, args.size)?;
+        let img = sheet_png(&results, &sheet_track, &profile, args.model, &lay, args.size)?;
         write_atomic(&stage.path().join("sheet.png"), &img.encode_png()?)?;
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
         write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
@@ -494,11 +491,11 @@ pub fn run(args: Args) -> Result<()> {
         match (&choice, &correction) {
             (Some(c), _) => println!("brush (--brush auto): {}", c.reason),
             (None, Some(c)) if c.not_taken.is_some() => println!(
-                "brush kept from the photo (--observed): {corrected_name}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm, the tip trailing {:.1} footprint lengths) explains only {:.0} % of the ink error {:.4} (under {:.0} %){next}; written to {}{}",
+                "brush kept from the photo (--observed): {corrected_name}; the best re-fit (width ×{:.3}, length ×{:.3}, spread {:+.2} mm, {}) explains only {:.0} % of the ink error {:.4} (under {:.0} %){next}; written to {}{}",
                 c.not_taken.map_or(1.0, |v| v[0]),
                 c.not_taken.map_or(1.0, |v| v[1]),
                 c.not_taken.map_or(0.0, |v| v[2]),
-                c.trail_reach,
+                hairs_text(&profile.hairs),
                 c.not_taken.map_or(0.0, |v| 100.0 * (1.0 - v[3] / c.ink_error_before)),
                 c.ink_error_before,
                 100.0 * pipeline::MIN_CORRECTION_GAIN,
@@ -510,12 +507,12 @@ pub fn run(args: Args) -> Result<()> {
                 }
             ),
             (None, Some(c)) => println!(
-                "brush re-fitted from the photo (--observed): {corrected_name} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} (fitted with the tip trailing {:.1} footprint lengths; ink error {:.4} → {:.4}){next}; written to {}{}",
+                "brush re-fitted from the photo (--observed): {corrected_name} = width ×{:.3}, length ×{:.3}, spread {:+.2} mm on top of {} ({}; ink error {:.4} → {:.4}){next}; written to {}{}",
                 c.width_factor,
                 c.length_factor,
                 c.spread_mm,
                 observed.as_ref().map_or("", |o| o.track.brush.name.as_str()),
-                c.trail_reach,
+                hairs_text(&profile.hairs),
                 c.ink_error_before,
                 c.ink_error_after,
                 args.output.join("brush.json").display(),
@@ -727,6 +724,14 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
     Ok(())
 }
 
+/// The fitted hairs in words, for the closing line of `write --observed`.
+fn hairs_text(h: &brush_model::HairMotion) -> String {
+    format!(
+        "the tip trailing {:.1} footprint lengths, the hairs following from {:.2} mm of press",
+        h.trail_reach, h.contact_h_mm
+    )
+}
+
 /// Whether two profiles are the same brush: the same name, brush and ranges, and footprint
 /// models equal to 1e-9 mm (a correction carried back onto its own base rounds).
 fn same_brush(a: &BrushProfile, b: &BrushProfile) -> bool {
@@ -755,17 +760,16 @@ fn sheet_png(
     results: &[Written],
     sheet_track: &SheetTrack,
     profile: &BrushProfile,
-    fm: &brush_model::ForwardModel,
     model: ModelKind,
     lay: &Layout,
     size: u32,
 ) -> Result<bezier_raster::Coverage> {
     let tracks: Vec<&brush_model::Track> = results.iter().map(|r| &r.track).collect();
-    let mut img = pipeline::sheet_image_of(&tracks, profile, fm, model, lay, size).context("sheet.png")?;
+    let mut img = pipeline::sheet_image_of(&tracks, profile, model, lay, size).context("sheet.png")?;
     if sheet_track.mark_strokes > 0 {
         let marks = brush_model::Track { strokes: sheet_track.strokes[..sheet_track.mark_strokes].to_vec() };
         let (wp, hp) = lay.image_px(size);
-        let stamps = bezier_raster::track_stamps_with(&marks, profile, brush_model::Extrapolation::Refuse, fm)
+        let stamps = bezier_raster::track_stamps(&marks, profile, brush_model::Extrapolation::Refuse)
             .context("sheet.png: the registration marks")?;
         let m = bezier_raster::render_stamps(
             &stamps,
@@ -935,7 +939,7 @@ impl ObservedRun {
         profile: &BrushProfile,
         model: ModelKind,
     ) -> Result<(pipeline::BrushCorrection, BrushProfile)> {
-        let c = pipeline::fit_brush_from(&self.attempts(), profile, model, self.trail_reach()?)
+        let c = pipeline::fit_brush(&self.attempts(), profile, model)
             .with_context(|| format!("--observed {}: re-fitting the brush", self.dir.display()))?;
         let root = profile.name.split('+').next().unwrap_or(&profile.name);
         let name = match c.not_taken {
@@ -978,31 +982,12 @@ impl ObservedRun {
         }
     }
 
-    /// The trailing reach the observed sheet's brush was last fitted under (the last round's
-    /// `correction.trail_reach` in its summary.json), the forward model's own when none was.
-    ///
-    /// # Errors
-    /// A reach that is there but not a number in (0, 1] (a damaged or hand-edited summary).
-    fn trail_reach(&self) -> Result<f64> {
-        let Some(v) = self.earlier.last().map(|r| &r["correction"]["trail_reach"]).filter(|v| !v.is_null()) else {
-            return Ok(brush_model::TRAIL_REACH);
-        };
-        match v.as_f64() {
-            Some(r) if r > 0.0 && r <= 1.0 => Ok(r),
-            _ => bail!(
-                "{}: rounds[{}].correction.trail_reach is {v} (expected a number in (0, 1], the fitted trailing reach)",
-                self.sheet_dir.join("summary.json").display(),
-                self.earlier.len() - 1
-            ),
-        }
-    }
-
-    /// Each character's residual: observed ink minus the last attempt through `profile` with
-    /// the tip trailing `trail_reach`.
-    fn residuals(&self, profile: &BrushProfile, model: ModelKind, trail_reach: f64) -> Result<Vec<pipeline::Residual>> {
+    /// Each character's residual: observed ink minus the last attempt through `profile` (its
+    /// footprints and hairs).
+    fn residuals(&self, profile: &BrushProfile, model: ModelKind) -> Result<Vec<pipeline::Residual>> {
         self.attempts()
             .iter()
-            .map(|a| pipeline::Residual::of(a, profile, model, trail_reach))
+            .map(|a| pipeline::Residual::of(a, profile, model))
             .collect::<Result<_, _>>()
             .with_context(|| format!("--observed {}", self.dir.display()))
     }

@@ -1,5 +1,6 @@
 //! The closed loop against the test world (`common::world`): a sheet written, inked by a brush
-//! that writes wider, longer, with its hairs lagging and its ink spreading, photographed,
+//! that writes wider, longer, with its hairs lagging, trailing less and turning only under a
+//! press, and its ink spreading, photographed,
 //! observed, and written again with `--observed` (the brush re-fitted and the tracks refined
 //! against the glyph shifted by the observed residual; with `--brush-only` the brush alone),
 //! twice. Scored by the
@@ -48,6 +49,13 @@ fn same_world(_: &brush_model::BrushProfile) -> WorldBrush {
 /// correction over to them over-corrects them.
 fn world_by_brush(truth: &brush_model::BrushProfile) -> WorldBrush {
     if truth.brush.radius_mm < 6.0 { WorldBrush { width: 1.08, length: 1.05, ..WORLD } } else { WORLD }
+}
+
+/// A world whose hairs need 3 mm of press to turn: more than the nominal profile says (1 mm) and
+/// than the planner's glides give it (2 mm), so the first attempt leaves wedges that the brush
+/// fit must explain with a contact depth (`MAOBI_LOOP_WORLD=stiff`).
+fn stiff_world(_: &brush_model::BrushProfile) -> WorldBrush {
+    WorldBrush { contact_h_mm: 3.0, ..WORLD }
 }
 
 const FAST: Setup<'static> =
@@ -197,6 +205,12 @@ fn two_rounds(tracks: Tracks) {
         assert_eq!(r["round"], k);
         let seen = json(&c.observed[k].join("summary.json"));
         assert_eq!(r["chars"][0]["vs_glyph"], seen["chars"][0]["vs_glyph"]);
+        // The hairs are fitted among the brush's corrections and carried in its profile: the
+        // world's need for 1 mm of press cannot be told from the nominal 1 mm on a sheet whose
+        // glides press 2 mm, so the nominal depth is kept.
+        let hairs = &r["correction"]["hairs"];
+        assert_eq!(hairs["contact_h_mm"], serde_json::json!(brush_model::CONTACT_H_MM), "{r}");
+        assert_eq!(json(&c.sheets[k + 1].join("brush.json"))["hairs"], *hairs, "{r}");
     }
     // The first correction sees the world's wider, longer brush; the second changes the ink
     // far less.
@@ -250,14 +264,15 @@ fn two_rounds(tracks: Tracks) {
         assert_eq!(round["track"], "built with the corrected brush", "{round}");
         assert_eq!(round["brush_after"], rounds[0]["brush_after"], "{round}");
         fails(&maobi(&["write", FAST.chars, "--sheet", "A4", "--brush-only", "-o", s(&only)]), "--observed");
-        // A damaged trailing reach in the observed sheet's rounds is refused by name, and
-        // nothing is written.
-        let sheet_summary = c.sheets[1].join("summary.json");
-        let mut damaged = json(&sheet_summary);
-        damaged["rounds"][0]["correction"]["trail_reach"] = serde_json::json!(7.5);
-        std::fs::write(&sheet_summary, damaged.to_string()).unwrap();
+        // The corrected sheet's track carries the brush as fitted, its hairs included; a
+        // damaged trailing reach there is refused by name, and nothing is written.
+        let sheet_track = c.sheets[1].join("track.json");
+        let mut damaged = json(&sheet_track);
+        assert_eq!(damaged["brush"]["hairs"], json(&c.sheets[1].join("brush.json"))["hairs"]);
+        damaged["brush"]["hairs"]["trail_reach"] = serde_json::json!(7.5);
+        std::fs::write(&sheet_track, damaged.to_string()).unwrap();
         let out = dir.join("damaged");
-        fails(&rewrite(&c.observed[1], &[], &out), "rounds[0].correction.trail_reach is 7.5");
+        fails(&rewrite(&c.observed[1], &[], &out), "hairs.trail_reach");
         assert!(!out.exists());
     }
 }
@@ -336,9 +351,10 @@ fn closed_loop_figures() {
     let dir = &std::env::var_os("MAOBI_LOOP_KEEP").map_or(dir.to_path_buf(), PathBuf::from);
     // `MAOBI_LOOP_CHARS` takes other characters (the tuning set, 中国, when trying a change).
     let chars = std::env::var("MAOBI_LOOP_CHARS").unwrap_or_else(|_| FULL_CHARS.to_string());
-    // `MAOBI_LOOP_WORLD=by-brush`: the world of [`world_by_brush`].
+    // `MAOBI_LOOP_WORLD=by-brush`: the world of [`world_by_brush`]; `stiff`: [`stiff_world`].
     let world = match std::env::var("MAOBI_LOOP_WORLD").as_deref() {
         Ok("by-brush") => world_by_brush,
+        Ok("stiff") => stiff_world,
         _ => same_world,
     };
     let full = Setup { chars: &chars, size: 256, photo: [PHOTO_W, PHOTO_H], focal_px: FOCAL_PX, world };

@@ -26,18 +26,11 @@ pub struct Directions {
 }
 
 impl Problem<'_> {
-    /// The forward model the directions are derived with: the default one with
-    /// [`RefineOptions::trail_reach`](crate::RefineOptions::trail_reach).
-    fn model(&self) -> ForwardModel {
-        ForwardModel { trail_reach: self.opts.trail_reach, ..ForwardModel::default() }
-    }
-
     /// The track at an iterate with every direction re-derived by the forward model, as
     /// `trajectory::build_track` derives them (see [`Problem`]), and the pressed points'
     /// directions.
     pub fn directions(&self, theta: &[f64]) -> Directions {
-        let model = self.model();
-        let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..model };
+        let dragged = ForwardModel { tilt_threshold_rad: f64::INFINITY, ..ForwardModel::default() };
         let strokes: Vec<Stroke> = self
             .vars
             .states(theta)
@@ -73,14 +66,18 @@ impl Problem<'_> {
 
     /// The path sample an upright brush's footprint at point `i` aims at under the forward
     /// model's drag rule (walking back along the pressed path since touch-down, the first sample
-    /// at least `trail_reach` footprint lengths away), found by sampling the path as the model
-    /// does; `None` where another rule set the direction or the found sample disagrees with
-    /// `beta` (then the angle is kept fixed).
+    /// at least the profile's `hairs.trail_reach` footprint lengths away), found by sampling
+    /// the path as the model does; `None` where another rule set the direction or the found
+    /// sample disagrees with `beta` (then the angle is kept fixed). The walk stops where the
+    /// brush was lifted or pressed lighter than the hairs' contact depth (there the model
+    /// carries the bend along; a sample found past it would not be the one the model aims at,
+    /// and the check against `beta` keeps the angle instead).
     fn find_aim(&self, pts: &[TrackPoint], s: usize, i: usize, beta: f64) -> Option<((usize, usize, f64), [f64; 3])> {
-        let model = self.model();
+        let model = ForwardModel::default();
+        let hairs = self.profile.hairs;
         let p = pts[i];
         let len = self.profile.predict_oriented(&p.press(), Extrapolation::Allow).ok()?.length_mm();
-        let reach = model.trail_reach * len;
+        let reach = hairs.trail_reach * len;
         // The farthest sample so far (the drag rule's fallback before the brush has moved
         // `reach` since touch-down): distance, segment's groups, fraction.
         let mut far: Option<(f64, [f64; 2], usize, usize, f64)> = None;
@@ -97,7 +94,7 @@ impl Problem<'_> {
             for m in (0..n).rev() {
                 let f = m as f64 / n as f64;
                 let h = a.h_mm + f * (b.h_mm - a.h_mm);
-                if !(h > 0.0) {
+                if !(h > 0.0 && h >= hairs.contact_h_mm) {
                     break 'walk;
                 }
                 let (x, y) = (a.x_mm + f * (b.x_mm - a.x_mm), a.y_mm + f * (b.y_mm - a.y_mm));
@@ -133,11 +130,11 @@ impl Problem<'_> {
         Some(((ga, gb, f), [0.0; 3]))
     }
 
-    /// The drag rule's reach of a press, mm: `trail_reach` × footprint length (at β = 0, as
-    /// the forward model takes it), from the profile's linear model.
+    /// The drag rule's reach of a press, mm: the profile's `hairs.trail_reach` × footprint
+    /// length (at β = 0, as the forward model takes it), from the profile's linear model.
     fn reach(&self, h: f64, alpha: f64) -> f64 {
         let m = &self.profile.model;
-        self.opts.trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
+        self.profile.hairs.trail_reach * (m.lt_mm.eval(h, alpha, 0.0) + m.lh_mm.eval(h, alpha, 0.0))
     }
 
     /// `∂reach/∂(h, α)` of [`Self::reach`] (constant: the profile's model is linear in h and α).
@@ -145,7 +142,7 @@ impl Problem<'_> {
         let m = &self.profile.model;
         let c = |t: &brush_model::Terms| [t.h_mm.unwrap_or(0.0), t.alpha_rad.unwrap_or(0.0)];
         let (a, b) = (c(&m.lt_mm), c(&m.lh_mm));
-        let tr = self.opts.trail_reach;
+        let tr = self.profile.hairs.trail_reach;
         [tr * (a[0] + b[0]), tr * (a[1] + b[1])]
     }
 

@@ -48,7 +48,7 @@ pub struct LossTerms {
 /// variable vector holds every group's `x, y`, then every pressed point's `h`, then every tilt
 /// variable's `α`. Everything else is fixed: the number and order of strokes and points, the pen
 /// lifts, and the depth of every unpressed state (the reverse entry's zero presses, the
-/// turn-over glide at `trajectory::GLIDE_H_MM`, the eases between pieces stay unpressed).
+/// turn-over glide at `trajectory::glide_h_mm`, the eases between pieces stay unpressed).
 ///
 /// **Directions are not variables.** Which way a footprint points follows from the motion
 /// (docs/brush-model.md): [`Problem::directions`] re-derives it with the forward model the way

@@ -218,9 +218,10 @@ fn the_reverse_entry_moves_backwards_at_full_width_then_writes_forwards() {
     for q in &entry[1..entry.len() - 1] {
         assert!((q.h_mm - body_h).abs() < 0.05 * body_h, "entry pressed at {} (body {body_h})", q.h_mm);
     }
-    // Then it turns over with the tip only touching, and writes forwards with the hairs trailing.
+    // Then it turns over pressed lightly (no footprint), and writes forwards with the hairs
+    // trailing.
     let rest = &pts[entry.len()..];
-    assert!(rest[0].h_mm < 0.1, "eases up before turning over");
+    assert_eq!(rest[0].h_mm, trajectory::glide_h_mm(&pen1), "eases up before turning over");
     let last = pts[pts.len() - 1];
     assert!(last.x_mm > entry[0].x_mm && last.beta_rad.cos() < -0.9, "the body trails");
 }
@@ -281,9 +282,12 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
     let end = b.to_paper(Point::new(x0 + 50.0, y0));
     assert!(pts[head].anchor().distance(start) < 1e-9, "{:?}", pts[head]);
     assert!(pts[head + 1].h_mm < pen1.ranges.h_mm.min, "a lone press");
-    // Before it the brush glides back along the piece with only its tip touching (never lifted),
-    // so the head's footprint trails forward along the piece by the drag rule.
-    assert!(head > 2 && pts[..head].iter().all(|q| q.h_mm == trajectory::GLIDE_H_MM), "{:?}", &pts[..head]);
+    // Before it the brush glides back along the piece pressed lightly (never lifted, deeper than
+    // its hairs need to follow the motion, lighter than any footprint), so the head's footprint
+    // trails forward along the piece by the drag rule.
+    let glide = trajectory::glide_h_mm(&pen1);
+    assert!(glide > pen1.hairs.contact_h_mm && glide < pen1.ranges.h_mm.min);
+    assert!(head > 2 && pts[..head].iter().all(|q| q.h_mm == glide), "{:?}", &pts[..head]);
     assert!(pts[0].anchor().distance(start) > 2.0, "the glide starts along the piece");
     let forward = (end.y_mm - start.y_mm).atan2(end.x_mm - start.x_mm);
     assert!(
@@ -293,9 +297,8 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
     );
 }
 
-#[test]
-fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trail_derives() {
-    // 永 upright: the closed loop plans with the trailing reach it fitted to the observed ink.
+/// pen1, 永's median centre lines and upright track options in its automatic box.
+fn yong_upright() -> (BrushProfile, Vec<trajectory::StrokePath>, TrackOptions) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
     let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
@@ -305,15 +308,23 @@ fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trai
         alpha_rad: 0.0,
         sizing: Sizing::Brush,
     };
+    (pen1, paths, opts)
+}
+
+#[test]
+fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trail_derives() {
+    // 永 upright: the closed loop plans with the brush whose trailing reach it fitted to the
+    // observed ink.
+    let (pen1, paths, opts) = yong_upright();
     let own = build_track(&paths, &pen1, &opts).unwrap().track;
-    let same = trajectory::build_track_with(&paths, &pen1, &opts, &brush_model::ForwardModel::default()).unwrap().track;
-    assert_eq!(own, same, "the default model is build_track");
-    let short = brush_model::ForwardModel { trail_reach: 0.3, ..brush_model::ForwardModel::default() };
-    let t = trajectory::build_track_with(&paths, &pen1, &opts, &short).unwrap().track;
+    let mut short = pen1.clone();
+    short.hairs.trail_reach = 0.3;
+    let t = build_track(&paths, &short, &opts).unwrap().track;
+    let model = brush_model::ForwardModel::default();
     let mut turned = 0;
     for (s, o) in t.strokes.iter().zip(&own.strokes) {
         assert_eq!(s.points.len(), o.points.len());
-        let sweep = short.sweep(&pen1, &s.points, Extrapolation::Refuse);
+        let sweep = model.sweep(&short, &s.points, Extrapolation::Refuse);
         for ((p, q), d) in s.points.iter().zip(&o.points).zip(&sweep.directions) {
             // The motion is the same: the trail only decides which way the footprints point.
             assert_eq!((p.x_mm, p.y_mm, p.h_mm, p.alpha_rad), (q.x_mm, q.y_mm, q.h_mm, q.alpha_rad));
@@ -328,4 +339,58 @@ fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trai
     }
     // Round the curves the tip 0.3 footprint lengths back points the footprints otherwise.
     assert!(turned > 10, "{turned} footprints turned");
+}
+
+/// The glides are pressed past the hairs' contact depth, so the footprints' directions do not
+/// depend on what the hairs do below it: the track of a brush whose hairs follow only from
+/// 1 mm (the nominal profile) points every footprint as the track of a brush whose hairs follow
+/// any touch (contact 0, glides at 0.01 mm) does, and as the nominal brush would if its hairs
+/// needed anything up to twice that (its track swept with hairs needing 1.9 mm).
+#[test]
+fn glides_pressed_past_the_contact_depth_point_every_footprint_as_any_touch_would() {
+    let (pen1, paths, opts) = yong_upright();
+    let with_contact = |c: f64| {
+        let mut p = pen1.clone();
+        p.hairs.contact_h_mm = c;
+        p
+    };
+    let nominal = build_track(&paths, &pen1, &opts).unwrap().track;
+    let touch = build_track(&paths, &with_contact(0.0), &opts).unwrap().track;
+    let glide = trajectory::glide_h_mm(&pen1);
+    let stiff = with_contact(0.95 * glide);
+    let model = brush_model::ForwardModel::default();
+    let mut glides = 0;
+    for (n, t) in nominal.strokes.iter().zip(&touch.strokes) {
+        assert_eq!(n.points.len(), t.points.len());
+        let swept = model.sweep(&stiff, &n.points, Extrapolation::Refuse).directions;
+        for ((p, q), d) in n.points.iter().zip(&t.points).zip(&swept) {
+            assert_eq!((p.x_mm, p.y_mm), (q.x_mm, q.y_mm));
+            if p.h_mm >= pen1.ranges.h_mm.min {
+                assert_eq!(p.h_mm, q.h_mm);
+                // (to a hundredth of a radian: where the brush comes down from the surface while
+                // moving, the samples of the descent lighter than the contact depth do not
+                // start the pressed path, which moves its start by a fraction of a spacing)
+                let dd = brush_model::motion::wrap(p.beta_rad - q.beta_rad).abs();
+                assert!(dd < 0.01, "{dd} at {p:?} / {q:?}");
+                let d = d.expect("a pressed point has a direction");
+                assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 0.01, "β {} vs {d}", p.beta_rad);
+            } else if p.h_mm > 0.0 {
+                // Every glide is pressed past the contact depth (0.01 mm for contact 0).
+                assert_eq!((p.h_mm, q.h_mm), (glide, trajectory::GLIDE_H_MM));
+                glides += 1;
+            }
+        }
+    }
+    assert!(glides > 100, "{glides} glide states");
+    // Swept with hairs that need more than the glide gives, some footprints point otherwise.
+    let stiffer = with_contact(1.05 * glide);
+    let differs = nominal.strokes.iter().any(|n| {
+        let a = model.sweep(&pen1, &n.points, Extrapolation::Refuse).directions;
+        let b = model.sweep(&stiffer, &n.points, Extrapolation::Refuse).directions;
+        a.iter().zip(&b).any(|(x, y)| match (x, y) {
+            (Some(x), Some(y)) => brush_model::motion::wrap(x - y).abs() > 0.1,
+            _ => false,
+        })
+    });
+    assert!(differs, "a glide lighter than the contact depth leaves the hairs unturned");
 }

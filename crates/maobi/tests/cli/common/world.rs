@@ -1,170 +1,53 @@
 //! A world that is not the model, and a camera, for the closed-loop tests: ink made by a brush
-//! that writes differently from `brush_model::ForwardModel` (wider, longer, hairs lagging
-//! differently, ink spreading), photographed by a simulated camera (a pose with tilt, lens
-//! blur, uneven light, noise, JPEG). The world's and the camera's constants live here only
-//! (docs/closed-loop.md): maobi's library code must not know them.
+//! that writes differently from `brush_model::ForwardModel` (wider, longer, hairs lagging and
+//! trailing differently and turning only under a press, ink spreading: the `worlds` crate),
+//! photographed by a simulated camera (a pose with tilt, lens blur, uneven light, noise, JPEG).
+//! The world's and the camera's constants live in test code only (docs/closed-loop.md): maobi's
+//! library code must not know them.
 
 #![allow(dead_code)]
 
 use std::path::Path;
 
 use bezier_raster::{ModelKind, Stamp, render_stamps};
-use brush_model::{BrushProfile, Extrapolation, Footprint, PointMm, Press, Stroke};
+use brush_model::{BrushProfile, PointMm, Stroke};
+pub use worlds::World as WorldBrush;
+pub use worlds::{MISMATCH_LAG_MM as WORLD_LAG_MM, MISMATCH_TRAIL_REACH as WORLD_TRAIL_REACH};
 
 use super::{maobi, ok, s};
 
 // ---- The world: how its brush writes (differs from the profile and the forward model). ----
 
-/// Its belly half-width against the profile's.
-pub const WORLD_WIDTH: f64 = 1.18;
-/// Its tip and root lengths against the profile's.
-pub const WORLD_LENGTH: f64 = 1.12;
-/// The footprint's root end lags this far behind the commanded point along the path, mm.
-pub const WORLD_LAG_MM: f64 = 0.4;
-/// An upright brush's tip lies on the path this fraction of a footprint length back (the
-/// forward model: 0.5).
-pub const WORLD_TRAIL_REACH: f64 = 0.3;
-/// Ink spreads this far past the footprint's outline, mm.
-pub const WORLD_SPREAD_MM: f64 = 0.3;
+/// The depth from which the test world's hairs follow motion, mm: the top of the range issue 44
+/// asks the worlds to cover (the planner's glides must turn them without the loop's help).
+pub const WORLD_CONTACT_H_MM: f64 = 1.0;
+
+/// The test world's brush: the mismatched brush of `worlds` (belly ×1.18, lengths ×1.12, root
+/// lag 0.4 mm, tip 0.3 footprint lengths back, spread 0.3 mm) whose hairs need
+/// [`WORLD_CONTACT_H_MM`] of press to turn.
+pub const WORLD: WorldBrush = WorldBrush { contact_h_mm: WORLD_CONTACT_H_MM, ..WorldBrush::MISMATCH };
+
 /// The world's paper raster, px per mm.
 pub const WORLD_PX_PER_MM: f64 = 8.0;
 
-/// How a world's brush writes against the profile (the world above is [`WORLD`]).
-#[derive(Clone, Copy, Debug)]
-pub struct WorldBrush {
-    /// Belly half-width factor.
-    pub width: f64,
-    /// Tip and root length factor.
-    pub length: f64,
-    /// The root end's lag behind the commanded point along the path, mm.
-    pub lag_mm: f64,
-    /// An upright brush's tip lies on the path this fraction of a footprint length back.
-    pub trail_reach: f64,
-    /// Ink spread past the outline, mm.
-    pub spread_mm: f64,
-}
-
-/// The test world's brush (the constants above).
-pub const WORLD: WorldBrush = WorldBrush {
-    width: WORLD_WIDTH,
-    length: WORLD_LENGTH,
-    lag_mm: WORLD_LAG_MM,
-    trail_reach: WORLD_TRAIL_REACH,
-    spread_mm: WORLD_SPREAD_MM,
-};
-
-/// A world whose brush is the one the profile describes, written the forward model's way (tip
-/// half a footprint back, no lag, no spread): the "world equals the model" baseline.
-pub const MODEL_WORLD: WorldBrush =
-    WorldBrush { width: 1.0, length: 1.0, lag_mm: 0.0, trail_reach: 0.5, spread_mm: 0.0 };
+/// A world whose brush is the one the profile describes, written the forward model's way with
+/// the nominal hairs (tip half a footprint back, following from 1 mm of press; no lag, no
+/// spread): the "world equals the model" baseline.
+pub const MODEL_WORLD: WorldBrush = WorldBrush { contact_h_mm: brush_model::CONTACT_H_MM, ..WorldBrush::MODEL };
 
 /// The world's footprints along `strokes` (paper mm).
 pub fn world_stamps(strokes: &[Stroke], profile: &BrushProfile) -> Vec<Stamp> {
-    world_stamps_with(strokes, profile, &WORLD)
+    WORLD.track_stamps(strokes, profile)
 }
 
 /// The footprints of a world with brush `w` along `strokes` (paper mm).
 pub fn world_stamps_with(strokes: &[Stroke], profile: &BrushProfile, w: &WorldBrush) -> Vec<Stamp> {
-    let (world_width, world_length, world_lag_mm, world_trail_reach, world_spread_mm) =
-        (w.width, w.length, w.lag_mm, w.trail_reach, w.spread_mm);
-    let mut out = Vec::new();
-    for st in strokes {
-        // Dense samples along the commanded path (0.1 mm), depth and tilt linear.
-        let mut samples = Vec::new();
-        for w in st.points.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let n = ((b.x_mm - a.x_mm).hypot(b.y_mm - a.y_mm) / 0.1).ceil().max(1.0) as usize;
-            for k in 0..n {
-                let f = k as f64 / n as f64;
-                samples.push([
-                    a.x_mm + f * (b.x_mm - a.x_mm),
-                    a.y_mm + f * (b.y_mm - a.y_mm),
-                    a.h_mm + f * (b.h_mm - a.h_mm),
-                    a.alpha_rad + f * (b.alpha_rad - a.alpha_rad),
-                    a.beta_rad,
-                ]);
-            }
-        }
-        if let Some(p) = st.points.last() {
-            samples.push([p.x_mm, p.y_mm, p.h_mm, p.alpha_rad, p.beta_rad]);
-        }
-        let mut hist: Vec<[f64; 2]> = Vec::new();
-        let mut cum: Vec<f64> = Vec::new();
-        let mut last: Option<f64> = None;
-        for (i, p) in samples.iter().enumerate() {
-            let here = [p[0], p[1]];
-            if p[2] <= 0.0 {
-                hist.clear();
-                cum.clear();
-                last = None;
-                continue;
-            }
-            let c = match (hist.last(), cum.last()) {
-                (Some(q), Some(c)) => c + (here[0] - q[0]).hypot(here[1] - q[1]),
-                _ => 0.0,
-            };
-            hist.push(here);
-            cum.push(c);
-            if p[2] < profile.ranges.h_mm.min {
-                continue;
-            }
-            let Ok(fp) = profile.predict(&Press::new(p[2], p[3], 0.0), Extrapolation::Allow) else { continue };
-            // The root end lags along the path.
-            let target = c - world_lag_mm;
-            let k = cum.partition_point(|&v| v < target).min(hist.len() - 1);
-            let anchor = if target <= 0.0 || k == 0 {
-                hist[0]
-            } else {
-                let (a, b, ca, cb) = (hist[k - 1], hist[k], cum[k - 1], cum[k]);
-                let f = if cb > ca { (target - ca) / (cb - ca) } else { 0.0 };
-                [a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]
-            };
-            let len = world_length * (fp.lt_mm + fp.lh_mm);
-            let dir = if p[3] >= 2f64.to_radians() {
-                Some(p[4])
-            } else {
-                let mut far = (0.0, None);
-                let mut found = None;
-                for q in hist[..=k.min(hist.len() - 1)].iter().rev() {
-                    let d = (q[0] - anchor[0]).hypot(q[1] - anchor[1]);
-                    if d >= world_trail_reach * len {
-                        found = Some((q[1] - anchor[1]).atan2(q[0] - anchor[0]));
-                        break;
-                    }
-                    if d > far.0 {
-                        far = (d, Some(*q));
-                    }
-                }
-                found.or(match far {
-                    (d, Some(q)) if d >= 0.3 => Some((q[1] - anchor[1]).atan2(q[0] - anchor[0])),
-                    _ => None,
-                })
-            };
-            let ahead = || {
-                samples[i..]
-                    .iter()
-                    .find(|q| (q[0] - here[0]).hypot(q[1] - here[1]) >= 0.3)
-                    .map(|q| (here[1] - q[1]).atan2(here[0] - q[0]))
-            };
-            let beta = dir.or(last).or_else(ahead).unwrap_or(std::f64::consts::FRAC_PI_2);
-            last = Some(beta);
-            // Spread: the outline grown at both ends and both sides.
-            let footprint = Footprint {
-                lt_mm: world_length * fp.lt_mm + world_spread_mm,
-                lh_mm: world_length * fp.lh_mm + world_spread_mm,
-                lr_mm: world_width * fp.lr_mm + world_spread_mm,
-            };
-            let anchor =
-                PointMm::new(anchor[0] - world_spread_mm * beta.cos(), anchor[1] - world_spread_mm * beta.sin());
-            out.push(Stamp { footprint, anchor, beta_rad: beta });
-        }
-    }
-    out
+    w.track_stamps(strokes, profile)
 }
 
 /// The world's ink in a frame: `size²` px over the box `[x0, y0, side]` mm.
 pub fn world_ink(stamps: &[Stamp], b: [f64; 3], size: u32) -> bezier_raster::Coverage {
-    render_stamps(stamps, ModelKind::Bsm.model(), PointMm::new(b[0], b[1]), size as f64 / b[2], size, size)
+    worlds::ink(stamps, b[0], b[1], b[2], size)
 }
 
 // ---- The camera. ----
