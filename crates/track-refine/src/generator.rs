@@ -97,7 +97,7 @@ impl GenModel {
     /// cannot be read.
     pub fn new(g: &Generator) -> Result<Self, RefineError> {
         Ok(Self {
-            net: InputVjp::new(g)?,
+            net: g.kernels()?.clone(),
             size: g.config.size as usize,
             px_per_mm: g.config.px_per_mm,
             beta: g.config.ranges.beta_rad,
