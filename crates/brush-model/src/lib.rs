@@ -41,7 +41,10 @@ mod regression;
 mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
-pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements, write_measurements};
+pub use measurements::{
+    MEASUREMENT_COLUMNS, Measurement, MeasurementError, load_measurements, measurement_fields, read_measurements,
+    write_measurements,
+};
 pub use motion::{DEPTH_EDGE_TOLERANCE_MM, ForwardModel, Sweep, TILT_THRESHOLD_RAD, TRAIL_REACH};
 pub use profile::{
     BrushProfile, Clamp, Extrapolation, InverseH, MAX_BRUSH_MM, MAX_FOOTPRINT_PER_LENGTH, MAX_PROFILE_BYTES,
