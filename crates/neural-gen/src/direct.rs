@@ -797,17 +797,7 @@ mod spec_tests {
     use candle_core::{DType, Device, Tensor};
     use candle_nn::{AdamW, Optimizer, ParamsAdamW, VarBuilder, VarMap};
 
-    fn values(n: usize, seed: u64, scale: f32) -> Vec<f32> {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                scale * ((s >> 40) as f32 / (1u64 << 23) as f32 - 1.0)
-            })
-            .collect()
-    }
+    use crate::kernels::test_values as values;
 
     /// Sets every variable of `varmap` to reproducible values of the size candle's default
     /// initialisation has (uniform, ±1/√fan-in), biases included so that every ReLU sees

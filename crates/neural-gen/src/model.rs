@@ -240,6 +240,20 @@ impl Generator {
         ))
     }
 
+    /// The images' side, px, after checking that `upstream` holds `size²` values for each of
+    /// `n` presses.
+    fn upstream_side(&self, n: usize, upstream: &[f32]) -> Result<usize, NeuralGenError> {
+        let s = self.config.size as usize;
+        if upstream.len() != n * s * s {
+            return Err(NeuralGenError::Shape(format!(
+                "upstream gradient has {} values, expected {} ({n} presses × {s}²)",
+                upstream.len(),
+                n * s * s
+            )));
+        }
+        Ok(s)
+    }
+
     /// Images for a batch of presses and, for each, the gradient of `Σ upstream_i · image_i`
     /// with respect to its press `(h [per mm], α [per rad], β [per rad])`. `upstream` holds
     /// `size²` values per press, press after press. One forward and one backward pass through
@@ -254,15 +268,7 @@ impl Generator {
         presses: &[Press],
         upstream: &[f32],
     ) -> Result<(Vec<Coverage>, Vec<[f64; 3]>), NeuralGenError> {
-        let s = self.config.size as usize;
-        if upstream.len() != presses.len() * s * s {
-            return Err(NeuralGenError::Shape(format!(
-                "upstream gradient has {} values, expected {} ({} presses × {s}²)",
-                upstream.len(),
-                presses.len() * s * s,
-                presses.len()
-            )));
-        }
+        let s = self.upstream_side(presses.len(), upstream)?;
         let net = self.kernels()?;
         let tape = net.forward(presses);
         let grads = net.vjp(&tape, upstream)?;
@@ -285,15 +291,8 @@ impl Generator {
         presses: &[Press],
         upstream: &[f32],
     ) -> Result<(Vec<Coverage>, Vec<[f64; 3]>), NeuralGenError> {
-        let s = self.config.size as usize;
+        let s = self.upstream_side(presses.len(), upstream)?;
         let b = presses.len();
-        if upstream.len() != b * s * s {
-            return Err(NeuralGenError::Shape(format!(
-                "upstream gradient has {} values, expected {} ({b} presses × {s}²)",
-                upstream.len(),
-                b * s * s
-            )));
-        }
         if b == 0 {
             return Ok((Vec::new(), Vec::new()));
         }
