@@ -13,7 +13,7 @@ use brush_model::BrushProfile;
 use pipeline::{BoxRule, ReportMeans, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
 use stroke_metrics::{SsimWorkspace, Summary};
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 use crate::figures::{Better, Figures, Regression, compare, fig};
 use crate::fixtures::root;
@@ -78,7 +78,7 @@ pub fn character_figures() -> Result<Figures> {
     let mut f = Figures::new();
     for method in [Method::Medians, Method::Skeleton] {
         let prepared =
-            chars.par_iter().map(|&c| Ok(prepare(glyph::embedded(c)?, Some(method))?)).collect::<Result<Vec<_>>>()?;
+            chars.par_iter().map(|&c| Ok(prepare(embedded_glyph(c)?, Some(method))?)).collect::<Result<Vec<_>>>()?;
         for model in ModelKind::ALL {
             // The executed figures (the program run as the simulator moves) for the B-BSM only.
             let execute = model == ModelKind::Bsm;

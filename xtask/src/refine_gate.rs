@@ -5,7 +5,7 @@ use anyhow::{Result, bail};
 use brush_model::BrushProfile;
 use pipeline::{BoxRule, RefineMeans, RefineOptions, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 use crate::figures::{Better, Figures, fig};
 
@@ -32,7 +32,7 @@ pub fn refine_figures() -> Result<Figures> {
     let reports = chars
         .par_iter()
         .map(|&c| {
-            let p = prepare(glyph::embedded(c)?, Some(Method::Medians))?;
+            let p = prepare(embedded_glyph(c)?, Some(Method::Medians))?;
             Ok(write_placed(&p, &pen1, &opts, BoxRule::Auto)?.report)
         })
         .collect::<Result<Vec<_>>>()?;

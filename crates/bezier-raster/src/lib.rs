@@ -49,10 +49,9 @@ pub use stroke_metrics;
 struct ReadmeDoctests;
 
 mod batch;
-// `binary` and `coverage` are namespaces of helpers (binary analysis; image files, PNG/SVG).
-pub mod binary;
+mod binary;
 mod canvas;
-pub mod coverage;
+mod coverage;
 mod dataset;
 mod models;
 mod raster;
@@ -61,8 +60,12 @@ pub use batch::{
     Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, sweep_stamps_with, track_stamps,
     track_stamps_with,
 };
+pub use binary::{connected_components, fill_holes, otsu_threshold};
 pub use canvas::StrokeCanvas;
-pub use coverage::{Coverage, ImageFileError, RasterError};
+pub use coverage::{
+    Coverage, ImageFileError, MAX_LOAD_PIXELS, MAX_SIDE, RasterError, decode_image, image_header, image_limits,
+    overlay_png, svg_document,
+};
 pub use dataset::{DatasetSpec, Sample};
 pub use models::{Bsm, Circle, Ellipse, Line, ModelKind, QBC_DISCS, Qbc, StrokeModel};
 pub use raster::Rasterizer;

@@ -32,11 +32,8 @@ struct ReadmeDoctests;
 
 mod footprint;
 mod measurements;
-// `motion` and `profile` stay public only for callers that still name items through them
-// (`brush_model::motion::wrap`, `brush_model::profile::MAX_BRUSH_MM`); everything in them is
-// re-exported below, which is the path to use.
-pub mod motion;
-pub mod profile;
+mod motion;
+mod profile;
 mod regression;
 mod units;
 

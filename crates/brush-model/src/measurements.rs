@@ -22,7 +22,7 @@ pub(crate) const MAX_ROWS: usize = 1_000_000;
 pub(crate) const MAX_BYTES: u64 = 64 << 20;
 
 /// Each column's accepted values (inclusive), with the reason given when a value is outside:
-/// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::profile::MAX_BRUSH_MM) can
+/// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::MAX_BRUSH_MM) can
 /// do, tilts short of lying flat, rotations within a turn either way.
 const BOUNDS: [(f64, f64, &str); 6] = [
     (0.0, 1000.0, "expected a depth of 0..=1000 mm"),

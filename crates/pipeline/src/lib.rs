@@ -12,7 +12,7 @@
 //! use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 //!
 //! let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-//! let glyph = trajectory::glyph::embedded('永')?;
+//! let glyph = trajectory::embedded_glyph('永')?;
 //! let prepared = prepare(glyph, None)?;
 //! let opts = WriteOptions { size: 128, ..WriteOptions::default() };
 //! let written = write_placed(&prepared, &pen1, &opts, BoxRule::Auto)?;

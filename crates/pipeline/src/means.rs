@@ -96,11 +96,11 @@ impl ReportMeans {
     /// ```no_run
     /// # fn main() -> Result<(), pipeline::Error> {
     /// use pipeline::{BoxRule, ReportMeans, WriteOptions, prepare, write_placed};
-    /// use pipeline::trajectory::glyph;
-    /// let pen1 = pipeline::brush_model::BrushProfile::builtin("pen1")?;
+    /// use trajectory::embedded_glyph;
+    /// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
     /// let mut reports = Vec::new();
     /// for c in ['十', '口'] {
-    ///     let p = prepare(glyph::embedded(c)?, None)?;
+    ///     let p = prepare(embedded_glyph(c)?, None)?;
     ///     reports.push(write_placed(&p, &pen1, &WriteOptions::default(), BoxRule::Auto)?.report);
     /// }
     /// let means = ReportMeans::of(&reports);

@@ -125,7 +125,7 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         _ => bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display()),
     };
     let what = || format!("--sheet-photo {}", photo_path.display());
-    let img = bezier_raster::coverage::decode_image(photo_path).with_context(what)?;
+    let img = bezier_raster::decode_image(photo_path).with_context(what)?;
     let photo = Photo::from_image(&img).with_context(what)?;
     let ink = ink_map(&photo).with_context(what)?;
     let reg = register(&ink, &marks).with_context(what)?;

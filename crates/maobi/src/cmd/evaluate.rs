@@ -7,7 +7,7 @@ use pipeline::{
 };
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{Method, glyph};
+use trajectory::{GlyphError, Method, embedded_chars};
 
 use crate::cmd::write::{glyph_input, prepare_char};
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
@@ -289,7 +289,7 @@ fn method_name(reports: &[CharReport]) -> String {
 
 /// Whether a glyph error says the fonts do not cover the character.
 fn is_uncovered(e: &anyhow::Error) -> bool {
-    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(glyph::GlyphError::Unknown { .. })))
+    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(GlyphError::Unknown { .. })))
 }
 
 /// The images of `--images DIR`: files `<char>.png|jpg|jpeg`, one character per name, sorted.
@@ -328,7 +328,7 @@ fn chars_and_input(args: &Args) -> Result<(Vec<char>, GlyphInput)> {
     let mut chars: Vec<char> = match &args.chars {
         Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
         None if args.images.is_some() => image_files.iter().map(|(c, _)| *c).collect(),
-        None => glyph::embedded_chars(),
+        None => embedded_chars(),
     };
     if args.images.is_some() {
         let missing: Vec<char> = chars.iter().filter(|c| !image_files.iter().any(|(f, _)| f == *c)).copied().collect();

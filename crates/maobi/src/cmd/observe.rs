@@ -117,8 +117,7 @@ fn load_sheet(dir: &Path) -> Result<(SheetTrack, Vec<KnownMark>, Vec<Planned>)> 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let (track, marks, chars) = load_sheet(&args.sheet)?;
-    let img = bezier_raster::coverage::decode_image(&args.photo)
-        .with_context(|| format!("PHOTO {}", args.photo.display()))?;
+    let img = bezier_raster::decode_image(&args.photo).with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let photo = Photo::from_image(&img).with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let ink = ink_map(&photo).with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let reg = register(&ink, &marks).with_context(|| format!("PHOTO {}", args.photo.display()))?;

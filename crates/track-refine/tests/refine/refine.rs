@@ -182,7 +182,7 @@ fn directions_follow_the_trail_reach_of_the_options_which_is_written_only_when_n
         };
         let want = model.with_directions(&profile, &track.strokes[0].points, brush_model::Extrapolation::Refuse);
         for (g, w) in got.iter().zip(&want) {
-            assert!(brush_model::motion::wrap(g - w.beta_rad).abs() < 1e-12, "{trail_reach}: {g} vs {}", w.beta_rad);
+            assert!(brush_model::wrap_angle_rad(g - w.beta_rad).abs() < 1e-12, "{trail_reach}: {g} vs {}", w.beta_rad);
         }
         got
     };
