@@ -39,6 +39,11 @@ fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e)
 }
 
+/// Images of side `s`, one after another in `images`, as coverages.
+fn coverages(images: &[f32], s: usize) -> Vec<Coverage> {
+    images.chunks_exact(s * s).map(|c| Coverage::from_vec(s as u32, s as u32, c.to_vec()).expect("sized")).collect()
+}
+
 /// A tensor's values as f32, flattened.
 fn tensor_vec(t: &Tensor) -> Result<Vec<f32>, NeuralGenError> {
     t.flatten_all().and_then(|f| f.to_dtype(DType::F32)).and_then(|f| f.to_vec1::<f32>()).map_err(cerr)
@@ -272,12 +277,7 @@ impl Generator {
         let net = self.kernels()?;
         let tape = net.forward(presses);
         let grads = net.vjp(&tape, upstream)?;
-        let imgs = tape
-            .images()
-            .chunks_exact(s * s)
-            .map(|c| Coverage::from_vec(s as u32, s as u32, c.to_vec()).expect("sized"))
-            .collect();
-        Ok((imgs, grads))
+        Ok((coverages(tape.images(), s), grads))
     }
 
     /// As [`Generator::images_and_vjps`], through candle's autograd (one forward and one
@@ -309,9 +309,7 @@ impl Generator {
         let k = self.config.normalise_slopes();
         let img = tensor_vec(&y)?;
         Ok((
-            img.chunks_exact(s * s)
-                .map(|c| Coverage::from_vec(s as u32, s as u32, c.to_vec()).expect("sized"))
-                .collect(),
+            coverages(&img, s),
             gx.chunks_exact(3).map(|v| [v[0] as f64 * k[0], v[1] as f64 * k[1], v[2] as f64 * k[2]]).collect(),
         ))
     }
