@@ -13,8 +13,9 @@
 //!   the neural generator ([`StrokeCanvas`]).
 //! * Batches: parallel rendering with rayon ([`render_batch`], [`render_track`]) and the [`Compositor`] for many stamps.
 //! * Datasets ([`DatasetSpec`]): deterministic random presses over a profile's range and their images.
-//! * [`binary`]: Otsu's threshold and connected components for binary analysis.
-//! * [`coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG.
+//! * Binary analysis: [`otsu_threshold`], [`connected_components`], [`fill_holes`].
+//! * [`Coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG
+//!   ([`svg_document`]); image files read within limits ([`decode_image`]).
 //!
 //! Pixel convention: x right, y down; pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in pixel
 //! units, so its centre is at `(i + 0.5, j + 0.5)`; paper point `(x, y)` mm is at

@@ -8,10 +8,10 @@
 //!   half-width `lr`) as two mirrored cubic Béziers, placed on the paper by an anchor and `β`.
 //! * Regression ([`fit_general`], [`fit_paper`], [`FitReport`]): the least-squares fits from measured presses to footprints (the paper's
 //!   general Eq. 6 and its Eq. 1–5 form) with a statsmodels-style report.
-//! * The measurements CSV ([`load_measurements`], [`Measurement`]).
-//! * [`motion`]: the forward model of the moving brush ([`ForwardModel`]): from the brush's
+//! * The measurements CSV ([`load_measurements`], [`Measurement`], [`measurement_fields`]).
+//! * The forward model of the moving brush ([`ForwardModel`]): from the brush's
 //!   commanded path (position, depth, tilt) to the footprints it leaves and which way they point.
-//! * [`profile`]: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
+//! * Profiles: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
 //!   and the inverse model (the h that gives a wanted width).
 //!
 //! ```

@@ -511,7 +511,7 @@ pub fn glyph_from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
 }
 
 /// A glyph from one font file: TrueType/OpenType (`.ttf`, `.otf`), the first face of a
-/// collection (`.ttc`, `.otc`), WOFF or WOFF2 (see [`font`]). Font units are scaled so the em is
+/// collection (`.ttc`, `.otc`), WOFF or WOFF2 (see [`FontSet`]). Font units are scaled so the em is
 /// 1024 units with the baseline at `y = 0` of the original frame (so the ideographic em box,
 /// from about −0.12 em to 0.88 em, lands on the 1024 box like hanzi-writer-data). No medians.
 /// For several files, folders or another face, see [`glyph_from_font_files`] and [`FontSet`].

@@ -89,7 +89,7 @@ pub enum Method {
     /// A skeleton of the glyph image.
     Skeleton,
     /// A stroke template (hanzi-writer medians of the same character) registered onto the glyph
-    /// ([`template`], [`centre_lines_from_template`]).
+    /// ([`register_template`], [`centre_lines_from_template`]).
     Template,
 }
 
