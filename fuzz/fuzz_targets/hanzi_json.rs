@@ -3,11 +3,11 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use trajectory::glyph::{self, GlyphSource, limits};
+use trajectory::{GlyphSource, limits, parse_hanzi_json};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };
-    let Ok(g) = glyph::parse_hanzi_json('永', text, GlyphSource::Embedded, "fuzz.json") else { return };
+    let Ok(g) = parse_hanzi_json('永', text, GlyphSource::Embedded, "fuzz.json") else { return };
     for m in g.medians.as_ref().expect("hanzi data has medians") {
         assert!(m.len() <= limits::MAX_MEDIAN_POINTS);
         for p in m {

@@ -3,12 +3,12 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use trajectory::glyph::{self, GlyphSource};
+use trajectory::{GlyphSource, parse_hanzi_json};
 
 fuzz_target!(|data: &[u8]| {
     let Ok(path) = std::str::from_utf8(data) else { return };
     let doc = serde_json::json!({"strokes": [path], "medians": [[[100, 400], [900, 400]]]}).to_string();
-    let Ok(g) = glyph::parse_hanzi_json('一', &doc, GlyphSource::Embedded, "fuzz.json") else { return };
-    let img = trajectory::raster::render_glyph(&g, 64);
+    let Ok(g) = parse_hanzi_json('一', &doc, GlyphSource::Embedded, "fuzz.json") else { return };
+    let img = trajectory::render_glyph(&g, 64);
     assert!(img.data().iter().all(|v| v.is_finite()));
 });

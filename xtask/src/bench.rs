@@ -302,7 +302,7 @@ fn pairs(root: &Path, quick: bool, rounds: usize) -> Result<String> {
         .filter(|&n| n > 0)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let pen1 = 2.0 * neural_gen::Arch::default_128().macs_per_image() as f64 * 64.0;
-    let ltp = 2.0 * neural_gen::Ltp::MACS_PER_IMAGE as f64 * 64.0;
+    let ltp = 2.0 * neural_gen::bench::Ltp::MACS_PER_IMAGE as f64 * 64.0;
     // A training step: the forward products, then those for the input and the weight gradients.
     let list = [
         Pair {

@@ -126,7 +126,7 @@ type NamedFile = (String, Vec<u8>);
 /// JPEG artefacts and a slight rotation, saved as PNG with their scale. Returns the labels CSV
 /// and the photos.
 fn photo_set() -> Result<(Vec<u8>, Vec<NamedFile>)> {
-    use stroke_fit::synth::{Degradation, photo, png_with_scale};
+    use stroke_fit::{Degradation, png_with_scale, synthetic_photo};
     let pen1 = BrushProfile::builtin("pen1")?;
     let px = 8.0;
     let mut labels = String::from("file,h_mm,alpha_deg,beta_deg\n");
@@ -149,7 +149,7 @@ fn photo_set() -> Result<(Vec<u8>, Vec<NamedFile>)> {
                 gradient: 0.2 + 0.02 * k as f64,
                 ..Degradation::default()
             };
-            let g = photo(&fp, anchor, beta, px, side, side, &d, 7000 + k);
+            let g = synthetic_photo(&fp, anchor, beta, px, side, side, &d, 7000 + k);
             let name = format!("stroke_{:02}.png", k + 1);
             labels.push_str(&format!("{name},{h},{a},{b}\n"));
             files.push((name, png_with_scale(&g, side, side, px)));
@@ -196,7 +196,7 @@ fn footprint_sheet() -> Result<Vec<u8>> {
 fn character_render(ch: char, method: trajectory::Method) -> Result<Vec<u8>> {
     use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
     let pen1 = BrushProfile::builtin("pen1")?;
-    let p = prepare(trajectory::glyph::embedded(ch)?, Some(method))?;
+    let p = prepare(trajectory::embedded_glyph(ch)?, Some(method))?;
     let opts = WriteOptions { size: 256, free_widths: false, ..WriteOptions::default() };
     let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
     Ok(r.render.encode_png()?)
@@ -226,7 +226,7 @@ fn python_golden(dir: &str, script: &str) -> Result<Vec<u8>> {
 /// `一.json`.
 fn hanzi_dir(i: &Inputs) -> Result<PathBuf> {
     let dir = i.hanzi_data.as_deref().context("needs --hanzi-data DIR (an unpacked `npm pack hanzi-writer-data`)")?;
-    trajectory::glyph::HANZI_SUBFOLDERS
+    trajectory::HANZI_SUBFOLDERS
         .iter()
         .map(|sub| if sub.is_empty() { dir.to_path_buf() } else { dir.join(sub) })
         .find(|d| d.join("一.json").is_file())
@@ -252,7 +252,7 @@ fn subset_chars() -> Result<Vec<char>> {
 }
 
 /// Every `<char>.json` of the package (one character in the name), packed by
-/// `trajectory::glyph::pack_hanzi` with the subset's order.
+/// `trajectory::pack_hanzi` with the subset's order.
 fn hanzi_blob(i: &Inputs) -> Result<Vec<u8>> {
     let dir = hanzi_dir(i)?;
     let mut files = Vec::new();
@@ -266,7 +266,7 @@ fn hanzi_blob(i: &Inputs) -> Result<Vec<u8>> {
         files.push((c, text));
     }
     files.sort_by_key(|f| f.0);
-    Ok(trajectory::glyph::pack_hanzi(&files, &subset_chars()?)?)
+    Ok(trajectory::pack_hanzi(&files, &subset_chars()?)?)
 }
 
 /// One minified line per character: `{"c":"永","strokes":[...],"medians":[...]}`, in frequency
@@ -324,7 +324,7 @@ pub fn run(args: &[String]) -> Result<()> {
         if f.needs_hanzi && inputs.hanzi_data.is_none() {
             if check && f.path.ends_with("hanzi.bin") {
                 // Not regenerable offline, but checkable: its hash, index and every character.
-                let n = trajectory::glyph::verify_embedded().context(f.path)?;
+                let n = trajectory::verify_embedded().context(f.path)?;
                 println!(
                     "ok       {}  (offline: hash, index and all {n} characters decode; regenerated only with --hanzi-data DIR)",
                     f.path

@@ -10,92 +10,17 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeModel};
 use brush_model::BrushProfile;
-use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
+use pipeline::{BoxRule, ReportMeans, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 use stroke_metrics::{SsimWorkspace, Summary};
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
+use crate::figures::{Better, Figures, Regression, compare, fig};
 use crate::fixtures::root;
+use crate::refine_gate::refine_figures;
 
 /// Characters the character gates write (all in the embedded subset).
 pub const GATE_CHARS: &str = "永字八法十口人丁山水中国书大小日月";
-
-/// Which way is better for a figure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Better {
-    /// Larger values are better (similarities).
-    Higher,
-    /// Smaller values are better (distances, errors).
-    Lower,
-}
-
-/// One recorded figure.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Figure {
-    /// The value.
-    pub value: f64,
-    /// How much worse it may get before the gate fails.
-    pub tolerance: f64,
-    /// Which way is better.
-    pub better: Better,
-}
-
-/// A group of figures, as stored in `fixtures/baselines/<group>.json`.
-pub type Figures = BTreeMap<String, Figure>;
-
-/// A figure that got worse than its baseline allows.
-#[derive(Debug, PartialEq)]
-pub struct Regression {
-    /// Figure name.
-    pub name: String,
-    /// Baseline value.
-    pub baseline: f64,
-    /// Value now.
-    pub value: f64,
-    /// Allowed change.
-    pub tolerance: f64,
-}
-
-impl std::fmt::Display for Regression {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{} regressed: baseline {:.6}, now {:.6} (tolerance {})",
-            self.name, self.baseline, self.value, self.tolerance
-        )
-    }
-}
-
-/// Compares figures with their baselines: every figure that got worse by more than its
-/// tolerance, and every baseline figure that is missing now.
-pub fn compare(baseline: &Figures, now: &Figures) -> Vec<Regression> {
-    let mut out = Vec::new();
-    for (name, b) in baseline {
-        let Some(n) = now.get(name) else {
-            out.push(Regression {
-                name: format!("{name} (missing)"),
-                baseline: b.value,
-                value: f64::NAN,
-                tolerance: b.tolerance,
-            });
-            continue;
-        };
-        let worse = match b.better {
-            Better::Higher => b.value - n.value,
-            Better::Lower => n.value - b.value,
-        };
-        if !(worse <= b.tolerance) {
-            out.push(Regression { name: name.clone(), baseline: b.value, value: n.value, tolerance: b.tolerance });
-        }
-    }
-    out
-}
-
-fn fig(value: f64, tolerance: f64, better: Better) -> Figure {
-    Figure { value, tolerance, better }
-}
 
 /// Stroke-model figures: each of `models` against `reference` over `n` presses of pen1 at 128²
 /// (CSIM and SSIM best, worst, mean), plus the reference's mean relative error of rendered ink
@@ -153,7 +78,7 @@ pub fn character_figures() -> Result<Figures> {
     let mut f = Figures::new();
     for method in [Method::Medians, Method::Skeleton] {
         let prepared =
-            chars.par_iter().map(|&c| Ok(prepare(glyph::embedded(c)?, Some(method))?)).collect::<Result<Vec<_>>>()?;
+            chars.par_iter().map(|&c| Ok(prepare(embedded_glyph(c)?, Some(method))?)).collect::<Result<Vec<_>>>()?;
         for model in ModelKind::ALL {
             // The executed figures (the program run as the simulator moves) for the B-BSM only.
             let execute = model == ModelKind::Bsm;
@@ -162,23 +87,30 @@ pub fn character_figures() -> Result<Figures> {
                 .par_iter()
                 .map(|p| Ok(write_placed(p, &pen1, &opts, BoxRule::Auto)?.report))
                 .collect::<Result<Vec<_>>>()?;
-            let n = reports.len() as f64;
-            let key = |m: &str| format!("chars/{}/{}/{m}", method.name(), model.name());
-            f.insert(key("csim"), fig(reports.iter().map(|r| r.plan.csim).sum::<f64>() / n, 0.003, Better::Higher));
-            f.insert(key("ssim"), fig(reports.iter().map(|r| r.plan.ssim).sum::<f64>() / n, 0.003, Better::Higher));
-            f.insert(key("iou"), fig(reports.iter().map(|r| r.plan.iou).sum::<f64>() / n, 0.005, Better::Higher));
+            let m = ReportMeans::of(&reports);
+            let key = |name: &str| format!("chars/{}/{}/{name}", method.name(), model.name());
+            f.insert(key("csim"), fig(m.plan.csim, 0.003, Better::Higher));
+            f.insert(key("ssim"), fig(m.plan.ssim, 0.003, Better::Higher));
+            f.insert(key("iou"), fig(m.plan.iou, 0.005, Better::Higher));
             if model == ModelKind::Bsm {
-                let ch: Vec<f64> = reports.iter().filter_map(|r| r.plan.chamfer_pct).collect();
-                f.insert(key("chamfer_pct"), fig(ch.iter().sum::<f64>() / ch.len() as f64, 0.05, Better::Lower));
-                let ex: Vec<_> = reports.iter().filter_map(|r| r.executed).collect();
-                let ag: Vec<_> = reports.iter().filter_map(|r| r.agreement).collect();
-                f.insert(key("executed_csim"), fig(ex.iter().map(|s| s.csim).sum::<f64>() / n, 0.003, Better::Higher));
-                f.insert(key("executed_iou"), fig(ex.iter().map(|s| s.iou).sum::<f64>() / n, 0.005, Better::Higher));
-                f.insert(key("agreement_csim"), fig(ag.iter().map(|s| s.csim).sum::<f64>() / n, 0.002, Better::Higher));
-                let worst = ag.iter().map(|s| s.csim).fold(f64::INFINITY, f64::min);
-                f.insert(key("agreement_csim_worst"), fig(worst, 0.005, Better::Higher));
-                let right = reports.iter().filter(|r| r.plan.strokes_expected == Some(r.plan.strokes_found)).count();
-                f.insert(key("strokes_right_fraction"), fig(right as f64 / n, 0.0, Better::Higher));
+                let (Some(ex), Some(ag), Some(chamfer), Some(strokes)) =
+                    (m.executed, m.agreement, m.chamfer_pct, m.strokes_match_fraction)
+                else {
+                    bail!(
+                        "{} {}: a character was not executed or has no chamfer or stroke count",
+                        method.name(),
+                        model.name()
+                    );
+                };
+                if ex.count != m.count || ag.count != m.count {
+                    bail!("{} {}: {} of {} characters executed", method.name(), model.name(), ex.count, m.count);
+                }
+                f.insert(key("chamfer_pct"), fig(chamfer, 0.05, Better::Lower));
+                f.insert(key("executed_csim"), fig(ex.csim, 0.003, Better::Higher));
+                f.insert(key("executed_iou"), fig(ex.iou, 0.005, Better::Higher));
+                f.insert(key("agreement_csim"), fig(ag.csim, 0.002, Better::Higher));
+                f.insert(key("agreement_csim_worst"), fig(ag.csim_min, 0.005, Better::Higher));
+                f.insert(key("strokes_right_fraction"), fig(strokes, 0.0, Better::Higher));
             }
         }
     }
@@ -242,7 +174,7 @@ pub fn run(args: &[String]) -> Result<()> {
         ("models", model_figures(ModelKind::Bsm.model(), &baselines, 300)),
         ("characters", character_figures()?),
         ("generator", generator_figures()?),
-        ("refine", crate::refine_gate::refine_figures()?),
+        ("refine", refine_figures()?),
         ("worlds", world_figures()?),
     ];
     println!("{:<48} {:>12} {:>12} {:>10}", "figure", "baseline", "now", "Δ");
@@ -309,22 +241,6 @@ mod tests {
             let f = Footprint { lr_mm: fp.lr_mm * 0.85, ..*fp };
             bezier_raster::Bsm.local_outline(&f)
         }
-    }
-
-    #[test]
-    fn comparison_is_directional_with_tolerance() {
-        let base =
-            Figures::from([("a".into(), fig(0.9, 0.01, Better::Higher)), ("d".into(), fig(1.0, 0.1, Better::Lower))]);
-        let ok =
-            Figures::from([("a".into(), fig(0.895, 0.01, Better::Higher)), ("d".into(), fig(0.5, 0.1, Better::Lower))]);
-        assert!(compare(&base, &ok).is_empty());
-        let bad =
-            Figures::from([("a".into(), fig(0.85, 0.01, Better::Higher)), ("d".into(), fig(1.2, 0.1, Better::Lower))]);
-        let r = compare(&base, &bad);
-        assert_eq!(r.len(), 2);
-        assert_eq!(r[0].to_string(), "a regressed: baseline 0.900000, now 0.850000 (tolerance 0.01)");
-        let nan = Figures::from([("a".into(), fig(f64::NAN, 0.01, Better::Higher))]);
-        assert_eq!(compare(&base, &nan).len(), 2, "NaN and a missing figure both fail");
     }
 
     #[test]

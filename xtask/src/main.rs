@@ -6,6 +6,7 @@
 use std::process::ExitCode;
 
 mod bench;
+mod figures;
 mod fixtures;
 mod gates;
 mod io;

@@ -1,15 +1,13 @@
-//! The refinement gate: `maobi write --refine` on a few gate characters, bounded in time.
-//!
-//! Wire it into `gates.rs` as a figure group (e.g. `"refine" => refine_gate::refine_figures()`,
-//! baseline `fixtures/baselines/refine.json`) and `mod refine_gate;` in `main.rs`.
+//! The refinement gate: `maobi write --refine` on a few gate characters, bounded in time (the
+//! figure group `refine` of `cargo xtask gates`, baseline `fixtures/baselines/refine.json`).
 
 use anyhow::{Result, bail};
 use brush_model::BrushProfile;
-use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
+use pipeline::{BoxRule, RefineMeans, RefineOptions, WriteOptions, prepare, write_placed};
 use rayon::prelude::*;
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
-use crate::gates::{Better, Figure, Figures};
+use crate::figures::{Better, Figures, fig};
 
 /// The characters the refinement gate writes: the first four gate characters (one stroke-rich,
 /// one short, two with crossings). At the default settings (256² analysis raster) each refines
@@ -34,30 +32,22 @@ pub fn refine_figures() -> Result<Figures> {
     let reports = chars
         .par_iter()
         .map(|&c| {
-            let p = prepare(glyph::embedded(c)?, Some(Method::Medians))?;
+            let p = prepare(embedded_glyph(c)?, Some(Method::Medians))?;
             Ok(write_placed(&p, &pen1, &opts, BoxRule::Auto)?.report)
         })
         .collect::<Result<Vec<_>>>()?;
-    let mut after = (0.0, 0.0);
-    let mut gain = 0.0;
-    let mut rejected = 0usize;
     for r in &reports {
         let Some(rf) = &r.refine else { bail!("{}: no refinement report", r.char) };
-        if rf.rejected.is_some() {
-            rejected += 1;
-        }
-        let (Some(b), Some(a)) = (rf.executed_before, rf.executed_after) else {
+        if rf.executed_before.is_none() || rf.executed_after.is_none() {
             bail!("{}: the refined track was not executed ({:?})", r.char, rf.rejected)
-        };
-        after = (after.0 + a.csim, after.1 + a.iou);
-        gain += a.csim - b.csim;
+        }
     }
-    let n = reports.len() as f64;
-    let f = |value, tolerance, better| Figure { value, tolerance, better };
+    let m = RefineMeans::of(reports.iter().filter_map(|r| r.refine.as_ref())).expect("every report refined");
+    let (after, gain) = (m.executed_after.expect("executed"), m.executed_csim_gain.expect("executed"));
     Ok(Figures::from([
-        ("refine/medians/bsm/executed_csim".to_string(), f(after.0 / n, 0.003, Better::Higher)),
-        ("refine/medians/bsm/executed_iou".to_string(), f(after.1 / n, 0.005, Better::Higher)),
-        ("refine/medians/bsm/executed_csim_gain".to_string(), f(gain / n, 0.003, Better::Higher)),
-        ("refine/medians/bsm/rejected".to_string(), f(rejected as f64, 0.0, Better::Lower)),
+        ("refine/medians/bsm/executed_csim".to_string(), fig(after.csim, 0.003, Better::Higher)),
+        ("refine/medians/bsm/executed_iou".to_string(), fig(after.iou, 0.005, Better::Higher)),
+        ("refine/medians/bsm/executed_csim_gain".to_string(), fig(gain, 0.003, Better::Higher)),
+        ("refine/medians/bsm/rejected".to_string(), fig(m.rejected as f64, 0.0, Better::Lower)),
     ]))
 }

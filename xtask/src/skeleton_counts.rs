@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use serde::Serialize;
-use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, glyph};
+use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, embedded_chars, embedded_glyph, glyph_from_hanzi_dir};
 
 use crate::io::{char_bar, write_atomic};
 
@@ -60,7 +60,7 @@ struct Report {
 
 pub(crate) fn read_set(spec: &str) -> Result<Vec<char>> {
     if spec == "embedded" {
-        return Ok(glyph::embedded_chars());
+        return Ok(embedded_chars());
     }
     let text = std::fs::read_to_string(spec).with_context(|| format!("--set {spec}"))?;
     let chars: Vec<char> = text
@@ -126,8 +126,8 @@ pub fn run(args: &[String]) -> Result<()> {
         chars = chars[x - 1..y].to_vec();
     }
     let load = |c: char| match &hanzi {
-        Some(dir) => glyph::from_hanzi_dir(dir, c),
-        None => glyph::embedded(c),
+        Some(dir) => glyph_from_hanzi_dir(dir, c),
+        None => embedded_glyph(c),
     };
     let pb = char_bar(chars.len(), "skeletons");
     // Per character: the medians' count and each variant's count.

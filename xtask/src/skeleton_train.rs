@@ -10,7 +10,7 @@ use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
 use trajectory::{
     CORNER_FEATURE_NAMES, DEFAULT_ANALYSIS_PX, DecisionModel, FEATURE_NAMES, GraphOptions, Skeleton, SkeletonModels,
-    glyph,
+    embedded_chars, glyph_from_hanzi_dir,
 };
 
 use crate::io::{char_bar, write_atomic};
@@ -136,7 +136,7 @@ fn train(
 
 /// The training characters (see [`HELP`]).
 fn training_chars(dir: &Path, heldout: &Path, every: usize) -> Result<Vec<char>> {
-    let mut excluded: std::collections::HashSet<char> = glyph::embedded_chars().into_iter().collect();
+    let mut excluded: std::collections::HashSet<char> = embedded_chars().into_iter().collect();
     let text = std::fs::read_to_string(heldout).with_context(|| format!("--heldout {}", heldout.display()))?;
     excluded.extend(text.lines().filter(|l| !l.starts_with('#')).filter_map(|l| l.trim().chars().next()));
     let mut chars: Vec<char> = std::fs::read_dir(dir)
@@ -170,7 +170,7 @@ fn collect(
         .par_iter()
         .enumerate()
         .map(|(k, &c)| -> Result<_> {
-            let g = glyph::from_hanzi_dir(dir, c).with_context(|| format!("{c}"))?;
+            let g = glyph_from_hanzi_dir(dir, c).with_context(|| format!("{c}"))?;
             let medians = g.medians.clone().unwrap_or_default();
             let out = match Skeleton::of(&g, DEFAULT_ANALYSIS_PX) {
                 Some(s) => samples(&s, &medians).into_iter().map(|(x, y)| (k, x, y)).collect(),

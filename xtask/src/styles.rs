@@ -18,8 +18,8 @@ use brush_model::BrushProfile;
 use pipeline::{BoxRule, GlyphInput, WriteOptions, prepare_with_template, write_placed};
 use rayon::prelude::*;
 use serde::Serialize;
-use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
-use trajectory::{Glyph, GlyphError, Method, glyph};
+use trajectory::{Glyph, GlyphError, Method};
+use trajectory::{ScanOptions, decode_gray, embedded_chars, synth_scan};
 
 use crate::io::write_atomic;
 
@@ -234,7 +234,7 @@ pub fn run(args: &[String]) -> Result<()> {
             .flat_map(|l| l.chars())
             .filter(|c| !c.is_whitespace())
             .collect(),
-        None => glyph::embedded_chars(),
+        None => embedded_chars(),
     };
     let list: Vec<char> = list.into_iter().skip(skip).take(take).collect();
     let pen = BrushProfile::builtin("pen1")?;

@@ -11,7 +11,7 @@ use brush_model::BrushProfile;
 use pipeline::{BoxRule, CharResult, Similarity, WriteOptions, prepare, similarity, write_placed};
 use rayon::prelude::*;
 use serde::Serialize;
-use trajectory::glyph;
+use trajectory::embedded_glyph;
 use worlds::{World, ink};
 
 use crate::io::{char_bar, write_atomic};
@@ -270,7 +270,7 @@ fn judge_char(
     refine: bool,
     images: Option<&std::path::Path>,
 ) -> Result<CharFigures> {
-    let p = prepare(glyph::embedded(c)?, None)?;
+    let p = prepare(embedded_glyph(c)?, None)?;
     let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
     let built = write_placed(&p, profile, &opts, BoxRule::Auto)?;
     let (unrefined, inks) = judge(&built, profile, worlds)?;
@@ -340,7 +340,7 @@ fn gray_rgb(c: &Coverage) -> image::RgbImage {
 }
 
 fn overlay(reference: &Coverage, ink: &Coverage) -> Result<image::RgbImage> {
-    let png = bezier_raster::coverage::overlay_png(reference, ink)?;
+    let png = bezier_raster::overlay_png(reference, ink)?;
     Ok(image::load_from_memory(&png)?.to_rgb8())
 }
 
@@ -364,7 +364,7 @@ pub fn gate_rows(chars: &str, specs: &[&str], size: u32) -> Result<Vec<GateRow>>
         .collect::<Vec<_>>()
         .par_iter()
         .map(|&c| {
-            let p = prepare(glyph::embedded(c)?, None)?;
+            let p = prepare(embedded_glyph(c)?, None)?;
             let opts = WriteOptions { size, free_widths: false, ..WriteOptions::default() };
             let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
             Ok(judge(&r, &pen1, &worlds)?.0)

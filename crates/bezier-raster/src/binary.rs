@@ -31,7 +31,7 @@ pub fn otsu_threshold(gray: &[u8]) -> u8 {
 
 /// 4-connected components of `mask == value`: a label per pixel (0 = other value) and the size
 /// of each label (index 0 unused).
-pub fn components(mask: &[bool], w: usize, h: usize, value: bool) -> (Vec<u32>, Vec<usize>) {
+pub fn connected_components(mask: &[bool], w: usize, h: usize, value: bool) -> (Vec<u32>, Vec<usize>) {
     let mut label = vec![0u32; w * h];
     let mut sizes = vec![0usize];
     let mut stack = Vec::new();
@@ -73,7 +73,7 @@ pub fn components(mask: &[bool], w: usize, h: usize, value: bool) -> (Vec<u32>, 
 /// Fills holes: paper components of a `w × h` mask that do not touch the border and are smaller
 /// than `max_px` become ink (`usize::MAX`: every enclosed hole).
 pub fn fill_holes(mask: &mut [bool], w: usize, h: usize, max_px: usize) {
-    let (label, sizes) = components(mask, w, h, false);
+    let (label, sizes) = connected_components(mask, w, h, false);
     let mut border = vec![false; sizes.len()];
     for x in 0..w {
         border[label[x] as usize] = true;
@@ -107,7 +107,7 @@ mod tests {
     fn components_are_counted() {
         // Two separate ink blobs.
         let m = [true, true, false, false, true, false, false, false, true]; // (0,0),(1,0),(1,1) and (2,2)
-        let (_, sizes) = components(&m, 3, 3, true);
+        let (_, sizes) = connected_components(&m, 3, 3, true);
         assert_eq!(sizes[1..].to_vec(), vec![3, 1]);
     }
 }

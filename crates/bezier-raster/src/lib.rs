@@ -13,8 +13,9 @@
 //!   the neural generator ([`StrokeCanvas`]).
 //! * Batches: parallel rendering with rayon ([`render_batch`], [`render_track`]) and the [`Compositor`] for many stamps.
 //! * Datasets ([`DatasetSpec`]): deterministic random presses over a profile's range and their images.
-//! * [`binary`]: Otsu's threshold and connected components for binary analysis.
-//! * [`coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG.
+//! * Binary analysis: [`otsu_threshold`], [`connected_components`], [`fill_holes`].
+//! * [`Coverage`]: the image type, PNG encode/decode (black ink on white on disk), and SVG
+//!   ([`svg_document`]); image files read within limits ([`decode_image`]).
 //!
 //! Pixel convention: x right, y down; pixel `(i, j)` covers `[i, i+1) × [j, j+1)` in pixel
 //! units, so its centre is at `(i + 0.5, j + 0.5)`; paper point `(x, y)` mm is at
@@ -49,17 +50,22 @@ pub use stroke_metrics;
 struct ReadmeDoctests;
 
 mod batch;
-// `binary` and `coverage` are namespaces of helpers (binary analysis; image files, PNG/SVG).
-pub mod binary;
+mod binary;
 mod canvas;
-pub mod coverage;
+mod coverage;
 mod dataset;
 mod models;
 mod raster;
 
-pub use batch::{Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps};
+pub use batch::{
+    Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps,
+};
+pub use binary::{connected_components, fill_holes, otsu_threshold};
 pub use canvas::StrokeCanvas;
-pub use coverage::{Coverage, ImageFileError, RasterError};
+pub use coverage::{
+    Coverage, ImageFileError, MAX_LOAD_PIXELS, MAX_SIDE, RasterError, decode_image, image_header, image_limits,
+    overlay_png, svg_document,
+};
 pub use dataset::{DatasetSpec, Sample};
 pub use models::{Bsm, Circle, Ellipse, Line, ModelKind, QBC_DISCS, Qbc, StrokeModel};
 pub use raster::Rasterizer;

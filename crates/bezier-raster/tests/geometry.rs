@@ -211,7 +211,7 @@ fn png_round_trip_and_bad_files() {
 #[test]
 fn svg_contains_the_outline() {
     let fp = Footprint::new(10.0, 4.0, 3.0).unwrap();
-    let svg = bezier_raster::coverage::svg_document(&Bsm.outline(&fp, PointMm::new(5.0, 5.0), 0.0), 20.0, 10.0);
+    let svg = bezier_raster::svg_document(&Bsm.outline(&fp, PointMm::new(5.0, 5.0), 0.0), 20.0, 10.0);
     assert!(svg.starts_with("<svg") && svg.contains("viewBox=\"0 0 20 10\"") && svg.contains(" C"));
 }
 

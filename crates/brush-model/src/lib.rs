@@ -8,10 +8,10 @@
 //!   half-width `lr`) as two mirrored cubic Béziers, placed on the paper by an anchor and `β`.
 //! * Regression ([`fit_general`], [`fit_paper`], [`FitReport`]): the least-squares fits from measured presses to footprints (the paper's
 //!   general Eq. 6 and its Eq. 1–5 form) with a statsmodels-style report.
-//! * The measurements CSV ([`load_measurements`], [`Measurement`]).
-//! * [`motion`]: the forward model of the moving brush ([`ForwardModel`]): from the brush's
+//! * The measurements CSV ([`load_measurements`], [`Measurement`], [`measurement_fields`]).
+//! * The forward model of the moving brush ([`ForwardModel`]): from the brush's
 //!   commanded path (position, depth, tilt) to the footprints it leaves and which way they point.
-//! * [`profile`]: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
+//! * Profiles: versioned [`BrushProfile`] JSON, built-in nominal `pen1`/`pen2`, prediction
 //!   and the inverse model (the h that gives a wanted width).
 //!
 //! ```
@@ -32,16 +32,16 @@ struct ReadmeDoctests;
 
 mod footprint;
 mod measurements;
-// `motion` and `profile` stay public only for callers that still name items through them
-// (`brush_model::motion::wrap`, `brush_model::profile::MAX_BRUSH_MM`); everything in them is
-// re-exported below, which is the path to use.
-pub mod motion;
-pub mod profile;
+mod motion;
+mod profile;
 mod regression;
 mod units;
 
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
-pub use measurements::{Measurement, MeasurementError, load_measurements, read_measurements, write_measurements};
+pub use measurements::{
+    MEASUREMENT_COLUMNS, Measurement, MeasurementError, load_measurements, measurement_fields, read_measurements,
+    write_measurements,
+};
 pub use motion::{DEPTH_EDGE_TOLERANCE_MM, ForwardModel, Sweep, TILT_THRESHOLD_RAD, TRAIL_REACH};
 pub use profile::{
     BrushProfile, CONTACT_H_MM, Clamp, Extrapolation, HairMotion, InverseH, MAX_BRUSH_MM, MAX_FOOTPRINT_PER_LENGTH,

@@ -22,7 +22,7 @@ pub(crate) const MAX_ROWS: usize = 1_000_000;
 pub(crate) const MAX_BYTES: u64 = 64 << 20;
 
 /// Each column's accepted values (inclusive), with the reason given when a value is outside:
-/// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::profile::MAX_BRUSH_MM) can
+/// depths and lengths up to what a brush of [`MAX_BRUSH_MM`](crate::MAX_BRUSH_MM) can
 /// do, tilts short of lying flat, rotations within a turn either way.
 const BOUNDS: [(f64, f64, &str); 6] = [
     (0.0, 1000.0, "expected a depth of 0..=1000 mm"),
@@ -182,19 +182,38 @@ pub fn read_measurements(reader: impl Read, source_name: &str) -> Result<Vec<Mea
     Ok(out)
 }
 
+/// The measurement columns of a CSV header, in the order [`measurement_fields`] writes them:
+/// what [`read_measurements`] needs. Writers with other columns put theirs around these.
+pub const MEASUREMENT_COLUMNS: &str = "h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm";
+
+/// One measurement as the fields of a CSV row under [`MEASUREMENT_COLUMNS`] (angles in
+/// degrees, no line end): every value with all its digits, or the lengths rounded to
+/// `length_decimals` places (a length fitted from a photo is not known to more).
+///
+/// # Examples
+/// ```
+/// use brush_model::{Footprint, Measurement, Press, measurement_fields};
+/// let m = Measurement {
+///     press: Press::from_degrees(12.0, 10.0, 0.0),
+///     footprint: Footprint { lt_mm: 9.25, lh_mm: 3.0, lr_mm: 2.0 / 3.0 },
+/// };
+/// assert_eq!(measurement_fields(&m, Some(4)), "12,10,0,9.2500,3.0000,0.6667");
+/// ```
+pub fn measurement_fields(m: &Measurement, length_decimals: Option<usize>) -> String {
+    let (p, f) = (&m.press, &m.footprint);
+    let press = format!("{},{},{}", p.h_mm, p.alpha_rad.to_degrees(), p.beta_rad.to_degrees());
+    match length_decimals {
+        None => format!("{press},{},{},{}", f.lt_mm, f.lh_mm, f.lr_mm),
+        Some(d) => format!("{press},{:.d$},{:.d$},{:.d$}", f.lt_mm, f.lh_mm, f.lr_mm),
+    }
+}
+
 /// Writes measurements as CSV with the standard header (angles in degrees).
 pub fn write_measurements(rows: &[Measurement]) -> String {
-    let mut s = String::from("h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm\n");
+    let mut s = format!("{MEASUREMENT_COLUMNS}\n");
     for m in rows {
-        s.push_str(&format!(
-            "{},{},{},{},{},{}\n",
-            m.press.h_mm,
-            m.press.alpha_rad.to_degrees(),
-            m.press.beta_rad.to_degrees(),
-            m.footprint.lt_mm,
-            m.footprint.lh_mm,
-            m.footprint.lr_mm
-        ));
+        s.push_str(&measurement_fields(m, None));
+        s.push('\n');
     }
     s
 }

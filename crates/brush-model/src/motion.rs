@@ -388,13 +388,10 @@ fn from_axis(v: [f64; 3], beta_a: f64, beta_b: f64, f: f64) -> (f64, f64) {
     (alpha, beta)
 }
 
-/// An angle wrapped into (−π, π]: the older name of [`wrap_angle_rad`], kept for existing
-/// callers (`brush_model::motion::wrap`); new code uses `brush_model::wrap_angle_rad`.
-pub use crate::units::wrap_angle_rad as wrap;
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::units::wrap_angle_rad as wrap;
 
     fn pt(x: f64, y: f64, h: f64) -> TrackPoint {
         TrackPoint { x_mm: x, y_mm: y, h_mm: h, alpha_rad: 0.0, beta_rad: 0.0 }

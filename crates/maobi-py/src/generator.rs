@@ -56,7 +56,7 @@ impl Generator {
                 Some(p) => neural_gen::Generator::load(p).map_err(|e| lib_err("path", e))?,
                 None => neural_gen::Generator::pen1().map_err(|e| lib_err("the committed pen1 generator", e))?,
             };
-            let net = InputVjp::new(&g).map_err(|e| lib_err("Generator.load", e))?;
+            let net = g.kernels().map_err(|e| lib_err("Generator.load", e))?.clone();
             Ok(Self {
                 net: Arc::new(net),
                 size: g.config.size as usize,

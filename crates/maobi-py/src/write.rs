@@ -383,7 +383,7 @@ pub(crate) fn glyph<'py>(
     let input = glyph_input(font, hanzi_data)?;
     let img = guarded(py, "glyph", move || {
         let (g, _) = input.load(c).map_err(|e| pipeline_err(Box::new(e)))?;
-        Ok(trajectory::raster::render_glyph(&g, size))
+        Ok(trajectory::render_glyph(&g, size))
     })?;
     image_out(py, img)
 }

@@ -318,7 +318,7 @@ pub fn labelled_row_png(panels: &[(&str, &bezier_raster::Coverage)]) -> Result<V
 /// When the sizes differ, or drawing or encoding fails.
 pub fn overlay_legend_png(reference: &bezier_raster::Coverage, render: &bezier_raster::Coverage) -> Result<Vec<u8>> {
     register_font();
-    let plain = bezier_raster::coverage::overlay_png(reference, render)?;
+    let plain = bezier_raster::overlay_png(reference, render)?;
     let img = image::load_from_memory(&plain)?.to_rgb8();
     let (w, img_h) = img.dimensions();
     let px = label_px(w);

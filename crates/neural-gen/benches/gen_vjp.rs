@@ -7,7 +7,7 @@
 
 use brush_model::Press;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use neural_gen::{Generator, GeneratorConfig, InputVjp};
+use neural_gen::{Generator, GeneratorConfig};
 use std::hint::black_box;
 
 #[global_allocator]
@@ -27,7 +27,7 @@ fn bench(c: &mut Criterion) {
         })
         .collect();
     let up: Vec<f32> = (0..BATCH * s * s).map(|i| ((i * 7919) % 101) as f32 / 101.0 - 0.5).collect();
-    let net = InputVjp::new(&g).unwrap();
+    let net = g.kernels().unwrap();
     let mut grp = c.benchmark_group("generator_vjp");
     grp.throughput(Throughput::Elements(BATCH as u64));
     grp.sample_size(20);

@@ -1,13 +1,14 @@
-//! The LearningToPaint-sized network (`neural_gen::ltp`): one Adam training step at batch 64 and
+//! The LearningToPaint-sized network (`neural_gen::bench::Ltp`): one Adam training step at batch 64 and
 //! inference at batch 1 and 64, with stock candle kernels and with maobi's (direct convolution
 //! with fused bias/ReLU, pixel shuffle, fused AdamW), and on the direct kernels
-//! (`neural_gen::DirectNet`: packed products, register-tiled correlations, no candle graph).
+//! (`neural_gen::bench::DirectTrainer`: packed products, register-tiled correlations, no candle
+//! graph).
 //! `cargo bench -p neural-gen --bench ltp`;
 //! the PyTorch reference is `python3 crates/neural-gen/benches/ltp_torch.py`.
 
 use candle_core::{Device, Tensor};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use neural_gen::{DirectNet, Ltp, LtpKernels as Kernels};
+use neural_gen::bench::{DirectTrainer, Ltp, LtpKernels as Kernels};
 use std::hint::black_box;
 
 // As in the `maobi` binary: an allocator that reuses freed large buffers.
@@ -27,14 +28,14 @@ fn bench(c: &mut Criterion) {
     let xv: Vec<f32> = x.flatten_all().unwrap().to_vec1().unwrap();
     let yv: Vec<f32> = target.flatten_all().unwrap().to_vec1().unwrap();
     let ltp = Ltp::new(Kernels::Candle, 1e-4).unwrap();
-    let mut direct = DirectNet::from_varmap(&Ltp::spec(), &ltp.varmap).unwrap();
+    let mut direct = DirectTrainer::from_varmap(&Ltp::spec(), &ltp.varmap).unwrap();
     grp.bench_function("step_batch_64_direct", |b| b.iter(|| direct.step(black_box(&xv), &yv, 1e-4).unwrap()));
     grp.finish();
     let mut grp = c.benchmark_group("ltp_inference");
     grp.throughput(Throughput::Elements(1));
-    grp.bench_function("batch_1_direct", |b| b.iter(|| direct.forward(black_box(&xv[..3])).unwrap()));
+    grp.bench_function("batch_1_direct", |b| b.iter(|| direct.images(black_box(&xv[..3])).unwrap()));
     grp.throughput(Throughput::Elements(64));
-    grp.bench_function("batch_64_direct", |b| b.iter(|| direct.forward(black_box(&xv)).unwrap()));
+    grp.bench_function("batch_64_direct", |b| b.iter(|| direct.images(black_box(&xv)).unwrap()));
     for (name, kernels) in [("maobi", Kernels::Maobi), ("candle", Kernels::Candle)] {
         let net = Ltp::new(kernels, 1e-4).unwrap();
         grp.throughput(Throughput::Elements(1));

@@ -16,7 +16,8 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use bezier_raster::DatasetSpec;
 use brush_model::{BrushProfile, Press};
-use neural_gen::{Arch, DirectTrainer, Generator, GeneratorConfig};
+use neural_gen::bench::DirectTrainer;
+use neural_gen::{Arch, Generator, GeneratorConfig};
 
 /// Nanoseconds every thread of this process has run on a CPU.
 fn cpu_ns() -> u64 {

@@ -12,7 +12,7 @@ use std::time::Instant;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use candle_core::{Device, Tensor};
-use neural_gen::{Ltp, LtpKernels as Kernels};
+use neural_gen::bench::{Ltp, LtpKernels as Kernels};
 
 fn main() -> candle_core::Result<()> {
     let steps: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(5);

@@ -1,22 +1,29 @@
-//! Training on the direct kernels: the forward pass of [`InputVjp`] with every stage's input
-//! kept, the backward pass to the weights (the input-gradient correlations of [`InputVjp`],
-//! then a weight-gradient correlation per stage and products for the fully connected layers),
-//! and AdamW fused into one pass per tensor, on plain buffers allocated once.
+//! Training on the direct kernels, for the generator and for any [`NetSpec`] network (the
+//! benchmarks' LearningToPaint-size one): per image in one pass (its activations stay in the
+//! core's cache), the forward pass of [`Net`] with every stage's input and ReLU mask kept, the
+//! squared error, the backward pass to the seed map (the input-gradient correlations of
+//! [`Net`]) and a weight-gradient correlation per stage; then products for the fully connected
+//! layers on the whole batch, and AdamW fused into one pass per tensor, on plain buffers
+//! allocated once.
 //!
 //! Every image's gradients are computed on their own and summed over the batch in image order,
 //! each sum a fixed chain of operations: the results do not depend on the thread count. The
 //! weights live here during training; [`DirectTrainer::write_back`] copies them into the
 //! generator's candle variables (checkpoints, the final weights).
 
+// `DirectTrainer` is public through `crate::bench` only (the `bench` feature).
+#![cfg_attr(not(feature = "bench"), allow(unreachable_pub))]
+
 use std::sync::{Mutex, MutexGuard};
 
+use candle_nn::VarMap;
 use pulp::{Simd, WithSimd};
 use rayon::prelude::*;
 
+use crate::NeuralGenError;
 use crate::kernels::{Dense, padded_len};
 use crate::model::Generator;
-use crate::vjp::{BackwardImage, ForwardImage, InputVjp};
-use crate::{GeneratorConfig, NeuralGenError};
+use crate::net::{BackwardImage, ForwardImage, Net, NetSpec};
 
 /// One trainable tensor and its AdamW moments.
 struct Param {
@@ -28,20 +35,19 @@ struct Param {
     v: Vec<f32>,
 }
 
-/// The generator's training step on the direct kernels (AdamW with weight decay 0 on MSE).
-/// Public for the benchmarks; [`crate::train()`] is the entry point.
-#[doc(hidden)]
+/// A network's training step on the direct kernels (AdamW with weight decay 0 on MSE): the
+/// generator's ([`DirectTrainer::new`]) or any [`NetSpec`]'s ([`DirectTrainer::from_varmap`]).
+/// [`crate::train()`] is the generator's entry point; public for the benchmarks.
 pub struct DirectTrainer {
-    config: GeneratorConfig,
     /// `fc0.weight, fc0.bias, …, conv0.weight, conv0.bias, …`.
     params: Vec<Param>,
-    net: InputVjp,
+    net: Net,
     t: i32,
     /// Per image: the convolution stages' weight and bias gradients, then the seed-map gradient.
     per_image: Vec<f32>,
     /// The gradient at a fully connected layer's output, transposed (`[out, batch]`).
     gt: Vec<f32>,
-    /// The fully connected layers' outputs (after the ReLU but the last: the seed maps).
+    /// The fully connected layers' outputs (after their ReLU; the last: the seed maps).
     hid: Vec<Vec<f32>>,
     /// Each fully connected layer's input, packed for its weight gradient (`[batch, in]`).
     xin: Vec<Dense>,
@@ -76,11 +82,11 @@ struct ScratchRef<'a> {
 }
 
 impl Scratch {
-    fn new(net: &InputVjp) -> Self {
-        let ss = net.size() * net.size();
+    fn new(net: &Net) -> Self {
+        let ss = net.size * net.size;
         Scratch {
             acts: vec![0f32; net.per_image],
-            bufs: net.stages.iter().map(|st| vec![0f32; padded_len(st.cout, st.n)]).collect(),
+            bufs: net.gradient_planes(),
             masks: vec![0u8; net.masks_per_image],
             img: vec![0f32; ss],
             up: vec![0f32; ss],
@@ -96,7 +102,7 @@ impl Scratch {
 }
 
 impl ScratchRef<'_> {
-    fn get(&mut self, net: &InputVjp) -> &mut Scratch {
+    fn get(&mut self, net: &Net) -> &mut Scratch {
         match &mut self.guard {
             Some(g) => g,
             None => self.own.get_or_insert_with(|| Scratch::new(net)),
@@ -104,45 +110,41 @@ impl ScratchRef<'_> {
     }
 }
 
-/// Convolution parameters (weights and biases of every stage) of an architecture.
-fn conv_len(net: &InputVjp) -> usize {
-    net.stages.iter().map(|s| s.cout * s.cin * 9 + s.cout).sum()
-}
-
 impl DirectTrainer {
-    /// Copies `g`'s weights.
+    /// The generator's network with `g`'s weights (copied).
     ///
     /// # Errors
     /// [`NeuralGenError::Candle`].
     pub fn new(g: &Generator) -> Result<Self, NeuralGenError> {
-        let weights = g.weights()?;
+        Self::from_varmap(&NetSpec::of_arch(&g.config.arch), &g.varmap)
+    }
+
+    /// The network `spec` with the weights of `varmap` (copied; candle's names and layouts:
+    /// `fc{i}.weight` `[out, in]`, `fc{i}.bias`, `conv{i}.weight` `[cout, cin, 3, 3]`,
+    /// `conv{i}.bias`).
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when the spec does not fit together or a tensor is missing or
+    /// has the wrong size; [`NeuralGenError::Candle`].
+    pub fn from_varmap(spec: &NetSpec, varmap: &VarMap) -> Result<Self, NeuralGenError> {
+        spec.validate()?;
+        let data = varmap.data().lock().expect("varmap");
         let mut params = Vec::new();
-        let a = &g.config.arch;
-        let names =
-            (0..=a.hidden.len()).map(|i| format!("fc{i}")).chain((0..a.stages.len()).map(|i| format!("conv{i}")));
-        for layer in names {
-            for part in ["weight", "bias"] {
-                let name = format!("{layer}.{part}");
-                let t = weights.get(&name).ok_or_else(|| NeuralGenError::Config {
-                    source_name: "generator".into(),
-                    problem: crate::ConfigError::MissingTensor { name: name.clone() },
-                })?;
-                let w: Vec<f32> = t.flatten_all().and_then(|f| f.to_vec1()).map_err(NeuralGenError::Candle)?;
-                let n = w.len();
-                params.push(Param {
-                    name,
-                    dims: t.dims().to_vec(),
-                    w,
-                    g: vec![0.0; n],
-                    m: vec![0.0; n],
-                    v: vec![0.0; n],
-                });
+        for (name, dims) in spec.tensors() {
+            let t = data.get(&name).ok_or_else(|| NeuralGenError::Shape(format!("no tensor {name}")))?;
+            let w: Vec<f32> = t.as_tensor().flatten_all().and_then(|f| f.to_vec1()).map_err(NeuralGenError::Candle)?;
+            let len: usize = dims.iter().product();
+            if w.len() != len {
+                return Err(NeuralGenError::Shape(format!("{name}: {} values, expected {len}", w.len())));
             }
+            params.push(Param { name, dims, w, g: vec![0.0; len], m: vec![0.0; len], v: vec![0.0; len] });
         }
-        let mut tr = DirectTrainer {
-            config: g.config.clone(),
-            net: InputVjp::new(g)?,
+        drop(data);
+        let net =
+            Net::new(spec, |name| Ok(params.iter().find(|p| p.name == name).map(|p| p.w.clone()).unwrap_or_default()))?;
+        Ok(DirectTrainer {
             params,
+            net,
             t: 0,
             per_image: Vec::new(),
             gt: Vec::new(),
@@ -154,18 +156,13 @@ impl DirectTrainer {
             sq: Vec::new(),
             pool: Vec::new(),
             batch: 0,
-        };
-        tr.rebuild()?;
-        Ok(tr)
+        })
     }
 
-    /// Repacks the kernels' weights from the parameters.
-    fn rebuild(&mut self) -> Result<(), NeuralGenError> {
-        let params = &self.params;
-        self.net = InputVjp::from_weights(&self.config, |name| {
-            Ok(params.iter().find(|p| p.name == name).map(|p| p.w.clone()).unwrap_or_default())
-        })?;
-        Ok(())
+    /// Side of the images, px.
+    #[cfg(any(test, feature = "bench"))]
+    pub fn size(&self) -> usize {
+        self.net.size
     }
 
     /// Sizes the per-image buffers for `batch` images (only when the batch changes).
@@ -173,56 +170,73 @@ impl DirectTrainer {
         if batch == self.batch {
             return;
         }
-        self.per_image = vec![0.0; batch * (conv_len(&self.net) + self.net.seed_len())];
-        self.hid = self.net.fcs.iter().map(|fc| vec![0.0; batch * fc.out]).collect();
+        let net = &self.net;
+        self.per_image = vec![0.0; batch * (net.conv_len() + net.seed_len())];
+        self.hid = net.fcs.iter().map(|fc| vec![0.0; batch * fc.out]).collect();
         let mut inp = 3;
-        self.xin = self
-            .net
+        self.xin = net
             .fcs
             .iter()
             .map(|fc| {
-                let d = Dense::new(&vec![0.0; batch * inp], batch, inp, self.net.isa);
+                let d = Dense::new(&vec![0.0; batch * inp], batch, inp, net.isa);
                 inp = fc.out;
                 d
             })
             .collect();
         let threads = rayon::current_num_threads().max(1);
-        self.pool = (0..threads).map(|_| Mutex::new(Scratch::new(&self.net))).collect();
+        self.pool = (0..threads).map(|_| Mutex::new(Scratch::new(net))).collect();
         self.batch = batch;
     }
 
     /// The MSE of the network's images of normalised inputs `x` (`[B, 3]`) against `target`
     /// (`B × size²`), and every parameter's gradient of it (kept for [`DirectTrainer::update`]).
     ///
-    /// # Panics
-    /// When `target` is not `B × size²` long.
-    pub fn gradients(&mut self, x: &[f32], target: &[f32]) -> f64 {
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when `x` is empty or not in threes, or `target` is not
+    /// `B × size²` long.
+    pub fn gradients(&mut self, x: &[f32], target: &[f32]) -> Result<f64, NeuralGenError> {
         let b = x.len() / 3;
-        let ss = self.net.size() * self.net.size();
-        assert_eq!(target.len(), b * ss, "targets");
+        let ss = self.net.size * self.net.size;
+        if b == 0 || x.len() % 3 != 0 || target.len() != b * ss {
+            return Err(NeuralGenError::Shape(format!(
+                "{} inputs and {} target values: expected threes and {ss} values per image",
+                x.len(),
+                target.len()
+            )));
+        }
         self.size_for(b);
+        let loss = self.image_gradients(x, target);
+        self.sum_conv_gradients(b);
+        self.dense_gradients(x, b);
+        Ok(loss)
+    }
+
+    /// The fully connected layers forward on the whole batch, then per image in one pass
+    /// (its activations stay in the core's cache): the stages, the squared error and its
+    /// gradient, back through the stages, the weight gradients of each, into `per_image`.
+    /// Returns the MSE, the squared errors summed image by image, then over the images in
+    /// order.
+    fn image_gradients(&mut self, x: &[f32], target: &[f32]) -> f64 {
+        let b = x.len() / 3;
         let net = &self.net;
+        let ss = net.size * net.size;
         let nfc = net.fcs.len();
         // The fully connected layers on the whole batch, into the kept buffers (the same
-        // products as `InputVjp::dense_forward`).
+        // products as `Net::dense_forward`).
         for li in 0..nfc {
             let (prev, cur) = self.hid.split_at_mut(li);
             let input: &[f32] = if li == 0 { x } else { &prev[li - 1] };
             let fc = &net.fcs[li];
             fc.fwd.apply_scratch(input, Some(&fc.b), &mut cur[0], &mut self.dense_t);
-            if li + 1 < nfc {
+            if net.fc_relu(li) {
                 cur[0].iter_mut().for_each(|v| *v = v.max(0.0));
             }
         }
-        let (hidden, seed) = self.hid.split_at(nfc - 1);
-        let seed = &seed[0];
+        let seed = &self.hid[nfc - 1];
         let sl = net.seed_len();
         let pool = &self.pool;
-        // Per image, in one pass (its activations stay in the core's cache): the stages, the
-        // squared error and its gradient, back through the stages, the weight gradients of each.
-        // The squared errors are summed image by image, then over the images in order.
         let k = 2.0 / (b * ss) as f32;
-        let cl = conv_len(net);
+        let cl = net.conv_len();
         self.sq.resize(b, 0.0);
         self.per_image
             .par_chunks_mut(cl + sl)
@@ -246,8 +260,14 @@ impl DirectTrainer {
                     net.isa.dispatch(WeightGrads { net, bufs, acts, grads });
                 },
             );
-        let loss = self.sq.iter().sum::<f64>() / (b * ss) as f64;
-        // The convolution gradients summed over the images, in image order.
+        self.sq.iter().sum::<f64>() / (b * ss) as f64
+    }
+
+    /// The convolution gradients of `per_image` summed over the `b` images, in image order,
+    /// into the parameters.
+    fn sum_conv_gradients(&mut self, b: usize) {
+        let nfc = self.net.fcs.len();
+        let (cl, sl) = (self.net.conv_len(), self.net.seed_len());
         let mut off = 0;
         for p in &mut self.params[2 * nfc..] {
             let len = p.g.len();
@@ -262,7 +282,16 @@ impl DirectTrainer {
             });
             off += len;
         }
-        // Back through the fully connected layers, on the whole batch.
+    }
+
+    /// Back through the fully connected layers on the whole batch of `b` inputs `x`, from the
+    /// seed maps' gradients in `per_image`: their weight and bias gradients into the
+    /// parameters.
+    fn dense_gradients(&mut self, x: &[f32], b: usize) {
+        let net = &self.net;
+        let nfc = net.fcs.len();
+        let (cl, sl) = (net.conv_len(), net.seed_len());
+        let hidden = &self.hid;
         let (mut g, mut gi) = (std::mem::take(&mut self.g), std::mem::take(&mut self.gi));
         g.clear();
         for i in 0..b {
@@ -300,61 +329,58 @@ impl DirectTrainer {
         }
         self.g = g;
         self.gi = gi;
-        loss
     }
 
     /// One AdamW step (candle's `AdamW` rule, weight decay 0) on the gradients of the last
     /// [`DirectTrainer::gradients`], at learning rate `lr`; the kernels then run on the new
     /// weights.
-    ///
-    /// # Errors
-    /// As [`InputVjp::new`].
-    pub fn update(&mut self, lr: f64) -> Result<(), NeuralGenError> {
+    pub fn update(&mut self, lr: f64) {
         self.t += 1;
         for p in &mut self.params {
             adamw_step(&mut p.w, &p.g, &mut p.m, &mut p.v, lr, self.t);
         }
         self.repack();
-        Ok(())
     }
 
-    /// Packs the parameters into the kernels' layouts, in place (the same values as
-    /// [`InputVjp::from_weights`] would pack).
+    /// Packs the parameters into the kernels' layouts, in place.
     fn repack(&mut self) {
-        let nfc = self.net.fcs.len();
-        for (li, fc) in self.net.fcs.iter_mut().enumerate() {
-            let w = &self.params[2 * li].w;
-            fc.fwd.repack_transposed(w);
-            fc.bwd.repack(w);
-            fc.b.copy_from_slice(&self.params[2 * li + 1].w);
-        }
-        for (si, st) in self.net.stages.iter_mut().enumerate() {
-            let w = &self.params[2 * (nfc + si)].w;
-            st.fwd.repack(w);
-            st.bwd.repack_flipped(w);
-            st.b.copy_from_slice(&self.params[2 * (nfc + si) + 1].w);
-        }
+        let params = &self.params;
+        self.net.set_weights(|k| &params[k].w);
     }
 
     /// [`DirectTrainer::gradients`] then [`DirectTrainer::update`]: one training step; returns
     /// the MSE before it.
     ///
     /// # Errors
-    /// As [`DirectTrainer::update`].
+    /// As [`DirectTrainer::gradients`].
     pub fn step(&mut self, x: &[f32], target: &[f32], lr: f64) -> Result<f64, NeuralGenError> {
-        let loss = self.gradients(x, target);
-        self.update(lr)?;
+        let loss = self.gradients(x, target)?;
+        self.update(lr);
         Ok(loss)
     }
 
     /// The gradient of the last [`DirectTrainer::gradients`] for the tensor `name`.
+    #[cfg(any(test, feature = "bench"))]
     pub fn gradient(&self, name: &str) -> Option<&[f32]> {
         self.params.iter().find(|p| p.name == name).map(|p| &p.g[..])
     }
 
-    /// The network on the current weights.
-    pub fn kernels(&self) -> &InputVjp {
-        &self.net
+    /// The current weights of the tensor `name`.
+    #[cfg(any(test, feature = "bench"))]
+    pub fn weight(&self, name: &str) -> Option<&[f32]> {
+        self.params.iter().find(|p| p.name == name).map(|p| &p.w[..])
+    }
+
+    /// Images of normalised inputs `x` (`[B, 3]`) on the current weights: `B × size²` values
+    /// in [0, 1], image after image; the same bits for any batch split and thread count.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when `x.len()` is not a multiple of 3.
+    pub fn images(&self, x: &[f32]) -> Result<Vec<f32>, NeuralGenError> {
+        if x.len() % 3 != 0 {
+            return Err(NeuralGenError::Shape(format!("{} inputs: they come in threes", x.len())));
+        }
+        Ok(self.net.images(x))
     }
 
     /// The current weights, by name.
@@ -363,28 +389,35 @@ impl DirectTrainer {
     }
 
     /// Restores weights from [`DirectTrainer::snapshot`].
-    pub(crate) fn restore(&mut self, w: Vec<Vec<f32>>) -> Result<(), NeuralGenError> {
+    pub(crate) fn restore(&mut self, w: Vec<Vec<f32>>) {
         for (p, w) in self.params.iter_mut().zip(w) {
             p.w = w;
         }
         self.repack();
-        Ok(())
     }
 
     /// Copies the current weights into `g`'s candle variables.
     ///
     /// # Errors
-    /// [`NeuralGenError::Candle`].
+    /// As [`DirectTrainer::write_varmap`].
     pub fn write_back(&self, g: &mut Generator) -> Result<(), NeuralGenError> {
-        {
-            let data = g.varmap.data().lock().expect("varmap");
-            for p in &self.params {
-                let t = candle_core::Tensor::from_vec(p.w.clone(), p.dims.clone(), g.device())
-                    .map_err(NeuralGenError::Candle)?;
-                data[&p.name].set(&t).map_err(NeuralGenError::Candle)?;
-            }
-        }
+        self.write_varmap(&g.varmap)?;
         g.weights_changed();
+        Ok(())
+    }
+
+    /// Copies the current weights into `varmap`'s variables of the same names.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when a variable is missing; [`NeuralGenError::Candle`].
+    pub fn write_varmap(&self, varmap: &VarMap) -> Result<(), NeuralGenError> {
+        let data = varmap.data().lock().expect("varmap");
+        for p in &self.params {
+            let var = data.get(&p.name).ok_or_else(|| NeuralGenError::Shape(format!("no variable {}", p.name)))?;
+            let t = candle_core::Tensor::from_vec(p.w.clone(), p.dims.clone(), var.device())
+                .map_err(NeuralGenError::Candle)?;
+            var.set(&t).map_err(NeuralGenError::Candle)?;
+        }
         Ok(())
     }
 }
@@ -392,7 +425,7 @@ impl DirectTrainer {
 /// The weight and bias gradients of every stage of one image: `bufs[si]` the padded gradient
 /// at stage `si`'s output (from [`BackwardImage`]), `acts` the stages' padded inputs.
 struct WeightGrads<'a> {
-    net: &'a InputVjp,
+    net: &'a Net,
     bufs: &'a [Vec<f32>],
     acts: &'a [f32],
     grads: &'a mut [f32],
@@ -404,11 +437,12 @@ impl WithSimd for WeightGrads<'_> {
     fn with_simd<S: Simd>(self, simd: S) {
         let (mut aoff, mut goff) = (0, 0);
         for (si, st) in self.net.stages.iter().enumerate() {
-            let x = &self.acts[aoff..aoff + padded_len(st.cin, st.n)];
-            let (gw, rest) = self.grads[goff..].split_at_mut(st.cout * st.cin * 9);
-            conv_weight_grads(simd, x, &self.bufs[si], (st.cin, st.cout, st.n), gw, &mut rest[..st.cout]);
-            aoff += padded_len(st.cin, st.n);
-            goff += st.cout * st.cin * 9 + st.cout;
+            let (cin, cout) = (st.spec.cin, st.spec.cout);
+            let x = &self.acts[aoff..aoff + padded_len(cin, st.n)];
+            let (gw, rest) = self.grads[goff..].split_at_mut(cout * cin * 9);
+            conv_weight_grads(simd, x, &self.bufs[si], (cin, cout, st.n), gw, &mut rest[..cout]);
+            aoff += padded_len(cin, st.n);
+            goff += cout * cin * 9 + cout;
         }
     }
 }
@@ -422,7 +456,7 @@ impl WithSimd for WeightGrads<'_> {
 /// one at a time, so that each vector of the input is loaded once for several output
 /// channels and taps; the blocking does not change any sum.
 #[inline(always)]
-pub(crate) fn conv_weight_grads<S: Simd>(
+fn conv_weight_grads<S: Simd>(
     simd: S,
     x: &[f32],
     gy: &[f32],
@@ -524,7 +558,7 @@ fn wgrad_block<S: Simd, const OB: usize>(
 
 /// One AdamW step (candle's rule, weight decay 0) at step `t` (from 1) on weights `w` with
 /// gradients `g` and moments `m`, `v`, in parallel over fixed chunks.
-pub(crate) fn adamw_step(w: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], lr: f64, t: i32) {
+fn adamw_step(w: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], lr: f64, t: i32) {
     let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8f64);
     let (sm, sv) = ((1.0 / (1.0 - b1.powi(t))) as f32, (1.0 / (1.0 - b2.powi(t))) as f32);
     let (lr, b1, b2, eps) = (lr as f32, b1 as f32, b2 as f32, eps as f32);
@@ -546,7 +580,8 @@ pub(crate) fn adamw_step(w: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32],
 #[cfg(test)]
 mod tests {
     use super::DirectTrainer;
-    use crate::{Arch, Generator, GeneratorConfig, NetworkStep};
+    use crate::train::NetworkStep;
+    use crate::{Arch, Generator, GeneratorConfig};
     use brush_model::{BrushProfile, Press};
     use candle_core::Tensor;
 
@@ -569,7 +604,7 @@ mod tests {
         let x: Vec<f32> = ps.iter().flat_map(|p| g.config.normalise(p)).collect();
         let t: Vec<f32> = (0..batch * s * s).map(|i| ((i * 7919) % 113) as f32 / 113.0).collect();
         let mut tr = DirectTrainer::new(&g).unwrap();
-        let loss = tr.gradients(&x, &t);
+        let loss = tr.gradients(&x, &t).unwrap();
         // candle: the same loss through the graph.
         let xs = g.inputs(&ps).unwrap();
         let ts = Tensor::from_vec(t.clone(), (batch, 1, s, s), g.device()).unwrap();
@@ -592,7 +627,7 @@ mod tests {
         let mut gc = Generator::new(GeneratorConfig::new(profile, arch), 3).unwrap();
         let mut ns = NetworkStep::new(&gc, 1e-3).unwrap();
         ns.step(&mut gc, &xs, &ts, 1e-3).unwrap();
-        tr.update(1e-3).unwrap();
+        tr.update(1e-3);
         tr.write_back(&mut g).unwrap();
         let (a, b) = (g.weights().unwrap(), gc.weights().unwrap());
         for (name, ta) in &a {
@@ -636,13 +671,13 @@ mod tests {
         let s = g.config.size as usize;
         let t: Vec<f32> = (0..5 * s * s).map(|i| ((i * 31) % 17) as f32 / 17.0).collect();
         let mut tr = DirectTrainer::new(&g).unwrap();
-        let before = tr.kernels().images_normalised(&x);
+        let before = tr.images(&x).unwrap();
         for _ in 0..2 {
             tr.step(&x, &t, 1e-2).unwrap();
         }
         tr.write_back(&mut g).unwrap();
-        let fresh = crate::InputVjp::new(&g).unwrap().images_normalised(&x);
-        let repacked = tr.kernels().images_normalised(&x);
+        let fresh = g.kernels().unwrap().images_normalised(&x);
+        let repacked = tr.images(&x).unwrap();
         assert_ne!(before, repacked, "the steps changed nothing");
         assert_eq!(fresh, repacked);
     }
@@ -660,7 +695,7 @@ mod tests {
             pool.install(|| {
                 let mut tr = DirectTrainer::new(&g).unwrap();
                 tr.step(&x, &t, 1e-3).unwrap();
-                tr.gradients(&x, &t);
+                tr.gradients(&x, &t).unwrap();
                 tr.params.iter().map(|p| (p.g.clone(), p.w.clone())).collect::<Vec<_>>()
             })
         };
@@ -749,5 +784,241 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+/// Networks other than the generator's ([`NetSpec`]s with and without shuffles and ReLUs, the
+/// LearningToPaint-size one) against candle.
+#[cfg(test)]
+mod spec_tests {
+    use super::DirectTrainer;
+    use crate::ltp::{Kernels as LtpKernels, Ltp};
+    use crate::net::{NetSpec, StageSpec};
+    use candle_core::{DType, Device, Tensor};
+    use candle_nn::{AdamW, Optimizer, ParamsAdamW, VarBuilder, VarMap};
+
+    use crate::kernels::test_values as values;
+
+    /// Sets every variable of `varmap` to reproducible values of the size candle's default
+    /// initialisation has (uniform, ±1/√fan-in), biases included so that every ReLU sees
+    /// both signs.
+    fn fill(varmap: &VarMap) {
+        let data = varmap.data().lock().unwrap();
+        let mut names: Vec<&String> = data.keys().collect();
+        names.sort();
+        for (i, name) in names.into_iter().enumerate() {
+            let var = &data[name];
+            let dims = var.dims().to_vec();
+            let fan_in: usize = if dims.len() > 1 { dims[1..].iter().product() } else { 8 };
+            let v = values(var.elem_count(), 11 + i as u64, 1.0 / (fan_in as f32).sqrt());
+            var.set(&Tensor::from_vec(v, dims, &Device::Cpu).unwrap()).unwrap();
+        }
+    }
+
+    /// Variables for `spec` with candle's layers' names and shapes.
+    fn varmap_for(spec: &NetSpec) -> VarMap {
+        let varmap = VarMap::new();
+        let vb = VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu);
+        for (i, w) in spec.widths.windows(2).enumerate() {
+            candle_nn::linear(w[0], w[1], vb.pp(format!("fc{i}"))).unwrap();
+        }
+        let cfg = candle_nn::Conv2dConfig { padding: 1, ..Default::default() };
+        for (i, st) in spec.stages.iter().enumerate() {
+            candle_nn::conv2d(st.cin, st.cout, 3, cfg, vb.pp(format!("conv{i}"))).unwrap();
+        }
+        fill(&varmap);
+        varmap
+    }
+
+    /// `spec` as a candle graph on `varmap`'s variables (autograd through it).
+    fn candle_forward(spec: &NetSpec, varmap: &VarMap, x: &Tensor) -> Tensor {
+        let data = varmap.data().lock().unwrap();
+        let get = |n: String| data[&n].as_tensor().clone();
+        let nfc = spec.widths.len() - 1;
+        let mut h = x.clone();
+        for i in 0..nfc {
+            h = h
+                .matmul(&get(format!("fc{i}.weight")).t().unwrap())
+                .unwrap()
+                .broadcast_add(&get(format!("fc{i}.bias")))
+                .unwrap();
+            if i + 1 < nfc || spec.relu_last_fc {
+                h = h.relu().unwrap();
+            }
+        }
+        let mut h = h.reshape((x.dim(0).unwrap(), spec.seed_channels, spec.seed_side, spec.seed_side)).unwrap();
+        for (i, st) in spec.stages.iter().enumerate() {
+            let b = get(format!("conv{i}.bias")).reshape((1, st.cout, 1, 1)).unwrap();
+            h = h.conv2d(&get(format!("conv{i}.weight")), 1, 1, 1, 1).unwrap().broadcast_add(&b).unwrap();
+            if st.relu {
+                h = h.relu().unwrap();
+            }
+            if st.shuffle {
+                h = candle_nn::ops::pixel_shuffle(&h, 2).unwrap();
+            }
+        }
+        candle_nn::ops::sigmoid(&h).unwrap()
+    }
+
+    fn flat(t: &Tensor) -> Vec<f32> {
+        t.flatten_all().unwrap().to_vec1().unwrap()
+    }
+
+    fn inputs(batch: usize) -> Vec<f32> {
+        values(batch * 3, 5, 1.0)
+    }
+
+    /// Images, every gradient and one AdamW step of the direct kernels against candle's graph
+    /// (`forward` on `varmap`), its autograd and candle's `AdamW`.
+    fn check(spec: &NetSpec, varmap: &VarMap, forward: &dyn Fn(&Tensor) -> Tensor, batch: usize, what: &str) {
+        let mut net = DirectTrainer::from_varmap(spec, varmap).unwrap();
+        let s = net.size();
+        let x = inputs(batch);
+        let xs = Tensor::from_vec(x.clone(), (batch, 3), &Device::Cpu).unwrap();
+        let t: Vec<f32> = (0..batch * s * s).map(|i| ((i * 7919) % 113) as f32 / 113.0).collect();
+        let ts = Tensor::from_vec(t.clone(), (batch, 1, s, s), &Device::Cpu).unwrap();
+        // Images.
+        let y = forward(&xs);
+        let (want, got) = (flat(&y), net.images(&x).unwrap());
+        assert_eq!(want.len(), got.len(), "{what}: image size");
+        let worst = want.iter().zip(&got).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst < 1e-5, "{what}: images differ by {worst}");
+        let spread = want.iter().fold(0f32, |m, v| m.max((v - 0.5).abs()));
+        assert!(spread > 1e-3, "{what}: a flat image tests little");
+        // Loss and gradients.
+        let l = (y - &ts).unwrap().sqr().unwrap().mean_all().unwrap();
+        let lc = l.to_scalar::<f32>().unwrap() as f64;
+        let loss = net.gradients(&x, &t).unwrap();
+        assert!((loss - lc).abs() < 1e-5 * lc, "{what}: loss {loss} vs candle {lc}");
+        let grads = l.backward().unwrap();
+        {
+            let data = varmap.data().lock().unwrap();
+            assert_eq!(data.len(), 2 * (spec.widths.len() - 1 + spec.stages.len()));
+            for (name, var) in data.iter() {
+                let want = flat(grads.get(var).unwrap());
+                let got = net.gradient(name).unwrap();
+                assert_eq!(want.len(), got.len(), "{what} {name}");
+                let scale = want.iter().fold(0f32, |m, v| m.max(v.abs()));
+                let worst = want.iter().zip(got).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+                assert!(scale > 1e-9, "{what} {name}: a zero gradient tests nothing");
+                assert!(worst <= 1e-3 * scale, "{what} {name}: worst {worst} of {scale}");
+            }
+        }
+        // One AdamW step each way: the same weights.
+        let mut opt =
+            AdamW::new(varmap.all_vars(), ParamsAdamW { lr: 1e-3, weight_decay: 0.0, ..Default::default() }).unwrap();
+        opt.step(&grads).unwrap();
+        net.update(1e-3);
+        let data = varmap.data().lock().unwrap();
+        for (name, var) in data.iter() {
+            let (vc, vd) = (flat(var.as_tensor()), net.weight(name).unwrap());
+            // Adam moves each weight by about lr; a gradient near zero may flip the sign of a
+            // step, so compare to a fraction of the step.
+            let worst = vc.iter().zip(vd).fold(0f32, |m, (p, q)| m.max((p - q).abs()));
+            assert!(worst < 2.1e-3, "{what} {name}: weights differ by {worst} after one step");
+            let agree = vc.iter().zip(vd).filter(|(p, q)| (*p - *q).abs() < 1e-5).count();
+            assert!(agree * 10 >= vc.len() * 9, "{what} {name}: {agree} of {} weights agree", vc.len());
+        }
+        drop(data);
+        // The updated network's images are candle's on the written-back weights.
+        net.write_varmap(varmap).unwrap();
+        let (want, got) = (flat(&forward(&xs)), net.images(&x).unwrap());
+        let worst = want.iter().zip(&got).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+        assert!(worst < 1e-5, "{what}: images after the step differ by {worst}");
+    }
+
+    fn st(cin: usize, cout: usize, relu: bool, shuffle: bool) -> StageSpec {
+        StageSpec { cin, cout, relu, shuffle }
+    }
+
+    /// Convolutions with and without shuffles and ReLUs, odd sides and channel counts.
+    fn odd() -> NetSpec {
+        NetSpec {
+            widths: vec![3, 24, 45],
+            relu_last_fc: true,
+            seed_channels: 5,
+            seed_side: 3,
+            stages: vec![
+                st(5, 8, true, false),
+                st(8, 12, false, true),
+                st(3, 7, true, false),
+                st(7, 8, true, true),
+                st(2, 4, false, true),
+            ],
+        }
+    }
+
+    /// The generator's pattern (every convolution followed by a shuffle, no ReLU after the
+    /// last fully connected layer).
+    fn generator_like() -> NetSpec {
+        NetSpec {
+            widths: vec![3, 16, 64],
+            relu_last_fc: false,
+            seed_channels: 4,
+            seed_side: 4,
+            stages: vec![st(4, 8, true, true), st(2, 12, true, true), st(3, 4, false, true)],
+        }
+    }
+
+    #[test]
+    fn odd_architectures_match_candle() {
+        for (spec, what) in [(odd(), "odd"), (generator_like(), "generator-like")] {
+            let vm = varmap_for(&spec);
+            check(&spec, &vm, &|x: &Tensor| candle_forward(&spec, &vm, x), 5, what);
+        }
+    }
+
+    /// The LearningToPaint-size network against its own candle implementation (`Ltp`).
+    #[test]
+    fn learning_to_paint_network_matches_candle() {
+        let ltp = Ltp::new(LtpKernels::Candle, 1e-3).unwrap();
+        fill(&ltp.varmap);
+        let spec = Ltp::spec();
+        assert_eq!(spec.macs_per_image(), Ltp::MACS_PER_IMAGE);
+        check(&spec, &ltp.varmap, &|x: &Tensor| ltp.forward(x).unwrap(), 2, "LearningToPaint");
+    }
+
+    /// Images do not depend on the batch split; gradients and steps not on the thread count.
+    #[test]
+    fn results_do_not_depend_on_batch_or_threads() {
+        let spec = odd();
+        let vm = varmap_for(&spec);
+        let x = inputs(6);
+        let s = DirectTrainer::from_varmap(&spec, &vm).unwrap().size();
+        let t = vec![0.25f32; 6 * s * s];
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut net = DirectTrainer::from_varmap(&spec, &vm).unwrap();
+                let whole = net.images(&x).unwrap();
+                let parts: Vec<f32> = x.chunks(9).flat_map(|c| net.images(c).unwrap()).collect();
+                assert_eq!(whole, parts, "a batch against its parts");
+                net.step(&x, &t, 1e-3).unwrap();
+                net.gradients(&x, &t).unwrap();
+                net.params.iter().map(|p| (p.g.clone(), p.w.clone())).collect::<Vec<_>>()
+            })
+        };
+        assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn bad_specs_and_inputs_are_errors() {
+        let mut spec = odd();
+        spec.stages[1].cout = 10;
+        assert!(spec.validate().is_err(), "a shuffle of 10 channels");
+        let mut spec = odd();
+        spec.widths[2] = 44;
+        assert!(spec.validate().is_err(), "seed size");
+        let mut spec = odd();
+        spec.stages[4].shuffle = false;
+        assert!(spec.validate().is_err(), "the last stage without a shuffle");
+        let spec = odd();
+        let vm = varmap_for(&generator_like());
+        assert!(DirectTrainer::from_varmap(&spec, &vm).is_err(), "weights of another architecture");
+        let vm = varmap_for(&spec);
+        let mut net = DirectTrainer::from_varmap(&spec, &vm).unwrap();
+        assert!(net.images(&[0.0; 4]).is_err());
+        assert!(net.gradients(&[0.0; 3], &[0.0; 5]).is_err());
+        assert!(net.gradients(&[], &[]).is_err());
     }
 }

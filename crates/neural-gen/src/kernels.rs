@@ -480,41 +480,37 @@ impl WithSimd for DenseOp<'_> {
 
 /// Panel after panel (each then stays in cache), blocks of 4 rows then single rows.
 #[inline(always)]
-fn dense_rows<S: Simd, const NV: usize>(simd: S, op: DenseOp<'_>) {
-    let (k, n, p, st) = (op.d.k, op.d.n, op.d.p, op.stride);
+fn dense_rows<S: Simd, const NV: usize>(simd: S, mut op: DenseOp<'_>) {
+    let (d, p, st) = (op.d, op.d.p, op.stride);
     debug_assert_eq!(p, NV * S::F32_LANES);
     let m = op.y.len() / st;
     for pi in op.panels.clone() {
-        let panel = &op.d.panels[pi * k * p..(pi + 1) * k * p];
-        let (j0, cols) = (pi * p - op.col0, p.min(n - pi * p));
+        let panel = &d.panels[pi * d.k * p..(pi + 1) * d.k * p];
+        let cols = (pi * p - op.col0, p.min(d.n - pi * p));
         let mut r = 0;
         while r + 4 <= m {
-            dense_tile::<S, 4, NV>(
-                simd,
-                &op.x[r * k..(r + 4) * k],
-                k,
-                panel,
-                &mut op.y[r * st..(r + 4) * st],
-                st,
-                j0,
-                cols,
-            );
+            dense_rows_at::<S, 4, NV>(simd, &mut op, panel, r, cols);
             r += 4;
         }
         while r < m {
-            dense_tile::<S, 1, NV>(
-                simd,
-                &op.x[r * k..(r + 1) * k],
-                k,
-                panel,
-                &mut op.y[r * st..(r + 1) * st],
-                st,
-                j0,
-                cols,
-            );
+            dense_rows_at::<S, 1, NV>(simd, &mut op, panel, r, cols);
             r += 1;
         }
     }
+}
+
+/// Rows `r .. r + MR` of `op` through one panel, `(j0, cols)` its columns ([`dense_tile`]). A
+/// function, not a closure: a closure would not be compiled with the dispatched instruction set.
+#[inline(always)]
+fn dense_rows_at<S: Simd, const MR: usize, const NV: usize>(
+    simd: S,
+    op: &mut DenseOp<'_>,
+    panel: &[f32],
+    r: usize,
+    (j0, cols): (usize, usize),
+) {
+    let (k, st) = (op.d.k, op.stride);
+    dense_tile::<S, MR, NV>(simd, &op.x[r * k..(r + MR) * k], k, panel, &mut op.y[r * st..(r + MR) * st], st, j0, cols);
 }
 
 /// `MR` rows × one panel (`NV` vectors), in `MR·NV` registers; `cols` of the panel's
@@ -549,20 +545,26 @@ fn dense_tile<S: Simd, const MR: usize, const NV: usize>(
     }
 }
 
+/// Reproducible test values in `[-scale, scale)` (xorshift64 from `seed`).
+#[cfg(test)]
+pub(crate) fn test_values(n: usize, seed: u64, scale: f32) -> Vec<f32> {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            scale * ((s >> 40) as f32 / (1u64 << 23) as f32 - 1.0)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn values(n: usize, seed: u64) -> Vec<f32> {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        (0..n)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 40) as f32 / (1u64 << 23) as f32 - 1.0
-            })
-            .collect()
+        test_values(n, seed, 1.0)
     }
 
     fn isas() -> Vec<Isa> {

@@ -30,18 +30,21 @@ pub use stroke_metrics;
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
+// Candle's graph with a fused AdamW: the reference training step of the tests and benchmarks.
+#[cfg(any(test, feature = "bench"))]
 mod adam;
 mod compose;
 mod config;
 mod conv;
 #[cfg(test)]
 mod conv_tests;
-mod convnet;
 mod direct;
 mod eval;
 mod kernels;
+#[cfg(any(test, feature = "bench"))]
 mod ltp;
 mod model;
+mod net;
 mod train;
 mod vjp;
 
@@ -49,21 +52,25 @@ use thiserror::Error;
 
 pub use compose::render_track;
 pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
-pub use convnet::{DirectNet, NetSpec, StageSpec};
 pub use eval::{HELD_OUT_SEED, evaluate};
 pub use model::{Generator, config_path};
+pub use net::Tape;
 pub use train::{TrainOptions, TrainPoint, TrainReport, train};
-pub use vjp::{InputVjp, Tape};
+pub use vjp::InputVjp;
 
-// The LearningToPaint-sized network, kept for the speed comparison with PyTorch
-// (benches/ltp.rs, examples/ltp_speed.rs) only: not part of the API a downstream crate should
-// use.
-#[doc(hidden)]
-pub use direct::DirectTrainer;
-#[doc(hidden)]
-pub use ltp::{Kernels as LtpKernels, Ltp};
-#[doc(hidden)]
-pub use train::NetworkStep;
+/// What the benchmarks and speed examples measure beside the generator, not part of the API a
+/// downstream crate should use: the trainer on the direct kernels for any [`bench::NetSpec`]
+/// network, the LearningToPaint-size network (for the speed comparison with PyTorch,
+/// `benches/ltp.rs`) and the training step through candle's graph. Compiled with the `bench`
+/// feature, which the crate's own benches, examples and tests turn on (a dev-dependency on
+/// itself), as does xtask.
+#[cfg(feature = "bench")]
+pub mod bench {
+    pub use crate::direct::DirectTrainer;
+    pub use crate::ltp::{Kernels as LtpKernels, Ltp};
+    pub use crate::net::{NetSpec, StageSpec};
+    pub use crate::train::NetworkStep;
+}
 
 /// Errors of neural-gen.
 #[derive(Debug, Error)]

@@ -14,7 +14,7 @@ use candle_nn::{AdamW, Linear, Optimizer, ParamsAdamW, VarBuilder, VarMap};
 
 use crate::adam::FusedAdamW;
 use crate::conv;
-use crate::{NetSpec, StageSpec};
+use crate::net::{NetSpec, StageSpec};
 
 /// Which kernels the network trains with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,7 +56,7 @@ impl Ltp {
         + 32 * 32 * (8 * 16 + 16 * 16) * 9
         + 64 * 64 * (4 * 8 + 8 * 4) * 9;
 
-    /// The architecture as a [`NetSpec`], for [`crate::DirectNet::from_varmap`] on
+    /// The architecture as a [`NetSpec`], for [`crate::bench::DirectTrainer::from_varmap`] on
     /// [`Ltp::varmap`] (the network on the direct kernels).
     pub fn spec() -> NetSpec {
         NetSpec {

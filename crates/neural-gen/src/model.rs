@@ -39,6 +39,16 @@ fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e)
 }
 
+/// Images of side `s`, one after another in `images`, as coverages.
+fn coverages(images: &[f32], s: usize) -> Vec<Coverage> {
+    images.chunks_exact(s * s).map(|c| Coverage::from_vec(s as u32, s as u32, c.to_vec()).expect("sized")).collect()
+}
+
+/// A tensor's values as f32, flattened.
+fn tensor_vec(t: &Tensor) -> Result<Vec<f32>, NeuralGenError> {
+    t.flatten_all().and_then(|f| f.to_dtype(DType::F32)).and_then(|f| f.to_vec1::<f32>()).map_err(cerr)
+}
+
 impl Generator {
     /// A new generator with weights initialised deterministically from `seed` (Kaiming-uniform
     /// weights, zero biases).
@@ -99,12 +109,20 @@ impl Generator {
     /// change): what [`Generator::forward`] and [`Generator::render`] run on.
     ///
     /// # Errors
-    /// As [`InputVjp::new`].
+    /// [`NeuralGenError::Candle`] when the weights cannot be read.
     pub fn kernels(&self) -> Result<&InputVjp, NeuralGenError> {
         if let Some(k) = self.kernels.get() {
             return Ok(k);
         }
-        let built = InputVjp::new(self)?;
+        let data = self.varmap.data().lock().expect("varmap");
+        let built = InputVjp::new(&self.config, |name| {
+            let v = data.get(name).ok_or_else(|| NeuralGenError::Config {
+                source_name: "generator".into(),
+                problem: ConfigError::MissingTensor { name: name.to_string() },
+            })?;
+            tensor_vec(v.as_tensor())
+        })?;
+        drop(data);
         // Another thread may have built it meanwhile: the same weights, either copy will do.
         let _ = self.kernels.set(built);
         Ok(self.kernels.get().expect("just set"))
@@ -224,6 +242,75 @@ impl Generator {
         Ok((
             Coverage::from_vec(s as u32, s as u32, img).expect("sized"),
             [gx[0] as f64 * k[0], gx[1] as f64 * k[1], gx[2] as f64 * k[2]],
+        ))
+    }
+
+    /// The images' side, px, after checking that `upstream` holds `size²` values for each of
+    /// `n` presses.
+    fn upstream_side(&self, n: usize, upstream: &[f32]) -> Result<usize, NeuralGenError> {
+        let s = self.config.size as usize;
+        if upstream.len() != n * s * s {
+            return Err(NeuralGenError::Shape(format!(
+                "upstream gradient has {} values, expected {} ({n} presses × {s}²)",
+                upstream.len(),
+                n * s * s
+            )));
+        }
+        Ok(s)
+    }
+
+    /// Images for a batch of presses and, for each, the gradient of `Σ upstream_i · image_i`
+    /// with respect to its press `(h [per mm], α [per rad], β [per rad])`. `upstream` holds
+    /// `size²` values per press, press after press. One forward and one backward pass through
+    /// the network (direct kernels, input gradient only: [`InputVjp`]); the same numbers as
+    /// [`Generator::image_and_vjp`] press by press (the kernels of [`Generator::kernels`]).
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Shape`] when `upstream` is not `presses.len() × size²` long;
+    /// [`NeuralGenError::Candle`].
+    pub fn images_and_vjps(
+        &self,
+        presses: &[Press],
+        upstream: &[f32],
+    ) -> Result<(Vec<Coverage>, Vec<[f64; 3]>), NeuralGenError> {
+        let s = self.upstream_side(presses.len(), upstream)?;
+        let net = self.kernels()?;
+        let tape = net.forward(presses);
+        let grads = net.vjp(&tape, upstream)?;
+        Ok((coverages(tape.images(), s), grads))
+    }
+
+    /// As [`Generator::images_and_vjps`], through candle's autograd (one forward and one
+    /// backward of the whole batch; weight gradients are computed too). Kept for the speed
+    /// comparison and as a cross-check.
+    ///
+    /// # Errors
+    /// As [`Generator::images_and_vjps`].
+    pub fn images_and_vjps_candle(
+        &self,
+        presses: &[Press],
+        upstream: &[f32],
+    ) -> Result<(Vec<Coverage>, Vec<[f64; 3]>), NeuralGenError> {
+        let s = self.upstream_side(presses.len(), upstream)?;
+        let b = presses.len();
+        if b == 0 {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let x = candle_core::Var::from_tensor(&self.inputs(presses)?).map_err(cerr)?;
+        let y = self.forward_autograd(x.as_tensor())?;
+        let w = Tensor::from_vec(upstream.to_vec(), (b, 1, s, s), self.device()).map_err(cerr)?;
+        let l = (&y * &w).and_then(|t| t.sum_all()).map_err(cerr)?;
+        let grads = l.backward().map_err(cerr)?;
+        let gx = tensor_vec(
+            grads
+                .get(x.as_tensor())
+                .ok_or_else(|| NeuralGenError::Candle(candle_core::Error::Msg("no gradient for the input".into())))?,
+        )?;
+        let k = self.config.normalise_slopes();
+        let img = tensor_vec(&y)?;
+        Ok((
+            coverages(&img, s),
+            gx.chunks_exact(3).map(|v| [v[0] as f64 * k[0], v[1] as f64 * k[1], v[2] as f64 * k[2]]).collect(),
         ))
     }
 

@@ -5,9 +5,12 @@ use std::time::Instant;
 
 use bezier_raster::{Bsm, Coverage, DatasetSpec, Rasterizer, StrokeCanvas};
 use brush_model::Press;
+#[cfg(any(test, feature = "bench"))]
 use candle_core::Tensor;
+#[cfg(any(test, feature = "bench"))]
 use candle_nn::{Optimizer, ParamsAdamW};
 
+#[cfg(any(test, feature = "bench"))]
 use crate::adam::FusedAdamW;
 use crate::direct::DirectTrainer;
 use rayon::prelude::*;
@@ -16,6 +19,7 @@ use serde::Serialize;
 use crate::model::Generator;
 use crate::{ConfigError, NeuralGenError};
 
+#[cfg(any(test, feature = "bench"))]
 fn cerr(e: candle_core::Error) -> NeuralGenError {
     NeuralGenError::Candle(e)
 }
@@ -155,13 +159,14 @@ impl Batch {
 
 /// One optimiser step of the network alone through candle's graph (forward, MSE, backward,
 /// fused AdamW with weight decay 0): what [`train()`] ran before the direct kernels
-/// ([`crate::DirectTrainer`]), kept as their reference in tests and benchmarks; public for the
+/// (`DirectTrainer`), kept as their reference in tests and benchmarks; public for the
 /// benchmarks.
-#[doc(hidden)]
+#[cfg(any(test, feature = "bench"))]
 pub struct NetworkStep {
     opt: FusedAdamW,
 }
 
+#[cfg(any(test, feature = "bench"))]
 impl NetworkStep {
     /// The optimiser over `g`'s weights at learning rate `lr`.
     ///
@@ -262,7 +267,7 @@ pub fn train(
         std::mem::swap(&mut cur, &mut next);
         let mut point = TrainPoint { step: step + 1, train_mse, val_mse: None, lr };
         if (step + 1) % opts.val_every == 0 || step + 1 == opts.steps {
-            let imgs = net.kernels().images_normalised(&val_x);
+            let imgs = net.images(&val_x)?;
             let v = imgs.iter().zip(&val_y).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>() / val_y.len() as f64;
             point.val_mse = Some(v);
             if v < best * 0.999 {
@@ -286,7 +291,7 @@ pub fn train(
         }
     }
     if let Some(w) = best_weights {
-        net.restore(w)?;
+        net.restore(w);
     }
     net.write_back(g)?;
     Ok(TrainReport {

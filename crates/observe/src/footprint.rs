@@ -1,7 +1,7 @@
 //! One footprint measured on the paper: a single press's ink, rectified from the photo, and the
 //! B-BSM outline fitted to it.
 
-use bezier_raster::binary::components;
+use bezier_raster::connected_components;
 use serde::Serialize;
 use stroke_fit::{InkMask, fit_footprint};
 
@@ -97,7 +97,7 @@ pub fn measure_footprint(
     let cov = rectify(ink, reg, &frame);
     let (w, h) = (frame.width as usize, frame.height as usize);
     let mask: Vec<bool> = cov.data().iter().map(|&c| c >= 0.5).collect();
-    let (label, sizes) = components(&mask, w, h, true);
+    let (label, sizes) = connected_components(&mask, w, h, true);
     let mut order: Vec<usize> = (1..sizes.len()).filter(|&l| sizes[l] >= 20).collect();
     order.sort_by_key(|&l| std::cmp::Reverse(sizes[l]));
     let Some(&big) = order.first() else { return Err(ObserveError::NoFootprint { window_mm }) };

@@ -1,7 +1,7 @@
 //! A photo as luminance, the sheet found in it, the paper's brightness flattened and the ink
 //! separated.
 
-use bezier_raster::binary::{components, fill_holes, otsu_threshold};
+use bezier_raster::{connected_components, fill_holes, otsu_threshold};
 use image::DynamicImage;
 
 use crate::ObserveError;
@@ -126,7 +126,7 @@ pub fn ink_map(photo: &Photo) -> Result<InkMap, ObserveError> {
     let bytes: Vec<u8> = smooth.iter().map(|v| (v.clamp(0.0, 1.0) * 255.0) as u8).collect();
     let t = otsu_threshold(&bytes);
     let bright: Vec<bool> = bytes.iter().map(|&v| v > t).collect();
-    let (label, sizes) = components(&bright, w, h, true);
+    let (label, sizes) = connected_components(&bright, w, h, true);
     let (best, &size) = sizes.iter().enumerate().skip(1).max_by_key(|(_, s)| **s).ok_or(ObserveError::NoPaper)?;
     if size * 10 < w * h {
         return Err(ObserveError::NoPaper);

@@ -1,6 +1,6 @@
 //! The registration marks found in a photo and the photo → paper homography.
 
-use bezier_raster::binary::components;
+use bezier_raster::connected_components;
 use serde::{Deserialize, Serialize};
 
 use crate::{Homography, InkMap, ObserveError};
@@ -223,7 +223,7 @@ pub fn register(ink: &InkMap, marks: &[KnownMark]) -> Result<Registration, Obser
 fn blobs(ink: &InkMap) -> Vec<Blob> {
     let (w, h) = (ink.width, ink.height);
     let mask: Vec<bool> = ink.ink.iter().map(|&v| v >= 0.5).collect();
-    let (label, sizes) = components(&mask, w, h, true);
+    let (label, sizes) = connected_components(&mask, w, h, true);
     let mut sx = vec![0f64; sizes.len()];
     let mut sy = vec![0f64; sizes.len()];
     for (i, &l) in label.iter().enumerate() {

@@ -5,7 +5,7 @@ use brush_model::BrushProfile;
 use criterion::{Criterion, criterion_group, criterion_main};
 use pipeline::{BoxRule, WriteOptions, prepare, refine_target, write_placed};
 use track_refine::{RefineOptions, refine};
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 fn bench(c: &mut Criterion) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
@@ -14,7 +14,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("refine");
     group.sample_size(10);
     for ch in ['永', '字'] {
-        let p = prepare(glyph::embedded(ch).unwrap(), Some(Method::Medians)).unwrap();
+        let p = prepare(embedded_glyph(ch).unwrap(), Some(Method::Medians)).unwrap();
         let built = write_placed(&p, &pen1, &plan, BoxRule::Auto).unwrap();
         let target = refine_target(&p.glyph, &built.char_box, opts.analysis_px).unwrap();
         group.bench_function(format!("{ch} default"), |b| {

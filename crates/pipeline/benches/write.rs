@@ -5,7 +5,7 @@ use brush_model::BrushProfile;
 use criterion::{Criterion, criterion_group, criterion_main};
 use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 use std::hint::black_box;
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 fn bench(c: &mut Criterion) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
@@ -13,7 +13,7 @@ fn bench(c: &mut Criterion) {
     for (name, method) in [("write_yong_medians_512", Method::Medians), ("write_yong_skeleton_512", Method::Skeleton)] {
         c.bench_function(name, |b| {
             b.iter(|| {
-                let p = prepare(glyph::embedded(black_box('永')).unwrap(), Some(method)).unwrap();
+                let p = prepare(embedded_glyph(black_box('永')).unwrap(), Some(method)).unwrap();
                 write_placed(&p, &pen1, &opts, BoxRule::Auto).unwrap()
             })
         });

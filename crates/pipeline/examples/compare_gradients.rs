@@ -14,13 +14,13 @@ use brush_model::BrushProfile;
 use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
 use track_refine::GenModel;
 use track_refine::Gradients;
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_chars, embedded_glyph, glyph_from_hanzi_dir};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let set = args.first().map_or("tuning", String::as_str).to_string();
     let n: usize = args.get(1).map_or(Ok(10), |s| s.parse())?;
-    let embedded = glyph::embedded_chars();
+    let embedded = embedded_chars();
     // The committed pen1 generator, as the `maobi` binary uses it.
     let gen_model = Arc::new(GenModel::new(&neural_gen::Generator::pen1()?)?);
     let (chars, dir): (Vec<char>, Option<std::path::PathBuf>) = match set.as_str() {
@@ -42,8 +42,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("char | before CSIM IoU | analytic CSIM IoU ms | generator CSIM IoU ms");
     for &ch in chars.iter().skip(skip) {
         let g = match &dir {
-            Some(d) => glyph::from_hanzi_dir(d, ch)?,
-            None => glyph::embedded(ch)?,
+            Some(d) => glyph_from_hanzi_dir(d, ch)?,
+            None => embedded_glyph(ch)?,
         };
         let p = prepare(g, Some(Method::Medians))?;
         let mut row = Vec::new();

@@ -11,7 +11,7 @@
 
 use brush_model::BrushProfile;
 use pipeline::{BoxRule, RefineOptions, WriteOptions, prepare, write_placed};
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let pen1 = BrushProfile::builtin("pen1")?;
     let mut sums = [0.0; 5];
     for ch in text.chars() {
-        let p = prepare(glyph::embedded(ch)?, Some(Method::Medians))?;
+        let p = prepare(embedded_glyph(ch)?, Some(Method::Medians))?;
         let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?.report;
         let rf = r.refine.as_ref().expect("refinement was asked for");
         let ex = |s: Option<pipeline::Similarity>| s.map_or(f64::NAN, |s| s.csim);

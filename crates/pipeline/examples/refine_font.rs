@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!("  ink missed {m:.3}, ink outside {e:.3}; presses at the lightest {lo:.3}, deepest {hi:.3}");
         }
         if let Some(dir) = std::env::var_os("REFINE_PNG") {
-            let png = bezier_raster::coverage::overlay_png(&r.reference, &r.render)?;
+            let png = bezier_raster::overlay_png(&r.reference, &r.render)?;
             std::fs::write(PathBuf::from(dir).join(format!("{ch}_refined.png")), png)?;
         }
         (before, after, ms, n) = (before + c0, after + c1, ms + rf.millis, n + 1);

@@ -46,7 +46,7 @@ pub fn builtin_brushes() -> Vec<BrushProfile> {
 /// ```
 /// use pipeline::{builtin_brushes, choose_brush, prepare};
 ///
-/// let p = prepare(trajectory::glyph::embedded('永')?, None)?;
+/// let p = prepare(trajectory::embedded_glyph('永')?, None)?;
 /// let pen1 = choose_brush(&[p.clone()], &builtin_brushes(), 127.0, 0.0);
 /// assert_eq!(pen1.name, "pen1");
 /// let small = choose_brush(&[p], &builtin_brushes(), 40.0, 0.0);

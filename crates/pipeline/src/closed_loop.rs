@@ -16,7 +16,7 @@ use serde::Serialize;
 use thiserror::Error;
 use track_refine::{RefineOptions, Target};
 use trajectory::CharBox;
-use trajectory::raster::render_glyph;
+use trajectory::render_glyph;
 
 use crate::write::refine_result;
 use crate::{CharResult, Prepared, WriteOptions};
@@ -839,7 +839,7 @@ mod tests {
 
     #[test]
     fn the_target_is_the_glyph_shifted_by_the_residual() {
-        let glyph = trajectory::glyph::embedded('十').unwrap();
+        let glyph = trajectory::embedded_glyph('十').unwrap();
         let b = CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 64.0 };
         let zero = Residual { side: 32, values: vec![0.0; 32 * 32] };
         let t0 = ilc_target(&glyph, &b, &zero, 32).unwrap();
@@ -904,7 +904,7 @@ mod tests {
         assert!(matches!(carry_correction(&s71, &odd, &s59, "x"), Err(ClosedLoopError::NotACorrection { .. })));
         // At the box --brush auto gives pen1-s71, the brush writing a third wider suits a
         // smaller base brush.
-        let p = crate::prepare(trajectory::glyph::embedded('山').unwrap(), None).unwrap();
+        let p = crate::prepare(trajectory::embedded_glyph('山').unwrap(), None).unwrap();
         let all = crate::builtin_brushes();
         let mm = crate::choose_brush(std::slice::from_ref(&p), &all, 1.0, 0.0).candidates
             [all.iter().position(|b| b.name == "pen1-s71").unwrap()]

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use trajectory::Method;
-use trajectory::glyph::{self, FontSet, Glyph, GlyphError, GlyphSource};
+use trajectory::{FontSet, Glyph, GlyphError, GlyphSource, embedded_glyph, glyph_from_hanzi_dir, glyph_from_image};
 
 use crate::{Error, Prepared, Result, prepare_with_template};
 
@@ -39,8 +39,8 @@ impl GlyphInput {
     pub fn load(&self, ch: char) -> Result<(Glyph, Option<Glyph>)> {
         let template = |dir: &Option<PathBuf>| -> Result<Option<Glyph>> {
             let found = match dir {
-                Some(d) => glyph::from_hanzi_dir(d, ch),
-                None => glyph::embedded(ch),
+                Some(d) => glyph_from_hanzi_dir(d, ch),
+                None => embedded_glyph(ch),
             };
             match found {
                 Ok(g) => Ok(Some(g)),
@@ -49,12 +49,12 @@ impl GlyphInput {
             }
         };
         Ok(match self {
-            GlyphInput::Hanzi(Some(dir)) => (glyph::from_hanzi_dir(dir, ch)?, None),
-            GlyphInput::Hanzi(None) => (glyph::embedded(ch)?, None),
+            GlyphInput::Hanzi(Some(dir)) => (glyph_from_hanzi_dir(dir, ch)?, None),
+            GlyphInput::Hanzi(None) => (embedded_glyph(ch)?, None),
             GlyphInput::Fonts(set, dir) => (set.glyph(ch)?, template(dir)?),
             GlyphInput::Images(files, dir) => {
                 let path: &Path = files.iter().find(|(c, _)| *c == ch).map(|(_, p)| p).ok_or(Error::NoImage(ch))?;
-                (glyph::from_image(path, ch)?, template(dir)?)
+                (glyph_from_image(path, ch)?, template(dir)?)
             }
         })
     }

@@ -12,7 +12,7 @@
 //! use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 //!
 //! let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-//! let glyph = trajectory::glyph::embedded('永')?;
+//! let glyph = trajectory::embedded_glyph('永')?;
 //! let prepared = prepare(glyph, None)?;
 //! let opts = WriteOptions { size: 128, ..WriteOptions::default() };
 //! let written = write_placed(&prepared, &pen1, &opts, BoxRule::Auto)?;
@@ -27,6 +27,7 @@ mod closed_loop;
 mod error;
 mod glyphs;
 mod marks;
+mod means;
 mod observation;
 mod placement;
 mod prepare;
@@ -57,6 +58,7 @@ pub use observation::{
     MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
     ObservedScores, ObservedSheet,
 };
+pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
 pub use placement::{
     BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
     write_placed,

@@ -4,7 +4,7 @@
 use bezier_raster::Coverage;
 use brush_model::{BrushProfile, Extrapolation, Track};
 use robot_io::program::{RobotConfig, build_program};
-use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track, raster::render_glyph};
+use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track, render_glyph};
 
 use crate::write::{level_frame_for, render_char};
 use crate::{CharResult, Prepared, Result, WriteOptions, write_char};
@@ -32,7 +32,7 @@ pub enum BoxRule {
 /// ```
 /// use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
 /// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-/// let p = prepare(trajectory::glyph::embedded('十')?, None)?;
+/// let p = prepare(trajectory::embedded_glyph('十')?, None)?;
 /// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
 /// let r = write_placed(&p, &pen1, &opts, BoxRule::Auto)?;
 /// assert!(r.report.plan.csim > 0.5, "{}", r.report.plan.csim);
@@ -198,7 +198,7 @@ mod tests {
         let pen = BrushProfile::builtin("pen1").unwrap();
         // 口 has corners (the split matters), 永 a hook.
         for c in ['永', '口'] {
-            let p = prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap();
+            let p = prepare(trajectory::embedded_glyph(c).unwrap(), None).unwrap();
             assert!(p.paths.iter().any(|q| !q.corners.is_empty()), "{c}");
             let auto = trajectory::auto_char_mm(&p.paths, &pen, 0.0);
             let pl = searched_placement(&p, &pen, &WriteOptions::default()).unwrap();
@@ -220,7 +220,7 @@ mod tests {
             assert!(got >= best_whole - 1e-12, "{c}: {pl:?} scores {got} < {best_whole}");
         }
         // Strokes marked false lose their corners, the others keep them.
-        let p = prepare(trajectory::glyph::embedded('口').unwrap(), None).unwrap();
+        let p = prepare(trajectory::embedded_glyph('口').unwrap(), None).unwrap();
         let split: Vec<bool> = (0..p.paths.len()).map(|i| i % 2 == 0).collect();
         for ((a, b), s) in with_splits(&p.paths, &split).iter().zip(&p.paths).zip(&split) {
             assert_eq!(a.corners.is_empty(), !s || b.corners.is_empty());

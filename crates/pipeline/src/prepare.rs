@@ -30,7 +30,7 @@ pub struct Prepared {
 ///
 /// # Examples
 /// ```
-/// let p = pipeline::prepare(trajectory::glyph::embedded('十')?, None)?;
+/// let p = pipeline::prepare(trajectory::embedded_glyph('十')?, None)?;
 /// assert_eq!(p.paths.len(), 2);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```

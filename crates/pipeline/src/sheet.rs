@@ -515,14 +515,14 @@ impl Layout {
     }
 
     /// Refuses a layout whose sheet image ([`sheet_image`]) at `size_px` per character would
-    /// exceed the largest image side ([`bezier_raster::coverage::MAX_SIDE`]); the size in px
+    /// exceed the largest image side ([`bezier_raster::MAX_SIDE`]); the size in px
     /// does not depend on the box side in mm, so this can run before the glyphs are known.
     ///
     /// # Errors
     /// [`SheetError::ImageTooLarge`].
     pub fn check_image_size(&self, size_px: u32) -> Result<(), SheetError> {
         let (width_px, height_px) = self.image_px(size_px);
-        let max_px = bezier_raster::coverage::MAX_SIDE;
+        let max_px = bezier_raster::MAX_SIDE;
         if width_px > max_px as f64 || height_px > max_px as f64 {
             return Err(SheetError::ImageTooLarge {
                 width_px,

@@ -65,7 +65,7 @@ pub struct WrittenText {
 /// ```
 /// use pipeline::{TextOptions, WriteOptions, prepare, write_text};
 /// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-/// let chars = ['十', '口'].map(|c| prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap());
+/// let chars = ['十', '口'].map(|c| prepare(trajectory::embedded_glyph(c).unwrap(), None).unwrap());
 /// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
 /// let w = write_text(chars.to_vec(), &pen1, &opts, &TextOptions::default(), &|| {})?;
 /// assert_eq!(w.results.len(), 2);
@@ -99,7 +99,7 @@ pub fn write_text(
 /// ```
 /// use pipeline::{TextOptions, WriteOptions, prepare, write_text_each};
 /// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-/// let chars = ['十', '口'].map(|c| prepare(trajectory::glyph::embedded(c).unwrap(), None).unwrap());
+/// let chars = ['十', '口'].map(|c| prepare(trajectory::embedded_glyph(c).unwrap(), None).unwrap());
 /// let opts = WriteOptions { size: 64, free_widths: false, execute: false, ..WriteOptions::default() };
 /// // Keep only each character's plan CSIM (a caller would write its images here).
 /// let (layout, csim, _) =

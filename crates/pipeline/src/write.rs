@@ -9,7 +9,7 @@ use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use serde::Serialize;
 use track_refine::{LossTerms, RefineOptions, Target};
-use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, raster::render_glyph};
+use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, render_glyph};
 
 use crate::{Error, Prepared, Result, TemplateReport};
 
@@ -656,7 +656,7 @@ mod tests {
     fn presses_at_the_shallowest_depth_are_executed_without_gaps() {
         for (ch, brush, size_mm) in [('字', "pen1", None), ('十', "pen2", Some(60.0))] {
             let profile = BrushProfile::builtin(brush).unwrap();
-            let p = crate::prepare(trajectory::glyph::embedded(ch).unwrap(), Some(Method::Medians)).unwrap();
+            let p = crate::prepare(trajectory::embedded_glyph(ch).unwrap(), Some(Method::Medians)).unwrap();
             let opts = WriteOptions { size: 128, free_widths: false, ..WriteOptions::default() };
             let size_mm = size_mm.unwrap_or_else(|| trajectory::auto_char_mm(&p.paths, &profile, 0.0));
             let r = write_char(&p, &profile, CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm }, &opts).unwrap();
@@ -672,7 +672,7 @@ mod tests {
     #[test]
     fn the_executed_figure_is_the_program_as_sent_unless_asked_otherwise() {
         let pen1 = BrushProfile::builtin("pen1").unwrap();
-        let p = crate::prepare(trajectory::glyph::embedded('十').unwrap(), None).unwrap();
+        let p = crate::prepare(trajectory::embedded_glyph('十').unwrap(), None).unwrap();
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 60.0 };
         let opts = WriteOptions { size: 64, free_widths: false, ..WriteOptions::default() };
         assert_eq!(opts.execution, Execution::PathBuffer);
@@ -697,7 +697,7 @@ mod tests {
         let mut short = pen1.clone();
         short.hairs.trail_reach = 0.3;
         // 心's hook and dots curve: where the tip trails decides which way their footprints point.
-        let p = crate::prepare(trajectory::glyph::embedded('心').unwrap(), Some(Method::Medians)).unwrap();
+        let p = crate::prepare(trajectory::embedded_glyph('心').unwrap(), Some(Method::Medians)).unwrap();
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: 120.0 };
         let base = WriteOptions { size: 96, free_widths: false, ..WriteOptions::default() };
         let r5 = write_char(&p, &pen1, b, &base).unwrap();

@@ -6,7 +6,7 @@ use pipeline::{
     BoxRule, BrushFit, BrushMiss, Error, Flow, GlyphInput, TextOptions, WriteOptions, auto_layout, prepare, write_char,
     write_placed, write_text,
 };
-use trajectory::{Method, glyph};
+use trajectory::{Method, embedded_glyph};
 
 fn pen1() -> BrushProfile {
     BrushProfile::builtin("pen1").unwrap()
@@ -18,7 +18,7 @@ fn quick() -> WriteOptions {
 
 #[test]
 fn a_written_character_reads_back_through_robot_io_as_it_was_written() {
-    let p = prepare(glyph::embedded('十').unwrap(), None).unwrap();
+    let p = prepare(embedded_glyph('十').unwrap(), None).unwrap();
     let r = write_placed(&p, &pen1(), &quick(), BoxRule::Fixed(40.0)).unwrap();
     let file = r.track_file(&pen1(), Some([210.0, 297.0]));
     let dir = tempfile::tempdir().unwrap();
@@ -37,7 +37,7 @@ fn a_written_character_reads_back_through_robot_io_as_it_was_written() {
 #[test]
 fn write_text_writes_each_character_as_write_char_does_in_its_box() {
     let pen = pen1();
-    let chars: Vec<_> = "十口".chars().map(|c| prepare(glyph::embedded(c).unwrap(), None).unwrap()).collect();
+    let chars: Vec<_> = "十口".chars().map(|c| prepare(embedded_glyph(c).unwrap(), None).unwrap()).collect();
     let text = TextOptions { char_mm: Some(30.0), per_line: 1, flow: Flow::Rows, ..TextOptions::default() };
     let done = std::sync::atomic::AtomicUsize::new(0);
     let w = write_text(chars.clone(), &pen, &quick(), &text, &|| {
@@ -72,7 +72,7 @@ fn the_automatic_layout_runs_columns_right_to_left_and_refuses_an_oversized_imag
 #[test]
 fn the_brush_verdict_says_which_way_the_brush_misses() {
     let pen = pen1();
-    let p = prepare(glyph::embedded('永').unwrap(), Some(Method::Medians)).unwrap();
+    let p = prepare(embedded_glyph('永').unwrap(), Some(Method::Medians)).unwrap();
     let auto = trajectory::auto_char_mm(&p.paths, &pen, 0.0);
     let at = |mm: f64| {
         let r = write_placed(&p, &pen, &quick(), BoxRule::Fixed(mm)).unwrap().report;

@@ -182,13 +182,13 @@ fn crop_box(pts: &[(f64, f64)], w: usize, h: usize) -> (usize, usize, usize, usi
 /// # Examples
 /// ```
 /// use stroke_fit::brush_model::{BrushProfile, Extrapolation, PointMm, Press};
-/// use stroke_fit::synth::{Degradation, photo};
+/// use stroke_fit::{Degradation, synthetic_photo};
 /// use stroke_fit::{fit_footprint, mask_from_gray};
 /// // A synthetic photo of a known press, 8 px/mm, blurred, noisy and JPEG-compressed.
 /// let pen1 = BrushProfile::builtin("pen1").unwrap();
 /// let fp = pen1.predict(&Press::from_degrees(15.0, 5.0, 0.0), Extrapolation::Refuse).unwrap();
 /// let (px_per_mm, size_px) = (8.0, 160);
-/// let gray = photo(&fp, PointMm::new(3.0, 10.0), 0.0, px_per_mm, size_px, size_px, &Degradation::default(), 1);
+/// let gray = synthetic_photo(&fp, PointMm::new(3.0, 10.0), 0.0, px_per_mm, size_px, size_px, &Degradation::default(), 1);
 /// let mask = mask_from_gray(gray, size_px as usize, size_px as usize, "synthetic").unwrap();
 /// let fit = fit_footprint(&mask, px_per_mm);
 /// let rel = |a: f64, b: f64| (a - b).abs() / b;

@@ -4,7 +4,7 @@
 //! `(h, α, β)` leaves strokes; each photo is normalised ([`load_ink`]: scale from metadata,
 //! background flattened, Otsu threshold, the one ink blob) and a B-BSM footprint is fitted to it
 //! ([`fit_footprint`]: moments and principal axis to start, Nelder–Mead on the soft IoU to refine, both
-//! ends tried as the root). [`synth`] makes synthetic stroke photos from known footprints.
+//! ends tried as the root). [`synthetic_photo`] makes synthetic stroke photos from known footprints.
 //!
 //! The measurements then go to `brush_model::fit` as usual.
 
@@ -22,7 +22,8 @@ struct ReadmeDoctests;
 
 mod fit;
 mod photo;
-pub mod synth;
+mod synth;
 
 pub use fit::{StrokeFit, fit_footprint};
 pub use photo::{InkMask, PhotoError, load_ink, mask_from_gray, scale_from_metadata};
+pub use synth::{Degradation, png_with_scale, synthetic_photo};

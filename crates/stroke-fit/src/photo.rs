@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use bezier_raster::binary::{components, fill_holes, otsu_threshold};
-use bezier_raster::coverage::{ImageFileError, decode_image};
+use bezier_raster::{ImageFileError, decode_image};
+use bezier_raster::{connected_components, fill_holes, otsu_threshold};
 use thiserror::Error;
 
 /// Errors from reading and normalising a photo. Each names the file.
@@ -97,7 +97,7 @@ pub fn scale_from_metadata(path: &Path) -> Option<f64> {
 /// # Errors
 /// [`PhotoError`] for unreadable files, no ink, mostly ink, or several large blobs.
 pub fn load_ink(path: &Path) -> Result<InkMask, PhotoError> {
-    // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
+    // Size-checked before decoding (bezier_raster::MAX_LOAD_PIXELS).
     let img = decode_image(path).map_err(|source| PhotoError::Image { path: path.to_path_buf(), source })?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     mask_from_gray(gray_on_white(&img), w, h, path)
@@ -142,7 +142,7 @@ pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: impl AsRef<Path>
     if share > 0.6 {
         return Err(PhotoError::AllInk { path: name.into(), percent: 100.0 * share });
     }
-    let (label, sizes) = components(&ink, w, h, true);
+    let (label, sizes) = connected_components(&ink, w, h, true);
     let mut order: Vec<usize> = (1..sizes.len()).collect();
     order.sort_by_key(|&i| std::cmp::Reverse(sizes[i]));
     let Some(&big) = order.first() else { return Err(PhotoError::NoInk { path: name.into() }) };

@@ -46,20 +46,20 @@ fn normal(rng: &mut SplitMix64) -> f64 {
 /// # Examples
 /// ```
 /// use stroke_fit::brush_model::{Footprint, PointMm};
-/// use stroke_fit::synth::{Degradation, photo};
+/// use stroke_fit::{Degradation, synthetic_photo};
 /// let fp = Footprint { lt_mm: 6.0, lh_mm: 2.0, lr_mm: 1.5 };
 /// let clean = Degradation { blur_px: 0.0, noise: 0.0, gradient: 0.0, bleed_px: 0.0, specks: 0, jpeg_quality: None };
-/// let gray = photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &clean, 7);
+/// let gray = synthetic_photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &clean, 7);
 /// assert_eq!(gray.len(), 100 * 100);
 /// // Dark ink on light paper: the pixels darker than mid-grey cover the footprint's area.
 /// let dark_px = gray.iter().filter(|g| **g < 0.5).count() as f64;
 /// let area_px = fp.area_mm2() * 10.0 * 10.0;
 /// assert!((dark_px - area_px).abs() < 0.05 * area_px);
 /// // One seed, one photo.
-/// assert_eq!(photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3),
-///            photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3));
+/// assert_eq!(synthetic_photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3),
+///            synthetic_photo(&fp, PointMm::new(1.0, 5.0), 0.0, 10.0, 100, 100, &Degradation::default(), 3));
 /// ```
-pub fn photo(
+pub fn synthetic_photo(
     fp: &Footprint,
     anchor_mm: PointMm,
     beta_rad: f64,
@@ -127,9 +127,9 @@ pub fn photo(
 /// ```
 /// use stroke_fit::{load_ink, scale_from_metadata};
 /// use stroke_fit::brush_model::{Footprint, PointMm};
-/// use stroke_fit::synth::{Degradation, photo, png_with_scale};
+/// use stroke_fit::{Degradation, png_with_scale, synthetic_photo};
 /// let fp = Footprint { lt_mm: 6.0, lh_mm: 2.0, lr_mm: 1.5 };
-/// let gray = photo(&fp, PointMm::new(1.0, 5.0), 0.0, 12.5, 125, 125, &Degradation::default(), 1);
+/// let gray = synthetic_photo(&fp, PointMm::new(1.0, 5.0), 0.0, 12.5, 125, 125, &Degradation::default(), 1);
 /// let path = std::env::temp_dir().join(format!("maobi-doc-stroke-{}.png", std::process::id()));
 /// std::fs::write(&path, png_with_scale(&gray, 125, 125, 12.5)).unwrap();
 /// // The file carries its scale, so a calibration photo needs no separate one.

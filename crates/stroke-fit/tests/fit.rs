@@ -1,7 +1,7 @@
 //! Fitting recovers known footprints from synthetic photos with real-scan defects.
 
 use brush_model::{BrushProfile, Extrapolation, PointMm, Press};
-use stroke_fit::synth::{Degradation, photo, png_with_scale};
+use stroke_fit::{Degradation, png_with_scale, synthetic_photo};
 use stroke_fit::{PhotoError, fit_footprint, load_ink, mask_from_gray, scale_from_metadata};
 
 struct Case {
@@ -54,7 +54,7 @@ fn recovers_lengths_within_3_percent_and_direction_within_1_degree() {
         let size_mm = w as f64 / c.px_per_mm;
         let centre = fp.placed_bounds(PointMm::default(), beta).centre();
         let anchor = PointMm::new(size_mm / 2.0 - centre.x_mm, size_mm / 2.0 - centre.y_mm);
-        let g = photo(&fp, anchor, beta, c.px_per_mm, w, h, &c.d, 100 + i as u64);
+        let g = synthetic_photo(&fp, anchor, beta, c.px_per_mm, w, h, &c.d, 100 + i as u64);
         let mask = mask_from_gray(g, w as usize, h as usize, "synthetic").unwrap();
         let f = fit_footprint(&mask, c.px_per_mm);
         // Ink bleed grows every length by the bleed: compare with the grown footprint.

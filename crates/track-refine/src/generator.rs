@@ -97,7 +97,7 @@ impl GenModel {
     /// cannot be read.
     pub fn new(g: &Generator) -> Result<Self, RefineError> {
         Ok(Self {
-            net: InputVjp::new(g)?,
+            net: g.kernels()?.clone(),
             size: g.config.size as usize,
             px_per_mm: g.config.px_per_mm,
             beta: g.config.ranges.beta_rad,
@@ -257,6 +257,34 @@ impl GenModel {
         w
     }
 
+    /// [`GenModel::visit`] over the pixels of footprint `f` where the residual weight `q` is
+    /// not 0: adds each one's spatial share to `g` ([`GenModel::add_spatial`]), then calls
+    /// `image(g, w, o, tx, ty)` with its weight and place in the footprint's image `src`.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the visit's inputs and the two outputs, as `visit` and `add_spatial` take them"
+    )]
+    #[inline]
+    fn weighted_pixels<const N: usize>(
+        &self,
+        r: &Raster<'_>,
+        f: &Fp,
+        pl: &Place,
+        q: &[f64],
+        src: &[f32],
+        g: &mut [f64; N],
+        mut image: impl FnMut(&mut [f64; N], f64, usize, f64, f64),
+    ) {
+        self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
+            let qk = q[p];
+            if qk == 0.0 {
+                return;
+            }
+            let w = self.add_spatial(g, src, pl, qk, (o, tx, ty, lx, ly));
+            image(g, w, o, tx, ty);
+        });
+    }
+
     /// The footprints' placements, images and soft union (the first half of the image term).
     fn render(&self, r: &Raster<'_>, fps: &[Fp], want_grad: bool) -> (Pass, UnionSums) {
         let places = self.places(fps, want_grad);
@@ -317,24 +345,12 @@ impl GenModel {
                 let j = &jac[u / BATCH][(u % BATCH) * 3 * ss..(u % BATCH + 1) * 3 * ss];
                 // x, y, θ, ∂L/∂a (2), ∂L/∂(h, α, βg) through the image (3).
                 let mut g = [0.0f64; 8];
-                self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
-                    let qk = q[p];
-                    if qk == 0.0 {
-                        return;
-                    }
-                    let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
+                self.weighted_pixels(r, f, pl, q, src, &mut g, |g, w, o, tx, ty| {
                     for i in 0..3 {
                         g[5 + i] += w * bilerp(&j[i * ss..(i + 1) * ss], o, s, tx, ty);
                     }
                 });
-                let an = |d: [f64; 2]| g[3] * d[0] + g[4] * d[1];
-                [
-                    g[0],
-                    g[1],
-                    g[5] + an(pl.da[0]),
-                    g[6] + an(pl.da[1]),
-                    g[2] * (1.0 - pl.follows) + pl.follows * (g[7] + an(pl.da[2])),
-                ]
+                press_partials(&g, [g[5], g[6], g[7]], pl)
             })
             .collect()
     }
@@ -357,12 +373,7 @@ impl GenModel {
                     let k = lo + m;
                     let (f, pl, src) = (&fps[k], &places[k], tape.image(m));
                     let mut g = [0.0f64; 5];
-                    self.visit(r, f, pl, |p, o, tx, ty, lx, ly| {
-                        let qk = q[p];
-                        if qk == 0.0 {
-                            return;
-                        }
-                        let w = self.add_spatial(&mut g, src, pl, qk, (o, tx, ty, lx, ly));
+                    self.weighted_pixels(r, f, pl, q, src, &mut g, |_, w, o, tx, ty| {
                         let wf = w as f32;
                         let (txf, tyf) = (tx as f32, ty as f32);
                         upk[o] += wf * (1.0 - txf) * (1.0 - tyf);
@@ -375,19 +386,25 @@ impl GenModel {
                 .collect();
             let v = self.net.vjp(tape, &up).expect("upstream sized by the tape");
             for (m, (sp, vj)) in spatial.iter().zip(&v).enumerate() {
-                let pl = &places[lo + m];
-                let an = |d: [f64; 2]| sp[3] * d[0] + sp[4] * d[1];
-                per_fp.push([
-                    sp[0],
-                    sp[1],
-                    vj[0] + an(pl.da[0]),
-                    vj[1] + an(pl.da[1]),
-                    sp[2] * (1.0 - pl.follows) + pl.follows * (vj[2] + an(pl.da[2])),
-                ]);
+                per_fp.push(press_partials(sp, *vj, &places[lo + m]));
             }
         }
         per_fp
     }
+}
+
+/// A footprint's `∂L/∂(x, y, h, α, β)` from its spatial parts `sp` (∂L/∂(x, y, θ) and Σ ∂L/∂a,
+/// [`GenModel::add_spatial`]) and the gradient `gi` of its image with respect to the
+/// generator's (h, α, β): the anchor's and the direction's dependence on the press added.
+fn press_partials(sp: &[f64], gi: [f64; 3], pl: &Place) -> [f64; 5] {
+    let an = |d: [f64; 2]| sp[3] * d[0] + sp[4] * d[1];
+    [
+        sp[0],
+        sp[1],
+        gi[0] + an(pl.da[0]),
+        gi[1] + an(pl.da[1]),
+        sp[2] * (1.0 - pl.follows) + pl.follows * (gi[2] + an(pl.da[2])),
+    ]
 }
 
 /// One rendering of the footprints: placements, the network's forward passes (tapes) and

@@ -3,10 +3,12 @@
 use brush_model::BrushProfile;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, glyph};
+use trajectory::{
+    CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, embedded_glyph,
+};
 
 fn bench(c: &mut Criterion) {
-    let g = glyph::embedded('永').unwrap();
+    let g = embedded_glyph('永').unwrap();
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     c.bench_function("centre_lines_medians_yong", |b| {
         b.iter(|| centre_lines(black_box(&g), Method::Medians, trajectory::DEFAULT_ANALYSIS_PX).unwrap())

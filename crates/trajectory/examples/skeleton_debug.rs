@@ -2,11 +2,11 @@
 //!
 //! `cargo run -p trajectory --example skeleton_debug -- 永 [POINTS.json]` (the second argument
 //! writes every stroke's points, em units, as a JSON array of arrays of `[x, y]`).
-use trajectory::{Method, centre_lines, glyph};
+use trajectory::{Method, centre_lines, embedded_glyph};
 
 fn main() {
     let ch = std::env::args().nth(1).and_then(|s| s.chars().next()).unwrap_or('永');
-    let g = glyph::embedded(ch).expect("embedded character");
+    let g = embedded_glyph(ch).expect("embedded character");
     let paths = centre_lines(&g, Method::Skeleton, trajectory::DEFAULT_ANALYSIS_PX).expect("skeleton");
     println!("{ch}: {} strokes (medians: {})", paths.len(), g.medians.as_ref().map_or(0, Vec::len));
     for (i, p) in paths.iter().enumerate() {

@@ -5,7 +5,7 @@
 //! (the last argument sets [`GraphOptions`] as `cargo xtask skeleton-counts --opts` does).
 use image::{Rgb, RgbImage};
 use kurbo::Point;
-use trajectory::{GraphOptions, Skeleton, glyph, raster};
+use trajectory::{GraphOptions, Skeleton, embedded_glyph, glyph_from_hanzi_dir, mask_of, render_glyph};
 
 const PX: u32 = 512;
 const CELL: u32 = 256;
@@ -39,12 +39,12 @@ fn main() {
     ];
     for (k, &ch) in chars.iter().enumerate() {
         let g = match &dir {
-            Some(d) => glyph::from_hanzi_dir(d, ch),
-            None => glyph::embedded(ch),
+            Some(d) => glyph_from_hanzi_dir(d, ch),
+            None => embedded_glyph(ch),
         }
         .expect("glyph");
         let (ox, oy) = ((k as u32 % cols) * CELL, (k as u32 / cols) * CELL);
-        let mask = raster::mask_of(&raster::render_glyph(&g, PX));
+        let mask = mask_of(&render_glyph(&g, PX));
         let s = PX / CELL;
         for y in 0..CELL {
             for x in 0..CELL {

@@ -13,8 +13,8 @@ use thiserror::Error;
 
 mod bitmap;
 pub use bitmap::glyph_from_gray;
-pub mod font;
-pub use font::{FontSet, from_font_files};
+mod font;
+pub use font::{FONT_EXTENSIONS, FontFormat, FontSet, font_files, glyph_from_font_files, read_sfnt, sfnt_from_bytes};
 mod packed;
 
 /// Side of the em box, em units.
@@ -120,7 +120,7 @@ fn path_outside(p: &BezPath) -> Option<Point> {
 }
 
 /// The embedded hanzi-writer-data: every character of the package, packed and compressed in
-/// chunks (read through [`embedded`]; the format is in docs/trajectory.md).
+/// chunks (read through [`embedded_glyph`]; the format is in docs/trajectory.md).
 static EMBEDDED_BLOB: &[u8] = include_bytes!("../data/hanzi.bin");
 /// The Arphic Public License the embedded data is distributed under.
 pub static ARPHIC_LICENSE: &str = include_str!("../data/ARPHICPL.TXT");
@@ -188,7 +188,7 @@ impl GlyphError {
 /// Where a glyph came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum GlyphSource {
-    /// The hanzi-writer-data compiled into this crate ([`embedded`]).
+    /// The hanzi-writer-data compiled into this crate ([`embedded_glyph`]).
     Embedded,
     /// A hanzi-writer-data folder.
     HanziData(String),
@@ -412,7 +412,7 @@ pub fn embedded_all_chars() -> Vec<char> {
 ///
 /// # Examples
 /// ```
-/// let g = trajectory::glyph::embedded('龍')?;
+/// let g = trajectory::embedded_glyph('龍')?;
 /// assert_eq!(g.medians.as_ref().map(Vec::len), Some(16));
 /// # Ok::<(), trajectory::GlyphError>(())
 /// ```
@@ -420,7 +420,7 @@ pub fn embedded_all_chars() -> Vec<char> {
 /// # Errors
 /// [`GlyphError::Unknown`] if the character is not in the data; [`GlyphError::Malformed`] if
 /// the compiled-in data is damaged (it never is in a released build: a test decodes all of it).
-pub fn embedded(ch: char) -> Result<Glyph, GlyphError> {
+pub fn embedded_glyph(ch: char) -> Result<Glyph, GlyphError> {
     let blob = embedded_blob()?;
     let bad = |message: String| GlyphError::Malformed { source_name: format!("{EMBEDDED_NAME}, {ch:?}"), message };
     let raw = blob.get(ch).map_err(bad)?.ok_or_else(|| GlyphError::Unknown {
@@ -479,7 +479,7 @@ pub const HANZI_SUBFOLDERS: [&str; 4] = ["", "package", "data", "package/data"];
 /// # Errors
 /// [`GlyphError::Io`] if `dir` is not a folder; [`GlyphError::Unknown`] naming the folders
 /// searched if none has a file for the character; [`GlyphError::Malformed`].
-pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
+pub fn glyph_from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
     if !dir.is_dir() {
         return Err(GlyphError::io(dir, std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a folder")));
     }
@@ -511,20 +511,20 @@ pub fn from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
 }
 
 /// A glyph from one font file: TrueType/OpenType (`.ttf`, `.otf`), the first face of a
-/// collection (`.ttc`, `.otc`), WOFF or WOFF2 (see [`font`]). Font units are scaled so the em is
+/// collection (`.ttc`, `.otc`), WOFF or WOFF2 (see [`FontSet`]). Font units are scaled so the em is
 /// 1024 units with the baseline at `y = 0` of the original frame (so the ideographic em box,
 /// from about −0.12 em to 0.88 em, lands on the 1024 box like hanzi-writer-data). No medians.
-/// For several files, folders or another face, see [`from_font_files`] and [`FontSet`].
+/// For several files, folders or another face, see [`glyph_from_font_files`] and [`FontSet`].
 ///
 /// # Errors
 /// [`GlyphError::Io`], [`GlyphError::Malformed`] (not a font, a web font that does not decode,
 /// a glyph beyond [`limits`]), [`GlyphError::Unknown`].
-pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
+pub fn glyph_from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     if path.is_dir() {
         let e = std::io::Error::new(std::io::ErrorKind::InvalidInput, "a folder, not a font file");
         return Err(GlyphError::io(path, e));
     }
-    from_font_files(&[path.to_path_buf()], None, ch)
+    glyph_from_font_files(&[path.to_path_buf()], None, ch)
 }
 
 /// A glyph from a photo or scan of one character (dark ink on light paper): Otsu threshold,
@@ -533,7 +533,7 @@ pub fn from_font(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
 /// # Errors
 /// [`GlyphError::Io`] for unreadable files, [`GlyphError::BadImage`] for an image with no ink
 /// or nothing but ink.
-pub fn from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
+pub fn glyph_from_image(path: &Path, ch: char) -> Result<Glyph, GlyphError> {
     let (size, ink) = bitmap::load_clean(path)?;
     Ok(Glyph {
         ch,
@@ -589,7 +589,7 @@ mod tests {
         for line in json.lines() {
             let ch = line.strip_prefix("{\"c\":\"").and_then(|r| r.chars().next()).unwrap();
             let from_json = parse_hanzi_json(ch, line, GlyphSource::Embedded, "subset").unwrap();
-            let packed = embedded(ch).unwrap();
+            let packed = embedded_glyph(ch).unwrap();
             assert_eq!(glyph_bits(&packed), glyph_bits(&from_json), "{ch}");
             n += 1;
         }
@@ -608,13 +608,13 @@ mod tests {
         // Characters beyond the frequency subset.
         for (ch, strokes) in [('眠', 10), ('龍', 16), ('鬱', 29)] {
             assert!(!embedded_chars().contains(&ch));
-            let g = embedded(ch).unwrap();
+            let g = embedded_glyph(ch).unwrap();
             assert_eq!(g.medians.as_ref().unwrap().len(), strokes, "{ch}");
             assert_eq!(g.source, GlyphSource::Embedded);
         }
         // Not covered: a private-use code point and a rare extension-B character.
         for ch in ['\u{E000}', '𪚥', 'a'] {
-            match embedded(ch) {
+            match embedded_glyph(ch) {
                 Err(GlyphError::Unknown { ch: c, tried, .. }) => {
                     assert_eq!(c, ch);
                     assert_eq!(tried.len(), 1);
@@ -626,7 +626,7 @@ mod tests {
                 other => panic!("{ch}: {other:?}"),
             }
         }
-        let e = embedded('\u{E000}').unwrap_err().to_string();
+        let e = embedded_glyph('\u{E000}').unwrap_err().to_string();
         assert!(e.contains("U+E000") && e.contains("embedded hanzi-writer-data") && !e.contains("--"), "{e}");
     }
 
@@ -643,11 +643,11 @@ mod tests {
         for (from, ch, found_in) in
             [(root.clone(), '永', "package"), (root.clone(), '字', "data"), (root.join("package"), '永', "package")]
         {
-            let g = from_hanzi_dir(&from, ch).unwrap();
+            let g = glyph_from_hanzi_dir(&from, ch).unwrap();
             assert_eq!(g.source, GlyphSource::HanziData(root.join(found_in).display().to_string()));
-            assert_eq!(glyph_bits(&g).2, glyph_bits(&embedded(ch).unwrap()).2, "{ch}");
+            assert_eq!(glyph_bits(&g).2, glyph_bits(&embedded_glyph(ch).unwrap()).2, "{ch}");
         }
-        match from_hanzi_dir(&root, '八') {
+        match glyph_from_hanzi_dir(&root, '八') {
             Err(GlyphError::Unknown { tried, .. }) => {
                 let want: Vec<String> = ["", "package", "data"]
                     .iter()

@@ -3,7 +3,7 @@
 //! From a Chinese character to the 5D brush track `T_i = (H_i, α_i, x_i, y_i, β_i)` a robot can
 //! write.
 //!
-//! 1. **Glyph** ([`glyph`]): hanzi-writer-data (every character of the package embedded,
+//! 1. **Glyph** ([`Glyph`]: [`embedded_glyph`], [`glyph_from_font`], [`glyph_from_image`], …): hanzi-writer-data (every character of the package embedded,
 //!    compressed, or an unpacked package's JSON), a CJK font's outlines, or a photo of a character.
 //!    Everything is in the em frame (1024 box, y down).
 //! 2. **Centre lines** ([`centre_lines`]): the source's stroke medians ([`Method::Medians`]), or a
@@ -16,9 +16,9 @@
 //!    profile's inverse model, placed on the paper by a [`CharBox`].
 //!
 //! ```
-//! use trajectory::{centre_lines, build_track, glyph, CharBox, Method, Sizing, TrackOptions, DEFAULT_SPACING_MM};
+//! use trajectory::{centre_lines, build_track, embedded_glyph, CharBox, Method, Sizing, TrackOptions, DEFAULT_SPACING_MM};
 //! use brush_model::BrushProfile;
-//! let g = glyph::embedded('十').unwrap();
+//! let g = embedded_glyph('十').unwrap();
 //! let paths = centre_lines(&g, Method::Medians, 256).unwrap();
 //! let pen1 = BrushProfile::builtin("pen1").unwrap();
 //! let opts = TrackOptions {
@@ -44,31 +44,37 @@ pub use kurbo;
 struct ReadmeDoctests;
 
 mod distance;
-pub mod glyph;
+mod glyph;
 mod medians;
 mod metrics;
 mod paper;
 mod path;
 mod polyline;
-pub mod raster;
-pub mod scan;
+mod raster;
+mod scan;
 mod skeleton;
-pub mod template;
+mod template;
 mod thinning;
 mod track;
 
 use thiserror::Error;
 
-pub use glyph::glyph_from_gray;
-pub use glyph::{Glyph, GlyphError, GlyphSource, Shape};
+pub use glyph::{
+    ARPHIC_LICENSE, EM, EM_TOP, EMBEDDED_NAME, FONT_EXTENSIONS, FontFormat, FontSet, Glyph, GlyphError, GlyphSource,
+    HANZI_SUBFOLDERS, Shape, embedded_all_chars, embedded_chars, embedded_glyph, font_files, glyph_from_font,
+    glyph_from_font_files, glyph_from_gray, glyph_from_hanzi_dir, glyph_from_image, limits, pack_hanzi,
+    parse_hanzi_json, read_sfnt, sfnt_from_bytes, verify_embedded,
+};
 pub use metrics::chamfer_pct;
 pub use paper::{CharBox, auto_char_mm};
 pub use path::{CORNER_RAD, CORNER_REACH_EM, StrokePath, find_corners};
+pub use raster::{mask_of, render_glyph, render_outlines, resample_bitmap};
+pub use scan::{ScanError, ScanOptions, decode_gray, synth_scan};
 pub use skeleton::{
     CORNER_FEATURE_NAMES, CornerSample, DecisionModel, FEATURE_NAMES, GraphOptions, NUM_CORNER_FEATURES, NUM_FEATURES,
     PairSample, Skeleton, SkeletonModelError, SkeletonModels,
 };
-pub use template::{Registration, StrokeFit, TemplateOptions};
+pub use template::{Registration, StrokeFit, TemplateOptions, register_template, shape_only};
 pub use track::{
     BuiltTrack, DEFAULT_SPACING_MM, GLIDE_CONTACT_FACTOR, GLIDE_H_MM, Sizing, TrackOptions, build_track, glide_h_mm,
 };
@@ -85,7 +91,7 @@ pub enum Method {
     /// A skeleton of the glyph image.
     Skeleton,
     /// A stroke template (hanzi-writer medians of the same character) registered onto the glyph
-    /// ([`template`], [`centre_lines_from_template`]).
+    /// ([`register_template`], [`centre_lines_from_template`]).
     Template,
 }
 
@@ -132,8 +138,8 @@ pub enum TrajectoryError {
 ///
 /// # Examples
 /// ```
-/// use trajectory::{Method, centre_lines, glyph};
-/// let g = glyph::embedded('十').unwrap();
+/// use trajectory::{Method, centre_lines, embedded_glyph};
+/// let g = embedded_glyph('十').unwrap();
 /// let paths = centre_lines(&g, Method::Medians, 256).unwrap();
 /// // 十 is written in two strokes: 横, then 竖.
 /// assert_eq!(paths.len(), 2);
@@ -149,7 +155,7 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
     match method {
         Method::Template => {
             let opts = TemplateOptions { analysis_px, ..TemplateOptions::default() };
-            Ok(template::register(g, &template::shape_only(g), &opts)?.paths)
+            Ok(template::register_template(g, &template::shape_only(g), &opts)?.paths)
         }
         Method::Medians => medians::from_medians(g, analysis_px),
         Method::Skeleton => medians::from_skeleton(g, analysis_px),
@@ -164,10 +170,10 @@ pub fn centre_lines(g: &Glyph, method: Method, analysis_px: u32) -> Result<Vec<S
 ///
 /// # Examples
 /// ```
-/// use trajectory::{centre_lines_from_template, glyph, template};
-/// let hanzi_writer = glyph::embedded('十').unwrap();
+/// use trajectory::{centre_lines_from_template, embedded_glyph, shape_only};
+/// let hanzi_writer = embedded_glyph('十').unwrap();
 /// // A target with the shape only, as a font or a photo gives it.
-/// let target = template::shape_only(&hanzi_writer);
+/// let target = shape_only(&hanzi_writer);
 /// let reg = centre_lines_from_template(&hanzi_writer, &target, 128).unwrap();
 /// assert_eq!(reg.paths.len(), 2);
 /// assert!(reg.strokes.iter().all(|s| s.found_ink));
@@ -181,5 +187,5 @@ pub fn centre_lines_from_template(
     target: &Glyph,
     analysis_px: u32,
 ) -> Result<Registration, TrajectoryError> {
-    template::register(template, target, &TemplateOptions { analysis_px, ..TemplateOptions::default() })
+    template::register_template(template, target, &TemplateOptions { analysis_px, ..TemplateOptions::default() })
 }

@@ -59,8 +59,8 @@ const CHAR_BOX_HIGH_PERCENTILE: f64 = 0.8;
 /// # Examples
 /// ```
 /// use trajectory::brush_model::BrushProfile;
-/// use trajectory::{Method, auto_char_mm, centre_lines, glyph};
-/// let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
+/// use trajectory::{Method, auto_char_mm, centre_lines, embedded_glyph};
+/// let paths = centre_lines(&embedded_glyph('永').unwrap(), Method::Medians, 256).unwrap();
 /// let pen1 = BrushProfile::builtin("pen1").unwrap();
 /// let size_mm = auto_char_mm(&paths, &pen1, 0.0);
 /// // A box in which pen1's widths match the glyph's strokes: about 12–17 cm for common characters.

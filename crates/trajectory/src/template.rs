@@ -38,7 +38,7 @@ use cpd::Cpd;
 use global::global_fit;
 use ridge::{extend_ends_own, own_margin_px, snap_to_ridge};
 
-/// Settings of [`register`].
+/// Settings of [`register_template`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TemplateOptions {
     /// Raster (px per em box) of the target's ink, distance transform and ridge snap.
@@ -92,7 +92,7 @@ pub struct StrokeFit {
     pub snap_em: f64,
 }
 
-/// The result of [`register`]: centre lines as [`crate::centre_lines`] returns them, plus what
+/// The result of [`register_template`]: centre lines as [`crate::centre_lines`] returns them, plus what
 /// the registration measured.
 #[derive(Clone, Debug)]
 pub struct Registration {
@@ -143,7 +143,11 @@ pub fn shape_only(g: &Glyph) -> Glyph {
 /// # Errors
 /// [`TrajectoryError::NoMedians`] when the template has no medians; [`TrajectoryError::Empty`]
 /// when either glyph has no ink at the fit raster.
-pub fn register(template: &Glyph, target: &Glyph, opts: &TemplateOptions) -> Result<Registration, TrajectoryError> {
+pub fn register_template(
+    template: &Glyph,
+    target: &Glyph,
+    opts: &TemplateOptions,
+) -> Result<Registration, TrajectoryError> {
     let medians =
         template.medians.as_ref().ok_or_else(|| TrajectoryError::NoMedians(template.source.kind().to_string()))?;
     // 1. Global affine fit.
@@ -310,7 +314,7 @@ fn finish_lines(lines: Vec<Line>, ink: &TargetInk) -> Vec<StrokePath> {
     paths
 }
 
-/// Stage 2 of [`register`]: the non-rigid field (CPD) taking the template's skeleton, moved by
+/// Stage 2 of [`register_template`]: the non-rigid field (CPD) taking the template's skeleton, moved by
 /// `affine`, onto the target's, and its mean displacement (em); `None` when it is switched off
 /// or there is too little skeleton.
 fn nonrigid_fit(template: &Glyph, target: &Glyph, affine: Affine, opts: &TemplateOptions) -> (Option<Cpd>, f64) {

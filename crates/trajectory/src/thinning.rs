@@ -179,7 +179,7 @@ mod tests {
             })
             .collect();
         zhang_suen(&mut m, w, h);
-        let (_, sizes) = bezier_raster::binary::components(&m, w, h, true);
+        let (_, sizes) = bezier_raster::connected_components(&m, w, h, true);
         // 4-connectivity may split diagonal steps, so check 8-connected reach instead: the arms'
         // tips are all inked and the centre is inked.
         assert!(sizes.len() >= 2);

@@ -159,8 +159,8 @@ pub fn glide_h_mm(profile: &BrushProfile) -> f64 {
 /// # Examples
 /// ```
 /// use trajectory::brush_model::BrushProfile;
-/// use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, glyph};
-/// let paths = centre_lines(&glyph::embedded('一').unwrap(), Method::Medians, 256).unwrap();
+/// use trajectory::{CharBox, DEFAULT_SPACING_MM, Method, Sizing, TrackOptions, build_track, centre_lines, embedded_glyph};
+/// let paths = centre_lines(&embedded_glyph('一').unwrap(), Method::Medians, 256).unwrap();
 /// let pen1 = BrushProfile::builtin("pen1").unwrap();
 /// let opts = TrackOptions {
 ///     char_box: CharBox { x0_mm: 10.0, y0_mm: 20.0, size_mm: 80.0 },

@@ -18,7 +18,7 @@ fn pt(x_mm: f64, y_mm: f64, h_mm: f64) -> TrackPoint {
 
 /// 永 written by `profile` and executed as sent: the executed brush states and the box.
 fn executed(ch: char, profile: &BrushProfile) -> (Vec<TrackPoint>, CharBox) {
-    let p = prepare(trajectory::glyph::embedded(ch).unwrap(), None).unwrap();
+    let p = prepare(trajectory::embedded_glyph(ch).unwrap(), None).unwrap();
     let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&p.paths, profile, 0.0) };
     let opts = WriteOptions { size: 64, free_widths: false, ..WriteOptions::default() };
     let r = write_char(&p, profile, b, &opts).unwrap();

@@ -176,7 +176,7 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         _ => bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display()),
     };
     let what = || format!("--sheet-photo {}", photo_path.display());
-    let img = bezier_raster::coverage::decode_image(photo_path).with_context(what)?;
+    let img = bezier_raster::decode_image(photo_path).with_context(what)?;
     let photo = Photo::from_image(&img).with_context(what)?;
     let ink = ink_map(&photo).with_context(what)?;
     let reg = register(&ink, &marks).with_context(what)?;
@@ -191,7 +191,7 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         })
         .collect();
     pb.finish_and_clear();
-    let mut csv = String::from("press,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,iou,used\n");
+    let mut csv = format!("press,{},iou,used\n", brush_model::MEASUREMENT_COLUMNS);
     let mut rows = Vec::new();
     let mut left_out = Vec::new();
     for (p, r) in layout.presses.iter().zip(results) {
@@ -214,23 +214,13 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         } else {
             None
         };
-        csv.push_str(&format!(
-            "{label},{},{},{},{:.4},{:.4},{:.4},{:.4},{}\n",
-            p.h_mm,
-            p.alpha_rad.to_degrees(),
-            p.beta_rad.to_degrees(),
-            m.lt_mm,
-            m.lh_mm,
-            m.lr_mm,
-            m.iou,
-            why.is_none()
-        ));
+        let measured =
+            Measurement { press: p.press(), footprint: Footprint { lt_mm: m.lt_mm, lh_mm: m.lh_mm, lr_mm: m.lr_mm } };
+        let fields = brush_model::measurement_fields(&measured, Some(4));
+        csv.push_str(&format!("{label},{fields},{:.4},{}\n", m.iou, why.is_none()));
         match why {
             Some(w) => left_out.push(format!("{label}: {w}")),
-            None => rows.push(Measurement {
-                press: p.press(),
-                footprint: Footprint { lt_mm: m.lt_mm, lh_mm: m.lh_mm, lr_mm: m.lr_mm },
-            }),
+            None => rows.push(measured),
         }
     }
     let n = layout.presses.len();

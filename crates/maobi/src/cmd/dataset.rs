@@ -76,7 +76,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     let write_err = || format!("cannot write {}", labels_path.display());
     labels
-        .write_all(b"file,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,px_per_mm,anchor_u,anchor_v\n")
+        .write_all(format!("file,{},px_per_mm,anchor_u,anchor_v\n", brush_model::MEASUREMENT_COLUMNS).as_bytes())
         .and_then(|()| labels.flush())
         .with_context(write_err)?;
     crate::common::stop_on_interrupt();
@@ -104,18 +104,13 @@ pub fn run(args: Args) -> Result<()> {
                     }
                     write_atomic(&dir.join(&file), &img.encode_png()?)?;
                     pb.inc(1);
-                    let (p, f) = (s.press, s.footprint);
+                    let fields = brush_model::measurement_fields(
+                        &brush_model::Measurement { press: s.press, footprint: s.footprint },
+                        None,
+                    );
                     Ok(Some(format!(
-                        "{file},{},{},{},{},{},{},{},{},{}\n",
-                        p.h_mm,
-                        p.alpha_rad.to_degrees(),
-                        p.beta_rad.to_degrees(),
-                        f.lt_mm,
-                        f.lh_mm,
-                        f.lr_mm,
-                        spec.canvas.px_per_mm,
-                        s.anchor_px[0],
-                        s.anchor_px[1]
+                        "{file},{fields},{},{},{}\n",
+                        spec.canvas.px_per_mm, s.anchor_px[0], s.anchor_px[1]
                     )))
                 },
             )

@@ -2,10 +2,12 @@
 
 use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
-use pipeline::{BoxRule, CharReport, GlyphInput, WriteOptions, write_placed};
+use pipeline::{
+    BoxRule, CharReport, GlyphInput, RefineMeans, ReportMeans, SimilarityMeans, WriteOptions, write_placed,
+};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{Method, glyph};
+use trajectory::{GlyphError, Method, embedded_chars};
 
 use crate::cmd::write::{glyph_input, prepare_char};
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
@@ -118,12 +120,13 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--font covers none of the {} characters asked for", chars.len());
     }
     pb.finish_and_clear();
-    let mut summary = summarize(&reports);
+    let means = ReportMeans::of(&reports);
+    let mut summary = summary_json(&means);
     if !args.font.is_empty() {
         summary["uncovered"] = json!({"count": uncovered.chars().count(), "chars": uncovered});
     }
-    if let Some(r) = refine_summary(&reports) {
-        summary["refine"] = r;
+    if let Some(r) = &means.refine {
+        summary["refine"] = refine_json(r);
     }
     if args.json {
         print_json(
@@ -235,81 +238,45 @@ fn print_table(reports: &[CharReport], summary: &serde_json::Value) -> Result<()
     Ok(())
 }
 
-/// Means and counts over character reports.
-pub fn summarize(r: &[CharReport]) -> serde_json::Value {
-    let n = r.len() as f64;
-    let mean = |f: &dyn Fn(&CharReport) -> f64| r.iter().map(f).sum::<f64>() / n;
-    let with_medians: Vec<&CharReport> = r.iter().filter(|c| c.plan.strokes_expected.is_some()).collect();
-    // A registered template always has the template's count: it is right when every stroke
-    // found its own ink.
-    let strokes_ok = with_medians
-        .iter()
-        .filter(|c| {
-            c.plan.strokes_expected == Some(c.plan.strokes_found) && c.template.as_ref().is_none_or(|t| t.strokes_ok)
-        })
-        .count();
-    let chamfers: Vec<f64> = r.iter().filter_map(|c| c.plan.chamfer_pct).collect();
-    let fw: Vec<_> = r.iter().filter_map(|c| c.plan.free_widths).collect();
-    let mean_sim = |v: Vec<pipeline::Similarity>| {
-        let k = v.len() as f64;
-        if v.is_empty() {
-            return serde_json::Value::Null;
-        }
-        let min_csim = v.iter().map(|s| s.csim).fold(f64::INFINITY, f64::min);
-        json!({
-            "csim": v.iter().map(|s| s.csim).sum::<f64>() / k,
-            "ssim": v.iter().map(|s| s.ssim).sum::<f64>() / k,
-            "iou": v.iter().map(|s| s.iou).sum::<f64>() / k,
-            "csim_min": min_csim,
-        })
+/// The summary's means and counts over the character reports ([`ReportMeans`]).
+fn summary_json(m: &ReportMeans) -> serde_json::Value {
+    let sim = |s: Option<SimilarityMeans>| {
+        s.map_or(
+            serde_json::Value::Null,
+            |s| json!({"csim": s.csim, "ssim": s.ssim, "iou": s.iou, "csim_min": s.csim_min}),
+        )
     };
+    let fw = m.free_widths.map_or(serde_json::Value::Null, |u| json!({"csim": u.csim, "ssim": u.ssim, "iou": u.iou}));
     json!({
-        "count": r.len(),
-        "csim": mean(&|c| c.plan.csim),
-        "ssim": mean(&|c| c.plan.ssim),
-        "iou": mean(&|c| c.plan.iou),
-        "chamfer_pct": if chamfers.is_empty() { None } else { Some(chamfers.iter().sum::<f64>() / chamfers.len() as f64) },
-        "strokes_match_fraction": if with_medians.is_empty() { None } else { Some(strokes_ok as f64 / with_medians.len() as f64) },
-        "millis_mean": mean(&|c| c.timing_ms.plan),
-        "executed": mean_sim(r.iter().filter_map(|c| c.executed).collect()),
-        "agreement": mean_sim(r.iter().filter_map(|c| c.agreement).collect()),
+        "count": m.count,
+        "csim": m.plan.csim,
+        "ssim": m.plan.ssim,
+        "iou": m.plan.iou,
+        "chamfer_pct": m.chamfer_pct,
+        "strokes_match_fraction": m.strokes_match_fraction,
+        "millis_mean": m.plan_millis,
+        "executed": sim(m.executed),
+        "agreement": sim(m.agreement),
         // The plan with footprints sized freely from the glyph (not a bound: see CharReport).
-        "free_widths": if fw.is_empty() { serde_json::Value::Null } else { json!({
-            "csim": fw.iter().map(|u| u.csim).sum::<f64>() / fw.len() as f64,
-            "ssim": fw.iter().map(|u| u.ssim).sum::<f64>() / fw.len() as f64,
-            "iou": fw.iter().map(|u| u.iou).sum::<f64>() / fw.len() as f64,
-        })},
+        "free_widths": fw,
     })
 }
 
-/// Means of the refinement's before/after figures (`None` when nothing was refined).
-fn refine_summary(r: &[CharReport]) -> Option<serde_json::Value> {
-    let rf: Vec<&pipeline::RefineReport> = r.iter().filter_map(|c| c.refine.as_ref()).collect();
-    if rf.is_empty() {
-        return None;
-    }
-    let mean = |v: Vec<pipeline::Similarity>| {
-        let k = v.len() as f64;
-        if v.is_empty() {
-            return serde_json::Value::Null;
-        }
-        json!({
-            "csim": v.iter().map(|s| s.csim).sum::<f64>() / k,
-            "ssim": v.iter().map(|s| s.ssim).sum::<f64>() / k,
-            "iou": v.iter().map(|s| s.iou).sum::<f64>() / k,
-        })
+/// The refinement's before/after means.
+fn refine_json(rf: &RefineMeans) -> serde_json::Value {
+    let sim = |s: Option<SimilarityMeans>| {
+        s.map_or(serde_json::Value::Null, |s| json!({"csim": s.csim, "ssim": s.ssim, "iou": s.iou}))
     };
-    let ms: Vec<f64> = rf.iter().map(|x| x.millis).collect();
-    Some(json!({
-        "count": rf.len(),
-        "rejected": rf.iter().filter(|x| x.rejected.is_some()).count(),
-        "executed_before": mean(rf.iter().filter_map(|x| x.executed_before).collect()),
-        "executed_after": mean(rf.iter().filter_map(|x| x.executed_after).collect()),
-        "planned_before": mean(rf.iter().map(|x| x.planned_before).collect()),
-        "planned_after": mean(rf.iter().map(|x| x.planned_after).collect()),
-        "millis_mean": ms.iter().sum::<f64>() / ms.len() as f64,
-        "millis_max": ms.iter().copied().fold(0.0, f64::max),
-    }))
+    json!({
+        "count": rf.count,
+        "rejected": rf.rejected,
+        "executed_before": sim(rf.executed_before),
+        "executed_after": sim(rf.executed_after),
+        "planned_before": sim(Some(rf.planned_before)),
+        "planned_after": sim(Some(rf.planned_after)),
+        "millis_mean": rf.millis_mean,
+        "millis_max": rf.millis_max,
+    })
 }
 
 /// The method the reports used: one name, or the names joined by `+` when they differ.
@@ -322,7 +289,7 @@ fn method_name(reports: &[CharReport]) -> String {
 
 /// Whether a glyph error says the fonts do not cover the character.
 fn is_uncovered(e: &anyhow::Error) -> bool {
-    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(glyph::GlyphError::Unknown { .. })))
+    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(GlyphError::Unknown { .. })))
 }
 
 /// The images of `--images DIR`: files `<char>.png|jpg|jpeg`, one character per name, sorted.
@@ -361,7 +328,7 @@ fn chars_and_input(args: &Args) -> Result<(Vec<char>, GlyphInput)> {
     let mut chars: Vec<char> = match &args.chars {
         Some(s) => s.chars().filter(|c| !c.is_whitespace()).collect(),
         None if args.images.is_some() => image_files.iter().map(|(c, _)| *c).collect(),
-        None => glyph::embedded_chars(),
+        None => embedded_chars(),
     };
     if args.images.is_some() {
         let missing: Vec<char> = chars.iter().filter(|c| !image_files.iter().any(|(f, _)| f == *c)).copied().collect();

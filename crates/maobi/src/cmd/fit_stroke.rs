@@ -52,8 +52,7 @@ pub fn scale_for(photo: &Path, given: Option<f64>, what: &str) -> Result<f64> {
 /// Fits one photo at the scale given or stored in the file. A missing, empty or non-image file
 /// says so first (not "no scale"), then the scale is checked, then the ink.
 pub fn fit_photo(photo: &Path, given: Option<f64>, what: &str) -> Result<(StrokeFit, stroke_fit::InkMask, f64)> {
-    bezier_raster::coverage::image_header(photo)
-        .map_err(|source| PhotoError::Image { path: photo.to_path_buf(), source })?;
+    bezier_raster::image_header(photo).map_err(|source| PhotoError::Image { path: photo.to_path_buf(), source })?;
     let scale = scale_for(photo, given, what)?;
     let mask = load_ink(photo)?;
     Ok((fit_footprint(&mask, scale), mask, scale))

@@ -162,7 +162,7 @@ pub(super) fn load_sheet(flag: &str, dir: &Path) -> Result<SheetFolder> {
 /// [`pipeline::OBSERVED_PX`].
 fn image_side(flag: &str, p: &Path) -> Result<u32> {
     let (w, h) =
-        bezier_raster::coverage::image_header(p).with_context(|| format!("{flag}: cannot read {}", p.display()))?;
+        bezier_raster::image_header(p).with_context(|| format!("{flag}: cannot read {}", p.display()))?;
     let [lo, hi] = pipeline::OBSERVED_PX;
     if w != h || !(lo..=hi).contains(&w) {
         bail!(
@@ -178,7 +178,7 @@ pub fn run(args: Args) -> Result<()> {
     check_output_apart("--output", &args.output, &[("--sheet", &args.sheet), ("PHOTO", &args.photo)])?;
     let sheet = load_sheet("--sheet", &args.sheet)?;
     let photo_err = || format!("PHOTO {}", args.photo.display());
-    let img = bezier_raster::coverage::decode_image(&args.photo).with_context(photo_err)?;
+    let img = bezier_raster::decode_image(&args.photo).with_context(photo_err)?;
     let photo = Photo::from_image(&img).with_context(photo_err)?;
     drop(img);
     let ink = ink_map(&photo).with_context(photo_err)?;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, coverage::svg_document};
+use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, svg_document};
 use brush_model::Extrapolation;
 use serde_json::json;
 

@@ -644,19 +644,21 @@ fn summary_json(
     brush_mm: f64,
 ) -> serde_json::Value {
     let char_mm = lay.char_mm;
-    let mean = |f: fn(&CharReport) -> f64| reports.iter().map(|r| f(r)).sum::<f64>() / reports.len() as f64;
+    let m = pipeline::ReportMeans::of(reports.iter().copied());
+    // Executed figures are means over every character (null unless all were executed).
+    let all = |s: Option<pipeline::SimilarityMeans>| s.filter(|s| s.count == m.count);
     json!({
         "text": chars.iter().collect::<String>(),
         "char_mm": char_mm,
         "brush": profile.name,
         "model": args.model.name(),
-        "plan_mean": {"csim": mean(|r| r.plan.csim), "ssim": mean(|r| r.plan.ssim), "iou": mean(|r| r.plan.iou)},
+        "plan_mean": {"csim": m.plan.csim, "ssim": m.plan.ssim, "iou": m.plan.iou},
         "executed_mean": {
-            "csim": mean(|r| r.executed.map_or(f64::NAN, |s| s.csim)),
-            "ssim": mean(|r| r.executed.map_or(f64::NAN, |s| s.ssim)),
-            "iou": mean(|r| r.executed.map_or(f64::NAN, |s| s.iou)),
+            "csim": all(m.executed).map(|s| s.csim),
+            "ssim": all(m.executed).map(|s| s.ssim),
+            "iou": all(m.executed).map(|s| s.iou),
         },
-        "agreement_mean": {"csim": mean(|r| r.agreement.map_or(f64::NAN, |s| s.csim))},
+        "agreement_mean": {"csim": all(m.agreement).map(|s| s.csim)},
         "sheet": {
             "name": lay.sheet.name, "size_mm": [lay.sheet.width_mm, lay.sheet.height_mm],
             "margin_mm": lay.margin_mm, "flow": flow, "per_line": lay.per_line, "lines": lay.lines,
@@ -860,7 +862,7 @@ fn load_observed(dir: &Path, chars: &[char], layout: Option<&Layout>) -> Result<
     let mut observed = Vec::new();
     for (i, c) in summary.chars.iter().enumerate() {
         let p = dir.join(&c.folder).join("observed.png");
-        let (w, h) = bezier_raster::coverage::image_header(&p)
+        let (w, h) = bezier_raster::image_header(&p)
             .with_context(|| format!("--observed: cannot read {}", p.display()))?;
         if (w, h) != (c.size_px, c.size_px) {
             bail!(

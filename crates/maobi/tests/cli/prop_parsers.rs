@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Extrapolation, read_measurements};
 use proptest::prelude::*;
-use trajectory::glyph::{self, GlyphSource, limits};
+use trajectory::{GlyphSource, limits, parse_hanzi_json};
 
 /// Numbers as a careless file would hold them: ordinary, huge, tiny, negative, not finite.
 fn wild_f64() -> impl Strategy<Value = f64> {
@@ -173,7 +173,7 @@ proptest! {
             (0..meds.len()).map(|i| if i == 1 { junk.clone().unwrap_or_else(|| svg.clone()) } else { svg.clone() }).collect();
         let doc = serde_json::json!({"strokes": strokes, "medians": meds}).to_string();
         let t0 = Instant::now();
-        let parsed = glyph::parse_hanzi_json('永', &doc, GlyphSource::Embedded, "t.json");
+        let parsed = parse_hanzi_json('永', &doc, GlyphSource::Embedded, "t.json");
         if let Ok(g) = parsed {
             for m in g.medians.as_ref().unwrap() {
                 prop_assert!(m.len() <= limits::MAX_MEDIAN_POINTS);

@@ -67,13 +67,13 @@ fn batched_vjps_equal_the_single_press_vjp() {
         }
     }
     // Batch size does not change a press's numbers (each image is computed on its own).
-    let net = InputVjp::new(&g).unwrap();
+    let net = g.kernels().unwrap();
     let tape = net.forward(&ps[1..3]);
     let part = net.vjp(&tape, &up[s * s..3 * s * s]).unwrap();
     assert_eq!(part[0], grads[1]);
     assert_eq!(tape.image(1), imgs[2].data());
     // The forward-mode Jacobian gives the same products.
-    let jac = assert_jacobian_matches_vjp(&net, &ps, &up, s, &grads, "tiny");
+    let jac = assert_jacobian_matches_vjp(net, &ps, &up, s, &grads, "tiny");
     // Only the marked columns, the same numbers.
     let some = net.jacobian_of(&net.forward(&ps), [true, false, true]);
     for i in 0..ps.len() {
@@ -98,7 +98,7 @@ fn batched_vjps_match_finite_differences() {
     let opts = neural_gen::TrainOptions { steps: 20, batch: 16, val_every: 1_000_000, ..Default::default() };
     neural_gen::train(&mut g, &opts, |_| {}).unwrap();
     let s = g.config.size as usize;
-    let net = InputVjp::new(&g).unwrap();
+    let net = g.kernels().unwrap();
     let ps = presses();
     let up = upstream(ps.len(), s);
     let grads = net.vjp(&net.forward(&ps), &up).unwrap();
@@ -157,7 +157,7 @@ fn odd_architectures_match_candle_autograd() {
             }
         }
         // The forward-mode Jacobian agrees with the VJP here too.
-        let net = InputVjp::new(&g).unwrap();
-        assert_jacobian_matches_vjp(&net, &ps, &up, s, &grads, &format!("arch {ai}"));
+        let net = g.kernels().unwrap();
+        assert_jacobian_matches_vjp(net, &ps, &up, s, &grads, &format!("arch {ai}"));
     }
 }

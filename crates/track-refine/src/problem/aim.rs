@@ -104,7 +104,7 @@ impl Problem<'_> {
                 }
                 if d >= reach {
                     let dir = (y - p.y_mm).atan2(x - p.x_mm);
-                    if brush_model::motion::wrap(dir - beta).abs() > 1e-9 {
+                    if brush_model::wrap_angle_rad(dir - beta).abs() > 1e-9 {
                         return None;
                     }
                     let aim = (self.vars.slots[s][k].group, self.vars.slots[s][k + 1].group, f);
@@ -124,7 +124,7 @@ impl Problem<'_> {
         // `min_motion_mm` away.
         let (d, [x, y], ga, gb, f) = far?;
         let dir = (y - p.y_mm).atan2(x - p.x_mm);
-        if d < model.min_motion_mm || brush_model::motion::wrap(dir - beta).abs() > 1e-9 {
+        if d < model.min_motion_mm || brush_model::wrap_angle_rad(dir - beta).abs() > 1e-9 {
             return None;
         }
         Some(((ga, gb, f), [0.0; 3]))

@@ -6,11 +6,11 @@ use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm};
 use robot_io::frame::PaperFrame;
 use robot_io::program::{RobotConfig, build_program};
 use track_refine::{RefineOptions, Target, refine};
-use trajectory::{CharBox, Method, Sizing, TrackOptions, build_track, centre_lines, glyph, raster::render_glyph};
+use trajectory::{CharBox, Method, Sizing, TrackOptions, build_track, centre_lines, embedded_glyph, render_glyph};
 
 fn check(ch: char, alpha_deg: f64) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let g = glyph::embedded(ch).unwrap();
+    let g = embedded_glyph(ch).unwrap();
     let paths = centre_lines(&g, Method::Medians, 256).unwrap();
     let alpha = alpha_deg.to_radians();
     let char_box = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: trajectory::auto_char_mm(&paths, &pen1, alpha) };
@@ -44,7 +44,7 @@ fn check(ch: char, alpha_deg: f64) {
         for (i, (p, q)) in s.points.iter().zip(&again).enumerate() {
             let eased = i > 0 && p.h_mm <= 0.0 && s.points[i - 1].h_mm > 0.0;
             if !eased {
-                assert!(brush_model::motion::wrap(p.beta_rad - q.beta_rad).abs() < 1e-9, "{ch}: point {i}");
+                assert!(brush_model::wrap_angle_rad(p.beta_rad - q.beta_rad).abs() < 1e-9, "{ch}: point {i}");
             }
         }
     }

@@ -182,7 +182,7 @@ fn directions_follow_the_profiles_trail_reach() {
             brush_model::ForwardModel { tilt_threshold_rad: f64::INFINITY, ..brush_model::ForwardModel::default() };
         let want = model.with_directions(&profile, &track.strokes[0].points, brush_model::Extrapolation::Refuse);
         for (g, w) in got.iter().zip(&want) {
-            assert!(brush_model::motion::wrap(g - w.beta_rad).abs() < 1e-12, "{trail_reach}: {g} vs {}", w.beta_rad);
+            assert!(brush_model::wrap_angle_rad(g - w.beta_rad).abs() < 1e-12, "{trail_reach}: {g} vs {}", w.beta_rad);
         }
         got
     };

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use bezier_raster::binary::{components, fill_holes, otsu_threshold};
+use bezier_raster::{connected_components, fill_holes, otsu_threshold};
 use image::GrayImage;
 
 use super::{Glyph, GlyphError, GlyphSource, Shape};
@@ -11,8 +11,8 @@ use super::{Glyph, GlyphError, GlyphSource, Shape};
 /// Loads, thresholds and cleans an image; returns the square side and the binary ink (1/0).
 pub(crate) fn load_clean(path: &Path) -> Result<(u32, Vec<f32>), GlyphError> {
     let name = path.display().to_string();
-    // Size-checked before decoding (bezier_raster::coverage::MAX_LOAD_PIXELS).
-    let img = bezier_raster::coverage::decode_image(path)
+    // Size-checked before decoding (bezier_raster::MAX_LOAD_PIXELS).
+    let img = bezier_raster::decode_image(path)
         .map_err(|source| GlyphError::Image { path: path.to_path_buf(), source: std::sync::Arc::new(source) })?;
     clean_gray(&name, on_white(&img))
 }
@@ -34,7 +34,7 @@ fn on_white(img: &image::DynamicImage) -> GrayImage {
 }
 
 /// A glyph from an 8-bit grey photo or scan already in memory (dark ink on light paper), cleaned
-/// as [`crate::glyph::from_image`] cleans a file; `name` labels the source in messages and in
+/// as [`crate::glyph_from_image`] cleans a file; `name` labels the source in messages and in
 /// [`GlyphSource::Image`].
 ///
 /// # Errors
@@ -150,7 +150,7 @@ fn clean_gray(name: &str, gray: GrayImage) -> Result<(u32, Vec<f32>), GlyphError
     }
     // Remove specks: ink components under 0.5 % of all ink.
     let total: usize = ink.iter().filter(|&&b| b).count();
-    let (label, sizes) = components(&ink, w, h, true);
+    let (label, sizes) = connected_components(&ink, w, h, true);
     for (i, v) in ink.iter_mut().enumerate() {
         if *v && (sizes[label[i] as usize] as f64) < 0.005 * total as f64 {
             *v = false;

@@ -384,7 +384,7 @@ fn centred_in_em(path: &BezPath) -> BezPath {
 ///
 /// # Errors
 /// As [`FontSet::open`] and [`FontSet::glyph`].
-pub fn from_font_files(paths: &[PathBuf], face_index: Option<u32>, ch: char) -> Result<Glyph, GlyphError> {
+pub fn glyph_from_font_files(paths: &[PathBuf], face_index: Option<u32>, ch: char) -> Result<Glyph, GlyphError> {
     FontSet::open(paths, face_index)?.glyph(ch)
 }
 

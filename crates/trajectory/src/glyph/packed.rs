@@ -166,19 +166,24 @@ impl Coder {
 }
 
 /// Appends one character's ops and numbers.
+/// A path element's op code (0 move, 1 line, 2 quadratic, 3 cubic, 4 close) and its points.
+fn op_and_points(el: &PathEl) -> (u8, Vec<Point>) {
+    match *el {
+        PathEl::MoveTo(a) => (0, vec![a]),
+        PathEl::LineTo(a) => (1, vec![a]),
+        PathEl::QuadTo(a, b) => (2, vec![a, b]),
+        PathEl::CurveTo(a, b, c) => (3, vec![a, b, c]),
+        PathEl::ClosePath => (4, vec![]),
+    }
+}
+
 fn encode(raw: &RawHanzi, ops: &mut Vec<u8>, nums: &mut Vec<u8>) {
     let mut coder = Coder::default();
     put_varint(ops, raw.outlines.len() as u64);
     for path in &raw.outlines {
         put_varint(ops, path.elements().len() as u64);
         for el in path.elements() {
-            let (op, points): (u8, &[Point]) = match el {
-                PathEl::MoveTo(a) => (0, std::slice::from_ref(a)),
-                PathEl::LineTo(a) => (1, std::slice::from_ref(a)),
-                PathEl::QuadTo(a, b) => (2, &[*a, *b]),
-                PathEl::CurveTo(a, b, c) => (3, &[*a, *b, *c]),
-                PathEl::ClosePath => (4, &[]),
-            };
+            let (op, points) = op_and_points(el);
             ops.push(op);
             for p in points {
                 coder.put(nums, [p.x, p.y]);
@@ -242,14 +247,8 @@ impl RawHanzi {
             v.push(p.elements().len() as u64);
         }
         for el in self.outlines.iter().flat_map(|p| p.elements()) {
-            let (kind, pts): (u64, &[Point]) = match el {
-                PathEl::MoveTo(a) => (0, std::slice::from_ref(a)),
-                PathEl::LineTo(a) => (1, std::slice::from_ref(a)),
-                PathEl::QuadTo(a, b) => (2, &[*a, *b]),
-                PathEl::CurveTo(a, b, c) => (3, &[*a, *b, *c]),
-                PathEl::ClosePath => (4, &[]),
-            };
-            v.push(kind);
+            let (kind, pts) = op_and_points(el);
+            v.push(u64::from(kind));
             v.extend(pts.iter().flat_map(|q| [q.x.to_bits(), q.y.to_bits()]));
         }
         for m in &self.medians {

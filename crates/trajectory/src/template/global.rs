@@ -9,7 +9,7 @@ use super::TemplateOptions;
 use crate::glyph::{EM, Glyph};
 use crate::{TrajectoryError, distance, raster};
 
-/// The global affine fit of [`register`](super::register) (stage 1): its coefficients and the blurred-ink
+/// The global affine fit of [`register_template`](super::register_template) (stage 1): its coefficients and the blurred-ink
 /// overlap before and after.
 pub(super) struct GlobalFit {
     /// Template em frame → target em frame, kurbo's affine coefficients.
@@ -20,7 +20,7 @@ pub(super) struct GlobalFit {
     pub(super) overlap_fit: f64,
 }
 
-/// Stage 1 of [`register`](super::register): the affine map of the template's ink onto the target's, from the
+/// Stage 1 of [`register_template`](super::register_template): the affine map of the template's ink onto the target's, from the
 /// moments start, Nelder–Mead on the overlap of the blurred inks at two blur widths.
 pub(super) fn global_fit(
     template: &Glyph,

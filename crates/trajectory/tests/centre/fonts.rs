@@ -4,8 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use trajectory::glyph::{self, FontSet, GlyphError, GlyphSource, Shape, font};
-use trajectory::raster;
+use trajectory::{
+    FontFormat, FontSet, Glyph, GlyphError, GlyphSource, Shape, glyph_from_font, glyph_from_font_files, mask_of,
+    render_glyph, sfnt_from_bytes,
+};
 
 fn fonts() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts")
@@ -13,18 +15,18 @@ fn fonts() -> PathBuf {
 
 const UKAI_CHARS: &str = "永字八法十口人丁山水";
 
-fn outline(g: &glyph::Glyph) -> &kurbo::BezPath {
+fn outline(g: &Glyph) -> &kurbo::BezPath {
     match &g.shape {
         Shape::Outlines(o) => &o[0],
         Shape::Bitmap { .. } => panic!("a font gives outlines"),
     }
 }
 
-fn one(path: &Path, ch: char) -> glyph::Glyph {
-    glyph::from_font(path, ch).unwrap_or_else(|e| panic!("{}: {ch}: {e}", path.display()))
+fn one(path: &Path, ch: char) -> Glyph {
+    glyph_from_font(path, ch).unwrap_or_else(|e| panic!("{}: {ch}: {e}", path.display()))
 }
 
-fn source_path(g: &glyph::Glyph) -> (String, u32) {
+fn source_path(g: &Glyph) -> (String, u32) {
     match &g.source {
         GlyphSource::Font { path, face_index } => (path.clone(), *face_index),
         s => panic!("not a font source: {s:?}"),
@@ -47,8 +49,8 @@ fn woff_and_woff2_give_the_truetype_outlines() {
 
 /// Intersection over union of two glyphs' masks at `px`², and the number of pixels where they
 /// differ that are not on the edge of `a`'s ink (no ink and no background among their 3×3).
-fn compare(a: &glyph::Glyph, b: &glyph::Glyph, px: u32) -> (f64, usize) {
-    let (ma, mb) = (raster::mask_of(&raster::render_glyph(a, px)), raster::mask_of(&raster::render_glyph(b, px)));
+fn compare(a: &Glyph, b: &Glyph, px: u32) -> (f64, usize) {
+    let (ma, mb) = (mask_of(&render_glyph(a, px)), mask_of(&render_glyph(b, px)));
     let inter = ma.iter().zip(&mb).filter(|(x, y)| **x && **y).count();
     let union = ma.iter().zip(&mb).filter(|(x, y)| **x || **y).count();
     let n = px as usize;
@@ -72,8 +74,8 @@ fn cff_outlines_match_the_truetype_ones() {
     // on the outline's edge (the rasteriser flattens quadratics and cubics differently).
     let (ttf, otf) = (fonts().join("ukai-subset.ttf"), fonts().join("ukai-subset-cff.otf"));
     assert_eq!(
-        font::FontFormat::sniff(&std::fs::read(&otf).unwrap()),
-        Some(font::FontFormat::OpenTypeCff),
+        FontFormat::sniff(&std::fs::read(&otf).unwrap()),
+        Some(FontFormat::OpenTypeCff),
         "the fixture must be CFF-flavoured"
     );
     for ch in UKAI_CHARS.chars() {
@@ -96,20 +98,20 @@ fn a_collection_face_is_chosen_by_index() {
     let g = one(&ttc, '永');
     assert_eq!(outline(&g).elements(), outline(&one(&ttf, '永')).elements());
     assert_eq!(source_path(&g), (name.clone(), 0));
-    let g = glyph::from_font_files(std::slice::from_ref(&ttc), Some(0), '永').unwrap();
+    let g = glyph_from_font_files(std::slice::from_ref(&ttc), Some(0), '永').unwrap();
     assert_eq!(source_path(&g).1, 0);
     // Face 1 holds 中大小 only.
-    let g = glyph::from_font_files(std::slice::from_ref(&ttc), Some(1), '中').unwrap();
+    let g = glyph_from_font_files(std::slice::from_ref(&ttc), Some(1), '中').unwrap();
     assert_eq!(source_path(&g), (name.clone(), 1));
-    let e = glyph::from_font_files(std::slice::from_ref(&ttc), Some(1), '永').unwrap_err();
+    let e = glyph_from_font_files(std::slice::from_ref(&ttc), Some(1), '永').unwrap_err();
     assert!(matches!(e, GlyphError::Unknown { .. }), "{e}");
     assert!(e.to_string().contains("(face 1)") && e.to_string().contains(&name), "{e}");
-    assert!(matches!(glyph::from_font_files(std::slice::from_ref(&ttc), None, '中'), Err(GlyphError::Unknown { .. })));
+    assert!(matches!(glyph_from_font_files(std::slice::from_ref(&ttc), None, '中'), Err(GlyphError::Unknown { .. })));
     // A face that is not there.
-    let e = glyph::from_font_files(std::slice::from_ref(&ttc), Some(2), '永').unwrap_err().to_string();
+    let e = glyph_from_font_files(std::slice::from_ref(&ttc), Some(2), '永').unwrap_err().to_string();
     assert!(e.contains(&name) && e.contains("no face 2") && e.contains("2 faces (indices 0..=1)"), "{e}");
     // A single font has face 0 only.
-    let e = glyph::from_font_files(&[ttf], Some(1), '永').unwrap_err().to_string();
+    let e = glyph_from_font_files(&[ttf], Some(1), '永').unwrap_err().to_string();
     assert!(e.contains("ukai-subset.ttf") && e.contains("no face 1: the file has 1 face "), "{e}");
 }
 
@@ -134,14 +136,14 @@ fn the_file_that_covers_the_character_is_used() {
         assert!(path.ends_with(&format!("ma-shan-zheng-{file}-400-normal.woff2")), "{ch}: {path}");
         assert_eq!(face, 0);
         // Brush-written, so not UKai: but a real glyph with ink in the em box.
-        let ink = raster::mask_of(&raster::render_glyph(&g, 128)).iter().filter(|&&b| b).count();
+        let ink = mask_of(&render_glyph(&g, 128)).iter().filter(|&&b| b).count();
         assert!(ink > 128 * 128 / 20, "{ch}: {ink} ink pixels");
     }
     // Files listed one by one, in any order with a folder: the first covering file wins.
     let files = [fonts().join("ukai-subset.woff2"), dir.clone()];
-    let g = glyph::from_font_files(&files, None, '永').unwrap();
+    let g = glyph_from_font_files(&files, None, '永').unwrap();
     assert!(source_path(&g).0.ends_with("ukai-subset.woff2"));
-    let g = glyph::from_font_files(&files, None, '国').unwrap();
+    let g = glyph_from_font_files(&files, None, '国').unwrap();
     assert!(source_path(&g).0.ends_with("ma-shan-zheng-118-400-normal.woff2"));
 }
 
@@ -166,7 +168,7 @@ fn a_character_in_no_file_names_the_files() {
     assert!(e.to_string().contains("maobi-nofonts"), "{e}");
     assert!(why.contains("no font files") && why.contains(".woff2"), "{e}: {why}");
     std::fs::remove_dir_all(&empty).unwrap();
-    let e = glyph::from_font_files(&[fonts().join("nope.ttf")], None, '永').unwrap_err().to_string();
+    let e = glyph_from_font_files(&[fonts().join("nope.ttf")], None, '永').unwrap_err().to_string();
     assert!(e.contains("nope.ttf"), "{e}");
     assert!(FontSet::open(&[], None).is_err());
 }
@@ -178,23 +180,23 @@ fn broken_web_fonts_are_clear_errors() {
         let data = std::fs::read(fonts().join(format!("ukai-subset.{ext}"))).unwrap();
         // Every truncation is refused with the file's name, never a panic.
         for len in 0..data.len() {
-            let e = font::sfnt_from_bytes(name, data[..len].to_vec()).unwrap_err().to_string();
+            let e = sfnt_from_bytes(name, data[..len].to_vec()).unwrap_err().to_string();
             assert!(e.starts_with("broken.woff2: ") && (e.contains("WOFF") || e.contains("not a font")), "{len}: {e}");
         }
         // Flipped bytes: an error or a font, never a panic; a decoded font still parses safely.
         for at in (0..data.len()).step_by(7) {
             let mut d = data.clone();
             d[at] ^= 0x5a;
-            if let Ok(sfnt) = font::sfnt_from_bytes(name, d)
+            if let Ok(sfnt) = sfnt_from_bytes(name, d)
                 && let Ok(face) = ttf_parser::Face::parse(&sfnt, 0)
             {
                 let _ = face.glyph_index('永');
             }
         }
     }
-    let e = font::sfnt_from_bytes(name, b"wOF2 and then garbage".to_vec()).unwrap_err().to_string();
+    let e = sfnt_from_bytes(name, b"wOF2 and then garbage".to_vec()).unwrap_err().to_string();
     assert!(e.contains("broken.woff2") && e.contains("not a valid WOFF2 file"), "{e}");
-    let e = font::sfnt_from_bytes(name, b"<html>not a font</html>".to_vec()).unwrap_err().to_string();
+    let e = sfnt_from_bytes(name, b"<html>not a font</html>".to_vec()).unwrap_err().to_string();
     assert!(
         e.contains("not a font: expected a TrueType/OpenType font (.ttf, .otf)") && e.contains("3c 68 74 6d"),
         "{e}"
@@ -202,12 +204,12 @@ fn broken_web_fonts_are_clear_errors() {
     // A WOFF whose table claims an impossible size is refused before decoding.
     let mut d = std::fs::read(fonts().join("ukai-subset.woff")).unwrap();
     d[44 + 12..44 + 16].copy_from_slice(&0x7fff_ffffu32.to_be_bytes());
-    let e = font::sfnt_from_bytes(name, d).unwrap_err().to_string();
+    let e = sfnt_from_bytes(name, d).unwrap_err().to_string();
     assert!(e.contains("not a valid WOFF file"), "{e}");
     // Through the file API, a garbage file is named.
     let bad = std::env::temp_dir().join(format!("maobi-bad-{}.woff2", std::process::id()));
     std::fs::write(&bad, b"wOF2\0\0\0\0").unwrap();
-    let e = glyph::from_font(&bad, '永').unwrap_err().to_string();
+    let e = glyph_from_font(&bad, '永').unwrap_err().to_string();
     assert!(e.contains(&bad.display().to_string()) && e.contains("WOFF2"), "{e}");
     std::fs::remove_file(&bad).unwrap();
 }

@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use trajectory::scan::{ScanOptions, decode_gray, synth_scan};
-use trajectory::template::{TemplateOptions, register};
-use trajectory::{Shape, glyph, glyph_from_gray, raster};
+use trajectory::{ScanOptions, decode_gray, embedded_glyph, glyph_from_font, mask_of, render_glyph, synth_scan};
+use trajectory::{Shape, glyph_from_gray};
+use trajectory::{TemplateOptions, register_template};
 
 use crate::common::{PX, csim};
 
@@ -15,7 +15,7 @@ fn ukai() -> PathBuf {
 
 #[test]
 fn scans_are_deterministic_and_degraded() {
-    let g = glyph::from_font(&ukai(), '永').unwrap();
+    let g = glyph_from_font(&ukai(), '永').unwrap();
     let o = ScanOptions { light_angle_rad: 0.0, ..ScanOptions::seeded(7) };
     let a = synth_scan(&g, &o).unwrap();
     assert_eq!(a, synth_scan(&g, &o).unwrap(), "same seed, same bytes");
@@ -44,7 +44,7 @@ fn scans_are_deterministic_and_degraded() {
 
 #[test]
 fn bad_options_are_refused() {
-    let g = glyph::from_font(&ukai(), '十').unwrap();
+    let g = glyph_from_font(&ukai(), '十').unwrap();
     let e = synth_scan(&g, &ScanOptions { jpeg_quality: 0, ..ScanOptions::default() }).unwrap_err();
     assert!(e.to_string().contains("jpeg_quality"), "{e}");
     let e = synth_scan(&g, &ScanOptions { size_px: 8, ..ScanOptions::default() }).unwrap_err();
@@ -56,14 +56,14 @@ fn an_unevenly_lit_scan_cleans_to_the_glyph() {
     // No rotation, so the cleaned bitmap can be compared with the font glyph placed where the
     // scan put it (the em box is the middle 80 % of the page).
     for c in ['永', '口', '水'] {
-        let g = glyph::from_font(&ukai(), c).unwrap();
+        let g = glyph_from_font(&ukai(), c).unwrap();
         let o = ScanOptions { rotation_rad: 0.0, light_gradient: 0.5, vignette: 0.3, ..ScanOptions::seeded(11) };
         let scan = glyph_from_gray(c, "scan", &decode_gray(&synth_scan(&g, &o).unwrap()).unwrap()).unwrap();
         let Shape::Bitmap { size, ink } = &scan.shape else { panic!("a bitmap") };
         let n = *size as usize;
         let em = (n as f64 * o.em_fraction).round() as usize;
         let off = (n - em) / 2;
-        let clean = raster::mask_of(&raster::render_glyph(&g, em as u32));
+        let clean = mask_of(&render_glyph(&g, em as u32));
         let (mut inter, mut union) = (0usize, 0usize);
         for y in 0..n {
             for x in 0..n {
@@ -84,12 +84,12 @@ fn registration_on_synthetic_scans_matches_the_clean_font() {
     let (mut ok, mut sum_scan, mut sum_font) = (0, 0.0, 0.0);
     let opts = TemplateOptions { analysis_px: PX, ..TemplateOptions::default() };
     for (k, c) in chars.chars().enumerate() {
-        let template = glyph::embedded(c).unwrap();
-        let font = glyph::from_font(&ukai(), c).unwrap();
+        let template = embedded_glyph(c).unwrap();
+        let font = glyph_from_font(&ukai(), c).unwrap();
         let bytes = synth_scan(&font, &ScanOptions::seeded(100 + k as u64)).unwrap();
         let scan = glyph_from_gray(c, "scan", &decode_gray(&bytes).unwrap()).unwrap();
-        let on_scan = register(&template, &scan, &opts).unwrap();
-        let on_font = register(&template, &font, &opts).unwrap();
+        let on_scan = register_template(&template, &scan, &opts).unwrap();
+        let on_font = register_template(&template, &font, &opts).unwrap();
         assert_eq!(on_scan.paths.len(), template.medians.as_ref().unwrap().len(), "{c}");
         ok += on_scan.strokes_ok() as usize;
         sum_scan += csim(&on_scan.paths, &scan);

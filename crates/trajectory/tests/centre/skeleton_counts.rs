@@ -2,11 +2,11 @@
 //! decisions (compiled in) against the hand rules alone. A small, fixed sample of the embedded
 //! subset; the full figures come from `cargo xtask skeleton-counts` (docs/trajectory.md).
 
-use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, glyph};
+use trajectory::{DEFAULT_ANALYSIS_PX, GraphOptions, Skeleton, embedded_chars, embedded_glyph};
 
 /// Every 25th embedded character (40 of them).
 fn sample() -> Vec<char> {
-    glyph::embedded_chars().into_iter().step_by(25).take(40).collect()
+    embedded_chars().into_iter().step_by(25).take(40).collect()
 }
 
 /// How many of `chars` the skeleton finds the medians' stroke count for, with `opts`.
@@ -14,7 +14,7 @@ fn right(chars: &[char], opts: &GraphOptions) -> usize {
     chars
         .iter()
         .filter(|&&c| {
-            let g = glyph::embedded(c).expect("embedded");
+            let g = embedded_glyph(c).expect("embedded");
             let expected = g.medians.as_ref().expect("medians").len();
             let sk = Skeleton::of(&g, DEFAULT_ANALYSIS_PX).expect("ink");
             sk.strokes(opts).len() == expected

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use kurbo::Point;
-use trajectory::template::{TemplateOptions, register, shape_only};
-use trajectory::{Glyph, Method, Shape, centre_lines, glyph};
+use trajectory::{Glyph, Method, Shape, centre_lines};
+use trajectory::{TemplateOptions, embedded_glyph, glyph_from_font, register_template, shape_only};
 
 use crate::common::{PX, csim};
 const CHARS: &str = "永字八法十口人丁山水";
@@ -29,11 +29,11 @@ fn mean_dist(a: &[Point], b: &[Point]) -> f64 {
 #[test]
 fn on_its_own_outline_the_template_gives_the_medians_result() {
     for c in CHARS.chars() {
-        let g = glyph::embedded(c).unwrap();
+        let g = embedded_glyph(c).unwrap();
         let medians = centre_lines(&g, Method::Medians, PX).unwrap();
         let target = shape_only(&g);
         assert!(target.medians.is_none() && target.stroke_outlines.is_none());
-        let reg = register(&g, &target, &opts()).unwrap();
+        let reg = register_template(&g, &target, &opts()).unwrap();
         // The global fit finds the identity.
         let [a, b, cc, d, e, f] = reg.affine;
         assert!(
@@ -68,9 +68,9 @@ fn the_ukai_font_fixture_registers_with_every_stroke() {
     let font = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf");
     let (mut sum_t, mut sum_s) = (0.0, 0.0);
     for c in CHARS.chars() {
-        let template = glyph::embedded(c).unwrap();
-        let target = glyph::from_font(&font, c).unwrap();
-        let reg = register(&template, &target, &opts()).unwrap();
+        let template = embedded_glyph(c).unwrap();
+        let target = glyph_from_font(&font, c).unwrap();
+        let reg = register_template(&template, &target, &opts()).unwrap();
         assert_eq!(reg.paths.len(), template.medians.as_ref().unwrap().len(), "{c}");
         assert!(reg.strokes_ok(), "{c}: {:?}", reg.strokes);
         let skel = centre_lines(&target, Method::Skeleton, PX).unwrap();
@@ -86,10 +86,10 @@ fn the_ukai_font_fixture_registers_with_every_stroke() {
 #[test]
 fn a_stroke_without_ink_is_kept_and_reported() {
     // 永 without its dot (stroke 1): the template's five strokes come back, the dot flagged.
-    let g = glyph::embedded('永').unwrap();
+    let g = embedded_glyph('永').unwrap();
     let Shape::Outlines(o) = &g.shape else { unreachable!() };
     let target = Glyph { shape: Shape::Outlines(o[1..].to_vec()), ..shape_only(&g) };
-    let reg = register(&g, &target, &opts()).unwrap();
+    let reg = register_template(&g, &target, &opts()).unwrap();
     assert_eq!(reg.paths.len(), 5);
     assert_eq!(reg.missing(), vec![0], "{:?}", reg.strokes);
     assert!(!reg.strokes_ok());
@@ -101,13 +101,13 @@ fn a_stroke_without_ink_is_kept_and_reported() {
 
 #[test]
 fn registration_is_deterministic_and_template_is_a_method() {
-    let g = glyph::embedded('字').unwrap();
+    let g = embedded_glyph('字').unwrap();
     let a = centre_lines(&g, Method::Template, PX).unwrap();
     let b = centre_lines(&g, Method::Template, PX).unwrap();
     assert_eq!(a, b);
     assert_eq!("template".parse::<Method>().unwrap(), Method::Template);
     let font = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/fonts/ukai-subset.ttf");
-    let f = glyph::from_font(&font, '字').unwrap();
+    let f = glyph_from_font(&font, '字').unwrap();
     assert!(centre_lines(&f, Method::Template, PX).unwrap_err().to_string().contains("no stroke medians"));
 }
 
@@ -115,12 +115,12 @@ fn registration_is_deterministic_and_template_is_a_method() {
 fn ink_the_template_does_not_explain_is_reported() {
     // 十 with an extra bar in the top left corner: two strokes found, the bar's ink unexplained.
     use kurbo::Shape as _;
-    let g = glyph::embedded('十').unwrap();
+    let g = embedded_glyph('十').unwrap();
     let Shape::Outlines(mut o) = g.shape.clone() else { unreachable!() };
-    let plain = register(&g, &shape_only(&g), &opts()).unwrap();
+    let plain = register_template(&g, &shape_only(&g), &opts()).unwrap();
     o.push(kurbo::Rect::new(60.0, 40.0, 300.0, 90.0).to_path(0.1));
     let target = Glyph { shape: Shape::Outlines(o), ..shape_only(&g) };
-    let reg = register(&g, &target, &opts()).unwrap();
+    let reg = register_template(&g, &target, &opts()).unwrap();
     assert_eq!(reg.paths.len(), 2);
     assert!(plain.uncovered_ink < 0.02, "{}", plain.uncovered_ink);
     assert!(reg.uncovered_ink > 0.1, "{}", reg.uncovered_ink);

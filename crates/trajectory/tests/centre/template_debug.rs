@@ -7,8 +7,7 @@
 use std::path::PathBuf;
 
 use image::{Rgb, RgbImage};
-use trajectory::template::{TemplateOptions, register};
-use trajectory::{glyph, raster};
+use trajectory::{TemplateOptions, embedded_glyph, glyph_from_font, register_template, render_glyph};
 
 #[test]
 #[ignore]
@@ -21,15 +20,15 @@ fn overlays() {
     std::fs::create_dir_all(&out).unwrap();
     let n = 512u32;
     for c in chars.chars() {
-        let template = glyph::embedded(c).unwrap();
+        let template = embedded_glyph(c).unwrap();
         let target = if std::env::var("TEMPLATE_DEBUG_SELF").is_ok() {
-            trajectory::template::shape_only(&template)
+            trajectory::shape_only(&template)
         } else {
-            glyph::from_font(&font, c).unwrap()
+            glyph_from_font(&font, c).unwrap()
         };
-        let reg = register(&template, &target, &TemplateOptions::default()).unwrap();
-        let cov = raster::render_glyph(&target, n);
-        let tcov = raster::render_glyph(&template, n);
+        let reg = register_template(&template, &target, &TemplateOptions::default()).unwrap();
+        let cov = render_glyph(&target, n);
+        let tcov = render_glyph(&template, n);
         let mut img = RgbImage::new(n, n);
         for (i, p) in img.pixels_mut().enumerate() {
             let v = 255 - (120.0 * cov.data()[i]) as u8;

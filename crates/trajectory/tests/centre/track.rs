@@ -5,7 +5,7 @@ use brush_model::{BrushProfile, Extrapolation, PointMm};
 use kurbo::{BezPath, Point, Rect, Shape as _};
 use trajectory::{
     CharBox, DEFAULT_SPACING_MM, Glyph, GlyphSource, Method, Shape, Sizing, TrackOptions, build_track, centre_lines,
-    glyph, raster,
+    embedded_chars, embedded_glyph, glyph_from_hanzi_dir, render_glyph,
 };
 
 fn bar_glyph(x0: f64, x1: f64, y0: f64, y1: f64) -> Glyph {
@@ -55,7 +55,7 @@ fn a_bar_is_written_at_its_own_width() {
     // Column through the middle of the bar: ink height ≈ 100 em = 50 px.
     let ink: f64 = (0..512).map(|y| img.get(256, y) as f64).sum();
     assert!((ink - 50.0).abs() < 3.0, "column ink {ink}");
-    let reference = raster::render_glyph(&g, 512);
+    let reference = render_glyph(&g, 512);
     let iou = stroke_metrics::iou(reference.as_gray(), img.as_gray()).unwrap();
     // The ends are square in the glyph and rounded by the footprints: IoU stays below 1.
     assert!(iou > 0.8, "IoU {iou}");
@@ -64,7 +64,7 @@ fn a_bar_is_written_at_its_own_width() {
 #[test]
 fn every_embedded_test_character_parses() {
     for ch in "永字八法十口人丁".chars() {
-        let g = glyph::embedded(ch).unwrap();
+        let g = embedded_glyph(ch).unwrap();
         let m = g.medians.as_ref().unwrap();
         assert_eq!(m.len(), g.stroke_outlines.as_ref().unwrap().len());
         for line in m {
@@ -73,15 +73,15 @@ fn every_embedded_test_character_parses() {
             }
         }
     }
-    assert!(glyph::embedded_chars().len() >= 1000);
-    assert!(glyph::embedded('\u{10FFFF}').is_err());
+    assert!(embedded_chars().len() >= 1000);
+    assert!(embedded_glyph('\u{10FFFF}').is_err());
 }
 
 #[test]
 fn halving_the_spacing_changes_the_render_by_under_half_a_percent() {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
     for ch in "永法".chars() {
-        let g = glyph::embedded(ch).unwrap();
+        let g = embedded_glyph(ch).unwrap();
         let paths = centre_lines(&g, Method::Medians, 256).unwrap();
         let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
         let b = CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm };
@@ -118,14 +118,14 @@ fn hanzi_folders_and_malformed_data() {
     let dir = std::env::temp_dir().join(format!("maobi-hanzi-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("十.json"), subset_line('十')).unwrap();
-    let g = glyph::from_hanzi_dir(&dir, '十').unwrap();
+    let g = glyph_from_hanzi_dir(&dir, '十').unwrap();
     assert_eq!(g.medians.unwrap().len(), 2);
-    assert!(matches!(glyph::from_hanzi_dir(&dir, '口'), Err(trajectory::GlyphError::Unknown { .. })));
+    assert!(matches!(glyph_from_hanzi_dir(&dir, '口'), Err(trajectory::GlyphError::Unknown { .. })));
     std::fs::write(dir.join("口.json"), r#"{"strokes": ["M 0 0 L 10 10 Z"], "medians": []}"#).unwrap();
-    let e = glyph::from_hanzi_dir(&dir, '口').unwrap_err().to_string();
+    let e = glyph_from_hanzi_dir(&dir, '口').unwrap_err().to_string();
     assert!(e.contains("口.json") && e.contains("1 strokes but 0 medians"), "{e}");
     std::fs::write(dir.join("口.json"), r#"{"strokes": ["M 0 0 X"], "medians": [[[0, 0]]]}"#).unwrap();
-    let e = glyph::from_hanzi_dir(&dir, '口').unwrap_err().to_string();
+    let e = glyph_from_hanzi_dir(&dir, '口').unwrap_err().to_string();
     assert!(e.contains("stroke 1: bad SVG path"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -133,7 +133,7 @@ fn hanzi_folders_and_malformed_data() {
 #[test]
 fn em_frame_follows_the_design_notes() {
     // Make Me a Hanzi's (x, y) with y up maps to (x, 900 − y).
-    let g = glyph::embedded('十').unwrap();
+    let g = embedded_glyph('十').unwrap();
     let raw: serde_json::Value = serde_json::from_str(&subset_line('十')).unwrap();
     let (x, y) = (raw["medians"][0][0][0].as_f64().unwrap(), raw["medians"][0][0][1].as_f64().unwrap());
     let p = g.medians.unwrap()[0][0];
@@ -229,7 +229,7 @@ fn the_reverse_entry_moves_backwards_at_full_width_then_writes_forwards() {
 #[test]
 fn a_track_holds_only_motion_the_forward_model_explains() {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let g = glyph::embedded('永').unwrap();
+    let g = embedded_glyph('永').unwrap();
     let paths = centre_lines(&g, Method::Medians, 256).unwrap();
     for alpha_deg in [0.0f64, 5.0] {
         let mm = trajectory::auto_char_mm(&paths, &pen1, alpha_deg.to_radians());
@@ -257,7 +257,7 @@ fn a_track_holds_only_motion_the_forward_model_explains() {
             for (p, d) in s.points.iter().zip(&sweep.directions) {
                 if p.h_mm >= pen1.ranges.h_mm.min {
                     let d = d.expect("a pressed point has a direction");
-                    assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
+                    assert!(brush_model::wrap_angle_rad(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
                 }
             }
         }
@@ -291,7 +291,7 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
     assert!(pts[0].anchor().distance(start) > 2.0, "the glide starts along the piece");
     let forward = (end.y_mm - start.y_mm).atan2(end.x_mm - start.x_mm);
     assert!(
-        brush_model::motion::wrap(pts[head].beta_rad - forward).abs() < 0.2,
+        brush_model::wrap_angle_rad(pts[head].beta_rad - forward).abs() < 0.2,
         "β {} vs {forward}",
         pts[head].beta_rad
     );
@@ -300,7 +300,7 @@ fn a_piece_shorter_than_any_footprint_is_glided_into_so_its_head_trails_forward(
 /// pen1, 永's median centre lines and upright track options in its automatic box.
 fn yong_upright() -> (BrushProfile, Vec<trajectory::StrokePath>, TrackOptions) {
     let pen1 = BrushProfile::builtin("pen1").unwrap();
-    let paths = centre_lines(&glyph::embedded('永').unwrap(), Method::Medians, 256).unwrap();
+    let paths = centre_lines(&embedded_glyph('永').unwrap(), Method::Medians, 256).unwrap();
     let mm = trajectory::auto_char_mm(&paths, &pen1, 0.0);
     let opts = TrackOptions {
         char_box: CharBox { x0_mm: 0.0, y0_mm: 0.0, size_mm: mm },
@@ -330,8 +330,8 @@ fn a_track_planned_with_another_trail_moves_the_same_way_and_points_as_that_trai
             assert_eq!((p.x_mm, p.y_mm, p.h_mm, p.alpha_rad), (q.x_mm, q.y_mm, q.h_mm, q.alpha_rad));
             if p.h_mm >= pen1.ranges.h_mm.min {
                 let d = d.expect("a pressed point has a direction");
-                assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
-                if brush_model::motion::wrap(p.beta_rad - q.beta_rad).abs() > 1e-3 {
+                assert!(brush_model::wrap_angle_rad(p.beta_rad - d).abs() < 1e-9, "β {} vs model {d}", p.beta_rad);
+                if brush_model::wrap_angle_rad(p.beta_rad - q.beta_rad).abs() > 1e-3 {
                     turned += 1;
                 }
             }
@@ -370,10 +370,10 @@ fn glides_pressed_past_the_contact_depth_point_every_footprint_as_any_touch_woul
                 // (to a hundredth of a radian: where the brush comes down from the surface while
                 // moving, the samples of the descent lighter than the contact depth do not
                 // start the pressed path, which moves its start by a fraction of a spacing)
-                let dd = brush_model::motion::wrap(p.beta_rad - q.beta_rad).abs();
+                let dd = brush_model::wrap_angle_rad(p.beta_rad - q.beta_rad).abs();
                 assert!(dd < 0.01, "{dd} at {p:?} / {q:?}");
                 let d = d.expect("a pressed point has a direction");
-                assert!(brush_model::motion::wrap(p.beta_rad - d).abs() < 0.01, "β {} vs {d}", p.beta_rad);
+                assert!(brush_model::wrap_angle_rad(p.beta_rad - d).abs() < 0.01, "β {} vs {d}", p.beta_rad);
             } else if p.h_mm > 0.0 {
                 // Every glide is pressed past the contact depth (0.01 mm for contact 0).
                 assert_eq!((p.h_mm, q.h_mm), (glide, trajectory::GLIDE_H_MM));
@@ -388,7 +388,7 @@ fn glides_pressed_past_the_contact_depth_point_every_footprint_as_any_touch_woul
         let a = model.sweep(&pen1, &n.points, Extrapolation::Refuse).directions;
         let b = model.sweep(&stiffer, &n.points, Extrapolation::Refuse).directions;
         a.iter().zip(&b).any(|(x, y)| match (x, y) {
-            (Some(x), Some(y)) => brush_model::motion::wrap(x - y).abs() > 0.1,
+            (Some(x), Some(y)) => brush_model::wrap_angle_rad(x - y).abs() > 0.1,
             _ => false,
         })
     });

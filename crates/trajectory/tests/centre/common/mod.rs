@@ -5,7 +5,7 @@
 use bezier_raster::{ModelKind, render_track};
 use brush_model::{BrushProfile, Extrapolation, PointMm};
 use trajectory::{
-    CharBox, DEFAULT_SPACING_MM, Glyph, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, raster,
+    CharBox, DEFAULT_SPACING_MM, Glyph, Sizing, StrokePath, TrackOptions, auto_char_mm, build_track, render_glyph,
 };
 
 /// Side of the images the tests score at, px.
@@ -29,6 +29,6 @@ pub fn csim(paths: &[StrokePath], g: &Glyph) -> f64 {
         PX,
     )
     .unwrap();
-    let reference = raster::render_glyph(g, PX);
+    let reference = render_glyph(g, PX);
     stroke_metrics::csim(reference.as_gray(), img.as_gray()).unwrap()
 }
