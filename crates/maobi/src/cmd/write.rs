@@ -72,6 +72,11 @@ pub struct Args {
     /// at its speed, no ramps or blends: no controller moves so).
     #[arg(long, default_value = "path-buffer", value_parser = parse_execution())]
     execution: pipeline::Execution,
+    /// Also score each plan with its footprints sized freely from the glyph (the press depth not
+    /// clamped to the brush's range): `plan.free_widths` in report.json, what the brush's range
+    /// costs. A diagnostic that builds and renders a second track (off by default).
+    #[arg(long)]
+    free_widths: bool,
     /// Side of the character box on paper, mm (default: chosen so the brush's width range
     /// covers the glyphs' stroke widths; see docs/trajectory.md).
     #[arg(long, allow_negative_numbers = true)]
@@ -353,6 +358,7 @@ pub fn run(args: Args) -> Result<()> {
         model: args.model,
         size: args.size,
         execution: args.execution,
+        free_widths: args.free_widths,
         alpha_rad,
         refine: write_refine,
         generator,
