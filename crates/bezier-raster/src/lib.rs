@@ -57,9 +57,7 @@ mod dataset;
 mod models;
 mod raster;
 
-pub use batch::{
-    Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps,
-};
+pub use batch::{Compositor, Stamp, render_batch, render_stamps, render_track, sweep_stamps, track_stamps};
 pub use binary::{connected_components, fill_holes, otsu_threshold};
 pub use canvas::StrokeCanvas;
 pub use coverage::{

@@ -11,7 +11,6 @@ use crate::models::StrokeModel;
 /// rendering many footprints allocates nothing after warm-up. Not `Sync`; use one per thread.
 pub struct Rasterizer {
     mask: Option<Mask>,
-    lut: [f32; 256],
 }
 
 impl Default for Rasterizer {
@@ -66,11 +65,7 @@ pub(crate) fn stamp_box(path_mm: &BezPath, px_per_mm: f64, w: u32, h: u32) -> Op
 impl Rasterizer {
     /// A rasteriser with no scratch space yet.
     pub fn new() -> Self {
-        let mut lut = [0.0f32; 256];
-        for (i, v) in lut.iter_mut().enumerate() {
-            *v = i as f32 / 255.0;
-        }
-        Self { mask: None, lut }
+        Self { mask: None }
     }
 
     /// The size of the scratch mask so far (`(0, 0)` before the first stamp): tiny-skia's
@@ -122,7 +117,6 @@ impl Rasterizer {
     pub fn stamp(&mut self, path_mm: &BezPath, px_per_mm: f64, out: &mut Coverage) {
         let Some([x0, y0, bw, bh]) = stamp_box(path_mm, px_per_mm, out.width(), out.height()) else { return };
         let Some(path) = to_skia(path_mm, px_per_mm, x0 as f64, y0 as f64) else { return };
-        let lut = self.lut;
         let mask = self.scratch(bw, bh);
         mask.fill_path(&path, FillRule::Winding, true, Transform::identity());
         let stride = mask.width() as usize;
@@ -133,8 +127,10 @@ impl Rasterizer {
             let s = &src[r * stride..r * stride + bw as usize];
             let d0 = (y0 as usize + r) * ow + x0 as usize;
             let d = &mut dst[d0..d0 + bw as usize];
+            // Coverage `sv / 255` (a select, not a table: the loop vectorises), kept where larger.
             for (dv, &sv) in d.iter_mut().zip(s) {
-                *dv = dv.max(lut[sv as usize]);
+                let v = f32::from(sv) / 255.0;
+                *dv = if v > *dv { v } else { *dv };
             }
         }
     }

@@ -244,10 +244,18 @@ impl ForwardModel {
                 return Some(direction(here, q));
             }
         }
-        // No point is `reach` away: the farthest one, as the full walk finds it.
+        // No point is `reach` away: the farthest one, as the full walk finds it (the first,
+        // walking back, of those at the largest `hypot`). Only points whose squared distance is
+        // within far more than both roundings of the largest can be that point: `hypot` is
+        // computed for those alone.
+        let sq = |q: &(f64, f64)| (q.0 - here.0) * (q.0 - here.0) + (q.1 - here.1) * (q.1 - here.1);
+        let near = history.iter().map(|&(x, y)| sq(&(x + shift.0, y + shift.1))).fold(0.0f64, f64::max) * (1.0 - 1e-9);
         let mut far = (0.0f64, None);
         for &(x, y) in history.iter().rev() {
             let q = (x + shift.0, y + shift.1);
+            if sq(&q) < near {
+                continue;
+            }
             let d = (q.0 - here.0).hypot(q.1 - here.1);
             if d >= reach {
                 return Some(direction(here, q));
@@ -576,5 +584,57 @@ mod tests {
         // Extrapolation allowed: depths as given.
         let got = m.sweep(&pen1, &wobble(3e-6), Extrapolation::Allow);
         assert!(got.stamps.iter().any(|p| p.h_mm < min));
+    }
+
+    /// The drag direction as the plain walk finds it (`hypot` at every point, walking back):
+    /// what [`ForwardModel::dragged`]'s shortcuts must reproduce bit for bit.
+    fn dragged_by_the_full_walk(m: &ForwardModel, history: &[(f64, f64)], here: (f64, f64), reach: f64) -> Option<f64> {
+        let mut far = (0.0f64, None);
+        for &q in history.iter().rev() {
+            let d = (q.0 - here.0).hypot(q.1 - here.1);
+            if d >= reach {
+                return Some(direction(here, q));
+            }
+            if d > far.0 {
+                far = (d, Some(q));
+            }
+        }
+        match far {
+            (d, Some(q)) if d >= m.min_motion_mm => Some(direction(here, q)),
+            _ => None,
+        }
+    }
+
+    proptest::proptest! {
+        /// Short histories (the farthest point decides), long ones (the reach decides), points
+        /// repeated (ties: the latest wins) and points on a circle round `here` (equal distances
+        /// up to rounding).
+        #[test]
+        fn the_drag_direction_is_the_full_walks_bit_for_bit(
+            steps in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0, 0u8..4), 1..200),
+            scale in proptest::prop_oneof![proptest::strategy::Just(1e-3), proptest::strategy::Just(0.05), proptest::strategy::Just(0.4)],
+            reach in 0.2f64..6.0,
+            here in (-3.0f64..3.0, -3.0f64..3.0),
+        ) {
+            let m = ForwardModel::default();
+            let mut history = Vec::new();
+            let mut at = (0.0f64, 0.0f64);
+            for (i, &(dx, dy, kind)) in steps.iter().enumerate() {
+                match kind {
+                    // The same point again.
+                    0 => {}
+                    // On a circle of radius `reach / 2` round `here`.
+                    1 => {
+                        let a = i as f64 * 0.7;
+                        at = (here.0 + 0.5 * reach * a.cos(), here.1 + 0.5 * reach * a.sin());
+                    }
+                    _ => at = (at.0 + dx * scale, at.1 + dy * scale),
+                }
+                history.push(at);
+            }
+            let got = m.dragged(&history, (0.0, 0.0), here, reach).map(f64::to_bits);
+            let want = dragged_by_the_full_walk(&m, &history, here, reach).map(f64::to_bits);
+            proptest::prop_assert_eq!(got, want);
+        }
     }
 }

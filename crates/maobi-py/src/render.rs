@@ -225,15 +225,7 @@ pub(crate) fn render_track<'py>(
     };
     let kind = model_arg(model)?;
     let img = guarded(py, "render_track", move || {
-        pipeline::render_char(
-            &t.track(),
-            &profile,
-            kind,
-            Extrapolation::Refuse,
-            &b,
-            size,
-        )
-        .map_err(|e| match e {
+        pipeline::render_char(&t.track(), &profile, kind, Extrapolation::Refuse, &b, size).map_err(|e| match e {
             pipeline::Error::Profile(p) => crate::brush::profile_err("track", p),
             e => lib_err("render_track", e),
         })

@@ -277,9 +277,11 @@ fn prepare_char(input: &GlyphInput, c: char) -> PyResult<pipeline::Prepared> {
 /// gradient descent against its glyph first (`iters` steps, default 20); `size_px`: side of
 /// each image; `font`: glyphs from font files (a path or a list); `hanzi_data`: a
 /// hanzi-writer-data folder; `alpha_rad`: constant brush tilt (radians, inside the brush's
-/// range); `char_mm`: the character box side (mm; default sized for the brush).
+/// range); `char_mm`: the character box side (mm; default sized for the brush);
+/// `free_widths`: also score the plan with free footprint widths (`report["plan"]["free_widths"]`,
+/// as `maobi write --free-widths`; a second track and render, so off by default).
 #[pyfunction]
-#[pyo3(signature = (text, brush = None, refine = false, size_px = 512, font = None, hanzi_data = None, alpha_rad = 0.0, *, char_mm = None, iters = None))]
+#[pyo3(signature = (text, brush = None, refine = false, size_px = 512, font = None, hanzi_data = None, alpha_rad = 0.0, *, char_mm = None, iters = None, free_widths = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn write<'py>(
     py: Python<'py>,
@@ -292,6 +294,7 @@ pub(crate) fn write<'py>(
     alpha_rad: f64,
     char_mm: Option<f64>,
     iters: Option<usize>,
+    free_widths: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let chars: Vec<char> = text.chars().filter(|c| !c.is_whitespace()).collect();
     if chars.is_empty() {
@@ -334,7 +337,7 @@ pub(crate) fn write<'py>(
     let input = glyph_input(font, hanzi_data)?;
     let results = guarded(py, "write", move || {
         let prepared = chars.iter().map(|&c| prepare_char(&input, c)).collect::<PyResult<Vec<_>>>()?;
-        let opts = WriteOptions { size, alpha_rad, refine, ..WriteOptions::default() };
+        let opts = WriteOptions { size, alpha_rad, refine, free_widths, ..WriteOptions::default() };
         let text = TextOptions { char_mm, ..TextOptions::default() };
         let w = write_text(prepared, &profile, &opts, &text, &|| {}).map_err(|e| pipeline_err(Box::new(e)))?;
         w.results

@@ -22,6 +22,21 @@ def test_one_character_equals_the_cli(written_yong):
     assert np.array_equal(maobi.glyph("永", size_px=128), w.reference)
 
 
+def test_the_free_width_plan_is_asked_for_as_in_the_cli(cli, written_yong, tmp_path):
+    # Off by default, in both.
+    assert load_json(written_yong / "report.json")["plan"]["free_widths"] is None
+    out = tmp_path / "free"
+    cli("write", "十", "--size", "96", "--free-widths", "-o", out)
+    w = maobi.write("十", size_px=96, free_widths=True)
+    free = w.report["plan"]["free_widths"]
+    assert set(free) == {"csim", "ssim", "iou"} and 0.5 < free["csim"] <= 1.0
+    assert without_timing(w.report) == without_timing(load_json(out / "report.json"))
+    # The free widths change nothing else in the report.
+    plain = maobi.write("十", size_px=96).report
+    assert plain["plan"]["free_widths"] is None
+    assert without_timing({**plain, "plan": {**plain["plan"], "free_widths": free}}) == without_timing(w.report)
+
+
 def test_several_characters_share_one_box_and_equal_the_cli(cli, tmp_path):
     out = tmp_path / "two"
     cli("write", "永和", "--size", "96", "-o", out)

@@ -54,11 +54,11 @@ pub use marks::{
     MARK_CLEARANCE_MM, MARK_DEPTH_FRACTION, MARK_GAP_MM, MARK_MARGIN_MM, MARK_SPACING_MM, MARK_TRAVEL_MM, Mark,
     MarkError, MarkRole, mark_strokes, registration_marks,
 };
+pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
 pub use observation::{
     MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
     ObservedScores, ObservedSheet,
 };
-pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
 pub use placement::{
     BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
     write_placed,

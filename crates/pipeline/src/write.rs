@@ -26,7 +26,8 @@ pub struct WriteOptions {
     pub alpha_rad: f64,
     /// Track point spacing, mm.
     pub spacing_mm: f64,
-    /// Also score the plan with footprints sized freely from the glyph ([`PlanReport::free_widths`]).
+    /// Also score the plan with footprints sized freely from the glyph ([`PlanReport::free_widths`]):
+    /// a diagnostic (a second track and render), off by default.
     pub free_widths: bool,
     /// Also run the track as a robot program (default paper frame and `robot.json`, the
     /// simulator's motion) and score what it writes.
@@ -69,7 +70,7 @@ impl Default for WriteOptions {
             size: 512,
             alpha_rad: 0.0,
             spacing_mm: trajectory::DEFAULT_SPACING_MM,
-            free_widths: true,
+            free_widths: false,
             execute: true,
             execution: Execution::default(),
             refine: None,
@@ -157,7 +158,8 @@ pub struct PlanReport {
     pub points: usize,
     /// The plan's scores with every footprint sized freely from the glyph's width (h unclamped,
     /// extrapolating beyond the brush's calibrated range). Not a bound: clamping can score higher
-    /// on some characters (an overshooting free width costs more than a clamped one).
+    /// on some characters (an overshooting free width costs more than a clamped one). Null unless
+    /// asked for ([`WriteOptions::free_widths`]).
     pub free_widths: Option<Similarity>,
 }
 
@@ -382,37 +384,38 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     let topts =
         TrackOptions { char_box, spacing_mm: opts.spacing_mm, alpha_rad: opts.alpha_rad, sizing: Sizing::Brush };
     let built = build_track(&p.paths, profile, &topts)?;
-    // The plan's render and the glyph's are independent: rendered side by side on rayon's pool.
-    let (render, reference) = rayon::join(
-        || render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size),
-        || render_glyph(&p.glyph, opts.size),
-    );
-    let render = render?;
-    let sim = similarity(&reference, &render)?;
-    let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
-    let millis = t0.elapsed().as_secs_f64() * 1e3;
-    // The free-width plan and the executed program are independent of each other: both at once.
-    let (free_widths, executed) = rayon::join(
-        || -> Result<Option<Similarity>> {
-            if !opts.free_widths {
-                return Ok(None);
-            }
-            let free =
-                build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
+    // The plan (its render beside the glyph's, its scores, the free-width plan when asked) and
+    // the executed program depend only on the track: both at once on rayon's pool.
+    let plan = || -> Result<_> {
+        let (render, reference) = rayon::join(
+            || render_char(&built.track, profile, opts.model, Extrapolation::Refuse, &char_box, opts.size),
+            || render_glyph(&p.glyph, opts.size),
+        );
+        let render = render?;
+        let sim = similarity(&reference, &render)?;
+        let chamfer = p.glyph.medians.as_ref().map(|m| chamfer_pct(&built.track, &char_box, m));
+        let millis = t0.elapsed().as_secs_f64() * 1e3;
+        let free_widths = if opts.free_widths {
+            let free = build_track(&p.paths, profile, &TrackOptions { sizing: Sizing::Unconstrained, ..topts })?;
             let img = render_char(&free.track, profile, opts.model, Extrapolation::Allow, &char_box, opts.size)?;
-            Ok(Some(similarity(&reference, &img)?))
-        },
-        || {
-            opts.execute
-                .then(|| execute_and_render(&built.track, profile, opts, &char_box))
-                .transpose()
-                .map_err(|source| Error::Check { ch: p.glyph.ch.to_string(), source })
-        },
-    );
-    let free_widths = free_widths?;
+            Some(similarity(&reference, &img)?)
+        } else {
+            None
+        };
+        Ok((render, reference, sim, chamfer, millis, free_widths))
+    };
+    let executed = || {
+        opts.execute
+            .then(|| execute_and_render(&built.track, profile, opts, &char_box))
+            .transpose()
+            .map_err(|source| Error::Check { ch: p.glyph.ch.to_string(), source })
+    };
+    let (plan, executed) = rayon::join(plan, executed);
+    let (render, reference, sim, chamfer, millis, free_widths) = plan?;
     let (executed, agreement, executed_img, executed_states) = match executed? {
         Some((states, img)) => {
-            (Some(similarity(&reference, &img)?), Some(similarity(&render, &img)?), Some(img), Some(states))
+            let (executed, agreement) = rayon::join(|| similarity(&reference, &img), || similarity(&render, &img));
+            (Some(executed?), Some(agreement?), Some(img), Some(states))
         }
         None => (None, None, None, None),
     };

@@ -80,18 +80,18 @@ impl DhParams {
     /// Forward kinematics: the flange pose in the base frame for joint angles `q` (rad), then
     /// the tool transform `tcp` (flange → TCP) applied.
     pub fn forward(&self, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
-        let mut t = Isometry3::identity();
-        #[allow(clippy::needless_range_loop, reason = "one index runs through q and the four arrays")]
-        for i in 0..6 {
-            let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha_rad[i]);
-            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + self.theta_rad[i]);
-            t = t
-                * Isometry3::from_parts(Translation3::identity(), rx)
-                * Isometry3::from_parts(Translation3::new(self.a_m[i], 0.0, 0.0), UnitQuaternion::identity())
-                * Isometry3::from_parts(Translation3::identity(), rz)
-                * Isometry3::from_parts(Translation3::new(0.0, 0.0, self.d_m[i]), UnitQuaternion::identity());
+        self.chain().forward(q, tcp)
+    }
+
+    /// The arm's links with what does not depend on the joints computed once ([`Chain`]): the
+    /// i5's nominal chain is computed once per process.
+    pub fn chain(&self) -> std::borrow::Cow<'static, Chain> {
+        static AUBO_I5: std::sync::LazyLock<Chain> = std::sync::LazyLock::new(|| Chain::new(&DhParams::AUBO_I5));
+        if *self == DhParams::AUBO_I5 {
+            std::borrow::Cow::Borrowed(&*AUBO_I5)
+        } else {
+            std::borrow::Cow::Owned(Chain::new(self))
         }
-        t * tcp
     }
 
     /// Numerical inverse kinematics (damped least squares from `seed`, then from a few standard
@@ -117,9 +117,84 @@ impl DhParams {
             let h = UR_HOME_JOINTS;
             seeds.push([q1, h[1], h[2], h[3], h[4], h[5]]);
         }
-        seeds.into_iter().find_map(|s| self.solve_from(&goal, tcp, s))
+        let chain = self.chain();
+        seeds.into_iter().find_map(|s| chain.solve_from(&goal, tcp, s))
+    }
+}
+
+/// A [`DhParams`] arm with each link's fixed part, `Rx(alpha_i) · Tx(a_i)` and `Tz(d_i)`,
+/// computed once ([`DhParams::chain`]): [`Chain::forward`] is [`DhParams::forward`] bit for
+/// bit (the same products in the same order) without recomputing them, and
+/// [`Chain::forward_nudged`] shares the links before each nudged joint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    theta_rad: [f64; 6],
+    rx: [Isometry3<f64>; 6],
+    tx: [Isometry3<f64>; 6],
+    tz: [Isometry3<f64>; 6],
+}
+
+impl Chain {
+    /// The chain of `dh`.
+    pub fn new(dh: &DhParams) -> Self {
+        Self {
+            theta_rad: dh.theta_rad,
+            rx: std::array::from_fn(|i| {
+                Isometry3::from_parts(
+                    Translation3::identity(),
+                    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), dh.alpha_rad[i]),
+                )
+            }),
+            tx: std::array::from_fn(|i| {
+                Isometry3::from_parts(Translation3::new(dh.a_m[i], 0.0, 0.0), UnitQuaternion::identity())
+            }),
+            tz: std::array::from_fn(|i| {
+                Isometry3::from_parts(Translation3::new(0.0, 0.0, dh.d_m[i]), UnitQuaternion::identity())
+            }),
+        }
     }
 
+    /// `t` followed by link `i` at joint angle `qi` (rad).
+    fn link(&self, t: &Isometry3<f64>, i: usize, qi: f64) -> Isometry3<f64> {
+        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), qi + self.theta_rad[i]);
+        t * self.rx[i] * self.tx[i] * Isometry3::from_parts(Translation3::identity(), rz) * self.tz[i]
+    }
+
+    /// [`DhParams::forward`]: the TCP pose in the base frame for joint angles `q` (rad).
+    pub fn forward(&self, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
+        let mut t = Isometry3::identity();
+        for (i, &qi) in q.iter().enumerate() {
+            t = self.link(&t, i, qi);
+        }
+        t * tcp
+    }
+
+    /// The TCP pose at `q` and, for each joint `k`, at `q` with `dq_rad` added to joint `k`
+    /// (what a numerical Jacobian needs), each equal bit for bit to [`Chain::forward`] there.
+    pub fn forward_nudged(
+        &self,
+        q: &[f64; 6],
+        dq_rad: f64,
+        tcp: &Isometry3<f64>,
+    ) -> (Isometry3<f64>, [Isometry3<f64>; 6]) {
+        // before[i]: the links before link i.
+        let mut before = [Isometry3::identity(); 7];
+        for i in 0..6 {
+            before[i + 1] = self.link(&before[i], i, q[i]);
+        }
+        let nudged = std::array::from_fn(|k| {
+            let mut qk = *q;
+            qk[k] += dq_rad;
+            let mut t = self.link(&before[k], k, qk[k]);
+            for (i, &qi) in qk.iter().enumerate().skip(k + 1) {
+                t = self.link(&t, i, qi);
+            }
+            t * tcp
+        });
+        (before[6] * tcp, nudged)
+    }
+
+    /// Damped least squares from `q` (see [`DhParams::inverse`]).
     fn solve_from(&self, goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> Option<[f64; 6]> {
         let mut lambda = 1e-2;
         let mut e = error(goal, &self.forward(&q, tcp));
@@ -129,11 +204,9 @@ impl DhParams {
             }
             // Numerical Jacobian.
             let mut j = Matrix6::zeros();
-            let base = self.forward(&q, tcp);
-            for k in 0..6 {
-                let mut qk = q;
-                qk[k] += 1e-6;
-                let d = error(&self.forward(&qk, tcp), &base) / 1e-6;
+            let (base, nudged) = self.forward_nudged(&q, 1e-6, tcp);
+            for (k, at) in nudged.iter().enumerate() {
+                let d = error(at, &base) / 1e-6;
                 j.set_column(k, &d);
             }
             let jt = j.transpose();
@@ -183,4 +256,59 @@ fn error(target: &Isometry3<f64>, at: &Isometry3<f64>) -> Vector6<f64> {
     let dp = target.translation.vector - at.translation.vector;
     let dr = (target.rotation * at.rotation.inverse()).scaled_axis();
     Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Forward kinematics as the links are written out: each link's four transforms built and
+    /// multiplied in order.
+    fn forward_by_the_links(dh: &DhParams, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
+        let mut t = Isometry3::identity();
+        for i in 0..6 {
+            let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), dh.alpha_rad[i]);
+            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + dh.theta_rad[i]);
+            t = t
+                * Isometry3::from_parts(Translation3::identity(), rx)
+                * Isometry3::from_parts(Translation3::new(dh.a_m[i], 0.0, 0.0), UnitQuaternion::identity())
+                * Isometry3::from_parts(Translation3::identity(), rz)
+                * Isometry3::from_parts(Translation3::new(0.0, 0.0, dh.d_m[i]), UnitQuaternion::identity());
+        }
+        t * tcp
+    }
+
+    fn bits(t: &Isometry3<f64>) -> Vec<u64> {
+        t.translation.vector.iter().chain(t.rotation.coords.iter()).map(|v| v.to_bits()).collect()
+    }
+
+    proptest::proptest! {
+        /// The chain (the i5's cached one, the UR5e's and any other arm's) and its nudged poses
+        /// are the links' product bit for bit: the inverse kinematics, the timing and the
+        /// simulator give the same joints and poses as before the chain was cached.
+        #[test]
+        fn the_chain_is_the_links_product_bit_for_bit(
+            q in proptest::array::uniform6(-3.2f64..3.2),
+            other in proptest::array::uniform6(-1.0f64..1.0),
+            tool_m in 0.0f64..0.3,
+            zero in 0usize..6,
+        ) {
+            let mut q = q;
+            // Joints at zero (exact zeros in the rotations) as well.
+            q[zero] = 0.0;
+            let tcp = Isometry3::translation(0.0, 0.0, tool_m);
+            let odd = DhParams { a_m: other, alpha_rad: other.map(|v| 3.0 * v), d_m: other.map(|v| -v), theta_rad: other.map(|v| 2.0 * v) };
+            for dh in [DhParams::AUBO_I5, DhParams::UR5E, odd] {
+                let want = forward_by_the_links(&dh, &q, &tcp);
+                proptest::prop_assert_eq!(bits(&dh.forward(&q, &tcp)), bits(&want));
+                let (base, nudged) = dh.chain().forward_nudged(&q, 1e-6, &tcp);
+                proptest::prop_assert_eq!(bits(&base), bits(&want));
+                for (k, got) in nudged.iter().enumerate() {
+                    let mut qk = q;
+                    qk[k] += 1e-6;
+                    proptest::prop_assert_eq!(bits(got), bits(&forward_by_the_links(&dh, &qk, &tcp)), "joint {}", k);
+                }
+            }
+        }
+    }
 }

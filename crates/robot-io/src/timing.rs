@@ -31,7 +31,7 @@ use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 use serde::Serialize;
 
 use crate::RobotError;
-use crate::kinematics::{DhParams, JOINT_LIMIT_RAD};
+use crate::kinematics::{Chain, DhParams, JOINT_LIMIT_RAD};
 use crate::pose::Pose;
 use crate::program::{Move, Program, RobotConfig, StrokeProgram};
 
@@ -335,26 +335,24 @@ fn pose_error(target: &Isometry3<f64>, at: &Isometry3<f64>) -> Vector6<f64> {
     Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z)
 }
 
-fn jacobian(kin: &DhParams, q: &[f64; 6], tcp: &Isometry3<f64>) -> Matrix6<f64> {
-    let base = kin.forward(q, tcp);
+fn jacobian(chain: &Chain, q: &[f64; 6], tcp: &Isometry3<f64>) -> Matrix6<f64> {
+    let (base, nudged) = chain.forward_nudged(q, 1e-7, tcp);
     let mut j = Matrix6::zeros();
-    for k in 0..6 {
-        let mut qk = *q;
-        qk[k] += 1e-7;
-        j.set_column(k, &(pose_error(&kin.forward(&qk, tcp), &base) / 1e-7));
+    for (k, at) in nudged.iter().enumerate() {
+        j.set_column(k, &(pose_error(at, &base) / 1e-7));
     }
     j
 }
 
 /// Newton steps from `q` (a solution within the inverse's tolerance) until the pose error is
 /// below 1e-10 m and rad.
-fn refine(kin: &DhParams, goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> [f64; 6] {
+fn refine(chain: &Chain, goal: &Isometry3<f64>, tcp: &Isometry3<f64>, mut q: [f64; 6]) -> [f64; 6] {
     for _ in 0..6 {
-        let e = pose_error(goal, &kin.forward(&q, tcp));
+        let e = pose_error(goal, &chain.forward(&q, tcp));
         if e.norm() < 1e-10 {
             break;
         }
-        let Some(inv) = jacobian(kin, &q, tcp).try_inverse() else { break };
+        let Some(inv) = jacobian(chain, &q, tcp).try_inverse() else { break };
         let step = inv * e;
         for k in 0..6 {
             q[k] += step[k];
@@ -431,6 +429,7 @@ const MAX_HALVINGS: usize = 6;
 struct Solver<'a> {
     stroke: usize,
     kin: &'a DhParams,
+    chain: &'a Chain,
     tcp: &'a Isometry3<f64>,
     cfg: &'a RobotConfig,
     min_sv: &'a mut f64,
@@ -442,11 +441,11 @@ impl Solver<'_> {
     fn solve(&mut self, target: &Target, seed: Option<&[f64; 6]>) -> Result<[f64; 6], RobotError> {
         let (iso, _, _, from) = *target;
         let at = |reason: String| unsafe_at(self.stroke, Some(from), reason);
-        let qi =
-            self.kin
-                .inverse(&Pose::from_iso(&iso), self.tcp, seed)
-                .map(|s| refine(self.kin, &iso, self.tcp, s))
-                .ok_or_else(|| at("the pressed pose is not reachable by the arm with this brush orientation".into()))?;
+        let qi = self
+            .kin
+            .inverse(&Pose::from_iso(&iso), self.tcp, seed)
+            .map(|s| refine(self.chain, &iso, self.tcp, s))
+            .ok_or_else(|| at("the pressed pose is not reachable by the arm with this brush orientation".into()))?;
         if let Some(j) = qi.iter().position(|v| v.abs() > JOINT_LIMIT_RAD) {
             return Err(at(format!(
                 "joint {} would reach {:.4} rad, beyond its limit ±{JOINT_LIMIT_RAD:.4}",
@@ -454,7 +453,7 @@ impl Solver<'_> {
                 qi[j]
             )));
         }
-        let sv = jacobian(self.kin, &qi, self.tcp).singular_values().min();
+        let sv = jacobian(self.chain, &qi, self.tcp).singular_values().min();
         *self.min_sv = self.min_sv.min(sv);
         if sv < self.cfg.limits.min_singular_value {
             return Err(at(format!(
@@ -660,7 +659,8 @@ pub fn time_stroke(
     let mut path = Path { iso: Vec::new(), depth_mm: Vec::new(), from: Vec::new(), s: Vec::new() };
     let mut q: Vec<[f64; 6]> = Vec::with_capacity(coarse.iso.len());
     let mut min_sv = f64::INFINITY;
-    let mut solver = Solver { stroke, kin, tcp, cfg, min_sv: &mut min_sv };
+    let chain = kin.chain();
+    let mut solver = Solver { stroke, kin, chain: &chain, tcp, cfg, min_sv: &mut min_sv };
     for i in 0..coarse.iso.len() {
         let target = (coarse.iso[i], coarse.depth_mm[i], coarse.s[i], coarse.from[i]);
         match q.last().copied() {
@@ -774,7 +774,7 @@ pub fn time_stroke(
         let f = ((sk - path.s[i]) / ds[i]).clamp(0.0, 1.0);
         let qk: [f64; 6] = std::array::from_fn(|j| q[i][j] + (q[i + 1][j] - q[i][j]) * f);
         let want = lerp_iso(&path.iso[i], &path.iso[i + 1], f);
-        let got = kin.forward(&qk, tcp);
+        let got = chain.forward(&qk, tcp);
         err_m = err_m.max((got.translation.vector - want.translation.vector).norm());
         err_rad = err_rad.max(got.rotation.angle_to(&want.rotation));
         joints.push(qk);

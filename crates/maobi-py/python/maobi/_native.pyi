@@ -242,6 +242,7 @@ def write(
     *,
     char_mm: Optional[float] = None,
     iters: Optional[int] = None,
+    free_widths: bool = False,
 ) -> Union[Written, List[Written]]:
     """Writes characters as ``maobi write TEXT`` (the same track, renders, executed program and
     report; no files): one :class:`Written` for one character, a list for several (one box
@@ -249,7 +250,9 @@ def write(
     pen1); ``refine``: refine each track against its glyph first (``iters`` steps, default 20);
     ``size_px``: each image's side (64–4096); ``font``: glyphs from font files; ``hanzi_data``:
     a hanzi-writer-data folder; ``alpha_rad``: constant tilt, inside the brush's range;
-    ``char_mm``: the box side, mm (default: sized for the brush). Raises ``ValueError`` for a
+    ``char_mm``: the box side, mm (default: sized for the brush); ``free_widths``: also score the
+    plan with free footprint widths (``report["plan"]["free_widths"]``, as ``maobi write
+    --free-widths``; off by default: a second track and render). Raises ``ValueError`` for a
     character no source covers, naming ``font``/``hanzi_data``."""
 
 def glyph(

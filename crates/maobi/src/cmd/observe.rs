@@ -161,8 +161,7 @@ pub(super) fn load_sheet(flag: &str, dir: &Path) -> Result<SheetFolder> {
 /// The side of a character image of the sheet, from its header: square and within
 /// [`pipeline::OBSERVED_PX`].
 fn image_side(flag: &str, p: &Path) -> Result<u32> {
-    let (w, h) =
-        bezier_raster::image_header(p).with_context(|| format!("{flag}: cannot read {}", p.display()))?;
+    let (w, h) = bezier_raster::image_header(p).with_context(|| format!("{flag}: cannot read {}", p.display()))?;
     let [lo, hi] = pipeline::OBSERVED_PX;
     if w != h || !(lo..=hi).contains(&w) {
         bail!(

@@ -72,6 +72,11 @@ pub struct Args {
     /// at its speed, no ramps or blends: no controller moves so).
     #[arg(long, default_value = "path-buffer", value_parser = parse_execution())]
     execution: pipeline::Execution,
+    /// Also score each plan with its footprints sized freely from the glyph (the press depth not
+    /// clamped to the brush's range): `plan.free_widths` in report.json, what the brush's range
+    /// costs. A diagnostic that builds and renders a second track (off by default).
+    #[arg(long)]
+    free_widths: bool,
     /// Side of the character box on paper, mm (default: chosen so the brush's width range
     /// covers the glyphs' stroke widths; see docs/trajectory.md).
     #[arg(long, allow_negative_numbers = true)]
@@ -359,6 +364,7 @@ pub fn run(args: Args) -> Result<()> {
         model: args.model,
         size: args.size,
         execution: args.execution,
+        free_widths: args.free_widths,
         alpha_rad,
         refine: write_refine,
         generator,
@@ -862,8 +868,8 @@ fn load_observed(dir: &Path, chars: &[char], layout: Option<&Layout>) -> Result<
     let mut observed = Vec::new();
     for (i, c) in summary.chars.iter().enumerate() {
         let p = dir.join(&c.folder).join("observed.png");
-        let (w, h) = bezier_raster::image_header(&p)
-            .with_context(|| format!("--observed: cannot read {}", p.display()))?;
+        let (w, h) =
+            bezier_raster::image_header(&p).with_context(|| format!("--observed: cannot read {}", p.display()))?;
         if (w, h) != (c.size_px, c.size_px) {
             bail!(
                 "--observed: {} is {w}×{h} px, expected {side}×{side} px (chars[{i}].size_px of {})",

@@ -60,8 +60,8 @@ fn one_character_gets_all_five_outputs() {
     assert!(r["executed"]["csim"].as_f64().unwrap() > 0.7, "{r}");
     assert!(r["agreement"]["csim"].as_f64().unwrap() > 0.97, "{r}");
     assert!((r["executed"]["csim"].as_f64().unwrap() - r["plan"]["csim"].as_f64().unwrap()).abs() < 0.02, "{r}");
-    // The plan with footprints sized freely from the glyph, named for what it is (not a bound).
-    assert!(r["plan"]["free_widths"]["csim"].as_f64().unwrap() > 0.7, "{r}");
+    // The plan with footprints sized freely from the glyph is a diagnostic, off unless asked.
+    assert!(r["plan"]["free_widths"].is_null(), "{r}");
     assert!(r.get("upper_bound").is_none(), "{r}");
     // The track parses back into brush-model's Track and sits inside the char box.
     let t = json(&out.join("track.json"));
@@ -203,6 +203,28 @@ fn bad_input_fails_cleanly_without_output() {
     // With --font, --hanzi-data is where the stroke templates come from.
     fails(&maobi(&["write", "永", "--font", s(&font), "--hanzi-data", "x", "--out", s(&out)]), "x: cannot read");
     assert!(!out.exists(), "nothing may be written on error");
+}
+
+#[test]
+fn the_free_width_plan_is_asked_for_and_changes_nothing_else() {
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, free) = (dir.path().join("plain"), dir.path().join("free"));
+    ok(&maobi(&["write", "十", "--size", "96", "--out", s(&plain)]));
+    ok(&maobi(&["write", "十", "--size", "96", "--free-widths", "--out", s(&free)]));
+    let (mut a, mut b) = (json(&plain.join("report.json")), json(&free.join("report.json")));
+    assert!(a["plan"]["free_widths"].is_null(), "{a}");
+    // Named for what it is (not a bound).
+    assert!(b["plan"]["free_widths"]["csim"].as_f64().unwrap() > 0.5, "{b}");
+    assert!(b.get("upper_bound").is_none(), "{b}");
+    // Scored beside the plan: everything else is the same run.
+    for r in [&mut a, &mut b] {
+        r["plan"]["free_widths"] = serde_json::Value::Null;
+        r["timing_ms"] = serde_json::Value::Null;
+    }
+    assert_eq!(a, b);
+    for f in ["render.png", "executed.png", "track.json"] {
+        assert_eq!(std::fs::read(plain.join(f)).unwrap(), std::fs::read(free.join(f)).unwrap(), "{f}");
+    }
 }
 
 #[test]
