@@ -266,9 +266,9 @@ mod tests {
     /// multiplied in order.
     fn forward_by_the_links(dh: &DhParams, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
         let mut t = Isometry3::identity();
-        for i in 0..6 {
+        for (i, qi) in q.iter().enumerate() {
             let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), dh.alpha_rad[i]);
-            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q[i] + dh.theta_rad[i]);
+            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), qi + dh.theta_rad[i]);
             t = t
                 * Isometry3::from_parts(Translation3::identity(), rx)
                 * Isometry3::from_parts(Translation3::new(dh.a_m[i], 0.0, 0.0), UnitQuaternion::identity())
