@@ -105,6 +105,52 @@ pub(crate) fn path_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path
         .map_err(|_| value_err(format!("{name}: expected a path (str or os.PathLike), got {}", type_name(obj))))
 }
 
+/// The most bytes an input file may hold (256 MiB: far above any profile, CSV, font, image,
+/// generator or robot file maobi writes or reads, far below what would exhaust memory).
+pub(crate) const MAX_INPUT_BYTES: u64 = 256 << 20;
+
+/// A path argument naming a file to read: refused unless it is a regular file (after symbolic
+/// links) of at most [`MAX_INPUT_BYTES`], before anything opens it. A FIFO would block the open
+/// forever, a device like `/dev/zero` has no size and never ends.
+pub(crate) fn input_file(path: &std::path::Path, name: &str) -> PyResult<()> {
+    let meta = match std::fs::metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(pyo3::exceptions::PyFileNotFoundError::new_err(format!(
+                "{name}: {} does not exist",
+                path.display()
+            )));
+        }
+        Err(e) => return Err(crate::lib_err(&format!("{name}: {}", path.display()), e)),
+    };
+    if !meta.is_file() {
+        let what = if meta.is_dir() { "a folder" } else { "not a regular file (a device, pipe or socket)" };
+        return Err(value_err(format!("{name}: {} is {what}: expected a file", path.display())));
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(value_err(format!(
+            "{name}: {} holds {} bytes: expected at most {} MiB",
+            path.display(),
+            meta.len(),
+            MAX_INPUT_BYTES >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// A path argument naming a file to read ([`path_arg`], then [`input_file`]).
+pub(crate) fn input_path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<std::path::PathBuf> {
+    let p = path_arg(obj, name)?;
+    input_file(&p, name)?;
+    Ok(p)
+}
+
+/// A number for a message: plain, or in exponent form when plain would be a wall of digits
+/// (`1e300`, `1e-300`).
+pub(crate) fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-6..1e15).contains(&v.abs()) { format!("{v}") } else { format!("{v:e}") }
+}
+
 /// The Python type name of `obj`, for messages.
 pub(crate) fn type_name(obj: &Bound<'_, PyAny>) -> String {
     obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into())

@@ -14,6 +14,10 @@ use crate::{guarded, lib_err};
 /// A brush profile: the brush (bundle length and radius, mm), its calibrated press ranges and
 /// the linear model from a press `(h_mm, alpha_rad, beta_rad)` to the footprint's lengths
 /// `(lt_mm, lh_mm, lr_mm)` (tip length, root length, belly half-width).
+/// The most presses one `Brush.predict` call evaluates (2^24: 16.8 M, about 800 MB of inputs
+/// and results).
+const MAX_PREDICT: usize = 1 << 24;
+
 #[pyclass(module = "maobi", name = "Brush", frozen)]
 #[derive(Clone)]
 pub(crate) struct Brush {
@@ -53,6 +57,7 @@ pub(crate) fn brush_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<BrushProfile
     let path = path_arg(obj, "brush").map_err(|_| {
         value_err(format!("brush: expected a built-in name, a profile path or a maobi.Brush, got {}", type_name(obj)))
     })?;
+    crate::arrays::input_file(&path, "brush")?;
     BrushProfile::load(&path).map_err(|e| profile_err("brush", e))
 }
 
@@ -79,7 +84,7 @@ impl Brush {
     /// Raises `FileNotFoundError`, or `MaobiError` naming the field for an invalid profile.
     #[staticmethod]
     fn load(path: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let p = path_arg(path, "path")?;
+        let p = crate::arrays::input_path(path, "path")?;
         BrushProfile::load(&p).map(|profile| Self { profile }).map_err(|e| profile_err("path", e))
     }
 
@@ -166,6 +171,13 @@ impl Brush {
             .call_method1("broadcast_arrays", (arr(&h)?, arr(&a)?, arr(&b)?))
             .map_err(|e| value_err(format!("h_mm, alpha_rad, beta_rad: shapes do not broadcast ({e})")))?;
         let parts: Vec<Bound<'py, PyAny>> = shaped.extract()?;
+        // The broadcast is a view; its copies and the three results are sized from it.
+        let n: usize = parts[0].getattr("size")?.extract()?;
+        if n > MAX_PREDICT {
+            return Err(value_err(format!(
+                "h_mm, alpha_rad, beta_rad: broadcast to {n} presses (expected at most {MAX_PREDICT} in one call)"
+            )));
+        }
         let [h, a, b] = [("h_mm", &parts[0]), ("alpha_rad", &parts[1]), ("beta_rad", &parts[2])]
             .map(|(n, x)| f64_array(x, n).and_then(|v| check_finite(&v, n).map(|_| v)));
         let (h, a, b) = (h?, a?, b?);
@@ -262,7 +274,7 @@ pub(crate) fn calibrate<'py>(
     let base = brush_arg(brush)?;
     let is_path = measurements.extract::<String>().is_ok() || measurements.hasattr("__fspath__")?;
     let (rows, default_name) = if is_path {
-        let p = path_arg(measurements, "measurements")?;
+        let p = crate::arrays::input_path(measurements, "measurements")?;
         let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "calibrated".into());
         let rows =
             guarded(py, "calibrate", || brush_model::load_measurements(&p).map_err(|e| lib_err("measurements", e)))?;

@@ -12,6 +12,10 @@ use crate::brush::Brush;
 use crate::errors::value_err;
 use crate::{guarded, lib_err};
 
+/// The most pixels of one call's images (B × size²: 2^26, 256 MiB of f32; 4,096 presses at
+/// 128 px).
+const MAX_BATCH_PIXELS: usize = 1 << 26;
+
 /// The B-BSMG generator: a press `(h_mm, alpha_rad, beta_rad)` to its footprint image
 /// (`size × size`, ink = 1, in the `maobi stroke` canvas convention: `px_per_mm`, footprint
 /// centred), and the exact gradient of any image loss back to the press.
@@ -28,6 +32,16 @@ impl Generator {
     /// generator was trained there) unless `extrapolate`.
     fn presses(&self, params: &Bound<'_, PyAny>, extrapolate: bool) -> PyResult<Vec<Press>> {
         let r = rows(params, "params", 3, "h_mm, alpha_rad, beta_rad per press")?;
+        // The images are B × size² floats: bounded before anything is sized from B.
+        let per = (self.size * self.size).max(1);
+        if r.len() > MAX_BATCH_PIXELS / per {
+            return Err(value_err(format!(
+                "params: {} presses: expected at most {} in one call (their {s}×{s} px images; split the batch)",
+                r.len(),
+                MAX_BATCH_PIXELS / per,
+                s = self.size
+            )));
+        }
         let out: Vec<Press> = r.iter().map(|v| Press::new(v[0], v[1], v[2])).collect();
         if !extrapolate {
             for (i, p) in out.iter().enumerate() {
@@ -51,6 +65,10 @@ impl Generator {
     #[pyo3(signature = (path = None))]
     fn load(py: Python<'_>, path: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let p = path.filter(|p| !p.is_none()).map(|p| path_arg(p, "path")).transpose()?;
+        if let Some(p) = &p {
+            crate::arrays::input_file(&neural_gen::config_path(p), "path (its config)")?;
+            crate::arrays::input_file(p, "path")?;
+        }
         guarded(py, "Generator.load", move || {
             let g = match &p {
                 Some(p) => neural_gen::Generator::load(p).map_err(|e| lib_err("path", e))?,
@@ -124,6 +142,15 @@ impl Generator {
             )));
         }
         crate::arrays::check_finite(&up, "grad_images")?;
+        // The network runs in f32: a value beyond its range would become infinite there.
+        if let Some(i) = up.data.iter().position(|v| v.abs() > f64::from(f32::MAX)) {
+            return Err(value_err(format!(
+                "grad_images{}: {} (expected values within ±{:e}, the network's f32 range)",
+                crate::arrays::index_of(i, &up.shape),
+                crate::arrays::num(up.data[i]),
+                f32::MAX
+            )));
+        }
         let net = self.net.clone();
         let g = guarded(py, "Generator.vjp", move || {
             let upstream: Vec<f32> = up.data.iter().map(|&v| v as f32).collect();

@@ -5,7 +5,7 @@ use brush_model::{Extrapolation, PointMm, Press, ProfileError, TrackPoint};
 use pyo3::prelude::*;
 use trajectory::CharBox;
 
-use crate::arrays::{image, path_arg, rows, to_numpy};
+use crate::arrays::{image, num, rows, to_numpy};
 use crate::brush::brush_arg;
 use crate::errors::value_err;
 use crate::{guarded, lib_err};
@@ -26,13 +26,43 @@ pub(crate) fn box_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<CharBox> {
             crate::arrays::type_name(obj)
         )));
     };
-    if !(x0.is_finite() && y0.is_finite()) {
-        return Err(value_err(format!("{name}: corner ({x0}, {y0}) mm is not finite")));
+    if !(x0.is_finite() && y0.is_finite() && x0.abs() <= MAX_COORD_MM && y0.abs() <= MAX_COORD_MM) {
+        return Err(value_err(format!(
+            "{name}: corner ({}, {}) mm (expected finite, within ±{MAX_COORD_MM} mm)",
+            num(x0),
+            num(y0)
+        )));
     }
     if !(side.is_finite() && side > 0.0 && side <= 10_000.0) {
-        return Err(value_err(format!("{name}: side {side} mm (expected a positive length of at most 10 m)")));
+        return Err(value_err(format!("{name}: side {} mm (expected a positive length of at most 10 m)", num(side))));
     }
     Ok(CharBox { x0_mm: x0, y0_mm: y0, size_mm: side })
+}
+
+/// The farthest a press or a box corner may lie from the paper's origin, mm (100 m): beyond
+/// it, pixel coordinates overflow the rasteriser's integers.
+pub(crate) const MAX_COORD_MM: f64 = 1e5;
+
+/// The smallest pixel an image may have, mm (1 µm): a finer one puts pixel coordinates beyond
+/// the rasteriser's integers.
+const MIN_PX_MM: f64 = 1e-3;
+
+/// Refuses a box whose pixels would be finer than [`MIN_PX_MM`] at `size` px, naming `name`.
+pub(crate) fn check_scale(b: &CharBox, size: u32, name: &str) -> PyResult<()> {
+    if !(b.size_mm.is_finite() && b.size_mm > 0.0 && b.size_mm <= 10_000.0) || b.size_mm / f64::from(size) < MIN_PX_MM {
+        return Err(value_err(format!(
+            "{name}: side {} mm at {size} px (expected a positive length of at most 10 m, and pixels of at least {MIN_PX_MM} mm)",
+            num(b.size_mm)
+        )));
+    }
+    if !(b.x0_mm.is_finite() && b.y0_mm.is_finite() && b.x0_mm.abs() <= MAX_COORD_MM && b.y0_mm.abs() <= MAX_COORD_MM) {
+        return Err(value_err(format!(
+            "{name}: corner ({}, {}) mm (expected finite, within ±{MAX_COORD_MM} mm)",
+            num(b.x0_mm),
+            num(b.y0_mm)
+        )));
+    }
+    Ok(())
 }
 
 /// `size_px=`: the side of a square image.
@@ -50,8 +80,15 @@ pub(crate) fn model_arg(name: &str) -> PyResult<ModelKind> {
 
 /// An `(N, 5)` presses array: `x_mm, y_mm, h_mm, alpha_rad, beta_rad` per row.
 fn presses_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<TrackPoint>> {
-    Ok(rows(obj, "presses", 5, "x_mm, y_mm, h_mm, alpha_rad, beta_rad per press")?
-        .into_iter()
+    let r = rows(obj, "presses", 5, "x_mm, y_mm, h_mm, alpha_rad, beta_rad per press")?;
+    if let Some(i) = r.iter().position(|p| p[0].abs() > MAX_COORD_MM || p[1].abs() > MAX_COORD_MM) {
+        return Err(value_err(format!(
+            "presses[{i}]: (x_mm, y_mm) = ({}, {}) (expected within ±{MAX_COORD_MM} mm of the paper's origin)",
+            num(r[i][0]),
+            num(r[i][1])
+        )));
+    }
+    Ok(r.into_iter()
         .map(|r| TrackPoint { x_mm: r[0], y_mm: r[1], h_mm: r[2], alpha_rad: r[3], beta_rad: r[4] })
         .collect())
 }
@@ -86,6 +123,7 @@ pub(crate) fn render_presses<'py>(
     let pts = presses_arg(presses)?;
     let b = box_arg(box_mm, "box_mm")?;
     let size = size_arg(size_px)?;
+    check_scale(&b, size, "box_mm")?;
     let profile = brush_arg(brush)?;
     let kind = model_arg(model)?;
     let ex = if extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
@@ -151,6 +189,7 @@ pub(crate) fn render_presses_soft<'py>(
     let pts = presses_arg(presses)?;
     let b = box_arg(box_mm, "box_mm")?;
     let size = size_arg(size_px)?;
+    check_scale(&b, size, "box_mm")?;
     let profile = brush_arg(brush)?;
     let c = canvas(&b, size, edge_px)?;
     let img = guarded(py, "render_presses_soft", move || {
@@ -180,6 +219,7 @@ pub(crate) fn render_presses_soft_vjp<'py>(
     let pts = presses_arg(presses)?;
     let b = box_arg(box_mm, "box_mm")?;
     let size = size_arg(size_px)?;
+    check_scale(&b, size, "box_mm")?;
     let profile = brush_arg(brush)?;
     let c = canvas(&b, size, edge_px)?;
     let up = crate::arrays::f64_array(grad_image, "grad_image")?;
@@ -219,6 +259,8 @@ pub(crate) fn render_track<'py>(
         },
     };
     let size = size_arg(size_px)?;
+    let what = if box_mm.is_some_and(|o| !o.is_none()) { "box_mm" } else { "track: char_box_mm" };
+    check_scale(&b, size, what)?;
     let profile = match brush.filter(|o| !o.is_none()) {
         Some(_) => brush_arg(brush)?,
         None => t.brush.clone(),
@@ -294,7 +336,7 @@ pub(crate) fn compare<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let load = |o: &Bound<'py, PyAny>, name: &str| -> PyResult<Bound<'py, PyAny>> {
         if o.extract::<String>().is_ok() || o.hasattr("__fspath__").unwrap_or(false) {
-            let p = path_arg(o, name)?;
+            let p = crate::arrays::input_path(o, name)?;
             let c = Coverage::load(&p).map_err(|e| lib_err(name, e))?;
             image_out(py, c)
         } else {

@@ -6,7 +6,7 @@ use robot_io::kinematics::DhParams;
 use robot_io::program::{Program, RobotConfig, build_program_chars};
 use robot_io::{ArmKinematics, PaperFile, PaperFrame, TrackFile};
 
-use crate::arrays::{json_to_py, path_arg};
+use crate::arrays::{input_path, json_to_py};
 use crate::errors::value_err;
 use crate::write::Track;
 use crate::{MaobiError, guarded, lib_err};
@@ -28,7 +28,7 @@ fn paper_arg(obj: &Bound<'_, PyAny>) -> PyResult<PaperFrame> {
                 .map_err(|e| value_err(format!("paper: not a paper.json (touch_points, size_mm): {e}")))?;
             PaperFrame::fit(&file).map_err(|e| value_err(format!("paper: {}", crate::errors::chain(&e))))
         }
-        None => PaperFrame::load(&path_arg(obj, "paper")?).map_err(|e| lib_err("paper", e)),
+        None => PaperFrame::load(&input_path(obj, "paper")?).map_err(|e| lib_err("paper", e)),
     }
 }
 
@@ -45,7 +45,7 @@ fn robot_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<RobotConfig> {
             c.validate().map_err(|e| value_err(format!("robot: {}", crate::errors::chain(&e))))?;
             Ok(c)
         }
-        None => RobotConfig::load(&path_arg(obj, "robot")?).map_err(|e| lib_err("robot", e)),
+        None => RobotConfig::load(&input_path(obj, "robot")?).map_err(|e| lib_err("robot", e)),
     }
 }
 
@@ -54,7 +54,7 @@ fn track_arg(obj: &Bound<'_, PyAny>) -> PyResult<TrackFile> {
     if let Ok(t) = obj.cast::<Track>() {
         return Ok(t.get().file.clone());
     }
-    TrackFile::load(&path_arg(obj, "track")?).map_err(|e| lib_err("track", e))
+    TrackFile::load(&input_path(obj, "track")?).map_err(|e| lib_err("track", e))
 }
 
 /// The checked program, as `maobi robot` builds it.
@@ -133,7 +133,7 @@ pub(crate) fn robot_export<'py>(
     let frame = paper_arg(paper)?;
     let cfg = robot_arg(robot)?;
     let arm = match kinematics.filter(|k| !k.is_none()) {
-        Some(k) => Some(ArmKinematics::load(&path_arg(k, "kinematics")?).map_err(|e| lib_err("kinematics", e))?),
+        Some(k) => Some(ArmKinematics::load(&input_path(k, "kinematics")?).map_err(|e| lib_err("kinematics", e))?),
         None => None,
     };
     if lua && !by_moves && arm.is_none() && !accept_nominal_kinematics {

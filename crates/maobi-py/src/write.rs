@@ -14,6 +14,13 @@ use crate::errors::value_err;
 use crate::render::{box_arg, image_out, size_arg};
 use crate::{MaobiError, guarded, lib_err};
 
+/// The most pixels of one `write` call's images of one kind (2^28: 1,024 characters at 512 px;
+/// three kinds of f32 images, about 3 GiB).
+const MAX_WRITE_PIXELS: u64 = 1 << 28;
+
+/// The most strokes of a `Track` made from Python (a sheet of 100 characters has about 1,500).
+const MAX_STROKES: usize = 100_000;
+
 /// Writes `bytes` to `path` through a temporary file beside it, renamed into place.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> PyResult<()> {
     let dir = match path.parent() {
@@ -55,7 +62,11 @@ impl Track {
         let list: Vec<Bound<'_, PyAny>> = strokes
             .try_iter()
             .map_err(|_| value_err("strokes: expected a list of (N, 5) arrays"))?
+            .take(MAX_STROKES + 1)
             .collect::<PyResult<_>>()?;
+        if list.len() > MAX_STROKES {
+            return Err(value_err(format!("strokes: more than {MAX_STROKES} strokes")));
+        }
         let mut out = Vec::with_capacity(list.len());
         for (i, s) in list.iter().enumerate() {
             let pts = rows(s, &format!("strokes[{i}]"), 5, "x_mm, y_mm, h_mm, alpha_rad, beta_rad per point")?;
@@ -88,17 +99,21 @@ impl Track {
     /// Reads a `track.json` (a character's or a sheet's), validating its brush.
     #[staticmethod]
     fn load(path: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let p = path_arg(path, "path")?;
+        let p = crate::arrays::input_path(path, "path")?;
         TrackFile::load(&p).map(|file| Self { file }).map_err(|e| lib_err("path", e))
     }
 
     /// A track from the JSON text of a `track.json`.
     #[staticmethod]
     fn from_json(text: &str) -> PyResult<Self> {
-        let file: TrackFile =
-            serde_json::from_str(text).map_err(|e| MaobiError::new_err(format!("text: not a track.json: {e}")))?;
-        file.brush.validate("text").map_err(|e| crate::brush::profile_err("text", e))?;
-        Ok(Self { file })
+        // The validation of `Track.load` (`stroke_chars` against the strokes and the sheet's
+        // characters), not only the brush's.
+        TrackFile::from_json(text, "text").map(|file| Self { file }).map_err(|e| match e {
+            robot_io::RobotError::Json { source, .. } => {
+                MaobiError::new_err(format!("text: not a track.json: {source}"))
+            }
+            e => lib_err("", e),
+        })
     }
 
     /// The track as `track.json` text (what `maobi write` writes).
@@ -241,6 +256,9 @@ fn glyph_input(font: Option<&Bound<'_, PyAny>>, hanzi: Option<&Bound<'_, PyAny>>
                 p.display()
             )));
         }
+        if !p.is_dir() {
+            crate::arrays::input_file(p, "font")?;
+        }
     }
     GlyphInput::fonts(&paths, None, hanzi).map_err(|e| lib_err("font", e))
 }
@@ -307,6 +325,16 @@ pub(crate) fn write<'py>(
         return Err(value_err(format!("size_px={size_px}: expected 64 to 4096 px (as `maobi write --size`)")));
     }
     let size = size_arg(size_px)?;
+    // Three images a character (reference, plan, executed), all returned: their pixels are
+    // bounded before any is made.
+    let px = chars.len() as u64 * u64::from(size) * u64::from(size);
+    if px > MAX_WRITE_PIXELS {
+        return Err(value_err(format!(
+            "text: {} characters at size_px={size_px}: {px} px an image set, expected at most {MAX_WRITE_PIXELS} \
+             (fewer characters a call, or a smaller size_px)",
+            chars.len()
+        )));
+    }
     let profile = brush_arg(brush)?;
     if !(alpha_rad.is_finite() && profile.ranges.alpha_rad.contains(alpha_rad)) {
         return Err(value_err(format!(
@@ -395,7 +423,7 @@ pub(crate) fn glyph<'py>(
 /// `(H, W)` float32 array, ink = 1.
 #[pyfunction]
 pub(crate) fn load_image<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
-    let p = path_arg(path, "path")?;
+    let p = crate::arrays::input_path(path, "path")?;
     let img = guarded(py, "load_image", move || bezier_raster::Coverage::load(&p).map_err(|e| lib_err("path", e)))?;
     image_out(py, img)
 }
@@ -406,6 +434,10 @@ pub(crate) fn load_image<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyRe
 pub(crate) fn save_image(py: Python<'_>, path: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>) -> PyResult<()> {
     let p = path_arg(path, "path")?;
     let (data, h, w) = crate::arrays::image(image, "image")?;
+    // What maobi reads back (`load_image`, `compare`): at most 16384 px a side, 64 Mpx in all.
+    if h > 16384 || w > 16384 || h * w > 1 << 26 {
+        return Err(value_err(format!("image: {w}×{h} px (expected at most 16384 px a side and 64 Mpx in all)")));
+    }
     if let Some(v) = data.iter().find(|v| !(0.0..=1.0).contains(*v)) {
         return Err(value_err(format!("image: value {v} (expected coverage in [0, 1])")));
     }

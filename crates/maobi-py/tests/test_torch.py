@@ -134,3 +134,18 @@ def test_tensors_off_the_cpu_are_refused():
         maobi.torch.generator(torch.zeros(2, 5))
     with pytest.raises(ValueError, match="floating-point"):
         maobi.torch.render_presses(torch.zeros(2, 5, dtype=torch.int64), 40.0, 32)
+
+
+def test_hostile_tensors_are_refused_naming_the_argument():
+    p = torch.zeros((2, 5)).to_sparse()
+    # A sparse tensor raised torch's RuntimeError ("unsupported memory format").
+    with pytest.raises(ValueError, match="presses: a torch.sparse_coo tensor"):
+        maobi.torch.render_presses(p, 40.0, 64)
+    # A string as the generator raised AttributeError inside forward.
+    with pytest.raises(TypeError, match="gen: expected a maobi.Generator, got str"):
+        maobi.torch.generator(torch.ones((1, 3)), gen="pen1")
+    # 64.9 px was cut to 64 silently.
+    with pytest.raises(TypeError):
+        maobi.torch.render_presses(torch.zeros((1, 5)), 40.0, 64.9)
+    with pytest.raises(ValueError, match="params: 5000000 presses"):
+        maobi.torch.generator(torch.tensor([[15.0, 0, 0]]).repeat(5_000_000, 1))

@@ -91,6 +91,14 @@ pub enum Fault {
     Link(String),
     /// An answer out of the protocol.
     Protocol(String),
+    /// The program has not finished long after its plan (a machine that reports but
+    /// acknowledges nothing more): the time run and the planned time, s.
+    Overdue {
+        /// Seconds since the stream started.
+        elapsed_s: f64,
+        /// The program's planned time, s.
+        planned_s: f64,
+    },
 }
 
 impl std::fmt::Display for Fault {
@@ -104,6 +112,10 @@ impl std::fmt::Display for Fault {
             Fault::Quiet(s) => write!(f, "GRBL did not answer for {s:.1} s: the link is lost"),
             Fault::Link(e) => write!(f, "the link failed: {e}"),
             Fault::Protocol(e) => write!(f, "out of GRBL's protocol: {e}"),
+            Fault::Overdue { elapsed_s, planned_s } => write!(
+                f,
+                "the program has not finished after {elapsed_s:.1} s (planned {planned_s:.1} s): GRBL acknowledges nothing more"
+            ),
         }
     }
 }

@@ -254,6 +254,10 @@ pub enum RateFit {
     Slow,
 }
 
+/// The most [`RateFit::Slow`] slows a program (1/100): a machine slower than that has a bogus
+/// maximum rate, or is not a plotter for this program.
+pub(crate) const MIN_FEED_SCALE: f64 = 0.01;
+
 /// What the checks found: each passed check in words, and the factor the feeds are scaled by
 /// (1 unless [`RateFit::Slow`] slowed them).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -317,7 +321,17 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
             info.rx_buffer
         ));
     }
-    // Rates: each feed move's speed along each axis.
+    // Rates: each feed move's speed along each axis. A maximum rate that is not a positive
+    // speed is no machine's (slowing to it would stream feeds of 0 or below).
+    for k in 0..3u16 {
+        if let Some(max) = info.setting(110 + k).filter(|&m| m <= 0.0) {
+            return refuse(format!(
+                "${}={max:.3}: the {} axis's maximum rate must be a positive speed (mm/min): check `$$`",
+                110 + k,
+                AXES[usize::from(k)]
+            ));
+        }
+    }
     let mut scale: f64 = 1.0;
     let mut worst: Option<(usize, usize, f64, f64)> = None;
     let mut prev: [Option<f64>; 3] = [None; 3];
@@ -355,6 +369,12 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
                 return refuse(format!(
                     "{msg}: raise ${} if the machine can go that fast, or slow the program (robot.json `write_speed_m_s`, or send with --slow-to-machine to scale every feed by {scale:.3})",
                     110 + k
+                ));
+            }
+            RateFit::Slow if scale < MIN_FEED_SCALE => {
+                return refuse(format!(
+                    "{msg}: slowing every feed by {scale:.3e} (below {MIN_FEED_SCALE}) would make the run last {:.0}× its plan: check `$$`, or slow the program itself",
+                    1.0 / scale
                 ));
             }
             RateFit::Slow => checks.push(format!("{msg}: every feed slowed to {scale:.3}× the program's")),
@@ -484,5 +504,24 @@ mod tests {
         hold.status.state = State::Hold;
         hold.status.sub = Some(0);
         assert!(refused(&hold, &p).contains("Hold:0"));
+    }
+
+    #[test]
+    fn bogus_maximum_rates_are_refused_not_slowed_to() {
+        let p = GcodeProgram::from_export(TEXT, 3000.0).unwrap();
+        // Before: $110=0 (or below) with RateFit::Slow gave a feed scale of 0 (or below): every
+        // feed streamed as F0; $110=1e-9 a run lasting 10^12 × its plan.
+        for bogus in [0.0, -5.0] {
+            let mut m = machine();
+            m.settings.insert(110, bogus);
+            for fit in [RateFit::Refuse, RateFit::Slow] {
+                let Err(GrblError::Refused(e)) = check_program(&m, &p, fit) else { panic!("{bogus} accepted") };
+                assert!(e.contains("$110=") && e.contains("must be a positive speed"), "{e}");
+            }
+        }
+        let mut m = machine();
+        m.settings.insert(110, 1e-9);
+        let Err(GrblError::Refused(e)) = check_program(&m, &p, RateFit::Slow) else { panic!("1e-9 accepted") };
+        assert!(e.contains("below 0.01"), "{e}");
     }
 }

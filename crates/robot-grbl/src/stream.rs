@@ -134,6 +134,9 @@ impl Grbl {
         let mut last_heard = Instant::now();
         let mut finished_at: Option<Instant> = None;
         let timeout = self.opts.timeout;
+        // The whole stream's bound: twice its plan and ten time-outs. Status reports keep a
+        // link alive (`last_heard`); they do not keep a run that acknowledges nothing going.
+        let overdue = Duration::from_secs_f64((2.0 * planned_total).clamp(0.0, 1e7)) + timeout * 10;
         let report = |acked: usize, last: &Option<Status>, progress: &mut dyn FnMut(&StreamProgress)| {
             let strokes_done = strokes_done(program, acked);
             progress(&StreamProgress {
@@ -179,14 +182,23 @@ impl Grbl {
                 let cause = Fault::Quiet(timeout.as_secs_f64());
                 return Err(fault(self, cause, acked, &last));
             }
+            if now - start > overdue {
+                let cause = Fault::Overdue { elapsed_s: (now - start).as_secs_f64(), planned_s: planned_total };
+                return Err(fault(self, cause, acked, &last));
+            }
             let deadline = last_poll.map_or(now, |t| t + POLL).max(now + Duration::from_millis(5));
             let line = match self.lines.next_line(deadline) {
                 Ok(Some(l)) => l,
                 Ok(None) => continue,
                 Err(e) => return Err(stopped(program, Fault::Link(e.to_string()), acked, lost())),
             };
-            last_heard = Instant::now();
-            match Response::parse(&line) {
+            let response = Response::parse(&line);
+            // What GRBL says in answer (acknowledgements, refusals, status reports); noise,
+            // settings and messages, however many, are not an answer.
+            if !matches!(response, Response::Bracket(_) | Response::Setting(..) | Response::Other(_)) {
+                last_heard = Instant::now();
+            }
+            match response {
                 Response::Ok => {
                     let Some(f) = in_flight.pop_front() else {
                         let cause = Fault::Protocol("an `ok` with no line waiting for it".into());
@@ -441,4 +453,96 @@ fn stopped(program: &GcodeProgram, cause: Fault, acked: usize, safe: SafeStop) -
         last_acked: last,
         safe,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io;
+    use std::sync::mpsc;
+
+    use super::*;
+    use crate::Port;
+    use crate::link::Lines;
+    use crate::machine::LinkOptions;
+
+    /// A hostile controller: every read gives `line` again (never an `ok`), writes are taken.
+    struct Flood(&'static [u8]);
+
+    impl Port for Flood {
+        fn read_some(&mut self, buf: &mut [u8], _timeout: Duration) -> io::Result<usize> {
+            let n = self.0.len().min(buf.len());
+            buf[..n].copy_from_slice(&self.0[..n]);
+            std::thread::sleep(Duration::from_millis(1));
+            Ok(n)
+        }
+        fn write_all_bytes(&mut self, _: &[u8]) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    const TEXT: &str = "; maobi writing program: 一\nG21 ; millimetres\nG90 ; absolute\nG0 Z5.000000\n; stroke 1\n\
+                        G0 X10.000000 Y-20.000000 F3000.000000\nG1 X10.000000 Y-20.000000 Z-2.000000 F600.000000\n\
+                        G1 X30.000000 Y-20.000000 Z-2.000000 F1200.000000\nG0 Z5.000000\nM2\n";
+
+    fn info() -> MachineInfo {
+        let Response::Status(status) = Response::parse("<Idle|MPos:0.000,0.000,0.000|FS:0,0>") else { panic!() };
+        MachineInfo {
+            version: "1.1h".into(),
+            build: String::new(),
+            planner_blocks: Some(15),
+            rx_buffer: 128,
+            settings: Default::default(),
+            offsets: Default::default(),
+            parser_state: String::new(),
+            wcs: "G54".into(),
+            wco: [0.0; 3],
+            status,
+            messages: Vec::new(),
+        }
+    }
+
+    /// Streams the program against `port`'s answers on another thread: the fault, and how long
+    /// the stream and its safe stop took (`None` past 60 s).
+    fn stream_against(line: &'static [u8]) -> Option<(Fault, Duration)> {
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let opts = LinkOptions { banner_wait: Duration::from_millis(100), timeout: Duration::from_millis(100) };
+            let mut g = Grbl { lines: Lines::new(Box::new(Flood(line))), opts };
+            let program = GcodeProgram::from_export(TEXT, 3000.0).unwrap();
+            let t0 = Instant::now();
+            let r = g.stream(&info(), &program, 1.0, &AtomicBool::new(false), &mut |_| {});
+            let cause = match r {
+                Err(GrblError::Stopped(s)) => s.cause,
+                r => panic!("not stopped: {r:?}"),
+            };
+            let _ = tx.send((cause, t0.elapsed()));
+        });
+        rx.recv_timeout(Duration::from_secs(60)).ok()
+    }
+
+    #[test]
+    fn a_controller_that_reports_or_chatters_but_never_acknowledges_is_stopped_in_bounded_time() {
+        let program = GcodeProgram::from_export(TEXT, 3000.0).unwrap();
+        let planned: f64 = program.lines.iter().map(|l| l.planned_s).sum();
+        // Before: each status report (or any line) counted as hearing from the machine, so a
+        // stream of `<Run|…>` or `[MSG:…]` without an `ok` never ended.
+        let (cause, took) = stream_against(b"<Run|MPos:0.000,0.000,0.000|FS:600,0>\r\n").expect("status flood: no end");
+        assert!(matches!(cause, Fault::Overdue { .. }), "{cause}");
+        assert!(took.as_secs_f64() < 2.0 * planned + 5.0, "{took:?} for a plan of {planned} s");
+        let (cause, took) = stream_against(b"[MSG:Caution: Unlocked]\r\n").expect("message flood: no end");
+        assert_eq!(cause, Fault::Quiet(0.1));
+        assert!(took < Duration::from_secs(5), "{took:?}");
+        let (cause, _) = stream_against(b"$110=1\r\n").expect("settings flood: no end");
+        assert_eq!(cause, Fault::Quiet(0.1));
+        // A bracketed message longer than a line: refused at the line bound, at once.
+        let huge: &'static [u8] = Box::leak(format!("[MSG:{}]\r\n", "x".repeat(300)).into_bytes().into_boxed_slice());
+        let (cause, took) = stream_against(huge).expect("huge message: no end");
+        assert!(matches!(&cause, Fault::Link(e) if e.contains("longer than 256 bytes")), "{cause}");
+        assert!(took < Duration::from_secs(5), "{took:?}");
+        // `error:` and `ALARM:` floods: the first one stops the run.
+        let (cause, _) = stream_against(b"error:9\r\n").expect("error flood: no end");
+        assert!(matches!(cause, Fault::Firmware { .. }), "{cause}");
+        let (cause, _) = stream_against(b"ALARM:1\r\n").expect("alarm flood: no end");
+        assert_eq!(cause, Fault::Alarm(1));
+    }
 }

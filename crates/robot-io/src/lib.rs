@@ -338,14 +338,38 @@ impl TrackFile {
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let t: TrackFile = load_json(path)?;
         t.brush.validate(&path.display().to_string())?;
-        // A sheet's character boundaries, checked against what they index: `stroke_chars` (the
-        // ink reload rule's) against the strokes and the sheet's `chars`.
         let chars: SheetChars = load_json(path)?;
-        t.check_stroke_chars(chars.chars.as_deref()).map_err(|message| RobotError::Config {
+        t.checked(chars, path)
+    }
+
+    /// As [`TrackFile::load`], from the text of a `track.json` (`name` labels errors: a file
+    /// name, or what the text came from), with the same validation.
+    ///
+    /// # Errors
+    /// As [`TrackFile::load`].
+    pub fn from_json(text: &str, name: &str) -> Result<Self, RobotError> {
+        let path = Path::new(name);
+        let json = |source| RobotError::Json { path: path.to_path_buf(), source };
+        if text.len() as u64 > MAX_FILE_BYTES {
+            return Err(RobotError::Config {
+                file: path.to_path_buf(),
+                message: format!("larger than {} MiB: not a track file maobi writes", MAX_FILE_BYTES >> 20),
+            });
+        }
+        let t: TrackFile = serde_json::from_str(text).map_err(json)?;
+        t.brush.validate(name)?;
+        let chars: SheetChars = serde_json::from_str(text).map_err(json)?;
+        t.checked(chars, path)
+    }
+
+    /// A sheet's character boundaries, checked against what they index: `stroke_chars` (the
+    /// ink reload rule's) against the strokes and the sheet's `chars`.
+    fn checked(self, chars: SheetChars, path: &Path) -> Result<Self, RobotError> {
+        self.check_stroke_chars(chars.chars.as_deref()).map_err(|message| RobotError::Config {
             file: path.to_path_buf(),
             message: format!("field `stroke_chars`: {message}"),
         })?;
-        Ok(t)
+        Ok(self)
     }
 
     /// `stroke_chars`, when there: one entry per stroke, the characters in writing order (each

@@ -26,6 +26,7 @@ A FRIDA-style loop::
 
 from __future__ import annotations
 
+import operator
 import threading
 from typing import Any, Optional, Tuple, Union
 
@@ -57,6 +58,8 @@ def _cpu_float(t: Any, name: str) -> "_torch.Tensor":
         raise ValueError(
             f"{name}: a tensor on {t.device}: maobi.torch runs on the CPU (no GPU path yet); move it with .cpu()"
         )
+    if t.layout != _torch.strided:
+        raise ValueError(f"{name}: a {t.layout} tensor (expected a dense one: .to_dense())")
     if not t.is_floating_point():
         raise ValueError(f"{name}: dtype {t.dtype} (expected a floating-point tensor)")
     return t
@@ -93,6 +96,8 @@ def generator(
     params = _cpu_float(params, "params")
     if params.dim() != 2 or params.shape[1] != 3:
         raise ValueError(f"params: shape {tuple(params.shape)} (expected (B, 3): h_mm, alpha_rad, beta_rad)")
+    if gen is not None and not isinstance(gen, _native.Generator):
+        raise TypeError(f"gen: expected a maobi.Generator, got {type(gen).__name__}")
     return _GeneratorFn.apply(params, gen if gen is not None else _committed_generator(), extrapolate)
 
 
@@ -138,7 +143,9 @@ def render_presses(
         raise ValueError(
             f"presses: shape {tuple(presses.shape)} (expected (N, 5): x_mm, y_mm, h_mm, alpha_rad, beta_rad)"
         )
-    return _RenderFn.apply(presses, box_mm, int(size_px), brush, float(edge_px), bool(extrapolate))
+    # An integer, as maobi.render_presses_soft takes it (64.9 is refused, not cut to 64).
+    size_px = operator.index(size_px)
+    return _RenderFn.apply(presses, box_mm, size_px, brush, float(edge_px), bool(extrapolate))
 
 
 __all__ = ["generator", "render_presses"]

@@ -648,18 +648,32 @@ impl UrRun<'_> {
         // Wait (bounded) for the program to stop and the arm to settle.
         let mut last = self.conn.state;
         let end = Instant::now() + Duration::from_secs(2);
+        // A pose reported after the stop: a lift is planned from nothing older (the arm may
+        // have moved on for a whole time-out since the last sample before it).
+        let mut fresh: Result<(), RobotError> = Err(RobotError::Timeout("no sample".into()));
         while Instant::now() < end {
             match self.sample() {
                 Ok(s) => {
+                    fresh = Ok(());
                     let still = distance_m(&s.pose, &last.pose) < 1e-5;
                     last = s;
                     if s.runtime_state == RUNTIME_STOPPED && still {
                         break;
                     }
                 }
-                Err(_) => break,
+                Err(e) => {
+                    fresh = Err(e);
+                    break;
+                }
             }
         }
+        let no_lift = no_lift.or_else(|| {
+            fresh.err().map(|e| {
+                format!(
+                    "no pose was reported after the stop ({e}): nothing sent, the brush may still touch the paper; check the arm"
+                )
+            })
+        });
         let lift = match no_lift {
             Some(why) => Err(why),
             None => self

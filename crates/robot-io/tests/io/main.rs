@@ -17,5 +17,6 @@ mod script_port;
 mod sim_server;
 mod timing;
 mod transports;
+mod ur_hostile;
 mod urscript_signatures;
 mod wire_golden;

@@ -49,6 +49,17 @@ pub struct UrFaults {
     pub program_stop_at_s: Option<f64>,
     /// From this time on the reported TCP pose is 20 mm off in +y from where the arm is.
     pub pose_offset_at_s: Option<f64>,
+    /// A hostile controller, from this time on: the reported TCP pose is NaN.
+    pub nan_pose_at_s: Option<f64>,
+    /// A hostile controller, from this time on: every RTDE data package is one byte short of
+    /// the recipe (the program keeps playing).
+    pub rtde_garbage_at_s: Option<f64>,
+    /// A hostile controller, from this time on: RTDE sends nothing more but keeps the
+    /// connection open (the program keeps playing).
+    pub rtde_silent_at_s: Option<f64>,
+    /// A hostile controller: RTDE closes its connections at this time (the program keeps
+    /// playing).
+    pub rtde_close_at_s: Option<f64>,
 }
 
 /// How the stand-in behaves.
@@ -158,6 +169,13 @@ impl Shared {
         self.origin.elapsed().as_secs_f64() * self.options.time_scale
     }
 
+    /// Whether a fault set `at` a program time is due (the first program started that long ago).
+    fn due(&self, at: Option<f64>) -> bool {
+        let Some(at) = at else { return false };
+        let first = self.lock().first_start;
+        first.is_some_and(|f| self.clock() - f >= at)
+    }
+
     /// Brings the state up to now: a program past its end or a fault's time is settled (its
     /// registers written, the arm at its last pose, the program stopped).
     fn advance(&self, st: &mut State) {
@@ -234,6 +252,11 @@ impl Shared {
             && clock_s - first >= at
         {
             pose.0[1] += 0.02;
+        }
+        if let (Some(at), Some(first)) = (self.options.faults.nan_pose_at_s, st.first_start)
+            && clock_s - first >= at
+        {
+            pose.0[0] = f64::NAN;
         }
         Snapshot {
             clock_s,
@@ -650,13 +673,20 @@ fn serve_rtde(mut stream: TcpStream, sh: &Shared, stop: &AtomicBool) {
         if dec.pending() > rtde::MAX_PACKAGE_BYTES {
             return;
         }
+        let f = sh.options.faults;
+        if sh.due(f.rtde_close_at_s) {
+            return;
+        }
         if started {
             let Some((names, types, hz)) = &recipe else { return };
-            if Instant::now() >= next {
+            if Instant::now() >= next && !sh.due(f.rtde_silent_at_s) {
                 let snap = sh.snapshot();
                 let mut p = vec![1u8];
                 for (n, t) in names.iter().zip(types) {
                     field(n, *t, &snap, sh).write(&mut p);
+                }
+                if sh.due(f.rtde_garbage_at_s) {
+                    p.pop();
                 }
                 if !reply(&mut stream, rtde::DATA_PACKAGE, &p) {
                     return;
