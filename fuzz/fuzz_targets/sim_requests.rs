@@ -6,7 +6,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use robot_io::Transport;
+use robot_io::wire::Transport;
 use robot_io::sim::{SimOptions, serve_bytes};
 
 fuzz_target!(|data: &[u8]| {
