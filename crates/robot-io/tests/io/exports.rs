@@ -4,10 +4,10 @@
 //! (a speed of 1e-300 as `0.000000`) refuses the export.
 
 use robot_io::{
-    DhParams, ExportTarget, GcodeStatement, InkStation, MAX_COMMENT_CHARS, Move, PointTimes, Program, ProgramTiming,
-    ReadMove, Reload, RobotConfig, RobotError, aubo_lua, build_program, comment_text, compact_program, gcode,
-    gcode_merge, point_times, read_gcode, read_lua, read_urscript, time_program, urscript, verify_gcode, verify_lua,
-    verify_urscript,
+    DhParams, ExportTarget as Target, GcodeStatement, InkStation, MAX_COMMENT_CHARS, Move, PointTimes, Program,
+    ProgramTiming, ReadMove, Reload, RobotConfig, RobotError, aubo_lua, build_program, comment_text, compact_program,
+    gcode, gcode_merge, point_times, read_gcode, read_lua, read_urscript, time_program, urscript, verify_gcode,
+    verify_lua, verify_urscript,
 };
 
 use crate::common::{paper, pen1, small_track};
@@ -43,34 +43,34 @@ fn times(cfg: &RobotConfig) -> PointTimes {
 }
 
 /// The three exports of the small track (with dips) under `title`.
-fn exports(title: &str) -> [(ExportTarget, String); 3] {
+fn exports(title: &str) -> [(Target, String); 3] {
     let cfg = inked();
     let p = program(&cfg);
     [
-        (ExportTarget::Lua, aubo_lua(&p, title).unwrap()),
-        (ExportTarget::UrScript, urscript(&p, &timing(&p, &cfg), &cfg, title).unwrap()),
-        (ExportTarget::Gcode, gcode(&small_track(), &times(&cfg), &cfg, title).unwrap().0),
+        (Target::Lua, aubo_lua(&p, title).unwrap()),
+        (Target::UrScript, urscript(&p, &timing(&p, &cfg), &cfg, title).unwrap()),
+        (Target::Gcode, gcode(&small_track(), &times(&cfg), &cfg, title).unwrap().0),
     ]
 }
 
 /// Statements of an export as read back: moves (arm) or G-code statements.
-fn statements(target: ExportTarget, text: &str) -> usize {
+fn statements(target: Target, text: &str) -> usize {
     match target {
-        ExportTarget::Lua => read_lua(text).unwrap().moves.len(),
-        ExportTarget::UrScript => read_urscript(text).unwrap().moves.len(),
-        ExportTarget::Gcode => read_gcode(text).unwrap().len(),
+        Target::Lua => read_lua(text).unwrap().moves.len(),
+        Target::UrScript => read_urscript(text).unwrap().moves.len(),
+        Target::Gcode => read_gcode(text).unwrap().len(),
     }
 }
 
-fn verify(target: ExportTarget, text: &str) -> Result<(), RobotError> {
+fn verify(target: Target, text: &str) -> Result<(), RobotError> {
     let cfg = inked();
     match target {
-        ExportTarget::Lua => verify_lua(text, &program(&cfg)),
-        ExportTarget::UrScript => {
+        Target::Lua => verify_lua(text, &program(&cfg)),
+        Target::UrScript => {
             let p = program(&cfg);
             verify_urscript(text, &p, &timing(&p, &cfg), &cfg)
         }
-        ExportTarget::Gcode => verify_gcode(text, &small_track(), None, &times(&cfg), &cfg),
+        Target::Gcode => verify_gcode(text, &small_track(), None, &times(&cfg), &cfg),
     }
 }
 
@@ -106,17 +106,17 @@ fn hostile_titles_stay_inside_the_first_comment() {
             assert_eq!(rest, base.split_once('\n').unwrap().1, "{what}");
             assert_eq!(statements(*target, text), statements(*target, base), "{what}");
             let marker = match target {
-                ExportTarget::Lua => "-- maobi writing program: ",
-                ExportTarget::UrScript => "# maobi writing program: ",
-                ExportTarget::Gcode => "; maobi writing program: ",
+                Target::Lua => "-- maobi writing program: ",
+                Target::UrScript => "# maobi writing program: ",
+                Target::Gcode => "; maobi writing program: ",
             };
             let kept = first.strip_prefix(marker).unwrap();
             assert_eq!(kept, comment_text(title, *target), "{what}");
             assert!(kept.chars().count() <= MAX_COMMENT_CHARS * 10 + 1, "{what}");
             let special: &[char] = match target {
-                ExportTarget::Lua => &['[', ']', '\'', '"'],
-                ExportTarget::UrScript => &['#', '\'', '"'],
-                ExportTarget::Gcode => &[';', '(', ')', '%'],
+                Target::Lua => &['[', ']', '\'', '"'],
+                Target::UrScript => &['#', '\'', '"'],
+                Target::Gcode => &[';', '(', ')', '%'],
             };
             assert!(!kept.contains(special), "{what}: {kept}");
             assert!(!text.contains(['\r', '\u{85}', '\u{2028}', '\u{2029}', '\u{0}', '\u{202e}']), "{what}");
@@ -202,58 +202,42 @@ fn tampered_exports_are_refused() {
     let lua_line = first_line(&lua, "  moveLine(");
     let ur_line = first_line(&ur, "  movel(");
     let g_line = first_line(&g, "G1 X");
-    let cases: Vec<(ExportTarget, String, &str)> = vec![
-        (ExportTarget::Gcode, insert_after(&g, "; maobi", "G1 Z-40.000000 F3000.000000\n"), "line 2"),
-        (ExportTarget::Gcode, insert_after(&g, "; maobi", "G1 Z-40\n"), "line 2: expected `G21`"),
-        (ExportTarget::Gcode, insert_after(&g, &g_line, "(G1 Z-40)\n"), "expected `G21`"),
-        (ExportTarget::Gcode, insert_after(&g, &g_line, &format!("{g_line}\n")), "does not match"),
-        (ExportTarget::Gcode, g.replacen(&g_line, &g_line.replace(" F", " F1"), 1), "F reads"),
-        (ExportTarget::Gcode, g.replacen("G21 ; millimetres", "G21 ; (millimetres)", 1), "not inert"),
-        (ExportTarget::Gcode, g.replacen("\n", "\r\n", 1), "U+000D"),
-        (ExportTarget::Gcode, format!("{g}G1 Z-40.000000 F1.000000\n"), "nothing after `M2`"),
-        (ExportTarget::Gcode, g.replace("M2\n", ""), "does not end with `M2`"),
-        (
-            ExportTarget::Lua,
-            insert_after(&lua, "  setSpeedFraction", "  os.execute(\"x\")\n"),
-            "line 10: expected a move",
-        ),
-        (ExportTarget::Lua, insert_after(&lua, "-- maobi", "--[[\n"), "line 2: a comment that is not inert"),
-        (ExportTarget::Lua, insert_after(&lua, &lua_line, "  --[[ x ]] os.exit()\n"), "expected a move"),
-        (ExportTarget::Lua, insert_after(&lua, &lua_line, &format!("{lua_line}\n")), "does not match"),
-        (
-            ExportTarget::Lua,
-            lua.replacen(", 0.020000, 0.000000, 0)", ", 0.000000, 0.000000, 0)", 1),
-            "the speed reads 0",
-        ),
-        (
-            ExportTarget::Lua,
-            lua.replacen("setSpeedFraction(1.000000)", "setSpeedFraction(0.000000)", 1),
-            "speed fraction",
-        ),
-        (ExportTarget::Lua, lua.replacen("0.048000", "0.148000", 1), "tool offset"),
-        (ExportTarget::Lua, format!("{lua}os.exit()\n"), "nothing after the final `end`"),
-        (ExportTarget::Lua, lua.replacen("  moveLine(", "  moveLine( ", 1), "expected a move"),
+    let cases: Vec<(Target, String, &str)> = vec![
+        (Target::Gcode, insert_after(&g, "; maobi", "G1 Z-40.000000 F3000.000000\n"), "line 2"),
+        (Target::Gcode, insert_after(&g, "; maobi", "G1 Z-40\n"), "line 2: expected `G21`"),
+        (Target::Gcode, insert_after(&g, &g_line, "(G1 Z-40)\n"), "expected `G21`"),
+        (Target::Gcode, insert_after(&g, &g_line, &format!("{g_line}\n")), "does not match"),
+        (Target::Gcode, g.replacen(&g_line, &g_line.replace(" F", " F1"), 1), "F reads"),
+        (Target::Gcode, g.replacen("G21 ; millimetres", "G21 ; (millimetres)", 1), "not inert"),
+        (Target::Gcode, g.replacen("\n", "\r\n", 1), "U+000D"),
+        (Target::Gcode, format!("{g}G1 Z-40.000000 F1.000000\n"), "nothing after `M2`"),
+        (Target::Gcode, g.replace("M2\n", ""), "does not end with `M2`"),
+        (Target::Lua, insert_after(&lua, "  setSpeedFraction", "  os.execute(\"x\")\n"), "line 10: expected a move"),
+        (Target::Lua, insert_after(&lua, "-- maobi", "--[[\n"), "line 2: a comment that is not inert"),
+        (Target::Lua, insert_after(&lua, &lua_line, "  --[[ x ]] os.exit()\n"), "expected a move"),
+        (Target::Lua, insert_after(&lua, &lua_line, &format!("{lua_line}\n")), "does not match"),
+        (Target::Lua, lua.replacen(", 0.020000, 0.000000, 0)", ", 0.000000, 0.000000, 0)", 1), "the speed reads 0"),
+        (Target::Lua, lua.replacen("setSpeedFraction(1.000000)", "setSpeedFraction(0.000000)", 1), "speed fraction"),
+        (Target::Lua, lua.replacen("0.048000", "0.148000", 1), "tool offset"),
+        (Target::Lua, format!("{lua}os.exit()\n"), "nothing after the final `end`"),
+        (Target::Lua, lua.replacen("  moveLine(", "  moveLine( ", 1), "expected a move"),
         // The progress counts the strokes finished, from 0.
         (
-            ExportTarget::Lua,
+            Target::Lua,
             lua.replacen("setInt32(\"maobi_strokes\", 1)", "setInt32(\"maobi_strokes\", 3)", 1),
             "progress register reads 3",
         ),
-        (
-            ExportTarget::Lua,
-            lua.replacen("setInt32(\"maobi_strokes\", 1)", "setInt32(\"maobi\", 1)", 1),
-            "expected a move",
-        ),
+        (Target::Lua, lua.replacen("setInt32(\"maobi_strokes\", 1)", "setInt32(\"maobi\", 1)", 1), "expected a move"),
         // AUBO's documented environment, exactly.
-        (ExportTarget::Lua, lua.replacen("select_robot(1)", "select_robot(2)", 1), "line 4: expected"),
-        (ExportTarget::Lua, lua.replacen("\n", "\r\n\r\n", 1), "U+000D"),
+        (Target::Lua, lua.replacen("select_robot(1)", "select_robot(2)", 1), "line 4: expected"),
+        (Target::Lua, lua.replacen("\n", "\r\n\r\n", 1), "U+000D"),
         (
-            ExportTarget::Lua,
+            Target::Lua,
             lua.replacen("(ret ~= nil and ret ~= 0) then error(", "(ret ~= nil and ret ~= 1) then error(", 1),
             "line 13: expected",
         ),
         (
-            ExportTarget::Lua,
+            Target::Lua,
             lua.replacen(
                 "    moveJoint(q, ",
                 "    moveJoint({0.000000, 0.000000, 0.000000, 0.000000, 0.000000, 0.000000}, ",
@@ -261,40 +245,32 @@ fn tampered_exports_are_refused() {
             ),
             "line 14",
         ),
-        (ExportTarget::Lua, lua.replacen("  do\n", "", 1), "line 11: expected a move"),
-        (ExportTarget::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
-        (
-            ExportTarget::UrScript,
-            insert_after(&ur, &ur_line, "  popup(\"x\")\n"),
-            "`popup` is not in the URScript subset",
-        ),
+        (Target::Lua, lua.replacen("  do\n", "", 1), "line 11: expected a move"),
+        (Target::UrScript, ur.replacen("  movej(p[", "  movel(p[", 1), "expected a move"),
+        (Target::UrScript, insert_after(&ur, &ur_line, "  popup(\"x\")\n"), "`popup` is not in the URScript subset"),
         // UR's order is `t` before `r`: the other way round is refused.
         (
-            ExportTarget::UrScript,
+            Target::UrScript,
             ur.replacen(&ur_line, &ur_line.replace(", t=0, r=", ", r=").replace(")", ", t=0)"), 1),
             "expected a move",
         ),
         // The progress register and its count are the plan's.
         (
-            ExportTarget::UrScript,
+            Target::UrScript,
             ur.replacen("write_output_integer_register(24, 1)", "write_output_integer_register(24, 2)", 1),
             "progress register reads 2",
         ),
         (
-            ExportTarget::UrScript,
+            Target::UrScript,
             ur.replacen("write_output_integer_register(24, 1)", "write_output_integer_register(23, 1)", 1),
             "expected a move",
         ),
-        (ExportTarget::UrScript, insert_after(&ur, &ur_line, &format!("{ur_line}\n")), "does not match"),
-        (
-            ExportTarget::UrScript,
-            ur.replacen(&ur_line, &ur_line.replace("r=0.000000", "r=0.100000"), 1),
-            "blend radius",
-        ),
-        (ExportTarget::UrScript, ur.replacen("movel(p[0.", "movel(p[1.", 1), "x reads"),
-        (ExportTarget::UrScript, insert_after(&ur, "def maobi_program", "  # x\u{2028}movel(p[0])\n"), "U+2028"),
-        (ExportTarget::UrScript, format!("{ur}maobi_program()\n"), "nothing after `end`"),
-        (ExportTarget::UrScript, ur.replace("def maobi_program():", "def other():"), "`def maobi_program():`"),
+        (Target::UrScript, insert_after(&ur, &ur_line, &format!("{ur_line}\n")), "does not match"),
+        (Target::UrScript, ur.replacen(&ur_line, &ur_line.replace("r=0.000000", "r=0.100000"), 1), "blend radius"),
+        (Target::UrScript, ur.replacen("movel(p[0.", "movel(p[1.", 1), "x reads"),
+        (Target::UrScript, insert_after(&ur, "def maobi_program", "  # x\u{2028}movel(p[0])\n"), "U+2028"),
+        (Target::UrScript, format!("{ur}maobi_program()\n"), "nothing after `end`"),
+        (Target::UrScript, ur.replace("def maobi_program():", "def other():"), "`def maobi_program():`"),
     ];
     for (target, text, needle) in cases {
         let e = verify(target, &text).expect_err(needle);
