@@ -13,10 +13,10 @@ fuzz_target!(|data: &[u8]| {
     std::fs::write(&pp, paper).unwrap();
     std::fs::write(&rp, robot).unwrap();
     std::fs::write(&tp, track).unwrap();
-    let frame = robot_io::frame::PaperFrame::load(&pp);
-    let cfg = robot_io::program::RobotConfig::load(&rp);
+    let frame = robot_io::PaperFrame::load(&pp);
+    let cfg = robot_io::RobotConfig::load(&rp);
     let tf = robot_io::TrackFile::load(&tp);
     if let (Ok(frame), Ok(cfg), Ok(tf)) = (frame, cfg, tf) {
-        let _ = robot_io::program::build_program(&tf.track(), &tf.brush, &frame, &cfg);
+        let _ = robot_io::build_program(&tf.track(), &tf.brush, &frame, &cfg);
     }
 });

@@ -6,8 +6,8 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use robot_io::Transport;
 use robot_io::sim::{SimOptions, serve_bytes};
+use robot_io::wire::Transport;
 
 fuzz_target!(|data: &[u8]| {
     let (pick, piece, stream) = match data {

@@ -2,9 +2,7 @@
 //! `maobi robot check --json` and `maobi robot export` build it.
 
 use pyo3::prelude::*;
-use robot_io::kinematics::DhParams;
-use robot_io::program::{Program, RobotConfig, build_program_chars};
-use robot_io::{ArmKinematics, PaperFile, PaperFrame, TrackFile};
+use robot_io::{ArmKinematics, DhParams, PaperFile, PaperFrame, Program, RobotConfig, TrackFile, build_program_chars};
 
 use crate::arrays::{input_path, json_to_py};
 use crate::errors::value_err;
@@ -58,11 +56,7 @@ fn track_arg(obj: &Bound<'_, PyAny>) -> PyResult<TrackFile> {
 }
 
 /// The checked program, as `maobi robot` builds it.
-fn program(
-    t: &TrackFile,
-    frame: &PaperFrame,
-    cfg: &RobotConfig,
-) -> PyResult<(Program, robot_io::program::CheckReport)> {
+fn program(t: &TrackFile, frame: &PaperFrame, cfg: &RobotConfig) -> PyResult<(Program, robot_io::CheckReport)> {
     build_program_chars(&t.track(), t.stroke_chars.as_deref(), &t.brush, frame, cfg)
         .map_err(|e| MaobiError::new_err(format!("the program fails the check: {}", crate::errors::chain(&e))))
 }
@@ -151,23 +145,20 @@ pub(crate) fn robot_export<'py>(
         let err = |e: robot_io::RobotError| MaobiError::new_err(format!("export: {}", crate::errors::chain(&e)));
         match format.as_str() {
             "aubo-lua" if by_moves => {
-                let compact = robot_io::program::compact_program(&program, &cfg);
-                robot_io::program::check_blends(&compact).map_err(err)?;
-                Ok((robot_io::export::aubo_lua(&compact, &title).map_err(err)?, Vec::new()))
+                let compact = robot_io::compact_program(&program, &cfg);
+                robot_io::check_blends(&compact).map_err(err)?;
+                Ok((robot_io::aubo_lua(&compact, &title).map_err(err)?, Vec::new()))
             }
-            "aubo-lua" => {
-                Ok((robot_io::export::aubo_lua_path_buffer(&program, &kin, &cfg, &title).map_err(err)?, Vec::new()))
-            }
+            "aubo-lua" => Ok((robot_io::aubo_lua_path_buffer(&program, &kin, &cfg, &title).map_err(err)?, Vec::new())),
             "urscript" => {
                 let timing = robot_io::time_program(&program, &kin, &cfg).map_err(err)?;
-                Ok((robot_io::export::urscript(&program, &timing, &cfg, &title).map_err(err)?, Vec::new()))
+                Ok((robot_io::urscript(&program, &timing, &cfg, &title).map_err(err)?, Vec::new()))
             }
             _ => {
                 let timing = robot_io::time_program(&program, &kin, &cfg).map_err(err)?;
-                let times = robot_io::export::point_times(&program, &timing).map_err(err)?;
+                let times = robot_io::point_times(&program, &timing).map_err(err)?;
                 let (g, warnings) =
-                    robot_io::export::gcode_chars(&t.track(), t.stroke_chars.as_deref(), &times, &cfg, &title)
-                        .map_err(err)?;
+                    robot_io::gcode_chars(&t.track(), t.stroke_chars.as_deref(), &times, &cfg, &title).map_err(err)?;
                 Ok((g, warnings.iter().map(|w| w.to_string()).collect::<Vec<String>>()))
             }
         }

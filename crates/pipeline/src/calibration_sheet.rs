@@ -15,7 +15,7 @@ use brush_model::{
     Brush, BrushProfile, Extrapolation, Footprint, ForwardModel, PointMm, Press, PressRanges, Range, Stroke, Track,
     TrackPoint,
 };
-use robot_io::program::{RobotConfig, build_program_chars};
+use robot_io::{RobotConfig, build_program_chars};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 use trajectory::CharBox;
@@ -316,7 +316,7 @@ pub fn calibration_sheet(
 /// `robot.json`, as `robot check` would: every press and move within the envelope.
 fn check_program(track: &SheetTrack, profile: &BrushProfile) -> Result<(), robot_io::RobotError> {
     let [w, h] = track.sheet_mm;
-    let frame = robot_io::exec::level_frame_in_front([w / 2.0, h / 2.0], [0.0, 0.0, w, h]);
+    let frame = robot_io::level_frame_in_front([w / 2.0, h / 2.0], [0.0, 0.0, w, h]);
     let t = Track { strokes: track.strokes.clone() };
     build_program_chars(&t, Some(&track.stroke_chars), profile, &frame, &RobotConfig::default())?;
     Ok(())

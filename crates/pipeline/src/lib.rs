@@ -7,6 +7,10 @@
 //! `maobi write` and `maobi evaluate`, `cargo xtask`'s gates and style tables, and the benches
 //! all call it.
 //!
+//! Each public item has one path, at the crate root; the values the pipeline was tuned with
+//! (analysis raster, char box search, sheet gaps, calibration sheet, registration marks, the
+//! closed loop's brush fit) are gathered in [`tuning`].
+//!
 //! # Examples
 //! ```
 //! use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
@@ -35,40 +39,32 @@ mod readback;
 mod sheet;
 mod sheet_file;
 mod text;
+pub mod tuning;
 mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
 pub use calibration_sheet::{
-    CALIBRATION_LAYOUT_VERSION, CELL_GAP_MM, CELL_GROWTH, CalibrationLayout, CalibrationPress, CalibrationSheet,
-    CalibrationSheetError, PRESS_ALPHA_LEVELS, PRESS_BETA_LEVELS, PRESS_H_LEVELS, PRESS_SLIDE_MM, PRESS_TOUCH_FRACTION,
+    CALIBRATION_LAYOUT_VERSION, CalibrationLayout, CalibrationPress, CalibrationSheet, CalibrationSheetError,
     calibration_sheet, calibration_sheet_image, press_stroke,
 };
 pub use closed_loop::{
-    BrushCorrection, CONTACT_CANDIDATES_MM, ClosedLoopError, FACTOR_RANGE, FIT_PX, LastAttempt, MIN_CORRECTION_GAIN,
-    Residual, SPREAD_RANGE_MM, TRAIL_CANDIDATES, carry_correction, choose_corrected_brush, fit_brush, ilc_target,
-    predict_attempt, refine_observed,
+    BrushCorrection, ClosedLoopError, LastAttempt, Residual, carry_correction, choose_corrected_brush, fit_brush,
+    ilc_target, predict_attempt, refine_observed,
 };
 pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
-pub use marks::{
-    MARK_CLEARANCE_MM, MARK_DEPTH_FRACTION, MARK_GAP_MM, MARK_MARGIN_MM, MARK_SPACING_MM, MARK_TRAVEL_MM, Mark,
-    MarkError, MarkRole, mark_strokes, registration_marks,
-};
+pub use marks::{Mark, MarkError, MarkRole, mark_strokes, registration_marks};
 pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
 pub use observation::{
     MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
     ObservedScores, ObservedSheet,
 };
-pub use placement::{
-    BoxRule, CHAR_BOX_SEARCH_PX, CHAR_BOX_SEARCH_SCALES, Placement, searched_placement, searched_splits, with_splits,
-    write_placed,
-};
-pub use prepare::{ANALYSIS_PX, Prepared, TemplateReport, prepare, prepare_with_template};
+pub use placement::{BoxRule, Placement, searched_placement, searched_splits, with_splits, write_placed};
+pub use prepare::{Prepared, TemplateReport, prepare, prepare_with_template};
 pub use readback::{ReadBackError, char_folder, fingerprint, read_bounded};
 pub use sheet::{
-    BRUSH_FIT_CLAMPED_SHARE, BRUSH_FIT_SIZE_FACTOR, BrushFit, BrushMiss, Flow, GAP_FRACTION, Grid, Layout,
-    MAX_SHEET_MM, Sheet, SheetChar, SheetError, SheetTrack, auto_layout, layout_on_sheet, parse_sheet, sheet_image,
-    sheet_image_of,
+    BrushFit, BrushMiss, Flow, Grid, Layout, MAX_SHEET_MM, Sheet, SheetChar, SheetError, SheetTrack, auto_layout,
+    layout_on_sheet, parse_sheet, sheet_image, sheet_image_of,
 };
 pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
 pub use text::{TextOptions, WrittenText, write_text, write_text_each};

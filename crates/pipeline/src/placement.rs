@@ -3,7 +3,7 @@
 
 use bezier_raster::Coverage;
 use brush_model::{BrushProfile, Extrapolation, Track};
-use robot_io::program::{RobotConfig, build_program};
+use robot_io::{RobotConfig, build_program};
 use trajectory::{CharBox, Sizing, StrokePath, TrackOptions, build_track, render_glyph};
 
 use crate::write::{level_frame_for, render_char};

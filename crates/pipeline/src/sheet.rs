@@ -159,7 +159,7 @@ const NAMED: &[(&str, f64, f64)] = &[
 pub fn parse_sheet(spec: &str) -> Result<Sheet, SheetError> {
     let s = spec.trim();
     if s.to_ascii_lowercase().ends_with(".json") || Path::new(s).is_file() {
-        let frame = robot_io::frame::PaperFrame::load(Path::new(s))
+        let frame = robot_io::PaperFrame::load(Path::new(s))
             .map_err(|source| SheetError::Paper { spec: s.to_string(), source })?;
         let b = frame.bounds_mm;
         return checked(Sheet { name: s.to_string(), width_mm: b[2] - b[0], height_mm: b[3] - b[1] }, spec);

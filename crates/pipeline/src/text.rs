@@ -27,7 +27,7 @@ pub struct TextOptions {
     /// are not affected.
     pub search_templates: bool,
     /// With an automatic layout (no `layout`), the margin it is widened to
-    /// ([`Layout::widened`]), mm: room for registration marks ([`crate::MARK_MARGIN_MM`]).
+    /// ([`Layout::widened`]), mm: room for registration marks ([`crate::tuning::MARK_MARGIN_MM`]).
     pub mark_margin_mm: Option<f64>,
 }
 

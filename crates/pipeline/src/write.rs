@@ -5,8 +5,7 @@ use std::time::Instant;
 
 use bezier_raster::{Coverage, ModelKind, Stamp, render_stamps, sweep_stamps, track_stamps};
 use brush_model::{BrushProfile, Extrapolation, PointMm, Track, TrackPoint};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program};
+use robot_io::{PaperFrame, RobotConfig, build_program};
 use serde::Serialize;
 use track_refine::{LossTerms, RefineOptions, Target};
 use trajectory::{CharBox, Glyph, Method, Sizing, TrackOptions, build_track, chamfer_pct, render_glyph};
@@ -240,10 +239,10 @@ pub struct CharResult {
 }
 
 /// The paper frame `maobi write` runs its program on: a level sheet
-/// ([`robot_io::exec::level_frame_in_front`]) with the char box's centre in front of the AUBO-i5
+/// ([`robot_io::level_frame_in_front`]) with the char box's centre in front of the AUBO-i5
 /// at base (0.45, 0.05, 0.05) m, usable one box size around the box.
 pub fn level_frame_for(b: &CharBox) -> PaperFrame {
-    robot_io::exec::level_frame_in_front(
+    robot_io::level_frame_in_front(
         [b.x0_mm + b.size_mm / 2.0, b.y0_mm + b.size_mm / 2.0],
         [b.x0_mm - b.size_mm, b.y0_mm - b.size_mm, b.x0_mm + 2.0 * b.size_mm, b.y0_mm + 2.0 * b.size_mm],
     )
@@ -268,7 +267,7 @@ pub fn execute_track(
 /// How a program is executed for an executed figure.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Execution {
-    /// [`robot_io::exec::execute_program`]: every move at its commanded speed, straight
+    /// [`robot_io::execute_program`]: every move at its commanded speed, straight
     /// between the points, no ramps and no blends (no controller moves so; kept to measure
     /// what the time law changes).
     Plain,
@@ -278,7 +277,7 @@ pub enum Execution {
     #[default]
     PathBuffer,
     /// As `robot send --motion moves` sends it: the program compacted
-    /// ([`robot_io::program::compact_program`]) and run with its blends rounded, on the time law.
+    /// ([`robot_io::compact_program`]) and run with its blends rounded, on the time law.
     Moves,
 }
 
@@ -321,23 +320,23 @@ pub fn execute_track_with(
     cfg: &RobotConfig,
     how: Execution,
 ) -> Result<Vec<TrackPoint>, robot_io::RobotError> {
-    use robot_io::kinematics::DhParams;
+    use robot_io::DhParams;
     use robot_io::sim::{SendMotion, execute_as_sent};
     let (program, _) = build_program(track, profile, frame, cfg)?;
     let trace = match how {
-        Execution::Plain => robot_io::exec::execute_program(&program),
+        Execution::Plain => robot_io::execute_program(&program),
         Execution::PathBuffer => {
             let timing = robot_io::time_program(&program, &DhParams::AUBO_I5, cfg)?;
             execute_as_sent(&program, &DhParams::AUBO_I5, SendMotion::PathBuffer(&timing))?
         }
         Execution::Moves => {
-            let compact = robot_io::program::compact_program(&program, cfg);
+            let compact = robot_io::compact_program(&program, cfg);
             execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?
         }
     };
     // Depths as executed: a press at the range's end read back a little outside it is the
     // forward model's to take (`brush_model::DEPTH_EDGE_TOLERANCE_MM`).
-    Ok(robot_io::exec::trace_to_states(&trace, frame))
+    Ok(robot_io::trace_to_states(&trace, frame))
 }
 
 /// Renders brush states (an executed path) through the forward model over a char box onto a

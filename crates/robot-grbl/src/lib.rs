@@ -1,6 +1,6 @@
 //! # robot-grbl
 //!
-//! Streams maobi's checked G-code (`robot_io::export::gcode_chars`) to a GRBL 1.1 brush
+//! Streams maobi's checked G-code (`robot_io::gcode_chars`) to a GRBL 1.1 brush
 //! plotter, live, over a serial device (USB serial, a pseudo-terminal) or TCP:
 //!
 //! 1. [`Grbl::connect`]: waits for the `Grbl 1.1…` banner (a soft reset if none comes), reads

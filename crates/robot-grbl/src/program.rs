@@ -3,8 +3,7 @@
 //! where it is in the file, which stroke it belongs to, where it moves to and how long it was
 //! planned to take.
 
-use robot_io::RobotError;
-use robot_io::export::parse::{GcodeStatement, read_gcode};
+use robot_io::{GcodeStatement, RobotError, read_gcode};
 use serde::Serialize;
 
 /// GRBL 1.1's line buffer (`LINE_BUFFER_SIZE`, 80 bytes with its terminator): a longer line
@@ -61,7 +60,7 @@ pub struct GcodeProgram {
 }
 
 impl GcodeProgram {
-    /// Reads G-code as `robot_io::export::gcode_chars` writes it (its grammar only: anything
+    /// Reads G-code as `robot_io::gcode_chars` writes it (its grammar only: anything
     /// else is refused naming the line), with `travel_mm_min` the speed its `G0` moves were
     /// planned at (`robot.json` `travel_speed_m_s` × 60 000).
     ///

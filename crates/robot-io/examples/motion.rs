@@ -6,11 +6,11 @@
 //! stroke's pressed points, and the share of samples more than 0.05 mm off).
 //!
 //! `cargo run -p robot-io --example motion -- TRACK.json PAPER.json`
-use robot_io::exec::{TraceEntry, execute_program};
-use robot_io::kinematics::DhParams;
-use robot_io::program::{Move, Program, RobotConfig, build_program_chars, compact_program};
 use robot_io::sim::{SendMotion, execute_as_sent_tagged};
-use robot_io::timing::pressed_path;
+use robot_io::{
+    DhParams, Move, Program, RobotConfig, TraceEntry, build_program_chars, compact_program, execute_program,
+    pressed_path,
+};
 
 fn distance_to_polyline(p: [f64; 3], line: &[[f64; 3]]) -> f64 {
     let v = |a: [f64; 3]| nalgebra::Vector3::from(a);
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: motion TRACK.json PAPER.json".into());
     };
     let tf = robot_io::TrackFile::load(std::path::Path::new(track))?;
-    let frame = robot_io::frame::PaperFrame::load(std::path::Path::new(paper))?;
+    let frame = robot_io::PaperFrame::load(std::path::Path::new(paper))?;
     let cfg = RobotConfig::default();
     let (program, _) = build_program_chars(&tf.track(), tf.stroke_chars.as_deref(), &tf.brush, &frame, &cfg)?;
     let kin = DhParams::AUBO_I5;

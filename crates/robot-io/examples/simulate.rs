@@ -7,9 +7,8 @@ use std::time::Duration;
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::aubo::{RunOptions, run_program};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program};
 use robot_io::sim::{Faults, Simulator};
+use robot_io::{PaperFrame, RobotConfig, build_program};
 
 fn main() {
     let pen1 = BrushProfile::builtin("pen1").expect("built-in");

@@ -1,8 +1,6 @@
 //! Prints the timing of each stroke of a track with the default `robot.json` and the nominal
 //! AUBO-i5: `cargo run -p robot-io --example timing -- TRACK.json PAPER.json`.
-use robot_io::kinematics::DhParams;
-use robot_io::program::{RobotConfig, build_program};
-use robot_io::timing::{pressed_path, time_stroke};
+use robot_io::{DhParams, RobotConfig, build_program, pressed_path, time_stroke};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -11,7 +9,7 @@ fn main() {
         std::process::exit(2);
     }
     let tf = robot_io::TrackFile::load(std::path::Path::new(&args[1])).unwrap();
-    let frame = robot_io::frame::PaperFrame::load(std::path::Path::new(&args[2])).unwrap();
+    let frame = robot_io::PaperFrame::load(std::path::Path::new(&args[2])).unwrap();
     let cfg = RobotConfig::default();
     let (program, _) = build_program(&tf.track(), &tf.brush, &frame, &cfg).unwrap();
     let mut seed = None;

@@ -66,7 +66,7 @@ pub const IN_FRONT_M: [f64; 3] = [0.45, 0.05, 0.05];
 ///
 /// # Examples
 /// ```
-/// use robot_io::{exec::IN_FRONT_M, level_frame_in_front};
+/// use robot_io::{IN_FRONT_M, level_frame_in_front};
 /// // An A4 sheet (210 × 297 mm) whose middle lies in front of the arm.
 /// let frame = level_frame_in_front([105.0, 148.5], [0.0, 0.0, 210.0, 297.0]);
 /// let [x_mm, y_mm, depth_mm] = frame.to_paper(IN_FRONT_M);

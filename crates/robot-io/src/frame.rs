@@ -10,7 +10,7 @@ use crate::RobotError;
 /// The largest `max_residual_mm` accepted, mm.
 pub const MAX_RESIDUAL_MM: f64 = 5.0;
 /// How far from the robot base a touched point may lie, m (an AUBO-i5 reaches 0.886 m).
-pub const MAX_REACH_M: f64 = 2.0;
+pub const MAX_TOUCH_REACH_M: f64 = 2.0;
 /// The smallest extent of the touched points on the paper, mm.
 pub const MIN_TOUCH_SPAN_MM: f64 = 20.0;
 /// The largest sheet side, mm (A0 is 1189 mm).
@@ -104,9 +104,9 @@ impl PaperFrame {
         }
         // Units: paper positions in mm, robot positions in m. A sheet touched within a few
         // millimetres, or a robot point metres from the base, is a unit mistake.
-        if let Some((i, t)) = tp.iter().enumerate().find(|(_, t)| Vector3::from(t.robot_m).norm() > MAX_REACH_M) {
+        if let Some((i, t)) = tp.iter().enumerate().find(|(_, t)| Vector3::from(t.robot_m).norm() > MAX_TOUCH_REACH_M) {
             return Err(bad(format!(
-                "touch_points[{i}].robot_m = {:?} lies {:.3} m from the robot base, beyond {MAX_REACH_M} m: robot_m is in metres",
+                "touch_points[{i}].robot_m = {:?} lies {:.3} m from the robot base, beyond {MAX_TOUCH_REACH_M} m: robot_m is in metres",
                 t.robot_m,
                 Vector3::from(t.robot_m).norm()
             )));

@@ -243,12 +243,12 @@ pub const READY_JOINTS: [f64; 6] = [0.0, -0.2618, 1.7453, 0.4363, FRAC_PI_2, 0.0
 pub const UR_HOME_JOINTS: [f64; 6] = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
 
 /// [`DhParams::forward`] with the i5's nominal parameters.
-pub fn forward(q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
+pub(crate) fn forward(q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
     DhParams::AUBO_I5.forward(q, tcp)
 }
 
 /// [`DhParams::inverse`] with the i5's nominal parameters.
-pub fn inverse(target: &Pose, tcp: &Isometry3<f64>, seed: Option<&[f64; 6]>) -> Option<[f64; 6]> {
+pub(crate) fn inverse(target: &Pose, tcp: &Isometry3<f64>, seed: Option<&[f64; 6]>) -> Option<[f64; 6]> {
     DhParams::AUBO_I5.inverse(target, tcp, seed)
 }
 
@@ -264,6 +264,7 @@ mod tests {
 
     /// Forward kinematics as the links are written out: each link's four transforms built and
     /// multiplied in order.
+    #[allow(clippy::needless_range_loop)] // `i` indexes the joint and the four DH arrays alike
     fn forward_by_the_links(dh: &DhParams, q: &[f64; 6], tcp: &Isometry3<f64>) -> Isometry3<f64> {
         let mut t = Isometry3::identity();
         for (i, qi) in q.iter().enumerate() {

@@ -2,13 +2,21 @@
 //!
 //! From a maobi brush track to a robot arm, safely. No image or ML dependencies.
 //!
-//! * [`frame`]: the paper's pose in the robot base frame, fitted (Kabsch, SVD) from three or
-//!   more touched points (`paper.json`), with its residual; collinear points are refused.
-//! * [`pose`]: a track point `(H, α, x, y, β)` → the TCP pose `[x, y, z, rx, ry, rz]` (m, rad,
-//!   `R = Rz·Ry·Rx`): the brush tip `H` into the paper, tilted by α towards β.
-//! * [`kinematics`]: AUBO-i5 forward kinematics (modified DH) and a numerical inverse.
-//! * [`program`]: `robot.json`, the writing program (travel, descend, press, lift, optional
-//!   dipping) and the safety envelope checked before anything moves.
+//! Every item has one path. The crate's own items are at the root; the controller families and
+//! the pieces whose names only read right qualified are public modules, with their items only
+//! there: [`aubo`], [`ur`] (with [`ur::rtde`]), [`sim`] and [`wire`].
+//!
+//! * The paper frame: [`PaperFrame`], the paper's pose in the robot base frame, fitted (Kabsch,
+//!   SVD) from three or more touched points ([`PaperFile`], `paper.json`), with its residual;
+//!   collinear points are refused.
+//! * The pose: [`brush_pose`] turns a track point `(H, α, x, y, β)` into the TCP [`Pose`]
+//!   `[x, y, z, rx, ry, rz]` (m, rad, `R = Rz·Ry·Rx`): the brush tip `H` into the paper, tilted
+//!   by α towards β.
+//! * Kinematics: [`DhParams`] (AUBO-i5 and UR5e, modified DH) and its [`Chain`], forward
+//!   kinematics and a numerical inverse.
+//! * The program: [`RobotConfig`] (`robot.json`), [`build_program`] → [`Program`], the writing
+//!   program (travel, descend, press, lift, optional dipping), and the safety envelope checked
+//!   before anything moves ([`CheckReport`]); [`time_program`] times it ([`ProgramTiming`]).
 //! * [`Controller`]: the seam `maobi robot send` drives: prepare a checked program in a
 //!   controller's form, connect and check before anything moves, run it with progress and a safe
 //!   stop. Each controller lives in its own module.
@@ -17,16 +25,18 @@
 //!   [`aubo::AuboRpc`] controller.
 //! * [`ur`]: Universal Robots e-Series arms driven live: URScript on the script port, RTDE for
 //!   progress and state, the dashboard server to stop ([`ur::UrArm`]).
-//! * [`export`]: ARCS Lua script, URScript, G-code.
-//! * [`exec`]: the pure motion executor (no sockets): a program executed as the controller
-//!   would move, sampled in time, tagged by stroke and ink dip, and turned back into brush
-//!   states on the paper; the level sheet in front of the arm.
-//! * [`sim`]: a loopback TCP simulator of the controller for tests and dry runs.
-//! * [`wire`]: the controller's wire formats (the SDK's frames, JSON text and login; lines;
+//! * Exports: [`aubo_lua`] (ARCS Lua script), [`urscript`], [`gcode`], each read back by its
+//!   parser ([`read_lua`], [`read_urscript`], [`read_gcode`]) before it is returned.
+//! * The pure motion executor (no sockets): [`execute_program`] executes a program as the
+//!   controller would move, sampled in time, tagged by stroke and ink dip
+//!   ([`execute_program_tagged`]), and [`trace_to_states`] turns it back into brush states on the
+//!   paper; [`level_frame_in_front`] is the level sheet in front of the arm.
+//! * [`sim`]: loopback TCP simulators of the controllers for tests and dry runs.
+//! * [`wire`]: the AUBO controller's wire formats (the SDK's frames, JSON text and login; lines;
 //!   JSON-RPC over HTTP), the transports and the controller's ports.
 //!
 //! ```
-//! use robot_io::{frame::PaperFrame, pose::{brush_pose, Pose}};
+//! use robot_io::{PaperFrame, brush_pose};
 //! use brush_model::TrackPoint;
 //! let paper = PaperFrame::level([0.4, 0.1, 0.02], [200.0, 200.0]);
 //! let p = TrackPoint { x_mm: 50.0, y_mm: 20.0, h_mm: 15.0, alpha_rad: 0.0, beta_rad: 0.0 };
@@ -50,34 +60,54 @@ struct ReadmeDoctests;
 pub mod aubo;
 mod config;
 mod controller;
-pub mod exec;
-pub mod export;
+mod exec;
+mod export;
 mod follow;
-pub mod frame;
-pub mod kinematics;
-pub mod pose;
-pub mod program;
+mod frame;
+mod kinematics;
+mod pose;
+mod program;
 pub mod sim;
-pub mod timing;
+mod timing;
 pub mod ur;
 pub mod wire;
 
-pub use config::SettingError;
+pub use config::{
+    Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
+    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_INTERVAL_S,
+    MAX_LIFT_MM, MAX_PAYLOAD_KG, MAX_STEP_LIMIT_MM, MIN_ACC, MIN_INTERVAL_S, MIN_JOINT_SPEED_RAD_S,
+    MIN_LINEAR_SPEED_M_S, MIN_SPEED_FRACTION, PlotterConfig, Reload, RobotConfig, SettingError, Timing, YAxis,
+    dip_plan, pressed_mm,
+};
 pub use controller::{Controller, Plan, Position, Preflight, Prepared, Progress, RunSummary, Watch, expected_seconds};
 pub use exec::{
-    TaggedEntry, TraceEntry, TraceKind, execute_program, execute_program_tagged, level_frame_in_front, trace_to_states,
+    HOME_JOINTS, IN_FRONT_M, MAX_SAMPLES_PER_MOVE, TRACE_STEP_M, TRACE_STEP_RAD, TRACE_STEP_S, TaggedEntry, TraceEntry,
+    TraceKind, execute_program, execute_program_tagged, joint_motion, level_frame_in_front, line_motion,
+    trace_to_states,
 };
-pub use export::{ArmKinematics, aubo_lua, aubo_lua_path_buffer, gcode, gcode_chars, urscript};
+pub use export::{
+    ArmKinematics, ExportTarget, GCODE_MERGE_TOLERANCE_MM, GcodeStatement, KINEMATICS_TOLERANCE, MAX_COMMENT_CHARS,
+    PROGRESS_VARIABLE, PointTimes, ReadMove, ReadPathBuffer, ReadProgram, URSCRIPT_FUNCTIONS, URSCRIPT_PROGRAM,
+    URSCRIPT_PROGRESS_REGISTER, aubo_lua, aubo_lua_path_buffer, comment_text, gcode, gcode_chars, gcode_merge,
+    point_times, read_gcode, read_lua, read_urscript, urscript, verify_gcode, verify_lua, verify_lua_path_buffer,
+    verify_urscript,
+};
 pub use follow::{MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M};
-pub use frame::{PaperFile, PaperFrame, TouchPoint};
-pub use pose::{Pose, brush_pose};
-pub use program::{
-    Approach, CheckReport, DipStation, InkStation, Limits, Move, Program, Reload, RobotConfig, StrokeProgram,
-    build_program, build_program_chars,
+pub use frame::{
+    MAX_RESIDUAL_MM, MAX_SHEET_MM, MAX_TOUCH_REACH_M, MIN_TOUCH_SPAN_MM, PaperFile, PaperFrame, TouchPoint,
 };
-pub use sim::{Faults, Listen, SimOptions, Simulator};
-pub use timing::{ProgramTiming, TimedStroke, time_program};
-pub use wire::Transport;
+pub use kinematics::{Chain, DhParams, JOINT_LIMIT_RAD, READY_JOINTS, UR_HOME_JOINTS};
+pub use pose::{Pose, brush_pose, brush_rotation_in_paper, lifted_pose};
+pub use program::{
+    COMPACT_TOLERANCE_M, COMPACT_TOLERANCE_RAD, CheckReport, IN_PLACE_MM, MIN_DEEPEST_PRESS_FRACTION,
+    MIN_TRACK_EXTENT_MM, Move, Program, StrokeProgram, build_program, build_program_chars, check_approach,
+    check_blends, compact_program, tcp_iso,
+};
+pub use timing::{
+    BRANCH_STEP_RAD, MAX_PIECE_M, MAX_STROKE_WAYPOINTS, MERGE_M, PATH_START_TOLERANCE_RAD, PATH_TOLERANCE_M,
+    PATH_TOLERANCE_RAD, ProgramTiming, TURN_LENGTH_M, TimedStroke, pressed_path, time_program, time_program_from,
+    time_stroke,
+};
 
 use std::path::{Path, PathBuf};
 

@@ -1,17 +1,15 @@
 //! The writing program: per stroke travel, descend, press along, lift; and the safety
 //! envelope checked before anything moves. The configuration it is built from (`robot.json`)
-//! is in the crate's `config` module, re-exported here.
+//! is in the crate's `config` module.
 
 use brush_model::{BrushProfile, Track, TrackPoint};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::RobotError;
-pub use crate::config::{
+pub(crate) use crate::config::{
     Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
-    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, DipStation, InkStation, Limits, MAX_DWELL_S, MAX_INTERVAL_S,
-    MAX_LIFT_MM, MAX_PAYLOAD_KG, MAX_STEP_LIMIT_MM, MIN_ACC, MIN_INTERVAL_S, MIN_JOINT_SPEED_RAD_S,
-    MIN_LINEAR_SPEED_M_S, MIN_SPEED_FRACTION, PlotterConfig, Reload, RobotConfig, Timing, YAxis, dip_plan, pressed_mm,
+    CONTROLLER_MAX_TCP_OFFSET_M, DWELL_SINK_MM, InkStation, Limits, RobotConfig, dip_plan,
 };
 use crate::frame::PaperFrame;
 use crate::kinematics;
@@ -741,7 +739,7 @@ const COMPACT_MAX_SPAN: usize = 2000;
 /// # Examples
 /// ```
 /// # use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// # use robot_io::{exec::level_frame_in_front, program::{RobotConfig, build_program, check_blends, compact_program}};
+/// # use robot_io::{level_frame_in_front, RobotConfig, build_program, check_blends, compact_program};
 /// let profile = BrushProfile::builtin("pen1").unwrap();
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let track = Track { strokes: vec![Stroke { points: (0..200).map(|i| pt(30.0 + 0.15 * f64::from(i))).collect() }] };

@@ -132,8 +132,8 @@ pub fn pressed_path(st: &StrokeProgram) -> Vec<Pose> {
 /// # Examples
 /// ```
 /// # use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// # use robot_io::{exec::level_frame_in_front, kinematics::DhParams, program::{RobotConfig, build_program}};
-/// # use robot_io::timing::time_program;
+/// # use robot_io::{level_frame_in_front, DhParams, RobotConfig, build_program};
+/// # use robot_io::time_program;
 /// let profile = BrushProfile::builtin("pen1").unwrap();
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let track = Track { strokes: vec![Stroke { points: (0..40).map(|i| pt(30.0 + f64::from(i))).collect() }] };

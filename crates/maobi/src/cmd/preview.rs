@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, Track, TrackPoint};
 use pipeline::{Grid, SheetTrack, parse_sheet};
-use robot_io::TrackFile;
-use robot_io::exec::{TaggedEntry, TraceEntry, level_frame_in_front, trace_to_states};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program_chars};
+use robot_io::{
+    PaperFrame, RobotConfig, TaggedEntry, TraceEntry, TrackFile, build_program_chars, level_frame_in_front,
+    trace_to_states,
+};
 use serde_json::{Value, json};
 
 use crate::common::{check_output_file, write_atomic};
@@ -203,7 +203,7 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     // beyond a limit is a refusal like the check's.
     let built =
         build_program_chars(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg).and_then(|(p, r)| {
-            let kin = robot_io::kinematics::DhParams::AUBO_I5;
+            let kin = robot_io::DhParams::AUBO_I5;
             let timing = robot_io::time_program(&p, &kin, cfg)?;
             let motion = robot_io::sim::SendMotion::PathBuffer(&timing);
             let tagged = robot_io::sim::execute_as_sent_tagged(&p, &kin, motion)?;

@@ -6,13 +6,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use robot_io::Transport;
 use robot_io::aubo::{AuboRpc, Link, Motion};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program_chars};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
+use robot_io::wire::Transport;
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
-use robot_io::{Controller, Plan, Progress, RobotError, TrackFile, Watch};
+use robot_io::{
+    Controller, PaperFrame, Plan, Progress, RobotConfig, RobotError, TrackFile, Watch, build_program_chars,
+};
 
 use crate::common::{PROGRESS_QUIET_S, check_output_file, clock, print_json, progress, write_atomic};
 
@@ -419,7 +419,7 @@ fn plotter_frame(t: &TrackFile) -> PaperFrame {
             if b[0] > b[2] { [0.0, 0.0, 1.0, 1.0] } else { [b[0] - 10.0, b[1] - 10.0, b[2] + 10.0, b[3] + 10.0] }
         }
     };
-    robot_io::exec::level_frame_in_front([(x0 + x1) / 2.0, (y0 + y1) / 2.0], [x0, y0, x1, y1])
+    robot_io::level_frame_in_front([(x0 + x1) / 2.0, (y0 + y1) / 2.0], [x0, y0, x1, y1])
 }
 
 fn title(t: &TrackFile) -> String {
@@ -432,7 +432,7 @@ fn check(a: CheckArgs) -> Result<()> {
         build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
     // Timed with the nominal AUBO-i5 (the simulator's arm); `send` times again with the
     // controller's own parameters before anything moves.
-    let timing = robot_io::time_program(&program, &robot_io::kinematics::DhParams::AUBO_I5, &l.cfg)?;
+    let timing = robot_io::time_program(&program, &robot_io::DhParams::AUBO_I5, &l.cfg)?;
     if a.json {
         let mut v = serde_json::to_value(&report)?;
         v["timing"] = serde_json::to_value(&timing)?;
@@ -483,7 +483,7 @@ fn export(a: ExportArgs) -> Result<()> {
     }
     let l = load(&a.program, a.format == "gcode")?;
     let arm = match &a.kinematics {
-        Some(p) => Some(robot_io::export::ArmKinematics::load(p)?),
+        Some(p) => Some(robot_io::ArmKinematics::load(p)?),
         None => None,
     };
     let track = l.track.track();
@@ -498,31 +498,31 @@ fn export(a: ExportArgs) -> Result<()> {
     }
     // URScript and G-code take only speeds from the timing (no joint is exported), so the
     // nominal arm serves when no other is given.
-    let kin = arm.as_ref().map_or(robot_io::kinematics::DhParams::AUBO_I5, |k| k.kinematics);
+    let kin = arm.as_ref().map_or(robot_io::DhParams::AUBO_I5, |k| k.kinematics);
     let t = title(&l.track);
     let (text, what) = match a.format.as_str() {
         "aubo-lua" if by_moves => {
-            let compact = robot_io::program::compact_program(&program, &l.cfg);
-            robot_io::program::check_blends(&compact)?;
-            let text = robot_io::export::aubo_lua(&compact, &t)?;
+            let compact = robot_io::compact_program(&program, &l.cfg);
+            robot_io::check_blends(&compact)?;
+            let text = robot_io::aubo_lua(&compact, &t)?;
             (text, format!("{} moves", compact.move_count()))
         }
         "aubo-lua" => {
-            let text = robot_io::export::aubo_lua_path_buffer(&program, &kin, &l.cfg, &t)?;
+            let text = robot_io::aubo_lua_path_buffer(&program, &kin, &l.cfg, &t)?;
             let buffers = text.matches("movePathBuffer(name)").count();
             let calls = text.lines().filter(|l| l.trim_start().starts_with("move")).count();
             (text, format!("{buffers} path buffers, {calls} motion calls"))
         }
         "urscript" => {
             let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
-            let text = robot_io::export::urscript(&program, &timing, &l.cfg, &t)?;
+            let text = robot_io::urscript(&program, &timing, &l.cfg, &t)?;
             let moves = text.lines().filter(|l| l.starts_with("  move")).count();
             (text, format!("{moves} moves"))
         }
         _ => {
             let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
-            let times = robot_io::export::point_times(&program, &timing)?;
-            let (g, warnings) = robot_io::export::gcode_chars(&track, chars, &times, &l.cfg, &t)?;
+            let times = robot_io::point_times(&program, &timing)?;
+            let (g, warnings) = robot_io::gcode_chars(&track, chars, &times, &l.cfg, &t)?;
             for w in warnings {
                 eprintln!("warning: {w}");
             }
@@ -567,7 +567,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
     };
     let params =
         client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
-    let arm = robot_io::export::ArmKinematics {
+    let arm = robot_io::ArmKinematics {
         robot: robot.clone(),
         source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.rpc_transport()),
         real: true,
@@ -734,7 +734,7 @@ fn sim(a: SimArgs) -> Result<()> {
             listen.push(Listen { bind: format!("127.0.0.1:{p}"), transports: vec![t] });
         }
     }
-    let arm = a.kinematics.as_deref().map(robot_io::export::ArmKinematics::load).transpose()?;
+    let arm = a.kinematics.as_deref().map(robot_io::ArmKinematics::load).transpose()?;
     let options = SimOptions {
         faults,
         user: a.user.clone(),
@@ -744,7 +744,7 @@ fn sim(a: SimArgs) -> Result<()> {
         trace_path: a.trace.clone(),
         trace_max_bytes: a.trace_max_mib << 20,
         kinematics_param: !a.no_kinematics_param,
-        kinematics: arm.as_ref().map_or(robot_io::kinematics::DhParams::AUBO_I5, |k| k.kinematics),
+        kinematics: arm.as_ref().map_or(robot_io::DhParams::AUBO_I5, |k| k.kinematics),
         ..SimOptions::default()
     };
     // The trace file is created before anything listens: a folder or an unwritable path fails now.
@@ -869,7 +869,7 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
 /// Reads a simulator trace: JSON lines (one sample per line, as `robot sim --trace` writes), or
 /// one JSON array. A last line cut short (the simulator stopped mid-write, or its disk filled)
 /// is skipped with a warning on stderr; a bad line before it is an error.
-fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::exec::TraceEntry>> {
+fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::TraceEntry>> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path).with_context(|| format!("{name}: cannot read"))?;
     // A cut can split a UTF-8 character: the text is read up to what decodes.
@@ -928,7 +928,7 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = read_trace(&a.trace)?;
-    let states = robot_io::exec::trace_to_states(&trace, &frame);
+    let states = robot_io::trace_to_states(&trace, &frame);
     let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
     let img = pipeline::render_states(

@@ -376,7 +376,7 @@ pub fn run(args: Args) -> Result<()> {
         per_line: args.per_line.unwrap_or(4),
         flow,
         search_templates: args.placement.search(),
-        mark_margin_mm: (args.marks && sheet.is_none()).then_some(pipeline::MARK_MARGIN_MM),
+        mark_margin_mm: (args.marks && sheet.is_none()).then_some(pipeline::tuning::MARK_MARGIN_MM),
     };
     let pb = progress(chars.len() as u64, "write");
     let kept = observed.as_ref().map(|_| prepared.clone());
@@ -504,7 +504,7 @@ pub fn run(args: Args) -> Result<()> {
                 hairs_text(&profile.hairs),
                 c.not_taken.map_or(0.0, |v| 100.0 * (1.0 - v[3] / c.ink_error_before)),
                 c.ink_error_before,
-                100.0 * pipeline::MIN_CORRECTION_GAIN,
+                100.0 * pipeline::tuning::MIN_CORRECTION_GAIN,
                 args.output.join("brush.json").display(),
                 if refine.is_some() {
                     "; tracks refined against the glyph shifted by the observed residual (ILC)"

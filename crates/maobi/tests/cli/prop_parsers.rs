@@ -265,11 +265,11 @@ mod robot_files {
             let track = serde_json::json!({"char": "永", "brush": pen1_json(), "strokes": [{"points": pts}]});
             std::fs::write(&tp, track.to_string()).unwrap();
             let t0 = Instant::now();
-            let frame = robot_io::frame::PaperFrame::load(&pp);
-            let cfg = robot_io::program::RobotConfig::load(&rp);
+            let frame = robot_io::PaperFrame::load(&pp);
+            let cfg = robot_io::RobotConfig::load(&rp);
             let tf = robot_io::TrackFile::load(&tp);
             if let (Ok(frame), Ok(cfg), Ok(tf)) = (frame, cfg, tf) {
-                let _ = robot_io::program::build_program(&tf.track(), &tf.brush, &frame, &cfg);
+                let _ = robot_io::build_program(&tf.track(), &tf.brush, &frame, &cfg);
             }
             prop_assert!(t0.elapsed() < Duration::from_secs(10), "took {:?}", t0.elapsed());
         }

@@ -158,7 +158,7 @@ fn template_placement_is_searched_unless_asked_not_to() {
     // The searched box is one of the tried multiples of the automatic one.
     let scale = mm / auto_mm;
     assert!(
-        pipeline::CHAR_BOX_SEARCH_SCALES.iter().any(|s| (s - scale).abs() < 1e-9),
+        pipeline::tuning::CHAR_BOX_SEARCH_SCALES.iter().any(|s| (s - scale).abs() < 1e-9),
         "searched {mm} mm is {scale}× the automatic {auto_mm} mm"
     );
     // Chosen by the plan at a coarser raster: never clearly worse than the automatic placement.

@@ -165,13 +165,13 @@ fn render_trace_reads_a_cut_trace_up_to_its_last_complete_line() {
         "char_box_mm": [20.0, 20.0, 80.0],
     });
     std::fs::write(&track, t.to_string()).unwrap();
-    let frame = robot_io::frame::PaperFrame::load(&paper()).unwrap();
-    let poses = [pt(30.0, -10.0), pt(30.0, 2.0), pt(90.0, 2.0), pt(90.0, -10.0)]
-        .map(|p| robot_io::pose::brush_pose(&frame, &p));
+    let frame = robot_io::PaperFrame::load(&paper()).unwrap();
+    let poses =
+        [pt(30.0, -10.0), pt(30.0, 2.0), pt(90.0, 2.0), pt(90.0, -10.0)].map(|p| robot_io::brush_pose(&frame, &p));
     let mut samples = vec![];
     for w in poses.windows(2) {
-        let t0 = samples.last().map_or(0.0, |s: &robot_io::exec::TraceEntry| s.t_s);
-        samples.extend(robot_io::exec::line_motion(&w[0], &w[1], 0.02, t0));
+        let t0 = samples.last().map_or(0.0, |s: &robot_io::TraceEntry| s.t_s);
+        samples.extend(robot_io::line_motion(&w[0], &w[1], 0.02, t0));
     }
     let full: String = samples.iter().map(|s| serde_json::to_string(s).unwrap() + "\n").collect();
     let n = samples.len();
@@ -315,13 +315,13 @@ fn the_official_sdk_client_drives_the_simulator() {
     assert_eq!(j["fk"][1], 0, "{j}");
     let fk: Vec<f64> = serde_json::from_value(j["fk"][0].clone()).unwrap();
     let want: Vec<f64> = serde_json::from_value(j["ik_target"].clone()).unwrap();
-    let (a, b) = (robot_io::pose::Pose(fk.try_into().unwrap()), robot_io::pose::Pose(want.try_into().unwrap()));
+    let (a, b) = (robot_io::Pose(fk.try_into().unwrap()), robot_io::Pose(want.try_into().unwrap()));
     let (a, b) = (a.to_iso(), b.to_iso());
     // Within the inverse's own tolerance (0.01 mm, 1e-4 rad: `kinematics::DhParams::inverse`).
     assert!((a.translation.vector - b.translation.vector).norm() < 1e-5, "{j}");
     assert!(a.rotation.angle_to(&b.rotation) < 1e-4, "{j}");
     assert_eq!(j["ik_far"][1], -10, "an unreachable pose: {j}");
-    let k = robot_io::kinematics::DhParams::AUBO_I5;
+    let k = robot_io::DhParams::AUBO_I5;
     for (name, want) in [("a", k.a_m), ("alpha", k.alpha_rad), ("d", k.d_m), ("theta", k.theta_rad)] {
         let got: Vec<f64> = serde_json::from_value(j["kinematics"][name].clone()).unwrap();
         assert_eq!(got, want, "{name}");
@@ -532,7 +532,7 @@ fn refused_distance_mm(e: &str) -> f64 {
 
 #[test]
 fn an_arm_whose_kinematics_differ_refuses_nominal_joints_and_follows_its_own() {
-    use robot_io::kinematics::DhParams;
+    use robot_io::DhParams;
     let dir = tempfile::tempdir().unwrap();
     let track = one_stroke_track(dir.path());
     let paper_json = paper();
@@ -542,12 +542,8 @@ fn an_arm_whose_kinematics_differ_refuses_nominal_joints_and_follows_its_own() {
     theirs.a_m[2] += 0.020;
     theirs.theta_rad[1] += 0.3f64.to_radians();
     let arm = dir.path().join("arm.json");
-    let file = robot_io::export::ArmKinematics {
-        robot: "rob1".into(),
-        source: "a test arm".into(),
-        real: true,
-        kinematics: theirs,
-    };
+    let file =
+        robot_io::ArmKinematics { robot: "rob1".into(), source: "a test arm".into(), real: true, kinematics: theirs };
     std::fs::write(&arm, serde_json::to_string_pretty(&file).unwrap()).unwrap();
     let (quiet, reporting) = (free_port(), free_port());
     let (quiet_trace, trace) = (dir.path().join("quiet.jsonl"), dir.path().join("trace.jsonl"));
@@ -582,19 +578,19 @@ fn an_arm_whose_kinematics_differ_refuses_nominal_joints_and_follows_its_own() {
     let read = dir.path().join("read.json");
     let p = reporting.to_string();
     ok(&maobi(&["robot", "kinematics", "--host", "127.0.0.1", "--port", &p, "-o", s(&read)]));
-    let got = robot_io::export::ArmKinematics::load(&read).unwrap();
+    let got = robot_io::ArmKinematics::load(&read).unwrap();
     assert_eq!(got.kinematics, theirs);
     // Sent on them (the default): written, and what the arm executed lies on the stroke (y 60
     // mm, depth 14 mm, x 30..90 mm) within the timing's path tolerance.
     let o = ok(&send(reporting, &[]));
     assert!(o.contains("1 of 1 strokes completed") && o.contains("on the controller's kinematics"), "{o}");
     let text = std::fs::read_to_string(&trace).unwrap();
-    let samples: Vec<robot_io::exec::TraceEntry> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    let pressed: Vec<_> = samples.into_iter().filter(|t| t.kind == robot_io::exec::TraceKind::PathBuffer).collect();
+    let samples: Vec<robot_io::TraceEntry> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let pressed: Vec<_> = samples.into_iter().filter(|t| t.kind == robot_io::TraceKind::PathBuffer).collect();
     assert!(pressed.len() > 100, "{} samples", pressed.len());
-    let frame = robot_io::frame::PaperFrame::load(&paper_json).unwrap();
-    let tol_mm = robot_io::timing::PATH_TOLERANCE_M * 1e3;
-    let states = robot_io::exec::trace_to_states(&pressed, &frame);
+    let frame = robot_io::PaperFrame::load(&paper_json).unwrap();
+    let tol_mm = robot_io::PATH_TOLERANCE_M * 1e3;
+    let states = robot_io::trace_to_states(&pressed, &frame);
     let worst = states.iter().map(|p| (p.y_mm - 60.0).abs().max((p.h_mm - 14.0).abs())).fold(0.0, f64::max);
     assert!(worst <= tol_mm, "{worst} mm off the stroke");
     let (x0, x1) = states.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.x_mm), b.max(p.x_mm)));
@@ -610,11 +606,11 @@ fn sim_refuses_a_kinematics_file_it_cannot_use_before_listening() {
     // The nominal parameters saved as if real would not be another arm; a length out of range
     // is named by its array and joint.
     let arm = dir.path().join("arm.json");
-    let mut file = robot_io::export::ArmKinematics {
+    let mut file = robot_io::ArmKinematics {
         robot: "rob1".into(),
         source: "a test arm".into(),
         real: false,
-        kinematics: robot_io::kinematics::DhParams::AUBO_I5,
+        kinematics: robot_io::DhParams::AUBO_I5,
     };
     std::fs::write(&arm, serde_json::to_string(&file).unwrap()).unwrap();
     fails(&sim(&arm), "`real` is false");

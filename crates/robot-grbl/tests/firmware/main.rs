@@ -11,9 +11,9 @@ use std::time::Duration;
 use harness::{Firmware, Inject, Machine, firmware, mpos, validate};
 use robot_grbl::{Endpoint, Fault, GcodeProgram, Grbl, GrblError, GrblPlotter, LinkOptions, RateFit, SerialLink};
 use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::export::point_times;
-use robot_io::kinematics::DhParams;
-use robot_io::{Controller, Plan, RobotConfig, Watch, build_program, level_frame_in_front, time_program};
+use robot_io::{
+    Controller, DhParams, Plan, RobotConfig, Watch, build_program, level_frame_in_front, point_times, time_program,
+};
 
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
@@ -56,7 +56,7 @@ fn export(track: &Track, cfg: &RobotConfig) -> String {
     let profile = BrushProfile::builtin("pen1").unwrap();
     let (program, _) = build_program(track, &profile, &frame, cfg).unwrap();
     let times = point_times(&program, &time_program(&program, &DhParams::AUBO_I5, cfg).unwrap()).unwrap();
-    robot_io::export::gcode(track, &times, cfg, "二").unwrap().0
+    robot_io::gcode(track, &times, cfg, "二").unwrap().0
 }
 
 fn link(m: &Machine) -> Box<SerialLink> {

@@ -58,7 +58,7 @@ pub struct RunOptions<'a> {
     /// The transport and credentials.
     pub link: Link,
     /// `Some(cfg)`: every pressed stroke goes to the controller as one path buffer of joint
-    /// waypoints, timed with `cfg` ([`crate::timing`]) on the controller's own kinematics
+    /// waypoints, timed with `cfg` ([`crate::time_program`]) on the controller's own kinematics
     /// (`getKinematicsParam`), checked before anything moves; `None`: a `moveLine` per point.
     pub path_buffer: Option<crate::program::RobotConfig>,
     /// Time the path buffers on maobi's nominal AUBO-i5 parameters

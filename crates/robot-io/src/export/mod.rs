@@ -13,12 +13,18 @@
 
 mod arm;
 mod lua;
-pub mod parse;
-pub mod text;
+mod parse;
+mod text;
 mod timed;
 
 pub use arm::ArmKinematics;
 pub use lua::{KINEMATICS_TOLERANCE, PROGRESS_VARIABLE};
+pub(crate) use parse::read_urscript_named;
+pub use parse::{
+    GcodeStatement, ReadMove, ReadPathBuffer, ReadProgram, URSCRIPT_FUNCTIONS, URSCRIPT_PROGRAM,
+    URSCRIPT_PROGRESS_REGISTER, read_gcode, read_lua, read_urscript,
+};
+pub use text::{ExportTarget, MAX_COMMENT_CHARS, comment_text};
 pub use timed::{PointTimes, point_times};
 
 use brush_model::Track;
@@ -30,8 +36,8 @@ use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{DWELL_SINK_MM, IN_PLACE_MM, Move, Program, RobotConfig, StrokeProgram, dip_plan};
 use crate::timing::{PATH_TOLERANCE_M, PATH_TOLERANCE_RAD, ProgramTiming, TimedStroke, pressed_path};
-use parse::{GcodeStatement, LUA_IK_ERROR, ReadMove, ReadProgram};
-use text::{LENGTH_FLOOR, Target, close, comment_text, num};
+use parse::LUA_IK_ERROR;
+use text::{LENGTH_FLOOR, close, num};
 
 /// Largest rotation, rad, between a URScript rotation vector read back and the checked pose's
 /// orientation (its components are printed within 1e-9 relative).
@@ -57,7 +63,7 @@ fn show(v: f64) -> String {
 }
 
 /// The refusal of an exported text that does not match what was checked.
-fn mismatch(target: Target, stroke: Option<usize>, line: Option<usize>, reason: String) -> RobotError {
+fn mismatch(target: ExportTarget, stroke: Option<usize>, line: Option<usize>, reason: String) -> RobotError {
     let at = line.map_or(String::new(), |l| format!(", line {l}"));
     RobotError::Unsafe {
         stroke,
@@ -182,7 +188,7 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
     let mut s = String::new();
     s.push_str(&format!(
         "-- maobi writing program: {}\n-- {what}. Generated; do not edit by hand.\n",
-        comment_text(title, Target::Lua),
+        comment_text(title, ExportTarget::Lua),
     ));
     let lines = |s: &mut String, v: Vec<String>| {
         for l in v {
@@ -257,7 +263,7 @@ fn lua_text(plan: &ArmPlan, title: &str, what: &str) -> String {
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// use robot_io::{RobotConfig, aubo_lua, build_program, export::verify_lua, level_frame_in_front};
+/// use robot_io::{RobotConfig, aubo_lua, build_program, verify_lua, level_frame_in_front};
 /// let profile = BrushProfile::builtin("pen1").unwrap();
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
@@ -276,7 +282,7 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
     let plan = moves_plan(program);
     let what = format!("{} strokes, {} moves", program.strokes.len(), program.move_count());
     let s = lua_text(&plan, title, &what);
-    compare_arm(Target::Lua, &parse::read_lua(&s)?, &plan)?;
+    compare_arm(ExportTarget::Lua, &parse::read_lua(&s)?, &plan)?;
     Ok(s)
 }
 
@@ -288,7 +294,7 @@ pub fn aubo_lua(program: &Program, title: &str) -> Result<String, RobotError> {
 /// [`RobotError::Unsafe`] naming the first line that is not in the exporter's grammar, or the
 /// first move (line, stroke, value) that differs from the program's.
 pub fn verify_lua(text: &str, program: &Program) -> Result<(), RobotError> {
-    compare_arm(Target::Lua, &parse::read_lua(text)?, &moves_plan(program))
+    compare_arm(ExportTarget::Lua, &parse::read_lua(text)?, &moves_plan(program))
 }
 
 /// The plan of a path-buffer Lua program: `program` timed on `kin` ([`crate::time_program`]),
@@ -352,8 +358,8 @@ fn path_buffer_plan(program: &Program, kin: &DhParams, cfg: &RobotConfig) -> Res
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// use robot_io::export::{aubo_lua_path_buffer, verify_lua_path_buffer};
-/// use robot_io::kinematics::DhParams;
+/// use robot_io::{aubo_lua_path_buffer, verify_lua_path_buffer};
+/// use robot_io::DhParams;
 /// use robot_io::{RobotConfig, build_program, level_frame_in_front};
 /// let profile = BrushProfile::builtin("pen1").unwrap();
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
@@ -382,7 +388,7 @@ pub fn aubo_lua_path_buffer(
     let moves = plan.steps().filter(|(_, w)| matches!(w, Want::Move(_))).count();
     let what = format!("{} strokes, {buffers} path buffers, {moves} moves", program.strokes.len());
     let s = lua_text(&plan, title, &what);
-    compare_arm(Target::Lua, &parse::read_lua(&s)?, &plan)?;
+    compare_arm(ExportTarget::Lua, &parse::read_lua(&s)?, &plan)?;
     Ok(s)
 }
 
@@ -398,7 +404,7 @@ pub fn verify_lua_path_buffer(
     kin: &DhParams,
     cfg: &RobotConfig,
 ) -> Result<(), RobotError> {
-    compare_arm(Target::Lua, &parse::read_lua(text)?, &path_buffer_plan(program, kin, cfg)?)
+    compare_arm(ExportTarget::Lua, &parse::read_lua(text)?, &path_buffer_plan(program, kin, cfg)?)
 }
 
 /// The tool speed of a URScript process move shorter than [`IN_PLACE_MM`] (one that only
@@ -468,8 +474,8 @@ fn urscript_plan(program: &Program, timing: &ProgramTiming, cfg: &RobotConfig) -
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// use robot_io::kinematics::DhParams;
-/// use robot_io::{RobotConfig, build_program, export::verify_urscript, level_frame_in_front, time_program, urscript};
+/// use robot_io::DhParams;
+/// use robot_io::{RobotConfig, build_program, verify_urscript, level_frame_in_front, time_program, urscript};
 /// let profile = BrushProfile::builtin("pen1").unwrap();
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
@@ -494,13 +500,13 @@ pub fn urscript(
 ) -> Result<String, RobotError> {
     let plan = urscript_plan(program, timing, cfg)?;
     let s = urscript_text(&plan, title, parse::URSCRIPT_PROGRAM);
-    compare_arm(Target::UrScript, &parse::read_urscript(&s)?, &plan)?;
+    compare_arm(ExportTarget::UrScript, &parse::read_urscript(&s)?, &plan)?;
     Ok(s)
 }
 
 /// The URScript text of a plan: `def <name>():`, the tool, the steps, `end`.
 fn urscript_text(plan: &ArmPlan, title: &str, name: &str) -> String {
-    let mut s = format!("# maobi writing program: {}\ndef {name}():\n", comment_text(title, Target::UrScript));
+    let mut s = format!("# maobi writing program: {}\ndef {name}():\n", comment_text(title, ExportTarget::UrScript));
     s.push_str(&format!("  set_tcp(p[0, 0, {}, 0, 0, 0])\n", len(plan.tcp_offset_m)));
     let pose_text = |pose: &Pose| format!("p[{}, {}]", lens(&pose.position()), lens(&pose.rotation_vector()));
     // UR's argument orders: movej(q, a, v, t, r), movel(pose, a, v, t, r), movep(pose, a, v, r);
@@ -556,8 +562,9 @@ pub(crate) fn urscript_lift(tcp_offset_m: f64, to: &Pose, a: f64, v: f64) -> Res
         entries: vec![Entry::Step(None, Want::Move(Move::Line { pose: *to, a, v, blend_m: 0.0 }))],
     };
     let s = urscript_text(&plan, "lift", "maobi_lift");
-    let read = parse::read_urscript_named(&s, "maobi_lift").map_err(|at| parse::refused(Target::UrScript, None, at))?;
-    compare_arm(Target::UrScript, &read, &plan)?;
+    let read =
+        parse::read_urscript_named(&s, "maobi_lift").map_err(|at| parse::refused(ExportTarget::UrScript, None, at))?;
+    compare_arm(ExportTarget::UrScript, &read, &plan)?;
     Ok(s)
 }
 
@@ -572,10 +579,10 @@ pub fn verify_urscript(
     timing: &ProgramTiming,
     cfg: &RobotConfig,
 ) -> Result<(), RobotError> {
-    compare_arm(Target::UrScript, &parse::read_urscript(text)?, &urscript_plan(program, timing, cfg)?)
+    compare_arm(ExportTarget::UrScript, &parse::read_urscript(text)?, &urscript_plan(program, timing, cfg)?)
 }
 
-fn compare_arm(target: Target, read: &ReadProgram, plan: &ArmPlan) -> Result<(), RobotError> {
+fn compare_arm(target: ExportTarget, read: &ReadProgram, plan: &ArmPlan) -> Result<(), RobotError> {
     if !close(read.tcp_offset_m, plan.tcp_offset_m, LENGTH_FLOOR) {
         return Err(mismatch(
             target,
@@ -644,7 +651,7 @@ fn same(what: &str, read: f64, want: f64, floor: f64) -> Result<(), String> {
 }
 
 fn compare_step(
-    target: Target,
+    target: ExportTarget,
     read: &ReadMove,
     want: &Want,
     program: &ReadProgram,
@@ -747,11 +754,11 @@ fn want_kind(m: &Want) -> &'static str {
 
 /// A pose read back (Lua: `[x, y, z, rx, ry, rz]`; URScript: position and rotation vector)
 /// against the checked pose.
-fn same_pose(target: Target, read: &[f64; 6], want: &Pose) -> Result<(), String> {
+fn same_pose(target: ExportTarget, read: &[f64; 6], want: &Pose) -> Result<(), String> {
     for (k, name) in ["x", "y", "z"].iter().enumerate() {
         same(name, read[k], want.0[k], LENGTH_FLOOR)?;
     }
-    if target == Target::UrScript {
+    if target == ExportTarget::UrScript {
         let r = UnitQuaternion::from_scaled_axis(Vector3::new(read[3], read[4], read[5]));
         let angle = r.angle_to(&want.to_iso().rotation);
         if !(angle <= ROTATION_TOL_RAD) {
@@ -789,8 +796,8 @@ const GCODE_MAX_SPAN: usize = 2000;
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// use robot_io::export::point_times;
-/// use robot_io::kinematics::DhParams;
+/// use robot_io::point_times;
+/// use robot_io::DhParams;
 /// use robot_io::{RobotConfig, build_program, gcode, level_frame_in_front, time_program};
 /// let pt = |x: f64| TrackPoint { x_mm: x, y_mm: 60.0, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let track = Track { strokes: vec![Stroke { points: (0..=50).map(|i| pt(30.0 + 0.4 * f64::from(i))).collect() }] };
@@ -827,7 +834,7 @@ pub fn gcode(
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{Stroke, Track, TrackPoint};
-/// use robot_io::export::PointTimes;
+/// use robot_io::PointTimes;
 /// use robot_io::{RobotConfig, gcode, gcode_chars};
 /// let pt = |x: f64, y: f64| TrackPoint { x_mm: x, y_mm: y, h_mm: 3.0, alpha_rad: 0.0, beta_rad: 0.0 };
 /// let stroke = |y: f64| Stroke { points: (0..=20).map(|i| pt(30.0 + f64::from(i), y)).collect() };
@@ -849,7 +856,7 @@ pub fn gcode_chars(
     title: &str,
 ) -> Result<(String, Vec<String>), RobotError> {
     let (plan, warnings) = gcode_plan(track, stroke_chars, times, cfg)?;
-    let mut s = format!("; maobi writing program: {}\n", comment_text(title, Target::Gcode));
+    let mut s = format!("; maobi writing program: {}\n", comment_text(title, ExportTarget::Gcode));
     for l in &plan {
         match (&l.statement, &l.comment) {
             (Some(st), Some(c)) => s.push_str(&format!("{} ; {c}\n", gcode_statement(st))),
@@ -1016,7 +1023,7 @@ fn gcode_plan(
             if st.dwell_s > 0.0 {
                 let soak_f = DWELL_SINK_MM / st.dwell_s * 60.0;
                 let soak = mv(false, None, None, Some(-st.depth_mm - DWELL_SINK_MM), Some(soak_f));
-                push(Some(soak), Some(comment_text(&format!("dwell {} s", st.dwell_s), Target::Gcode)), Some(i));
+                push(Some(soak), Some(comment_text(&format!("dwell {} s", st.dwell_s), ExportTarget::Gcode)), Some(i));
             }
             push(Some(up), None, Some(i));
         }
@@ -1060,12 +1067,12 @@ fn compare_gcode(text: &str, plan: &[GcodeLine]) -> Result<(), RobotError> {
     let want: Vec<_> = plan.iter().filter_map(|l| l.statement.as_ref().map(|s| (l.stroke, s))).collect();
     for (i, ((line, got), (stroke, w))) in read.iter().zip(&want).enumerate() {
         compare_gcode_statement(got, w)
-            .map_err(|r| mismatch(Target::Gcode, *stroke, Some(*line), format!("statement {}: {r}", i + 1)))?;
+            .map_err(|r| mismatch(ExportTarget::Gcode, *stroke, Some(*line), format!("statement {}: {r}", i + 1)))?;
     }
     if read.len() != want.len() {
         let line = read.get(want.len()).map(|m| m.0);
         return Err(mismatch(
-            Target::Gcode,
+            ExportTarget::Gcode,
             None,
             line,
             format!("the text has {} statements where the plotter program has {}", read.len(), want.len()),

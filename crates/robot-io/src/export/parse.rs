@@ -4,7 +4,7 @@
 //! checked program before they return the text.
 
 use super::lua;
-use super::text::{MAX_DECIMALS, Target, is_inert_comment, unsafe_anywhere};
+use super::text::{ExportTarget, MAX_DECIMALS, is_inert_comment, unsafe_anywhere};
 use crate::RobotError;
 use crate::kinematics::DhParams;
 
@@ -144,7 +144,7 @@ pub(crate) struct At {
 }
 
 /// The refusal of a text in `target`'s format.
-pub(crate) fn refused(target: Target, stroke: Option<usize>, at: At) -> RobotError {
+pub(crate) fn refused(target: ExportTarget, stroke: Option<usize>, at: At) -> RobotError {
     RobotError::Unsafe {
         stroke,
         point: None,
@@ -252,7 +252,7 @@ fn whole<T>(line: &str, f: impl FnOnce(&mut Cur<'_>) -> Option<T>) -> Option<T> 
 }
 
 /// Whether `line` is a comment line of `target`: `indent`, the marker, a space and inert text.
-fn is_comment(line: &str, indent: &str, marker: &str, target: Target) -> bool {
+fn is_comment(line: &str, indent: &str, marker: &str, target: ExportTarget) -> bool {
     line.strip_prefix(indent)
         .and_then(|l| l.strip_prefix(marker))
         .and_then(|l| l.strip_prefix(' '))
@@ -276,7 +276,7 @@ fn expect<'a>(it: &mut impl Iterator<Item = (usize, &'a str)>, want: &str, last:
 fn after_header<'a>(
     it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
     marker: &str,
-    target: Target,
+    target: ExportTarget,
 ) -> Result<(), At> {
     while let Some(&(n, l)) = it.peek() {
         if !l.starts_with(marker) {
@@ -309,14 +309,14 @@ pub(crate) const LUA_IK_ERROR: &str = "maobi: the controller cannot reach the fi
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
 pub fn read_lua(text: &str) -> Result<ReadProgram, RobotError> {
-    read_lua_at(text).map_err(|at| refused(Target::Lua, None, at))
+    read_lua_at(text).map_err(|at| refused(ExportTarget::Lua, None, at))
 }
 
 fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     let all = lines(text)?;
     let last = all.len();
     let mut it = all.into_iter().peekable();
-    after_header(&mut it, "--", Target::Lua)?;
+    after_header(&mut it, "--", ExportTarget::Lua)?;
     for want in lua::head_lines() {
         expect(&mut it, &want, last)?;
     }
@@ -370,7 +370,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
         if l == "end" {
             break;
         }
-        if is_comment(l, "  ", "--", Target::Lua) {
+        if is_comment(l, "  ", "--", ExportTarget::Lua) {
             continue;
         }
         let m = if l == "  do" {
@@ -585,7 +585,7 @@ fn read_path_buffer<'a>(
 /// [`RobotError::Unsafe`] naming the first line that is not exactly one of these (and the
 /// function, when the line calls one outside [`URSCRIPT_FUNCTIONS`]).
 pub fn read_urscript(text: &str) -> Result<ReadProgram, RobotError> {
-    read_urscript_at(text).map_err(|at| refused(Target::UrScript, None, at))
+    read_urscript_at(text).map_err(|at| refused(ExportTarget::UrScript, None, at))
 }
 
 fn read_urscript_at(text: &str) -> Result<ReadProgram, At> {
@@ -608,7 +608,7 @@ pub(crate) fn read_urscript_named(text: &str, name: &str) -> Result<ReadProgram,
     let all = lines(text)?;
     let last = all.len();
     let mut it = all.into_iter().peekable();
-    after_header(&mut it, "#", Target::UrScript)?;
+    after_header(&mut it, "#", ExportTarget::UrScript)?;
     expect(&mut it, &format!("def {name}():"), last)?;
     let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before set_tcp".into() })?;
     let tcp_offset_m = whole(l, |c| {
@@ -626,7 +626,7 @@ pub(crate) fn read_urscript_named(text: &str, name: &str) -> Result<ReadProgram,
         if l == "end" {
             break;
         }
-        if is_comment(l, "  ", "#", Target::UrScript) {
+        if is_comment(l, "  ", "#", ExportTarget::UrScript) {
             continue;
         }
         // UR's argument orders (the script manual): movej(q, a, v, t, r), movel(pose, a, v, t,
@@ -722,7 +722,7 @@ fn urscript_unexpected(line: usize, l: &str, want: &str) -> At {
 /// # Errors
 /// [`RobotError::Unsafe`] naming the first line that is not exactly one of these.
 pub fn read_gcode(text: &str) -> Result<Vec<(usize, GcodeStatement)>, RobotError> {
-    read_gcode_at(text).map_err(|at| refused(Target::Gcode, None, at))
+    read_gcode_at(text).map_err(|at| refused(ExportTarget::Gcode, None, at))
 }
 
 fn read_gcode_at(text: &str) -> Result<Vec<(usize, GcodeStatement)>, At> {
@@ -731,7 +731,7 @@ fn read_gcode_at(text: &str) -> Result<Vec<(usize, GcodeStatement)>, At> {
     let mut ended = false;
     for (n, l) in all {
         if l.starts_with(';') {
-            if !is_comment(l, "", ";", Target::Gcode) {
+            if !is_comment(l, "", ";", ExportTarget::Gcode) {
                 return Err(At { line: n, reason: format!("a comment that is not inert: {}", quote(l)) });
             }
             continue;
@@ -740,7 +740,7 @@ fn read_gcode_at(text: &str) -> Result<Vec<(usize, GcodeStatement)>, At> {
             return Err(unexpected(n, l, "nothing after `M2`"));
         }
         let code = match l.split_once(" ; ") {
-            Some((code, comment)) if is_inert_comment(comment, Target::Gcode) => code,
+            Some((code, comment)) if is_inert_comment(comment, ExportTarget::Gcode) => code,
             Some(_) => return Err(At { line: n, reason: format!("a comment that is not inert: {}", quote(l)) }),
             None => l,
         };

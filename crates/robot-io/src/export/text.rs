@@ -3,7 +3,7 @@
 
 /// The language an exported program is written in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Target {
+pub enum ExportTarget {
     /// AUBO ARCS Lua: `--` comments end at a line end (`\n` or `\r`); `--[[ ... ]]` (and
     /// `--[==[ ... ]==]`) are long comments spanning lines.
     Lua,
@@ -14,13 +14,13 @@ pub enum Target {
     Gcode,
 }
 
-impl Target {
+impl ExportTarget {
     /// The format's name, as errors print it.
     pub fn name(self) -> &'static str {
         match self {
-            Target::Lua => "ARCS Lua",
-            Target::UrScript => "URScript",
-            Target::Gcode => "G-code",
+            ExportTarget::Lua => "ARCS Lua",
+            ExportTarget::UrScript => "URScript",
+            ExportTarget::Gcode => "G-code",
         }
     }
 
@@ -28,9 +28,9 @@ impl Target {
     /// special in or around this target's comments.
     fn special(self) -> &'static [char] {
         match self {
-            Target::Lua => &['[', ']'],
-            Target::UrScript => &['#'],
-            Target::Gcode => &[';', '(', ')', '%', '*'],
+            ExportTarget::Lua => &['[', ']'],
+            ExportTarget::UrScript => &['#'],
+            ExportTarget::Gcode => &[';', '(', ')', '%', '*'],
         }
     }
 }
@@ -60,13 +60,13 @@ pub(crate) fn unsafe_anywhere(c: char) -> bool {
 
 /// Whether [`comment_text`] replaces `c` for `target` (every target: the characters of
 /// `unsafe_anywhere`, quotes, backquotes and the backslash that starts the escapes).
-fn escaped(c: char, target: Target) -> bool {
+fn escaped(c: char, target: ExportTarget) -> bool {
     unsafe_anywhere(c) || matches!(c, '\\' | '"' | '\'' | '`') || target.special().contains(&c)
 }
 
 /// Whether `text` may follow a comment marker in an exported `target` program: nothing that
 /// [`comment_text`] replaces, except the backslash of its escapes.
-pub(crate) fn is_inert_comment(text: &str, target: Target) -> bool {
+pub(crate) fn is_inert_comment(text: &str, target: ExportTarget) -> bool {
     text.chars().all(|c| c == '\\' || !escaped(c, target))
 }
 
@@ -77,7 +77,7 @@ pub(crate) fn is_inert_comment(text: &str, target: Target) -> bool {
 /// (its code point in lowercase hexadecimal, so the escaping can be undone); text beyond
 /// [`MAX_COMMENT_CHARS`] characters is cut and marked with `…`. The result is one line that
 /// none of the target's readers can end early.
-pub fn comment_text(text: &str, target: Target) -> String {
+pub fn comment_text(text: &str, target: ExportTarget) -> String {
     let mut out = String::new();
     for (i, c) in text.chars().enumerate() {
         if i == MAX_COMMENT_CHARS {
@@ -157,28 +157,28 @@ mod tests {
     #[test]
     fn comments_keep_printable_text_and_escape_the_rest() {
         for (text, target, want) in [
-            ("十", Target::Gcode, "十"),
-            ("十\nG1 Z-40 F3000", Target::Gcode, "十\\u{a}G1 Z-40 F3000"),
-            ("a\r\n\r\nb", Target::Lua, "a\\u{d}\\u{a}\\u{d}\\u{a}b"),
-            ("a\u{2028}b\u{85}c\u{0}d\te", Target::UrScript, "a\\u{2028}b\\u{85}c\\u{0}d\\u{9}e"),
-            ("x; (y) 5% *", Target::Gcode, "x\\u{3b} \\u{28}y\\u{29} 5\\u{25} \\u{2a}"),
-            ("x; (y)", Target::Lua, "x; (y)"),
-            ("--[[ ]]", Target::Lua, "--\\u{5b}\\u{5b} \\u{5d}\\u{5d}"),
-            ("#x", Target::UrScript, "\\u{23}x"),
-            ("#x", Target::Gcode, "#x"),
-            ("\"q' `b` \\", Target::Lua, "\\u{22}q\\u{27} \\u{60}b\\u{60} \\u{5c}"),
-            ("\u{202e}rtl\u{feff}", Target::Gcode, "\\u{202e}rtl\\u{feff}"),
+            ("十", ExportTarget::Gcode, "十"),
+            ("十\nG1 Z-40 F3000", ExportTarget::Gcode, "十\\u{a}G1 Z-40 F3000"),
+            ("a\r\n\r\nb", ExportTarget::Lua, "a\\u{d}\\u{a}\\u{d}\\u{a}b"),
+            ("a\u{2028}b\u{85}c\u{0}d\te", ExportTarget::UrScript, "a\\u{2028}b\\u{85}c\\u{0}d\\u{9}e"),
+            ("x; (y) 5% *", ExportTarget::Gcode, "x\\u{3b} \\u{28}y\\u{29} 5\\u{25} \\u{2a}"),
+            ("x; (y)", ExportTarget::Lua, "x; (y)"),
+            ("--[[ ]]", ExportTarget::Lua, "--\\u{5b}\\u{5b} \\u{5d}\\u{5d}"),
+            ("#x", ExportTarget::UrScript, "\\u{23}x"),
+            ("#x", ExportTarget::Gcode, "#x"),
+            ("\"q' `b` \\", ExportTarget::Lua, "\\u{22}q\\u{27} \\u{60}b\\u{60} \\u{5c}"),
+            ("\u{202e}rtl\u{feff}", ExportTarget::Gcode, "\\u{202e}rtl\\u{feff}"),
         ] {
             let got = comment_text(text, target);
             assert_eq!(got, want, "{text:?} for {target:?}");
             assert!(is_inert_comment(&got, target), "{got:?}");
         }
         let long = "永".repeat(1000);
-        let cut = comment_text(&long, Target::Lua);
+        let cut = comment_text(&long, ExportTarget::Lua);
         assert_eq!(cut.chars().count(), MAX_COMMENT_CHARS + 1);
         assert!(cut.ends_with('…'));
         // Worst case: every character escaped, each at most 10 bytes.
-        assert!(comment_text(&"\u{9f}".repeat(500), Target::Gcode).len() <= MAX_COMMENT_CHARS * 10 + 3);
-        assert!(!is_inert_comment("a\nb", Target::Gcode) && !is_inert_comment("(x)", Target::Gcode));
+        assert!(comment_text(&"\u{9f}".repeat(500), ExportTarget::Gcode).len() <= MAX_COMMENT_CHARS * 10 + 3);
+        assert!(!is_inert_comment("a\nb", ExportTarget::Gcode) && !is_inert_comment("(x)", ExportTarget::Gcode));
     }
 }

@@ -79,7 +79,7 @@ struct Dense {
 ///
 /// # Examples
 /// ```
-/// use robot_io::pose::Pose;
+/// use robot_io::Pose;
 /// use robot_io::sim::{BlendMove, blended_line_motion};
 /// let at = |x: f64, y: f64| Pose([x, y, 0.3, std::f64::consts::PI, 0.0, 0.0]);
 /// let mv = |p: Pose, blend_m: f64| BlendMove { pose: p, v_m_s: 0.02, a_m_s2: 0.3, blend_m };

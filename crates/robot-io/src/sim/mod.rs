@@ -1,7 +1,7 @@
 //! A loopback AUBO JSON-RPC simulator: serves the SDK's framed transport (with its login) and,
 //! only when asked, the line-delimited form and JSON-RPC over HTTP (both unauthenticated);
 //! validates every request (named or positional params), executes moves on a model of the arm
-//! (the executor in [`crate::exec`]), answers `getExecId`, `isSteady`, `getTcpPose` and
+//! (the executor of [`crate::execute_program`]), answers `getExecId`, `isSteady`, `getTcpPose` and
 //! `getJointPositions`, injects faults, and records the executed TCP path.
 //!
 //! It is built to survive a hostile client (docs/robot.md, "The simulator as a server"): one

@@ -35,7 +35,7 @@ pub enum SendMotion<'a> {
 /// # Examples
 /// ```
 /// use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-/// use robot_io::kinematics::DhParams;
+/// use robot_io::DhParams;
 /// use robot_io::sim::{SendMotion, execute_as_sent};
 /// use robot_io::{RobotConfig, build_program, level_frame_in_front, time_program};
 /// let profile = BrushProfile::builtin("pen1").unwrap();

@@ -13,7 +13,7 @@ use super::rtde::{connect_stream, io_error};
 use crate::RobotError;
 
 /// The longest line the client reads from the dashboard server, bytes.
-pub const MAX_LINE_BYTES: usize = 4096;
+pub const MAX_DASHBOARD_LINE_BYTES: usize = 4096;
 
 /// A connection to the dashboard server.
 pub struct Dashboard {
@@ -30,7 +30,7 @@ impl Dashboard {
     ///
     /// # Errors
     /// [`RobotError::Io`], [`RobotError::Timeout`]; [`RobotError::Protocol`] for a line longer
-    /// than [`MAX_LINE_BYTES`] or not UTF-8.
+    /// than [`MAX_DASHBOARD_LINE_BYTES`] or not UTF-8.
     pub fn connect(addr: &str, timeout: Duration) -> Result<Self, RobotError> {
         let stream = connect_stream(addr, timeout)?;
         let mut d = Dashboard { stream, buf: Vec::new(), timeout, addr: addr.to_string(), greeting: String::new() };
@@ -62,8 +62,10 @@ impl Dashboard {
                     .map_err(|_| RobotError::Protocol(format!("{what}: the answer is not UTF-8")))?;
                 return Ok(text.trim_end().to_string());
             }
-            if self.buf.len() > MAX_LINE_BYTES {
-                return Err(RobotError::Protocol(format!("{what}: an answer longer than {MAX_LINE_BYTES} bytes")));
+            if self.buf.len() > MAX_DASHBOARD_LINE_BYTES {
+                return Err(RobotError::Protocol(format!(
+                    "{what}: an answer longer than {MAX_DASHBOARD_LINE_BYTES} bytes"
+                )));
             }
             let now = Instant::now();
             if now >= deadline {

@@ -4,11 +4,13 @@
 //! the program writes into output register 24) and stops it through the dashboard server
 //! (29999, `stop`). The arm's own kinematics solve every pose (no joint angle is sent).
 //!
-//! The protocols are in [`rtde`] and [`dashboard`] (usable alone); the simulator that stands in
-//! for a UR5e is [`crate::sim::UrSimulator`].
+//! The RTDE protocol is in [`rtde`] and the dashboard client is [`Dashboard`] (each usable
+//! alone); the simulator that stands in for a UR5e is [`crate::sim::UrSimulator`].
 
-pub mod dashboard;
+mod dashboard;
 pub mod rtde;
+
+pub use dashboard::{Dashboard, MAX_DASHBOARD_LINE_BYTES};
 
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -23,7 +25,6 @@ use crate::follow::{Commanded, Expect, Sent, check_pose_from, distance_m, lift_w
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{Program, RobotConfig, compact_program};
-use dashboard::Dashboard;
 use rtde::{RtdeClient, Value};
 
 /// UR's script port (the secondary interface): a program sent here replaces the one running.

@@ -514,9 +514,9 @@ impl RtdeClient {
             let src = rest.get(..usize::from(sl))?;
             Some(format!("{}: {}", String::from_utf8_lossy(src), String::from_utf8_lossy(msg)))
         })();
-        self.messages.push(crate::export::text::comment_text(
+        self.messages.push(crate::export::comment_text(
             &text.unwrap_or_else(|| String::from_utf8_lossy(p).into_owned()),
-            crate::export::text::Target::UrScript,
+            crate::export::ExportTarget::UrScript,
         ));
     }
 }

@@ -8,10 +8,10 @@ use std::time::Duration;
 
 use brush_model::{Stroke, Track, TrackPoint};
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
-use robot_io::exec::{TRACE_STEP_M, TraceEntry, TraceKind};
-use robot_io::program::{Move, RobotConfig, build_program, compact_program};
 use robot_io::sim::{Faults, Simulator};
-use robot_io::{Pose, RobotError};
+use robot_io::{
+    Move, Pose, RobotConfig, RobotError, TRACE_STEP_M, TraceEntry, TraceKind, build_program, compact_program,
+};
 use serde_json::json;
 
 use crate::common::{paper, pen1};

@@ -2,7 +2,7 @@
 //! two-stroke track.
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::frame::PaperFrame;
+use robot_io::PaperFrame;
 
 /// The built-in pen1 profile.
 pub(crate) fn pen1() -> BrushProfile {

@@ -3,21 +3,19 @@
 //! text is refused by the parse-back check, and a number that would print as something else
 //! (a speed of 1e-300 as `0.000000`) refuses the export.
 
-use robot_io::export::parse::{GcodeStatement, ReadMove, read_gcode, read_lua, read_urscript};
-use robot_io::export::text::{MAX_COMMENT_CHARS, Target, comment_text};
-use robot_io::export::{
-    PointTimes, aubo_lua, gcode, gcode_merge, point_times, urscript, verify_gcode, verify_lua, verify_urscript,
+use robot_io::{
+    DhParams, ExportTarget as Target, GcodeStatement, InkStation, MAX_COMMENT_CHARS, Move, PointTimes, Program,
+    ProgramTiming, ReadMove, Reload, RobotConfig, RobotError, aubo_lua, build_program, comment_text, compact_program,
+    gcode, gcode_merge, point_times, read_gcode, read_lua, read_urscript, time_program, urscript, verify_gcode,
+    verify_lua, verify_urscript,
 };
-use robot_io::kinematics::DhParams;
-use robot_io::program::{Move, Program, RobotConfig, build_program, compact_program};
-use robot_io::{InkStation, ProgramTiming, Reload, RobotError, time_program};
 
 use crate::common::{paper, pen1, small_track};
 
 /// A pot beside the sheet, dipped before every stroke, with a dwell.
 fn inked() -> RobotConfig {
     RobotConfig {
-        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
+        limits: robot_io::Limits { max_step_mm: 16.0, ..Default::default() },
         ink: Some(InkStation {
             pose: [0.63, 0.10, 0.07, std::f64::consts::PI, 0.0, 0.0],
             depth_mm: 25.0,
@@ -135,9 +133,8 @@ fn exports_read_back_as_the_checked_program() {
     // URScript: the pressed moves compacted (stroke 1's (60, 61) lies on its neighbours' line),
     // each a process move.
     let compact = compact_program(&p, &cfg);
-    let moves = |r: &robot_io::export::parse::ReadProgram| {
-        r.moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count()
-    };
+    let moves =
+        |r: &robot_io::ReadProgram| r.moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count();
     assert_eq!((moves(&lua), moves(&ur)), (p.move_count(), compact.move_count()));
     // The count of finished strokes after each lift, from 0.
     let progress: Vec<usize> = ur
@@ -329,7 +326,7 @@ fn numbers_that_would_print_as_something_else_refuse_the_export() {
 
 #[test]
 fn tampered_path_buffer_lua_is_refused() {
-    use robot_io::export::{aubo_lua_path_buffer, verify_lua_path_buffer};
+    use robot_io::{aubo_lua_path_buffer, verify_lua_path_buffer};
     let cfg = inked();
     let p = program(&cfg);
     let kin = DhParams::AUBO_I5;
@@ -410,7 +407,7 @@ fn point_times_follow_the_timed_strokes() {
     assert_eq!(times.strokes.len(), 2);
     for (st, ts) in p.strokes.iter().zip(&t.strokes) {
         let at = times.strokes[st.index].as_ref().unwrap();
-        let path = robot_io::timing::pressed_path(st);
+        let path = robot_io::pressed_path(st);
         assert_eq!(at.len(), path.len());
         assert_eq!(at[0], 0.0);
         // The last point is first reached within one waypoint interval of the end, at rest.

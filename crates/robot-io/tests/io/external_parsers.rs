@@ -16,10 +16,10 @@ use std::process::{Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
 use brush_model::{Stroke, Track, TrackPoint};
-use robot_io::export::{GCODE_MERGE_TOLERANCE_MM, PointTimes, aubo_lua, aubo_lua_path_buffer, gcode, point_times};
-use robot_io::kinematics::DhParams;
-use robot_io::program::{Move, Program, RobotConfig, build_program};
-use robot_io::{InkStation, Reload, time_program};
+use robot_io::{
+    DhParams, GCODE_MERGE_TOLERANCE_MM, InkStation, Move, PointTimes, Program, Reload, RobotConfig, aubo_lua,
+    aubo_lua_path_buffer, build_program, gcode, point_times, time_program,
+};
 use serde_json::Value;
 
 use crate::common::{paper, pen1};
@@ -62,7 +62,7 @@ const POT_MM: [f64; 2] = [330.0, 150.0];
 /// A pot beside the sheet, dipped before every stroke, `dwell_s` in the ink; `None`: no pot.
 fn config(dwell_s: Option<f64>) -> RobotConfig {
     RobotConfig {
-        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
+        limits: robot_io::Limits { max_step_mm: 16.0, ..Default::default() },
         ink: dwell_s.map(|dwell_s| InkStation {
             pose: [0.63, 0.10, 0.07, std::f64::consts::PI, 0.0, 0.0],
             depth_mm: 25.0,

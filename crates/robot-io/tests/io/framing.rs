@@ -9,9 +9,9 @@ use std::net::{TcpListener, TcpStream};
 use std::time::{Duration, Instant};
 
 use robot_io::RobotError;
-use robot_io::Transport;
 use robot_io::aubo::AuboClient;
 use robot_io::sim::{Faults, Simulator};
+use robot_io::wire::Transport;
 use robot_io::wire::{FrameDecoder, MAX_FRAME_BYTES, encode_frame};
 use serde_json::{Value, json};
 

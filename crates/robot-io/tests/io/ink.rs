@@ -5,13 +5,12 @@
 #![allow(clippy::approx_constant, reason = "3.14 rad is a pendant-style rx, deliberately not π")]
 
 use brush_model::{Stroke, Track, TrackPoint};
-use robot_io::exec::{execute_program, execute_program_tagged, trace_to_states};
-use robot_io::frame::PaperFrame;
+use robot_io::{
+    DWELL_SINK_MM, InkStation, Move, PaperFrame, Reload, RobotConfig, build_program, build_program_chars, dip_plan,
+    execute_program, execute_program_tagged, trace_to_states,
+};
 
 use crate::common::pen1;
-use robot_io::program::{
-    DWELL_SINK_MM, InkStation, Move, Reload, RobotConfig, build_program, build_program_chars, dip_plan,
-};
 
 /// The fixture's paper (300 × 300 mm, level, origin at base (0.3, 0.25, 0.05)).
 fn paper() -> PaperFrame {
@@ -154,23 +153,23 @@ fn exports_carry_the_dips() {
     let f = paper();
     let c = cfg(Reload::EveryStrokes(2));
     let (prog, _) = build_program(&t, &pen1(), &f, &c).unwrap();
-    let lua = robot_io::export::aubo_lua(&prog, "t").unwrap();
-    let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &c).unwrap();
-    let ur = robot_io::export::urscript(&prog, &timing, &c, "t").unwrap();
-    let times = robot_io::export::point_times(&prog, &timing).unwrap();
+    let lua = robot_io::aubo_lua(&prog, "t").unwrap();
+    let timing = robot_io::time_program(&prog, &robot_io::DhParams::AUBO_I5, &c).unwrap();
+    let ur = robot_io::urscript(&prog, &timing, &c, "t").unwrap();
+    let times = robot_io::point_times(&prog, &timing).unwrap();
     assert_eq!(lua.matches("-- ink dip before stroke").count(), 2);
     assert!(lua.contains("-- ink dip before stroke 3"));
     assert_eq!(ur.matches("# ink dip before stroke").count(), 2);
     // Each dip is four line moves at the station's position.
     assert_eq!(ur.matches("movel(p[0.630000, 0.100000").count(), 2 * 4 - 2 * 2 + 2 * 2, "{ur}");
-    let (g, warnings) = robot_io::export::gcode(&t, &times, &c, "t").unwrap();
+    let (g, warnings) = robot_io::gcode(&t, &times, &c, "t").unwrap();
     assert_eq!(g.matches("; ink dip before stroke").count(), 2);
     assert!(g.contains("G0 X330.000000 Y-150.000000") && g.contains("G1 Z-25.000000") && g.contains("; dwell 0.5 s"));
     assert!(!warnings.iter().any(|w| w.contains("ink")), "{warnings:?}");
     // Without paper_mm the plotter cannot find the pot: said, not guessed.
     let mut no_pot = c.clone();
     no_pot.ink.as_mut().unwrap().paper_mm = None;
-    let (g, warnings) = robot_io::export::gcode(&t, &times, &no_pot, "t").unwrap();
+    let (g, warnings) = robot_io::gcode(&t, &times, &no_pot, "t").unwrap();
     assert!(!g.contains("ink dip"));
     assert!(warnings.iter().any(|w| w.contains("ink.paper_mm")), "{warnings:?}");
 }
@@ -185,11 +184,7 @@ fn ink_settings_are_validated_and_the_example_loads() {
     c.ink.as_mut().unwrap().dwell_s = 1e9;
     assert!(c.validate().unwrap_err().to_string().contains("dwell_s"));
     c = cfg(Reload::EveryMm(100.0));
-    c.dip = Some(robot_io::program::DipStation {
-        pose: [0.63, 0.1, 0.07, 3.14, 0.0, 0.0],
-        depth_mm: 5.0,
-        every_strokes: 1,
-    });
+    c.dip = Some(robot_io::DipStation { pose: [0.63, 0.1, 0.07, 3.14, 0.0, 0.0], depth_mm: 5.0, every_strokes: 1 });
     assert!(c.validate().unwrap_err().to_string().contains("not both"));
     let ex = RobotConfig::load(
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/robot/robot-ink.json"),

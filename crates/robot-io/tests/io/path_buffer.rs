@@ -7,9 +7,9 @@
 use std::time::Duration;
 
 use robot_io::aubo::{AuboClient, Link};
-use robot_io::exec::{HOME_JOINTS, TraceKind};
 use robot_io::sim::{Listen, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, SimOptions, Simulator};
-use robot_io::{RobotError, Transport};
+use robot_io::wire::Transport;
+use robot_io::{HOME_JOINTS, RobotError, TraceKind};
 use serde_json::{Value, json};
 
 const T: Duration = Duration::from_secs(3);
@@ -154,11 +154,11 @@ fn distance_to_polyline(p: [f64; 3], line: &[[f64; 3]]) -> f64 {
 
 #[test]
 fn send_writes_each_stroke_as_one_path_buffer_on_the_controllers_own_kinematics() {
-    use robot_io::kinematics::DhParams;
-    use robot_io::program::{RobotConfig, build_program};
+    use robot_io::DhParams;
+    use robot_io::{RobotConfig, build_program};
     use std::sync::atomic::AtomicBool;
     let profile = robot_io::brush_model::BrushProfile::builtin("pen1").unwrap();
-    let frame = robot_io::exec::level_frame_in_front([55.0, 55.0], [0.0, 0.0, 210.0, 297.0]);
+    let frame = robot_io::level_frame_in_front([55.0, 55.0], [0.0, 0.0, 210.0, 297.0]);
     let cfg = RobotConfig::default();
     let (program, _) = build_program(&two_strokes(), &profile, &frame, &cfg).unwrap();
     // A controller whose arm is not the nominal one (its upper arm 20 mm longer): the runner
@@ -189,11 +189,8 @@ fn send_writes_each_stroke_as_one_path_buffer_on_the_controllers_own_kinematics(
     let trace = sim.trace();
     let path_samples: Vec<_> = trace.iter().filter(|t| t.kind == TraceKind::PathBuffer).collect();
     assert!(path_samples.len() > 200, "{}", path_samples.len());
-    let lines: Vec<Vec<[f64; 3]>> = program
-        .strokes
-        .iter()
-        .map(|st| robot_io::timing::pressed_path(st).iter().map(|p| p.position()).collect())
-        .collect();
+    let lines: Vec<Vec<[f64; 3]>> =
+        program.strokes.iter().map(|st| robot_io::pressed_path(st).iter().map(|p| p.position()).collect()).collect();
     for t in &path_samples {
         let d = lines.iter().map(|l| distance_to_polyline(t.pose.position(), l)).fold(f64::INFINITY, f64::min);
         assert!(d < 1e-4, "a sample {:.4} mm off the path", d * 1e3);
@@ -206,11 +203,11 @@ fn send_writes_each_stroke_as_one_path_buffer_on_the_controllers_own_kinematics(
 
 #[test]
 fn nominal_kinematics_are_refused_unless_accepted_and_still_checked_by_the_controller() {
-    use robot_io::kinematics::DhParams;
-    use robot_io::program::{RobotConfig, build_program};
+    use robot_io::DhParams;
+    use robot_io::{RobotConfig, build_program};
     use std::sync::atomic::AtomicBool;
     let profile = robot_io::brush_model::BrushProfile::builtin("pen1").unwrap();
-    let frame = robot_io::exec::level_frame_in_front([55.0, 55.0], [0.0, 0.0, 210.0, 297.0]);
+    let frame = robot_io::level_frame_in_front([55.0, 55.0], [0.0, 0.0, 210.0, 297.0]);
     let cfg = RobotConfig::default();
     let (program, _) = build_program(&two_strokes(), &profile, &frame, &cfg).unwrap();
     let start = |options: SimOptions| {

@@ -9,22 +9,19 @@ use std::time::Duration;
 
 use brush_model::{Track, TrackPoint};
 use nalgebra::{Rotation3, Vector3};
-use robot_io::RobotError;
 use robot_io::aubo::{RunOptions, run_program};
-use robot_io::exec::TraceKind;
-use robot_io::export::{aubo_lua, gcode, urscript};
-use robot_io::frame::{PaperFile, PaperFrame, TouchPoint};
-use robot_io::kinematics::{forward, inverse};
-use robot_io::pose::{Pose, brush_pose};
-use robot_io::program::{RobotConfig, build_program, tcp_iso};
 use robot_io::sim::{Faults, Simulator};
+use robot_io::{
+    DhParams, PaperFile, PaperFrame, Pose, RobotConfig, RobotError, TouchPoint, TraceKind, aubo_lua, brush_pose,
+    build_program, gcode, tcp_iso, urscript,
+};
 
 use crate::common::{paper, pen1, small_track};
 
 /// The default settings with steps of up to 16 mm allowed within a stroke: [`small_track`]'s
 /// points lie 10–15 mm apart, where a planned track's lie 0.15 mm apart.
 fn sparse() -> RobotConfig {
-    RobotConfig { limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() }, ..Default::default() }
+    RobotConfig { limits: robot_io::Limits { max_step_mm: 16.0, ..Default::default() }, ..Default::default() }
 }
 
 /// [`sparse`] with every pressed move ending at rest on its point (no blend), so the trace
@@ -118,16 +115,16 @@ fn inverse_kinematics_round_trips() {
         [-0.8, 0.2, 1.9, -0.3, 1.6, -1.0],
         [0.5, -0.2618, 1.7453, 0.4363, 1.5708, 0.2],
     ] {
-        let pose = Pose::from_iso(&forward(&q, &tcp));
-        let sol = inverse(&pose, &tcp, None).expect("reachable");
-        let back = Pose::from_iso(&forward(&sol, &tcp));
+        let pose = Pose::from_iso(&DhParams::AUBO_I5.forward(&q, &tcp));
+        let sol = DhParams::AUBO_I5.inverse(&pose, &tcp, None).expect("reachable");
+        let back = Pose::from_iso(&DhParams::AUBO_I5.forward(&sol, &tcp));
         for k in 0..3 {
             assert!((back.0[k] - pose.0[k]).abs() < 2e-5);
         }
         assert!(same_rotation_loose(&back, &pose));
     }
     // Two metres away is out of reach.
-    assert!(inverse(&Pose([2.0, 0.0, 0.2, std::f64::consts::PI, 0.0, 0.0]), &tcp, None).is_none());
+    assert!(DhParams::AUBO_I5.inverse(&Pose([2.0, 0.0, 0.2, std::f64::consts::PI, 0.0, 0.0]), &tcp, None).is_none());
 }
 
 /// The kinematics are the AUBO controller's own (modified DH with its `a`, `alpha`, `d`, `theta`
@@ -136,8 +133,8 @@ fn inverse_kinematics_round_trips() {
 /// reproduced within 1.5 mm. maobi's earlier table put the first of these 0.9 m away.
 #[test]
 fn the_kinematics_are_the_controllers() {
-    use robot_io::kinematics::DhParams;
-    let flange = forward(&[0.0, -0.2618, 1.7453, 0.4363, 1.5708, 0.0], &tcp_iso(0.0));
+    use robot_io::DhParams;
+    let flange = DhParams::AUBO_I5.forward(&[0.0, -0.2618, 1.7453, 0.4363, 1.5708, 0.0], &tcp_iso(0.0));
     let want = Vector3::new(0.549, -0.121, 0.263);
     assert!((flange.translation.vector - want).norm() < 1e-3, "{:?}", flange.translation.vector);
     // The saved waypoint: that controller's arrays (same theta), TCP offset 0.1 m along y.
@@ -201,7 +198,7 @@ fn exports_follow_the_documented_forms() {
     assert!(lua.ends_with("\nend\n"));
     assert!(lua.contains("\n  setTcpOffset({0, 0, 0.048000, 0, 0, 0})\n  setSpeedFraction(1.000000)\n"));
     assert_eq!(lua.matches("moveLine(").count() + lua.matches("moveJoint(").count(), prog.move_count());
-    let timing = robot_io::time_program(&prog, &robot_io::kinematics::DhParams::AUBO_I5, &sparse()).unwrap();
+    let timing = robot_io::time_program(&prog, &robot_io::DhParams::AUBO_I5, &sparse()).unwrap();
     let ur = urscript(&prog, &timing, &sparse(), "test").unwrap();
     assert!(ur.starts_with("# maobi") && ur.contains("\ndef maobi_program():\n") && ur.ends_with("\nend\n"));
     assert!(ur.contains("  write_output_integer_register(24, 0)\n") && ur.contains("t=0, r="));
@@ -210,21 +207,18 @@ fn exports_follow_the_documented_forms() {
     assert_eq!(inside.split(", ").count(), 6, "{movel}");
     assert!(movel.contains("a=") && movel.contains("v=") && movel.contains("r="));
     // The level paper's upright brush is Rx(π): rotation vector (π, 0, 0) up to sign.
-    let times = robot_io::export::point_times(&prog, &timing).unwrap();
+    let times = robot_io::point_times(&prog, &timing).unwrap();
     let (g, warnings) = gcode(&small_track(), &times, &sparse(), "test").unwrap();
     assert!(g.contains("G21") && g.contains("G90") && g.trim_end().ends_with("M2"));
     assert!(g.contains("G1 X40.000000 Y-60.000000 Z-15.000000 F1200.000000"), "{g}");
     // Y toward the user: the paper's y as it is.
-    let toward = RobotConfig {
-        plotter: robot_io::program::PlotterConfig { y_axis: robot_io::program::YAxis::Toward },
-        ..sparse()
-    };
+    let toward = RobotConfig { plotter: robot_io::PlotterConfig { y_axis: robot_io::YAxis::Toward }, ..sparse() };
     let (g, _) = gcode(&small_track(), &times, &toward, "test").unwrap();
     assert!(g.contains("G1 X40.000000 Y60.000000 Z-15.000000 F1200.000000"), "{g}");
     assert!(warnings.iter().any(|w| w.contains("α")) && warnings.iter().any(|w| w.contains("β")));
 }
 
-fn run(sim: &Simulator, prog: &robot_io::program::Program) -> Result<robot_io::aubo::RunReport, RobotError> {
+fn run(sim: &Simulator, prog: &robot_io::Program) -> Result<robot_io::aubo::RunReport, RobotError> {
     let stop = AtomicBool::new(false);
     let opts = RunOptions {
         timeout: Duration::from_millis(500),
@@ -261,8 +255,8 @@ fn a_full_run_on_the_simulator_follows_the_track() {
     for w in trace.windows(2).filter(|w| w[1].kind == TraceKind::Line) {
         let (a, b) = (w[0].pose.position(), w[1].pose.position());
         let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
-        assert!(d <= robot_io::exec::TRACE_STEP_M + 1e-9, "a jump of {} mm", d * 1e3);
-        assert!(w[1].t_s >= w[0].t_s && w[1].t_s - w[0].t_s <= robot_io::exec::TRACE_STEP_S + 1e-9);
+        assert!(d <= robot_io::TRACE_STEP_M + 1e-9, "a jump of {} mm", d * 1e3);
+        assert!(w[1].t_s >= w[0].t_s && w[1].t_s - w[0].t_s <= robot_io::TRACE_STEP_S + 1e-9);
     }
 }
 
@@ -352,8 +346,8 @@ fn the_simulator_validates_requests() {
 /// 741 mm from that pose.
 #[test]
 fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kinematics() {
-    use robot_io::kinematics::DhParams;
-    use robot_io::program::Move;
+    use robot_io::DhParams;
+    use robot_io::Move;
     use robot_io::sim::{Listen, SimOptions};
     use robot_io::wire::Transport;
     let real = DhParams {

@@ -13,13 +13,10 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use brush_model::{Stroke, Track, TrackPoint};
-use robot_io::RobotError;
-use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program, send_script};
-use robot_io::kinematics;
-use robot_io::pose::Pose;
-use robot_io::program::{Move, Program, RobotConfig, build_program, tcp_iso};
+use robot_io::wire::Transport;
 use robot_io::wire::{self, FrameDecoder};
+use robot_io::{Move, Pose, Program, RobotConfig, RobotError, build_program, tcp_iso};
 use serde_json::{Value, json};
 
 use crate::common::{paper, pen1};
@@ -81,10 +78,10 @@ impl Drop for Fake {
 }
 
 const ROBOT: &str = "rob1";
-const HOME: [f64; 6] = kinematics::READY_JOINTS;
+const HOME: [f64; 6] = robot_io::READY_JOINTS;
 
 fn fk(q: &[f64; 6], offset_m: f64) -> [f64; 6] {
-    Pose::from_iso(&kinematics::forward(q, &tcp_iso(offset_m))).0
+    Pose::from_iso(&robot_io::DhParams::AUBO_I5.forward(q, &tcp_iso(offset_m))).0
 }
 
 fn numbers(v: &Value) -> Option<[f64; 6]> {
@@ -134,7 +131,7 @@ fn default_reply(c: &mut Ctl, method: &str, params: &Value) -> Option<Value> {
         "RobotState.getJointPositions" => json!(c.joints),
         "RobotAlgorithm.inverseKinematics" => {
             let (qnear, pose) = (numbers(arg(params, "qnear", 0))?, numbers(arg(params, "pose", 1))?);
-            match kinematics::inverse(&Pose(pose), &tcp_iso(c.tcp_offset_m), Some(&qnear)) {
+            match robot_io::DhParams::AUBO_I5.inverse(&Pose(pose), &tcp_iso(c.tcp_offset_m), Some(&qnear)) {
                 Some(q) => json!([q, 0]),
                 None => json!([[], -23]),
             }

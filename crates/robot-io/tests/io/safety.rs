@@ -9,16 +9,14 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use brush_model::{Stroke, Track, TrackPoint};
-use robot_io::RobotError;
-use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
-use robot_io::exec::TraceEntry;
-use robot_io::frame::{PaperFile, PaperFrame};
-use robot_io::program::{
-    Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
-    CONTROLLER_MAX_TCP_OFFSET_M, DipStation, Move, Program, RobotConfig, build_program,
-};
 use robot_io::sim::{Faults, Simulator};
+use robot_io::wire::Transport;
+use robot_io::{
+    Approach, CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED, CONTROLLER_MAX_SPEED_FRACTION,
+    CONTROLLER_MAX_TCP_OFFSET_M, DipStation, Move, PaperFile, PaperFrame, Program, RobotConfig, RobotError, TraceEntry,
+    build_program,
+};
 
 use crate::common::{paper, pen1};
 
@@ -117,14 +115,12 @@ fn tilt_is_bounded_by_the_limit_and_the_profile() {
     build_program(&held, &pen1(), &f, &cfg).unwrap();
     build_program(&with_alpha(11f64.to_radians()), &pen1(), &f, &cfg).unwrap();
     let no_jumps = RobotConfig {
-        limits: robot_io::program::Limits { max_turn_rad_per_mm: 0.2, ..Default::default() },
+        limits: robot_io::Limits { max_turn_rad_per_mm: 0.2, ..Default::default() },
         ..RobotConfig::default()
     };
     refused(&with_alpha(11f64.to_radians()), &f, &no_jumps, &["point 4", "max_turn_rad_per_mm = 0.2"]);
-    let strict = RobotConfig {
-        limits: robot_io::program::Limits { max_tilt_rad: 0.02, ..Default::default() },
-        ..RobotConfig::default()
-    };
+    let strict =
+        RobotConfig { limits: robot_io::Limits { max_tilt_rad: 0.02, ..Default::default() }, ..RobotConfig::default() };
     refused(&held, &f, &strict, &["max_tilt_rad = 0.0200"]);
 }
 
@@ -203,7 +199,7 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
         (
             "limit beyond controller",
             RobotConfig {
-                limits: robot_io::program::Limits { max_blend_mm: 200.0, ..Default::default() },
+                limits: robot_io::Limits { max_blend_mm: 200.0, ..Default::default() },
                 ..Default::default()
             },
             "limits.max_blend_mm = 200 is beyond what the controller accepts",
@@ -244,7 +240,7 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
         (
             "step limit 1 m",
             RobotConfig {
-                limits: robot_io::program::Limits { max_step_mm: 1000.0, ..Default::default() },
+                limits: robot_io::Limits { max_step_mm: 1000.0, ..Default::default() },
                 ..Default::default()
             },
             "limits.max_step_mm = 1000 is beyond",
@@ -252,7 +248,7 @@ fn every_setting_is_checked_against_the_controller_and_the_limits() {
         (
             "wrist rate 1e9",
             RobotConfig {
-                limits: robot_io::program::Limits { max_wrist_rate_rad_s: 1e9, ..Default::default() },
+                limits: robot_io::Limits { max_wrist_rate_rad_s: 1e9, ..Default::default() },
                 ..Default::default()
             },
             "limits.max_wrist_rate_rad_s",
@@ -530,7 +526,7 @@ fn points_reached(trace: &[TraceEntry], f: &PaperFrame, stroke: &Stroke) -> usiz
         .points
         .iter()
         .filter(|p| {
-            let want = robot_io::pose::brush_pose(f, p).position();
+            let want = robot_io::brush_pose(f, p).position();
             trace.iter().any(|t| t.pose.position().iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9))
         })
         .count()
@@ -678,7 +674,7 @@ fn a_flaky_link_either_finishes_or_gives_up_in_bounded_time_with_the_brush_lifte
 fn program_helpers_measure_depth_along_the_paper_normal() {
     let f = paper();
     let (prog, _): (Program, _) = build_program(&rows(1, 10), &pen1(), &f, &stops()).unwrap();
-    let p = robot_io::pose::brush_pose(&f, &pt(10.0, 20.0, 7.0, 0.1, 0.3));
+    let p = robot_io::brush_pose(&f, &pt(10.0, 20.0, 7.0, 0.1, 0.3));
     assert!((prog.depth_mm(p.position()) - 7.0).abs() < 1e-9);
     let up = prog.lifted_out(&p, 0.02);
     assert!((prog.depth_mm(up.position()) + 20.0).abs() < 1e-9);

@@ -7,11 +7,9 @@ use std::io::Write;
 use std::time::{Duration, Instant};
 
 use robot_io::aubo::AuboClient;
-use robot_io::export::{aubo_lua, aubo_lua_path_buffer};
-use robot_io::kinematics::DhParams;
-use robot_io::program::{RobotConfig, build_program};
 use robot_io::sim::{Listen, SimOptions, Simulator};
 use robot_io::wire::Transport;
+use robot_io::{DhParams, RobotConfig, aubo_lua, aubo_lua_path_buffer, build_program};
 use serde_json::{Value, json};
 
 use crate::common::{paper, pen1, small_track};
@@ -52,10 +50,8 @@ fn status(sim: &Simulator) -> String {
 #[test]
 fn the_exported_scripts_run_in_lua_and_publish_their_progress() {
     // The small track's points are 10 mm apart.
-    let cfg = RobotConfig {
-        limits: robot_io::program::Limits { max_step_mm: 16.0, ..Default::default() },
-        ..Default::default()
-    };
+    let cfg =
+        RobotConfig { limits: robot_io::Limits { max_step_mm: 16.0, ..Default::default() }, ..Default::default() };
     let (program, _) = build_program(&small_track(), &pen1(), &paper(), &cfg).unwrap();
     let (sim, port) = sim();
     assert_eq!(status(&sim), "Stopped");
@@ -65,7 +61,7 @@ fn the_exported_scripts_run_in_lua_and_publish_their_progress() {
     let pressed = sim.trace().iter().filter(|t| t.kind == robot_io::TraceKind::PathBuffer).count();
     assert!(pressed > 100, "{pressed}");
     // The move-per-point form, from where the first one left the arm.
-    let compact = robot_io::program::compact_program(&program, &cfg);
+    let compact = robot_io::compact_program(&program, &cfg);
     send(port, &aubo_lua(&compact, "十").unwrap());
     assert_eq!(ran(&sim, 2), Vec::<String>::new());
     // The last pose is the last lift's.

@@ -9,11 +9,10 @@ use std::net::TcpStream;
 use std::time::Duration;
 
 use proptest::prelude::*;
-use robot_io::RobotError;
-use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link};
-use robot_io::exec::{MAX_SAMPLES_PER_MOVE, line_motion};
 use robot_io::sim::{Faults, Listen, MAX_REQUEST_BYTES, SimOptions, Simulator, serve_bytes};
+use robot_io::wire::Transport;
+use robot_io::{MAX_SAMPLES_PER_MOVE, RobotError, line_motion};
 use serde_json::{Value, json};
 
 const T: Duration = Duration::from_secs(3);
@@ -84,22 +83,22 @@ fn a_second_session_cannot_move_while_the_first_owns_motion() {
     assert_eq!(line_to(&mut a, p2, 0.1).unwrap(), 0);
     let trace = sim.trace();
     let t0 = trace[after_a1 - 1].t_s;
-    let want = robot_io::sim::ramped_line_motion(&robot_io::pose::Pose(p1), &robot_io::pose::Pose(p2), 0.1, 0.5, t0);
+    let want = robot_io::sim::ramped_line_motion(&robot_io::Pose(p1), &robot_io::Pose(p2), 0.1, 0.5, t0);
     assert_eq!(&trace[after_a1..], &want[..]);
     // On a trapezoidal time law: 20 mm at 0.1 m/s with 0.5 m/s² ramps takes 0.2 + 0.2 s; the
     // path is line_motion's (same start, end and line), starting and ending slowly.
     let a2 = &trace[after_a1..];
     assert!((a2.last().unwrap().t_s - t0 - 0.4).abs() < 1e-9, "{}", a2.last().unwrap().t_s - t0);
-    let speed = |w: &[robot_io::exec::TraceEntry]| (w[1].pose.0[0] - w[0].pose.0[0]) / (w[1].t_s - w[0].t_s);
+    let speed = |w: &[robot_io::TraceEntry]| (w[1].pose.0[0] - w[0].pose.0[0]) / (w[1].t_s - w[0].t_s);
     let speeds: Vec<f64> = a2.windows(2).map(speed).collect();
     assert!(speeds[0] < 0.01 && *speeds.last().unwrap() < 0.01, "{} {}", speeds[0], speeds.last().unwrap());
     // (v²/a = 20 mm: the move just reaches 0.1 m/s at its middle.)
     let top = speeds.iter().copied().fold(0.0, f64::max);
     assert!(top <= 0.1 + 1e-9 && top > 0.098, "{top}");
-    assert!(a2.windows(2).all(|w| w[1].t_s - w[0].t_s <= robot_io::exec::TRACE_STEP_S + 1e-12));
+    assert!(a2.windows(2).all(|w| w[1].t_s - w[0].t_s <= robot_io::TRACE_STEP_S + 1e-12));
     assert_eq!(
         a2.last().unwrap().pose,
-        line_motion(&robot_io::pose::Pose(p1), &robot_io::pose::Pose(p2), 0.1, 0.0).last().unwrap().pose
+        line_motion(&robot_io::Pose(p1), &robot_io::Pose(p2), 0.1, 0.0).last().unwrap().pose
     );
     // Once A's connection closes, motion is free and B moves.
     drop(a);
@@ -348,20 +347,20 @@ fn the_simulator_moves_and_answers_with_the_kinematics_it_is_given() {
     use std::f64::consts::{FRAC_PI_2, PI};
     // A real controller's reported arrays and a waypoint it saved (issue 26), TCP offset 0.1 m
     // along the flange's y.
-    let dh = robot_io::kinematics::DhParams {
+    let dh = robot_io::DhParams {
         a_m: [0.0, 5.8e-5, 0.36851, 0.31634, 4.53e-5, 3.166e-4],
         alpha_rad: [0.0, -1.56995, 3.13975, 3.14489, -1.57019, 1.56620],
         d_m: [0.122, 0.12161, -1.145e-4, 1.145e-4, 0.10210, 0.094],
         theta_rad: [PI, -FRAC_PI_2, 0.0, -FRAC_PI_2, 0.0, 0.0],
     };
     let q = [-0.17556, 0.13348, -0.76781, 0.73389, -1.55988, -0.60547];
-    let saved = robot_io::pose::Pose([-0.49913, -0.09370, 0.57777, -3.09482, -0.04559, -1.14230]);
+    let saved = robot_io::Pose([-0.49913, -0.09370, 0.57777, -3.09482, -0.04559, -1.14230]);
     let sim = start(&[Transport::Framed], SimOptions { kinematics: dh, ..SimOptions::default() });
     let mut c = framed(&sim);
     assert_eq!(c.set_tcp_offset("rob1", [0.0, 0.1, 0.0, 0.0, 0.0, 0.0]).unwrap(), 0);
     let mj = json!({"q": q, "a": 1.0, "v": 1.0, "blend_radius": 0.0, "duration": 0.0});
     assert_eq!(c.call_status("rob1.MotionControl.moveJoint", mj).unwrap(), 0);
-    let near = |p: &robot_io::pose::Pose| {
+    let near = |p: &robot_io::Pose| {
         let (a, b) = (p.to_iso(), saved.to_iso());
         ((a.translation.vector - b.translation.vector).norm(), a.rotation.angle_to(&b.rotation))
     };
@@ -369,20 +368,20 @@ fn the_simulator_moves_and_answers_with_the_kinematics_it_is_given() {
     // 0.33°; the i5's nominal arrays put the same joints centimetres away.
     let (dp, dr) = near(&c.tcp_pose("rob1").unwrap());
     assert!(dp < 2e-3 && dr < 1e-2, "{dp} m, {dr} rad from the saved waypoint");
-    let tcp = robot_io::pose::Pose([0.0, 0.1, 0.0, 0.0, 0.0, 0.0]).to_iso();
-    let nominal = robot_io::pose::Pose::from_iso(&robot_io::kinematics::forward(&q, &tcp));
+    let tcp = robot_io::Pose([0.0, 0.1, 0.0, 0.0, 0.0, 0.0]).to_iso();
+    let nominal = robot_io::Pose::from_iso(&robot_io::DhParams::AUBO_I5.forward(&q, &tcp));
     assert!(near(&nominal).0 > 0.01, "the nominal model is {} m away", near(&nominal).0);
     // Its kinematics services: the same model, (values, status) pairs, the arrays it was given.
     let fk = c.call("rob1.RobotAlgorithm.forwardKinematics", json!({"q": q})).unwrap();
     assert_eq!(fk[1], 0);
     let p: [f64; 6] = serde_json::from_value(fk[0].clone()).unwrap();
-    assert!(near(&robot_io::pose::Pose(p)).0 < 2e-3);
+    assert!(near(&robot_io::Pose(p)).0 < 2e-3);
     let ik = c.call("rob1.RobotAlgorithm.inverseKinematics", json!({"qnear": q, "pose": saved.0})).unwrap();
     assert_eq!(ik[1], 0, "{ik}");
     let solved: [f64; 6] = serde_json::from_value(ik[0].clone()).unwrap();
     let back = c.call("rob1.RobotAlgorithm.forwardKinematics", json!({"q": solved})).unwrap();
     let back: [f64; 6] = serde_json::from_value(back[0].clone()).unwrap();
-    let (dp, dr) = near(&robot_io::pose::Pose(back));
+    let (dp, dr) = near(&robot_io::Pose(back));
     assert!(dp < 1e-5 && dr < 1e-4, "FK of IK: {dp} m, {dr} rad (the inverse's tolerance)");
     let far = c.call("rob1.RobotAlgorithm.inverseKinematics", json!({"qnear": q, "pose": [3.0, 0, 0.1, PI, 0, 0]}));
     assert_eq!(far.unwrap()[1], -10);
@@ -390,7 +389,7 @@ fn the_simulator_moves_and_answers_with_the_kinematics_it_is_given() {
     assert_eq!(serde_json::from_value::<[f64; 6]>(k["alpha"].clone()).unwrap(), dh.alpha_rad);
     assert_eq!(serde_json::from_value::<[f64; 6]>(k["d"].clone()).unwrap(), dh.d_m);
     // Kinematics that are not finite are refused at start.
-    let bad = robot_io::kinematics::DhParams { a_m: [f64::NAN; 6], ..dh };
+    let bad = robot_io::DhParams { a_m: [f64::NAN; 6], ..dh };
     let e = Simulator::start_with(
         &[Listen { bind: "127.0.0.1:0".into(), transports: vec![Transport::Framed] }],
         SimOptions { kinematics: bad, ..SimOptions::default() },

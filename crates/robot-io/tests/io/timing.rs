@@ -2,11 +2,9 @@
 //! at sharp turns and steep presses, and refuses what exceeds a limit, naming the stroke.
 
 use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::exec::level_frame_in_front;
-use robot_io::kinematics::DhParams;
-use robot_io::program::{RobotConfig, build_program};
-use robot_io::timing::{TimedStroke, time_program};
-use robot_io::{Program, RobotError};
+use robot_io::{
+    DhParams, Program, RobotConfig, RobotError, TimedStroke, build_program, level_frame_in_front, time_program,
+};
 
 fn pt(x: f64, y: f64, h: f64) -> TrackPoint {
     TrackPoint { x_mm: x, y_mm: y, h_mm: h, alpha_rad: 0.0, beta_rad: 0.0 }
@@ -120,7 +118,7 @@ fn a_stroke_beyond_a_limit_is_refused_naming_the_stroke_and_the_limit() {
 
 #[test]
 fn a_compacted_stroke_keeps_its_path_with_valid_blends_and_no_zero_length_move() {
-    use robot_io::program::{COMPACT_TOLERANCE_M, check_blends, compact_program};
+    use robot_io::{COMPACT_TOLERANCE_M, check_blends, compact_program};
     let cfg = RobotConfig::default();
     // A quarter circle of radius 20 mm, points 0.15 mm apart, a repeated point, a deepening press.
     let mut pts: Vec<TrackPoint> = (0..=209)
@@ -136,9 +134,8 @@ fn a_compacted_stroke_keeps_its_path_with_valid_blends_and_no_zero_length_move()
     let (before, after) = (prog.strokes[0].press.len(), compact.strokes[0].press.len());
     assert!(after * 5 <= before, "{after} moves of {before}");
     // Every original pressed point lies within the tolerance of the compacted polyline.
-    let line: Vec<[f64; 3]> =
-        robot_io::timing::pressed_path(&compact.strokes[0]).iter().map(|p| p.position()).collect();
-    for p in robot_io::timing::pressed_path(&prog.strokes[0]) {
+    let line: Vec<[f64; 3]> = robot_io::pressed_path(&compact.strokes[0]).iter().map(|p| p.position()).collect();
+    for p in robot_io::pressed_path(&prog.strokes[0]) {
         let q = nalgebra::Vector3::from(p.position());
         let d = line
             .windows(2)
@@ -163,7 +160,7 @@ fn the_brush_stops_exactly_where_the_path_turns_back() {
         (0..=50).map(|i| pt(40.0 + 0.2 * f64::from(i), 60.0, 3.0 + 0.04 * f64::from(i))).collect();
     pts.extend((1..=50).map(|i| pt(50.0 - 0.2 * f64::from(i), 60.0, 5.0 - 0.04 * f64::from(i))));
     let prog = program(pts, &cfg);
-    let far = robot_io::timing::pressed_path(&prog.strokes[0])[50].position();
+    let far = robot_io::pressed_path(&prog.strokes[0])[50].position();
     let t = time_program(&prog, &DhParams::AUBO_I5, &cfg).unwrap().strokes.remove(0);
     // A waypoint at the turning point itself (the deepest press is reached, not cut short).
     let closest = t

@@ -8,12 +8,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::RobotError;
-use robot_io::Transport;
 use robot_io::aubo::{AuboClient, Link, RunOptions, run_program};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{Program, RobotConfig, build_program};
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
+use robot_io::wire::Transport;
+use robot_io::{PaperFrame, Program, RobotConfig, RobotError, build_program};
 
 fn program() -> (Program, PaperFrame) {
     let paper = PaperFrame::level([0.35, 0.15, 0.05], [200.0, 200.0]);
@@ -68,7 +66,7 @@ fn a_program_runs_over_every_transport_and_resumes_after_a_drop() {
             let trace = s.trace();
             for st in &prog.strokes {
                 for m in &st.press {
-                    let robot_io::program::Move::Line { pose, .. } = m else { panic!("line") };
+                    let robot_io::Move::Line { pose, .. } = m else { panic!("line") };
                     assert!(trace.iter().any(|e| e.pose.position() == pose.position()), "{t}: a press missed");
                 }
             }
@@ -87,7 +85,7 @@ fn the_framed_login_is_checked() {
             .unwrap();
     assert_eq!(names, vec!["rob1".to_string()]);
     assert_eq!(c.interface_version(), Some(robot_io::wire::INTERFACE_VERSION));
-    assert_eq!(c.joint_positions("rob1").unwrap(), robot_io::exec::HOME_JOINTS);
+    assert_eq!(c.joint_positions("rob1").unwrap(), robot_io::HOME_JOINTS);
     // A wrong password or user: refused, saying who.
     for link in [Link::default(), Link { user: "root".into(), password: "brush".into(), ..Link::default() }] {
         let e = AuboClient::open(&addr, &link, Duration::from_millis(500)).err().unwrap();

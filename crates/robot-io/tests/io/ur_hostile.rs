@@ -9,8 +9,8 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program};
+use robot_io::PaperFrame;
+use robot_io::{RobotConfig, build_program};
 use robot_io::sim::{UrFaults, UrListen, UrSimOptions, UrSimulator};
 use robot_io::ur::{UrArm, UrPorts};
 use robot_io::{Controller, Plan, Progress, RobotError, Watch};

@@ -5,8 +5,7 @@
 //! millimetres; m/s, not mm/s; the register in the range UR reserves for RTDE clients).
 
 use robot_io::brush_model::{BrushProfile, Stroke, Track, TrackPoint};
-use robot_io::kinematics::DhParams;
-use robot_io::{RobotConfig, build_program, level_frame_in_front, time_program, urscript};
+use robot_io::{DhParams, RobotConfig, build_program, level_frame_in_front, time_program, urscript};
 use serde_json::Value;
 
 fn signatures() -> Value {

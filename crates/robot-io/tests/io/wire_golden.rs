@@ -7,10 +7,9 @@ use std::net::TcpListener;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use robot_io::Transport;
 use robot_io::aubo::AuboClient;
-use robot_io::pose::Pose;
-use robot_io::program::Move;
+use robot_io::wire::Transport;
+use robot_io::{Move, Pose};
 use serde_json::{Value, json};
 
 fn golden() -> Value {

@@ -3,8 +3,7 @@
 //! model derives, and the robot check (default robot.json) passes.
 
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm};
-use robot_io::frame::PaperFrame;
-use robot_io::program::{RobotConfig, build_program};
+use robot_io::{PaperFrame, RobotConfig, build_program};
 use track_refine::{RefineOptions, Target, refine};
 use trajectory::{CharBox, Method, Sizing, TrackOptions, build_track, centre_lines, embedded_glyph, render_glyph};
 

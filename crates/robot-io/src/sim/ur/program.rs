@@ -5,7 +5,7 @@
 use nalgebra::Isometry3;
 
 use crate::exec::{TraceEntry, TraceKind};
-use crate::export::parse::{ReadMove, URSCRIPT_PROGRAM, URSCRIPT_PROGRESS_REGISTER, read_urscript_named};
+use crate::export::{ReadMove, URSCRIPT_PROGRAM, URSCRIPT_PROGRESS_REGISTER, read_urscript_named};
 use crate::kinematics::DhParams;
 use crate::pose::Pose;
 use crate::program::{CONTROLLER_MAX_ACC, CONTROLLER_MAX_BLEND_M, CONTROLLER_MAX_SPEED};
