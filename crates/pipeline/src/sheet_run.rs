@@ -60,8 +60,9 @@ pub struct TimedFootprint {
 /// use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 ///
 /// let pen1 = BrushProfile::builtin("pen1")?;
-/// let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm: 5.0, alpha_rad: 0.0, beta_rad: 0.0 };
-/// let track = Track { strokes: vec![Stroke { points: vec![p(30.0), p(50.0)] }] };
+/// // A 20 mm stroke pressed 12 mm, a point every millimetre.
+/// let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let track = Track { strokes: vec![Stroke { points: (0..=20).map(|i| p(30.0 + i as f64)).collect() }] };
 /// let frame = robot_io::level_frame_in_front([40.0, 40.0], [0.0, 0.0, 80.0, 80.0]);
 /// let run = run_sheet(&track, None, &pen1, &frame, &robot_io::RobotConfig::default())?;
 /// assert_eq!(run.strokes_s.len(), 1);
