@@ -11,6 +11,13 @@
 //! It also holds docs/ARCHITECTURE.md's invariant "the pipeline is not CLI-aware":
 //! crates/pipeline depends on no CLI, progress or plotting crate, and its sources neither print,
 //! exit, write files nor name a command-line flag.
+//!
+//! And its mirror, "the CLI only speaks" ([`cli_not_pipeline`]): no file under crates/maobi/src
+//! runs a program on the simulated arm or sweeps footprints itself ([`CLI_EXECUTION`]: the
+//! pipeline's `run_sheet`, `run_footprints`, `execute_track` and `render_states` do), none but
+//! the `robot` command (the edge that checks, exports and sends a program to an arm, and serves
+//! the simulators) builds or times a program ([`CLI_PROGRAM`]), and no function there runs over
+//! [`CLI_MAX_FN_LINES`] lines.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -97,7 +104,116 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
     println!("tidy: {} tuned constants in {DOC} agree with {CODE_DIR}", rows.len());
     pipeline_not_cli_aware(&root)?;
     println!("tidy: {PIPELINE_DIR} knows no command line");
+    cli_not_pipeline(&root)?;
+    println!(
+        "tidy: {CLI_DIR} only speaks (no program run, no footprint swept, no function over {CLI_MAX_FN_LINES} lines)"
+    );
     Ok(())
+}
+
+const CLI_DIR: &str = "crates/maobi/src";
+
+/// What no file of the CLI may name: running a program on the simulated arm (robot-io's
+/// `execute_as_sent*`, `execute_program*`, `SendMotion`, `trace_to_states`) and sweeping
+/// footprints (brush-model's `ForwardModel` and its `sweep`, bezier-raster's `track_stamps` and
+/// `render_stamps`). Matched as text in code lines (comments skipped), so any path to them
+/// (`robot_io::sim::execute_as_sent`, a `use` of the root re-export) is caught.
+const CLI_EXECUTION: &[&str] = &[
+    "execute_as_sent",
+    "execute_program",
+    "SendMotion",
+    "trace_to_states",
+    "ForwardModel",
+    ".sweep(",
+    "track_stamps",
+    "render_stamps",
+];
+
+/// What only the `robot` command ([`CLI_ROBOT_FILE`]) may name: building, compacting and timing
+/// a program (`build_program*`, `compact_program`, `check_blends`, `time_program*`) and
+/// robot-io's `timing` and `sim` modules (the latter for serving the simulators, `maobi robot
+/// sim`). Elsewhere a sheet's program is run through the pipeline's `run_sheet`.
+const CLI_PROGRAM: &[&str] =
+    &["build_program", "compact_program", "check_blends", "time_program", "robot_io::timing", "robot_io::sim"];
+
+/// The command that talks to arms, exempt from [`CLI_PROGRAM`] only.
+const CLI_ROBOT_FILE: &str = "cmd/robot.rs";
+
+/// The longest function the CLI may hold, lines (signature to closing brace).
+const CLI_MAX_FN_LINES: usize = 100;
+
+/// Fails naming every place where the CLI runs a program, sweeps footprints, builds or times a
+/// program outside the `robot` command, or holds a function over [`CLI_MAX_FN_LINES`] lines.
+fn cli_not_pipeline(root: &Path) -> Result<()> {
+    let dir = root.join(CLI_DIR);
+    let mut files = Vec::new();
+    rust_files(&dir, &mut files)?;
+    let mut problems = Vec::new();
+    for f in files {
+        let text = std::fs::read_to_string(&f).with_context(|| format!("reading {}", f.display()))?;
+        let robot = f.strip_prefix(&dir).is_ok_and(|r| r == Path::new(CLI_ROBOT_FILE));
+        for (line, what) in pipeline_lines(&text, robot) {
+            problems.push(format!("{}:{line}: {what}", rel(root, &f)));
+        }
+        for (line, name, n) in long_functions(&text, CLI_MAX_FN_LINES) {
+            problems.push(format!("{}:{line}: fn {name} is {n} lines (at most {CLI_MAX_FN_LINES})", rel(root, &f)));
+        }
+    }
+    if !problems.is_empty() {
+        bail!("the CLI does pipeline work (docs/ARCHITECTURE.md, invariants):\n{}", problems.join("\n"));
+    }
+    Ok(())
+}
+
+/// `(line, what)` for each code line (comments skipped) naming a [`CLI_EXECUTION`] item, or a
+/// [`CLI_PROGRAM`] one unless `robot`.
+fn pipeline_lines(text: &str, robot: bool) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, l) in text.lines().enumerate() {
+        let code = l.trim_start();
+        if code.starts_with("//") {
+            continue;
+        }
+        let program: &[&str] = if robot { &[] } else { CLI_PROGRAM };
+        if let Some(c) = CLI_EXECUTION.iter().chain(program).find(|c| code.contains(*c)) {
+            out.push((i + 1, format!("`{c}`")));
+        }
+    }
+    out
+}
+
+/// `(line, name, lines)` of each `fn` over `max` lines, from its `fn` line to the closing brace
+/// at its indentation (rustfmt's layout: the body ends with a line holding only `}` at the
+/// indentation of `fn`).
+fn long_functions(text: &str, max: usize) -> Vec<(usize, String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let code = l.trim_start();
+        let indent = &l[..l.len() - code.len()];
+        let rest = ["pub(crate) ", "pub(super) ", "pub "].iter().find_map(|p| code.strip_prefix(p)).unwrap_or(code);
+        let rest = ["const ", "async ", "unsafe "].iter().fold(rest, |r, p| r.strip_prefix(p).unwrap_or(r));
+        let Some(sig) = rest.strip_prefix("fn ") else { continue };
+        let name: String = sig.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        // The signature ends at the first line ending with `{` (a body) or `;` (none).
+        let Some(open) = (i..lines.len()).find(|&j| {
+            let t = lines[j].trim_end();
+            t.ends_with('{') || t.ends_with(';') || t.ends_with('}')
+        }) else {
+            continue;
+        };
+        if !lines[open].trim_end().ends_with('{') {
+            continue;
+        }
+        let close = format!("{indent}}}");
+        if let Some(end) = (open + 1..lines.len()).find(|&j| lines[j] == close) {
+            let n = end - i + 1;
+            if n > max {
+                out.push((i + 1, name, n));
+            }
+        }
+    }
+    out
 }
 
 const PIPELINE_DIR: &str = "crates/pipeline";
@@ -336,5 +452,34 @@ mod cli_awareness_tests {
     #[test]
     fn the_pipeline_crate_passes() {
         pipeline_not_cli_aware(&crate::fixtures::root()).unwrap();
+    }
+
+    #[test]
+    fn runs_sweeps_and_programs_are_found_in_the_cli_and_comments_are_not() {
+        let src = "// ForwardModel::default() in a comment is fine\nuse robot_io::sim::{SendMotion, execute_as_sent};\nlet s = model.sweep(&p, &run, e);\nlet (p, r) = build_program_chars(&t, None, &b, &f, &c)?;\nlet t = robot_io::time_program(&p, &k, &c)?;\nlet c = RobotConfig::default();\n";
+        let found = pipeline_lines(src, false);
+        assert_eq!(found.iter().map(|(l, _)| *l).collect::<Vec<_>>(), vec![2, 3, 4, 5], "{found:?}");
+        assert!(found[0].1.contains("execute_as_sent") || found[0].1.contains("SendMotion"), "{found:?}");
+        // The robot command may build and time a program, never run or sweep one.
+        let found = pipeline_lines(src, true);
+        assert_eq!(found.iter().map(|(l, _)| *l).collect::<Vec<_>>(), vec![2, 3], "{found:?}");
+    }
+
+    #[test]
+    fn functions_over_the_limit_are_found_by_their_closing_brace() {
+        let body = |n: usize| (0..n).map(|i| format!("        let x{i} = {i};\n")).collect::<String>();
+        let src = format!(
+            "fn short() {{\n{}}}\n\nimpl A {{\n    pub(crate) fn long(\n        a: u32,\n    ) -> u32 {{\n{}        a\n    }}\n\n    fn decl(&self);\n}}\n",
+            body(3),
+            body(10)
+        );
+        // `long`: its fn line, two of signature, its `{` line, 10 + 1 of body, the closing brace.
+        assert_eq!(long_functions(&src, 12), vec![(8, "long".to_string(), 15)]);
+        assert!(long_functions(&src, 15).is_empty());
+    }
+
+    #[test]
+    fn the_cli_passes() {
+        cli_not_pipeline(&crate::fixtures::root()).unwrap();
     }
 }

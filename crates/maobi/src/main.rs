@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 mod cmd;
 mod common;
 mod generator;
+mod page;
 mod plot;
 
 // Training and rendering create and drop large buffers all the time; glibc hands allocations

@@ -32,12 +32,15 @@ mod error;
 mod glyphs;
 mod marks;
 mod means;
+mod next_attempt;
 mod observation;
 mod placement;
 mod prepare;
 mod readback;
+mod registration;
 mod sheet;
 mod sheet_file;
+mod sheet_run;
 mod text;
 pub mod tuning;
 mod write;
@@ -55,6 +58,10 @@ pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{Mark, MarkError, MarkRole, mark_strokes, registration_marks};
 pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
+pub use next_attempt::{
+    MAX_ROUNDS, MAX_SHEET_SUMMARY_BYTES, MIN_OBSERVED_INK_SHARE, NextAttempt, NextOptions, ObservedRun,
+    ObservedRunError, Round, RoundChar, same_brush,
+};
 pub use observation::{
     MAX_OBSERVATION_BYTES, OBSERVATION_VERSION, OBSERVED_PX, Observation, ObservedChar, ObservedRegistration,
     ObservedScores, ObservedSheet,
@@ -62,11 +69,13 @@ pub use observation::{
 pub use placement::{BoxRule, Placement, searched_placement, searched_splits, with_splits, write_placed};
 pub use prepare::{Prepared, TemplateReport, prepare, prepare_with_template};
 pub use readback::{ReadBackError, char_folder, fingerprint, read_bounded};
+pub use registration::known_marks;
 pub use sheet::{
     BrushFit, BrushMiss, Flow, Grid, Layout, MAX_SHEET_MM, Sheet, SheetChar, SheetError, SheetTrack, auto_layout,
-    layout_on_sheet, parse_sheet, sheet_image, sheet_image_of,
+    layout_on_sheet, parse_sheet, sheet_image, sheet_image_of, sheet_image_with_marks,
 };
 pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
+pub use sheet_run::{RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet};
 pub use text::{TextOptions, WrittenText, write_text, write_text_each};
 pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]

@@ -582,6 +582,43 @@ pub fn sheet_image_of(
     ))
 }
 
+/// `sheet.png`: every character's track ([`sheet_image_of`]) and the registration marks the
+/// robot writes before them (`marks`: the first strokes of the sheet's track, as the preview and
+/// the exports show them), at the characters' image scale (`size_px` per char box). The marks
+/// lie in the margin, apart from the characters; their ink is joined to the characters' as a
+/// union.
+///
+/// # Errors
+/// When the profile refuses a press of a character or of a mark.
+pub fn sheet_image_with_marks(
+    tracks: &[&Track],
+    marks: &[brush_model::Stroke],
+    profile: &BrushProfile,
+    model: ModelKind,
+    layout: &Layout,
+    size_px: u32,
+) -> Result<Coverage, brush_model::ProfileError> {
+    let mut img = sheet_image_of(tracks, profile, model, layout, size_px)?;
+    if marks.is_empty() {
+        return Ok(img);
+    }
+    let marks = Track { strokes: marks.to_vec() };
+    let (wp, hp) = layout.image_px(size_px);
+    let stamps = bezier_raster::track_stamps(&marks, profile, Extrapolation::Refuse)?;
+    let m = bezier_raster::render_stamps(
+        &stamps,
+        model.model(),
+        brush_model::PointMm::new(0.0, 0.0),
+        size_px as f64 / layout.char_mm,
+        wp as u32,
+        hp as u32,
+    );
+    for (a, &b) in img.data_mut().iter_mut().zip(m.data()) {
+        *a = 1.0 - (1.0 - *a) * (1.0 - b);
+    }
+    Ok(img)
+}
+
 /// Share of track points beyond one end of the brush's width range above which
 /// [`BrushFit::of`] says the brush does not suit the size. At the automatic size about a fifth
 /// of the points lie beyond each end by construction (it maps the 20th–80th percentile widths

@@ -88,33 +88,7 @@ pub fn run(args: Args) -> Result<()> {
     while start < args.n {
         let end = (start + CHUNK).min(args.n);
         // None: skipped because of Ctrl-C.
-        let rows: Vec<Option<String>> = (start..end)
-            .into_par_iter()
-            .map_init(
-                || (Rasterizer::new(), Coverage::new(args.size, args.size)),
-                |(raster, img), i| -> Result<Option<String>> {
-                    if interrupted() {
-                        return Ok(None);
-                    }
-                    let s = spec.sample(i)?;
-                    spec.render(&s, args.model.model(), raster, img);
-                    let file = file_name(i);
-                    if i == 700 {
-                        test_hook("dataset-image-700")?;
-                    }
-                    write_atomic(&dir.join(&file), &img.encode_png()?)?;
-                    pb.inc(1);
-                    let fields = brush_model::measurement_fields(
-                        &brush_model::Measurement { press: s.press, footprint: s.footprint },
-                        None,
-                    );
-                    Ok(Some(format!(
-                        "{file},{fields},{},{},{}\n",
-                        spec.canvas.px_per_mm, s.anchor_px[0], s.anchor_px[1]
-                    )))
-                },
-            )
-            .collect::<Result<_>>()?;
+        let rows = render_chunk(&args, &spec, &dir, start..end, &file_name, &pb)?;
         // Rows in index order up to the first image not written; later images of this chunk
         // (finished by other threads after Ctrl-C) are removed so the folder matches the labels.
         let done = rows.iter().take_while(|r| r.is_some()).count();
@@ -169,4 +143,40 @@ pub fn run(args: Args) -> Result<()> {
     );
     eprintln!("{msg}");
     Ok(())
+}
+
+/// Renders and writes images `range` in parallel; each one's labels.csv row, or `None` when
+/// skipped because of Ctrl-C.
+fn render_chunk(
+    args: &Args,
+    spec: &DatasetSpec,
+    dir: &std::path::Path,
+    range: std::ops::Range<u64>,
+    file_name: &(dyn Fn(u64) -> String + Sync),
+    pb: &crate::common::Progress,
+) -> Result<Vec<Option<String>>> {
+    range
+        .into_par_iter()
+        .map_init(
+            || (Rasterizer::new(), Coverage::new(args.size, args.size)),
+            |(raster, img), i| -> Result<Option<String>> {
+                if interrupted() {
+                    return Ok(None);
+                }
+                let s = spec.sample(i)?;
+                spec.render(&s, args.model.model(), raster, img);
+                let file = file_name(i);
+                if i == 700 {
+                    test_hook("dataset-image-700")?;
+                }
+                write_atomic(&dir.join(&file), &img.encode_png()?)?;
+                pb.inc(1);
+                let fields = brush_model::measurement_fields(
+                    &brush_model::Measurement { press: s.press, footprint: s.footprint },
+                    None,
+                );
+                Ok(Some(format!("{file},{fields},{},{},{}\n", spec.canvas.px_per_mm, s.anchor_px[0], s.anchor_px[1])))
+            },
+        )
+        .collect()
 }

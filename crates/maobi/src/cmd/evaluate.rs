@@ -9,8 +9,8 @@ use rayon::prelude::*;
 use serde_json::json;
 use trajectory::{GlyphError, Method, embedded_chars};
 
-use crate::cmd::write::{glyph_input, prepare_char};
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
+use crate::common::{MAX_CHAR_MM, MIN_CHAR_MM, PlacementArg, RefineArgs, glyph_input, prepare_char};
 use crate::generator::committed_gen_model;
 
 /// Arguments of `maobi evaluate`.
@@ -61,16 +61,16 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     #[command(flatten)]
-    placement: crate::cmd::write::PlacementArg,
+    placement: PlacementArg,
     #[command(flatten)]
-    refine: crate::cmd::write::RefineArgs,
+    refine: RefineArgs,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     check_range("--size", args.size, 64, 4096, "px")?;
     if let Some(mm) = args.char_mm {
-        check_range("--char-mm", mm, crate::cmd::write::MIN_CHAR_MM, crate::cmd::write::MAX_CHAR_MM, "mm")?;
+        check_range("--char-mm", mm, MIN_CHAR_MM, MAX_CHAR_MM, "mm")?;
     }
     if args.limit == Some(0) {
         bail!("--limit 0: expected at least 1 character");

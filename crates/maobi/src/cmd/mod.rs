@@ -1,7 +1,6 @@
 //! One module per subcommand.
 
 pub mod calibrate;
-pub mod calibrate_photos;
 pub mod calibrate_sheet;
 pub mod compare;
 pub mod dataset;

@@ -7,8 +7,7 @@ use anyhow::{Context, Result, bail};
 use bezier_raster::Coverage;
 use observe::{Frame, KnownMark, Photo, Registration, diagnose, ink_map, rectify, register};
 use pipeline::{
-    Mark, MarkRole, OBSERVATION_VERSION, Observation, ObservedChar, ObservedRegistration, ObservedSheet, SheetTrack,
-    similarity,
+    OBSERVATION_VERSION, Observation, ObservedChar, ObservedRegistration, ObservedSheet, SheetTrack, similarity,
 };
 
 use crate::common::{
@@ -40,28 +39,6 @@ pub struct Args {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     json: bool,
-}
-
-/// `marks` in the order `observe::register` takes them, the four corners first, then the others;
-/// `None` when a corner is missing.
-pub(super) fn known_marks(marks: &[Mark]) -> Option<Vec<KnownMark>> {
-    let order = [MarkRole::TopLeft, MarkRole::TopRight, MarkRole::BottomRight, MarkRole::BottomLeft];
-    let mut ordered: Vec<&Mark> = order.iter().filter_map(|r| marks.iter().find(|m| m.role == *r)).collect();
-    if ordered.len() != 4 {
-        return None;
-    }
-    ordered.extend(marks.iter().filter(|m| !order.contains(&m.role)));
-    Some(
-        ordered
-            .iter()
-            .map(|m| KnownMark {
-                role: m.role.name().into(),
-                centre_mm: m.centre_mm,
-                half_length_mm: m.half_length_mm,
-                half_width_mm: m.half_width_mm,
-            })
-            .collect(),
-    )
 }
 
 /// The sheet folder read back: its validated track.json (and that file's bytes, for the
@@ -119,7 +96,7 @@ pub(super) fn load_sheet(flag: &str, dir: &Path) -> Result<SheetFolder> {
             path.display()
         );
     }
-    let Some(known) = known_marks(&track.marks) else {
+    let Some(known) = pipeline::known_marks(&track.marks) else {
         bail!("{flag}: {} lacks one of the four corner registration marks", path.display());
     };
     if known.len() < 5 {

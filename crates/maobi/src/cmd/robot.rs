@@ -928,17 +928,10 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = read_trace(&a.trace)?;
-    let states = robot_io::trace_to_states(&trace, &frame);
     let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
-    let img = pipeline::render_states(
-        &states,
-        &tf.brush,
-        bezier_raster::ModelKind::Bsm,
-        brush_model::Extrapolation::Refuse,
-        &char_box,
-        a.size,
-    );
+    let (img, states) =
+        pipeline::render_trace(&trace, &frame, &tf.brush, bezier_raster::ModelKind::Bsm, &char_box, a.size);
     write_atomic(&a.output, &img.encode_png()?)?;
     let pressed = states.iter().filter(|p| p.h_mm > 0.0).count();
     println!("{} trace samples ({pressed} pressed) rendered to {}", states.len(), a.output.display());

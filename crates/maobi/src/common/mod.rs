@@ -9,13 +9,17 @@ use anyhow::{Result, bail};
 use brush_model::BrushProfile;
 
 mod args;
+mod glyph_args;
 mod interrupt;
 mod output;
+mod photo_args;
 mod progress;
 
 pub use args::*;
+pub use glyph_args::*;
 pub use interrupt::*;
 pub use output::*;
+pub use photo_args::*;
 pub use progress::*;
 
 /// The smallest image scale a flag may ask for, px per mm (a 25-dpi scan is 1 px/mm).

@@ -10,10 +10,10 @@ use std::time::{Duration, Instant};
 
 use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
 use robot_io::PaperFrame;
-use robot_io::{RobotConfig, build_program};
 use robot_io::sim::{UrFaults, UrListen, UrSimOptions, UrSimulator};
 use robot_io::ur::{UrArm, UrPorts};
 use robot_io::{Controller, Plan, Progress, RobotError, Watch};
+use robot_io::{RobotConfig, build_program};
 
 /// Runs a two-stroke program on the stand-in (its clock 10 × the wall clock) with `faults`:
 /// the result, the programs the stand-in was sent (the program, then any lift) and the time.

@@ -7,8 +7,7 @@ use anyhow::Result;
 use brush_model::{Footprint, Measurement};
 use rayon::prelude::*;
 
-use crate::cmd::fit_stroke::fit_photo;
-use crate::common::{progress, read_stroke_labels, write_atomic};
+use crate::common::{fit_photo, progress, read_stroke_labels, write_atomic};
 
 /// Fits every photo listed in the labels (in parallel, with a progress bar), lists and drops
 /// the poor fits, writes `measurements.csv` beside `profile_out`, and returns the measurements.

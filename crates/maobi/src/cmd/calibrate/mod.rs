@@ -7,6 +7,9 @@ use brush_model::{BrushProfile, Form, PressRanges, Range, load_measurements};
 
 use crate::common::{check_output_file, check_range, load_brush, print_json, write_atomic};
 
+mod photos;
+mod sheet_photo;
+
 /// Arguments of `maobi calibrate`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -69,31 +72,7 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    // The sheet photo's measurements.csv is written once the fit is accepted (a refused photo
-    // writes nothing).
-    let mut sheet_csv = None;
-    let mut sheet_brush = None;
-    let (rows, source) = match (&args.measurements, &args.images) {
-        (Some(m), _) => (load_measurements(m)?, m.clone()),
-        (None, None) if args.sheet_photo.is_some() => {
-            let (photo, cal) = (args.sheet_photo.as_ref().expect("matched"), args.layout.as_ref().expect("clap"));
-            args.output
-                .as_ref()
-                .context("--sheet-photo needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
-            let (rows, csv, brush) = crate::cmd::calibrate_sheet::measure(photo, cal, args.min_iou)?;
-            sheet_csv = Some(csv);
-            sheet_brush = Some(brush);
-            (rows, photo.clone())
-        }
-        (None, Some(dir)) => {
-            let out = args
-                .output
-                .as_ref()
-                .context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
-            (crate::cmd::calibrate_photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone())
-        }
-        (None, None) => bail!("give a measurements CSV, --images DIR or --sheet-photo PHOTO --layout CAL"),
-    };
+    let (rows, source, sheet_csv, sheet_brush) = measurements(&args)?;
     let form = match args.form {
         FormArg::General => Form::General,
         FormArg::Paper => Form::Paper,
@@ -164,4 +143,32 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The measurements the flags give, where they came from, and for a sheet photo its
+/// measurements.csv (written once the fit is accepted: a refused photo writes nothing) and the
+/// brush the sheet was made for.
+type Measured = (Vec<brush_model::Measurement>, PathBuf, Option<String>, Option<brush_model::Brush>);
+
+/// The measurements the flags name ([`Measured`]).
+fn measurements(args: &Args) -> Result<Measured> {
+    Ok(match (&args.measurements, &args.images) {
+        (Some(m), _) => (load_measurements(m)?, m.clone(), None, None),
+        (None, None) if args.sheet_photo.is_some() => {
+            let (photo, cal) = (args.sheet_photo.as_ref().expect("matched"), args.layout.as_ref().expect("clap"));
+            args.output
+                .as_ref()
+                .context("--sheet-photo needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
+            let (rows, csv, brush) = sheet_photo::measure(photo, cal, args.min_iou)?;
+            (rows, photo.clone(), Some(csv), Some(brush))
+        }
+        (None, Some(dir)) => {
+            let out = args
+                .output
+                .as_ref()
+                .context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
+            (photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone(), None, None)
+        }
+        (None, None) => bail!("give a measurements CSV, --images DIR or --sheet-photo PHOTO --layout CAL"),
+    })
 }

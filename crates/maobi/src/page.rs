@@ -1,0 +1,222 @@
+//! The preview page: one self-contained HTML file that plays a track's program over its sheet
+//! (the brush moving in time, footprints appearing), with plots of h, α and speed, the robot
+//! check's verdict and the ink dips. No network: the data and the script are inline. What it
+//! plays comes from the pipeline ([`pipeline::run_sheet`], [`pipeline::run_footprints`]); this
+//! module only lays it out. `maobi preview` and `maobi write` write it.
+
+use anyhow::Result;
+use brush_model::{BrushProfile, Track};
+use pipeline::{Grid, RunSample, SheetTrack};
+use robot_io::PaperFrame;
+use robot_io::RobotConfig;
+use robot_io::level_frame_in_front;
+use serde_json::json;
+
+/// What the preview shows.
+pub struct PreviewInput<'a> {
+    /// Title.
+    pub title: String,
+    /// Sheet `[w, h]`, mm.
+    pub sheet_mm: [f64; 2],
+    /// Grid under each box.
+    pub grid: Grid,
+    /// Character boxes `[x0, y0, size]`, mm.
+    pub boxes: Vec<[f64; 3]>,
+    /// Each stroke's character, when known.
+    pub stroke_chars: Option<Vec<usize>>,
+    /// The brush.
+    pub brush: &'a BrushProfile,
+    /// The strokes.
+    pub track: Track,
+}
+
+/// The preview of a sheet track (what `maobi write` writes beside the sheet).
+pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+    let input = PreviewInput {
+        title: t.char.clone(),
+        sheet_mm: t.sheet_mm,
+        grid: t.grid,
+        boxes: t.chars.iter().map(|c| c.char_box_mm).collect(),
+        stroke_chars: Some(t.stroke_chars.clone()),
+        brush: &t.brush,
+        track: Track { strokes: t.strokes.clone() },
+    };
+    preview_html(&input, frame, cfg)
+}
+
+/// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
+/// `maobi write` places a character for its executed figure).
+fn level_frame(sheet_mm: [f64; 2]) -> PaperFrame {
+    level_frame_in_front([sheet_mm[0] / 2.0, sheet_mm[1] / 2.0], [0.0, 0.0, sheet_mm[0], sheet_mm[1]])
+}
+
+/// The safe program's verdict: what it holds and how long it takes.
+fn verdict(run: &pipeline::SheetRun, cfg: &RobotConfig, where_: &str) -> String {
+    let report = &run.report;
+    // Ink is off unless the robot configuration names an ink pot: say so, not "0 dips".
+    let dips = if cfg.ink.is_none() {
+        "ink dipping off (no \"ink\" in robot.json: see fixtures/robot/robot-ink.json)".to_string()
+    } else {
+        format!("{} ink dip(s)", report.dips)
+    };
+    // One time: the program as the simulator runs it (what the timeline plays).
+    let run_s = run.samples.last().map_or(0.0, |x| x.t_s);
+    format!(
+        "safe ({where_}): {} strokes, {} points, {} moves, {dips}; deepest press {:.2} mm; {run_s:.1} s to write, {:.1} s of it on the paper (the strokes' timing; the longest stroke {:.1} s)",
+        report.strokes,
+        report.points,
+        report.moves,
+        report.max_press_mm,
+        run.timing.writing_s,
+        run.timing.strokes.iter().map(|t| t.duration_s).fold(0.0, f64::max)
+    )
+}
+
+fn r2(v: f64) -> f64 {
+    (v * 100.0).round() / 100.0
+}
+
+/// Builds the preview HTML: the program is checked with `paper` (default: a level sheet in front
+/// of the arm) and `robot.json` (default settings) and executed as the simulator would
+/// ([`pipeline::run_sheet`]); the footprints come from the forward model over the executed path,
+/// each at the time the brush reaches it ([`pipeline::run_footprints`]). A refused program is
+/// previewed from the planned track (timed at the write speed) with the refusal as the verdict.
+///
+/// # Errors
+/// When the brush profile refuses the track's presses.
+pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+    let default_cfg = RobotConfig::default();
+    let cfg = cfg.unwrap_or(&default_cfg);
+    let level = level_frame(input.sheet_mm);
+    let frame = paper.unwrap_or(&level);
+    let where_ = if paper.is_some() { "on the given paper.json" } else { "on a level sheet in front of the AUBO-i5" };
+    // Checked and timed as `robot check` does it (the nominal i5, the simulator's arm) and
+    // played as `robot send` sends it: the timeline's pressed time is the timing's. A timing
+    // beyond a limit is a refusal like the check's.
+    let (samples, verdict, safe, dips, strokes_s) =
+        match pipeline::run_sheet(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg) {
+            Ok(run) => {
+                let v = verdict(&run, cfg, where_);
+                let spans = run.strokes_s.iter().map(|s| [r2(s[0]), r2(s[1])]).collect();
+                (run.samples, v, true, run.report.dips, spans)
+            }
+            // The planned track, pen-down paths at the write speed, a second of travel between.
+            Err(e) => (
+                pipeline::planned_samples(&input.track, cfg.write_speed_m_s),
+                format!("refused ({where_}): {e}"),
+                false,
+                0,
+                Vec::new(),
+            ),
+        };
+    let mut feet: Vec<f64> = Vec::new();
+    for f in pipeline::run_footprints(&samples, input.brush, frame) {
+        feet.push(r2(f.t_s));
+        for p in f.outline {
+            feet.push(r2(p.x_mm));
+            feet.push(r2(p.y_mm));
+        }
+    }
+    let path = path_data(&samples);
+    let dip_spans = dip_spans(&samples);
+    let data = json!({
+        "title": input.title,
+        "sheet_mm": input.sheet_mm,
+        "grid": input.grid,
+        "boxes": input.boxes,
+        "verdict": verdict,
+        "safe": safe,
+        "dips": dips,
+        "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
+        "strokes_s": strokes_s,
+        "duration_s": samples.last().map_or(0.0, |s| s.t_s),
+        "path": path,
+        "feet": feet,
+        "brush": input.brush.name,
+    });
+    // No `<` at all inside the inline JSON (`\u003c` is the same string to JSON): `</script`
+    // would end the element and `<!--` would change how the browser reads the rest of it.
+    let data = serde_json::to_string(&data)?.replace('<', "\\u003c");
+    Ok(fill(TEMPLATE, &html_escape(&input.title), &data))
+}
+
+/// The template with its two placeholders filled in one pass, so that text put in for one can
+/// never be read as the other.
+fn fill(template: &str, title: &str, data: &str) -> String {
+    let mut out = String::with_capacity(template.len() + title.len() + data.len());
+    let mut rest = template;
+    while let Some(i) = rest.find("__") {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        if let Some(r) = tail.strip_prefix("__TITLE__") {
+            out.push_str(title);
+            rest = r;
+        } else if let Some(r) = tail.strip_prefix("__DATA__") {
+            out.push_str(data);
+            rest = r;
+        } else {
+            out.push_str("__");
+            rest = &tail[2..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;").replace('\'', "&#39;")
+}
+
+/// The samples thinned for the animation and plots (at most ~8000): t, x, y, h, α (degrees),
+/// speed (mm/s) and dip (0/1) each.
+fn path_data(samples: &[RunSample]) -> Vec<f64> {
+    // Thin the samples for the animation and plots (at most ~8000).
+    let step = samples.len().div_ceil(8000).max(1);
+    let mut path: Vec<f64> = Vec::new();
+    let mut prev: Option<&RunSample> = None;
+    for (k, s) in samples.iter().enumerate() {
+        if k % step != 0 && k + 1 != samples.len() {
+            continue;
+        }
+        let speed = prev.map_or(0.0, |q| {
+            let dt = s.t_s - q.t_s;
+            let d = ((s.point.x_mm - q.point.x_mm).powi(2)
+                + (s.point.y_mm - q.point.y_mm).powi(2)
+                + (s.point.h_mm - q.point.h_mm).powi(2))
+            .sqrt();
+            if dt > 1e-9 { d / dt } else { 0.0 }
+        });
+        path.extend([
+            (s.t_s * 1000.0).round() / 1000.0,
+            r2(s.point.x_mm),
+            r2(s.point.y_mm),
+            r2(s.point.h_mm),
+            (s.point.alpha_rad.to_degrees() * 100.0).round() / 100.0,
+            r2(speed),
+            if s.dip { 1.0 } else { 0.0 },
+        ]);
+        prev = Some(s);
+    }
+    path
+}
+
+/// The ink dips' intervals, s.
+fn dip_spans(samples: &[RunSample]) -> Vec<[f64; 2]> {
+    let mut dip_spans: Vec<[f64; 2]> = Vec::new();
+    let mut was_dip = false;
+    for x in samples {
+        match (x.dip, was_dip) {
+            (true, false) => dip_spans.push([x.t_s, x.t_s]),
+            (true, true) => {
+                if let Some(last) = dip_spans.last_mut() {
+                    last[1] = x.t_s;
+                }
+            }
+            _ => {}
+        }
+        was_dip = x.dip;
+    }
+    dip_spans
+}
+
+const TEMPLATE: &str = include_str!("cmd/preview.html");
