@@ -44,7 +44,7 @@ fn a_character_is_written_on_the_grbl_firmware_from_the_command_line() {
     assert!(stdout.contains("1 of 1 strokes completed") && stdout.contains("G-code lines"), "{stdout}");
     assert!(stdout.contains("written in") && stdout.contains("planned"), "{stdout}");
     m.stop_relay();
-    let st = m.wait_idle(Duration::from_secs(5));
+    let st = m.wait_idle(Duration::from_secs(30));
     // Idle at the travel height, 5 mm above the paper.
     assert!(st.starts_with("<Idle") && (mpos(&st)[2] - (-20.0 + 5.0)).abs() < 1e-3, "{st}");
     let blocks = m.finish();

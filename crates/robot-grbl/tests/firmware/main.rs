@@ -112,7 +112,7 @@ fn a_small_sheet_streams_end_to_end_through_the_controller_seam() {
     let max = m.seen.max_in_flight.load(Ordering::SeqCst);
     assert!((80..=127).contains(&max), "at most {max} bytes in flight");
     m.stop_relay();
-    let st = m.wait_idle(Duration::from_secs(5));
+    let st = m.wait_idle(Duration::from_secs(30));
     assert!(st.starts_with("<Idle"), "{st}");
     let last = mpos(&st);
     assert!((last[2] - (WCO[2] + gp.lift_mm)).abs() < 1e-3, "ends at the travel height: {st}");
@@ -240,7 +240,7 @@ fn faults_mid_stream_stop_with_the_last_acknowledged_line_and_a_raised_brush() {
     assert!(what.starts_with("error:") && text.starts_with('G') && *line > 0, "{s}");
     assert_eq!(s.last_acked.as_ref().map(|l| l.0), Some(p.lines[s.lines_acked - 1].source_line));
     assert!(s.safe.lifted, "{s}");
-    let st = m.wait_idle(Duration::from_secs(5));
+    let st = m.wait_idle(Duration::from_secs(30));
     assert!(mpos(&st)[2] - WCO[2] >= p.lift_mm - 1e-3, "at or above the travel height: {st}");
     drop(m);
     // A reset from the far side while moving: ALARM:3 (position lost): unlocked and raised
@@ -259,7 +259,7 @@ fn faults_mid_stream_stop_with_the_last_acknowledged_line_and_a_raised_brush() {
     assert!(!s.safe.lifted && s.safe.how.contains("lift it by hand"), "{s}");
     assert_eq!(s.lines_acked, 8 - 4, "{s}");
     assert!(s.to_string().contains(&format!("line {}", p.lines[3].source_line)), "{s}");
-    let st = m.wait_idle(Duration::from_secs(10));
+    let st = m.wait_idle(Duration::from_secs(30));
     assert!(st.starts_with("<Idle"), "{st}");
     drop(m);
     // The link gone quiet (GRBL's answers lost, its input still reaching it): reported lost
