@@ -31,12 +31,14 @@
 struct ReadmeDoctests;
 
 mod footprint;
+mod input;
 mod measurements;
 mod motion;
 mod profile;
 mod regression;
 mod units;
 
+pub use input::{open_regular, read_regular};
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
 pub use measurements::{
     MEASUREMENT_COLUMNS, Measurement, MeasurementError, load_measurements, measurement_fields, read_measurements,

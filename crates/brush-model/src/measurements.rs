@@ -114,12 +114,13 @@ pub enum MeasurementError {
 /// [`MeasurementError`] naming the file, line and column of the first problem.
 pub fn load_measurements(path: &Path) -> Result<Vec<Measurement>, MeasurementError> {
     let io = |source| MeasurementError::Io { path: path.to_path_buf(), source };
-    let file = std::fs::File::open(path).map_err(io)?;
+    let file = crate::open_regular(path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
     if len > MAX_BYTES {
         return Err(MeasurementError::TooLarge { path: path.to_path_buf(), bytes: len, max: MAX_BYTES });
     }
-    read_measurements(file, &path.display().to_string())
+    // Bounded even if the file grows while it is read.
+    read_measurements(file.take(MAX_BYTES), &path.display().to_string())
 }
 
 /// Reads measurements from any reader; `source_name` labels errors.

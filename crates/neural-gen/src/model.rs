@@ -16,6 +16,12 @@ use crate::conv::{self, Conv2d};
 use crate::vjp::InputVjp;
 use crate::{ConfigError, NeuralGenError};
 
+/// The largest generator config [`Generator::load`] reads, bytes.
+const MAX_CONFIG_BYTES: u64 = 1 << 20;
+/// The largest generator weights file [`Generator::load`] reads, bytes (the committed pen1
+/// checkpoint is a few MB).
+const MAX_WEIGHTS_BYTES: u64 = 1 << 30;
+
 /// A generator: the network and its configuration.
 ///
 /// Inference ([`Generator::forward`], [`Generator::render`]) runs on the crate's direct
@@ -351,16 +357,18 @@ impl Generator {
     pub fn load(path: &Path) -> Result<Self, NeuralGenError> {
         let cfg_path = config_path(path);
         let name = cfg_path.display().to_string();
-        let text = std::fs::read_to_string(&cfg_path).map_err(|source| NeuralGenError::Io {
-            path: cfg_path.clone(),
-            context: "cannot read the generator's config",
-            source,
-        })?;
-        let bytes = std::fs::read(path).map_err(|source| NeuralGenError::Io {
-            path: path.to_path_buf(),
-            context: "cannot read the generator's weights",
-            source,
-        })?;
+        let read = |p: &Path, max: u64, context: &'static str| {
+            let io = |source| NeuralGenError::Io { path: p.to_path_buf(), context, source };
+            let over = || io(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("more than {max} bytes")));
+            brush_model::read_regular(p, max).map_err(io)?.ok_or_else(over)
+        };
+        let text = String::from_utf8(read(&cfg_path, MAX_CONFIG_BYTES, "cannot read the generator's config")?)
+            .map_err(|e| NeuralGenError::Io {
+                path: cfg_path.clone(),
+                context: "cannot read the generator's config",
+                source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text: {e}")),
+            })?;
+        let bytes = read(path, MAX_WEIGHTS_BYTES, "cannot read the generator's weights")?;
         Self::from_bytes(&bytes, &text, &path.display().to_string(), &name)
     }
 

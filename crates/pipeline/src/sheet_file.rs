@@ -61,6 +61,18 @@ impl SheetTrack {
         let [w, h] = self.sheet_mm;
         check_num(path, "char_mm", self.char_mm, SHEET_MIN_CHAR_MM, SHEET_MAX_CHAR_MM, "mm")?;
         check_num(path, "margin_mm", self.margin_mm, 0.0, w.min(h) / 2.0, "mm")?;
+        self.validate_chars(path)?;
+        self.validate_stroke_chars(path)?;
+        self.validate_marks(path)?;
+        self.validate_points(path)?;
+        self.brush.validate("brush").map_err(|source| ReadBackError::Profile { path: path.to_path_buf(), source })
+    }
+
+    /// [`SheetTrack::validate`]'s characters: how many the sheet holds, each one printable
+    /// character in a box of the sheet's side on the sheet, their stroke ranges one after another.
+    fn validate_chars(&self, path: &Path) -> Result<(), ReadBackError> {
+        let bad = |field: &str, expected: String| Err(ReadBackError::field(path, field, expected));
+        let [w, h] = self.sheet_mm;
         let n = self.chars.len();
         if n == 0 {
             return bad("chars", "empty: expected the sheet's characters".into());
@@ -129,6 +141,14 @@ impl SheetTrack {
                 format!("the characters' strokes end at {next}, the sheet has {} strokes", self.strokes.len()),
             );
         }
+        Ok(())
+    }
+
+    /// [`SheetTrack::validate`]'s `stroke_chars`: one per stroke, each the character whose range
+    /// holds it (the marks' strokes count as the first character's).
+    fn validate_stroke_chars(&self, path: &Path) -> Result<(), ReadBackError> {
+        let bad = |field: &str, expected: String| Err(ReadBackError::field(path, field, expected));
+        let n = self.chars.len();
         if self.stroke_chars.len() != self.strokes.len() {
             return bad(
                 "stroke_chars",
@@ -147,6 +167,13 @@ impl SheetTrack {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// [`SheetTrack::validate`]'s marks: at most one per role, two strokes each, on the sheet.
+    fn validate_marks(&self, path: &Path) -> Result<(), ReadBackError> {
+        let bad = |field: &str, expected: String| Err(ReadBackError::field(path, field, expected));
+        let [w, h] = self.sheet_mm;
         if self.marks.len() > 6 {
             return bad("marks", format!("{} marks: a sheet has at most 6 (one per role)", self.marks.len()));
         }
@@ -167,6 +194,13 @@ impl SheetTrack {
             check_num(path, &format!("marks[{i}].half_length_mm"), m.half_length_mm, 0.01, w / 4.0, "mm")?;
             check_num(path, &format!("marks[{i}].half_width_mm"), m.half_width_mm, 0.01, h / 4.0, "mm")?;
         }
+        Ok(())
+    }
+
+    /// [`SheetTrack::validate`]'s track points: finite, and on the sheet.
+    fn validate_points(&self, path: &Path) -> Result<(), ReadBackError> {
+        let bad = |field: &str, expected: String| Err(ReadBackError::field(path, field, expected));
+        let [w, h] = self.sheet_mm;
         for (s, st) in self.strokes.iter().enumerate() {
             for (k, p) in st.points.iter().enumerate() {
                 let on = |v: f64, side: f64| v.is_finite() && v >= -POINT_SLACK_MM && v <= side + POINT_SLACK_MM;
@@ -186,6 +220,6 @@ impl SheetTrack {
                 }
             }
         }
-        self.brush.validate("brush").map_err(|source| ReadBackError::Profile { path: path.to_path_buf(), source })
+        Ok(())
     }
 }

@@ -499,11 +499,18 @@ pub fn glyph_from_hanzi_dir(dir: &Path, ch: char) -> Result<Glyph, GlyphError> {
                 message: format!("{len} bytes; a character file is at most {} bytes", limits::MAX_JSON_BYTES),
             });
         }
-        let text = match std::fs::read_to_string(&path) {
-            Ok(t) => t,
+        let too_large = || GlyphError::Malformed {
+            source_name: path.display().to_string(),
+            message: format!("a character file is at most {} bytes", limits::MAX_JSON_BYTES),
+        };
+        let bytes = match brush_model::read_regular(&path, limits::MAX_JSON_BYTES) {
+            Ok(b) => b.ok_or_else(too_large)?,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
             Err(e) => return Err(GlyphError::io(&path, e)),
         };
+        let text = String::from_utf8(bytes).map_err(|e| {
+            GlyphError::io(&path, std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text: {e}")))
+        })?;
         let source = GlyphSource::HanziData(folder.display().to_string());
         return parse_hanzi_json(ch, &text, source, &path.display().to_string());
     }

@@ -413,3 +413,26 @@ fn a_long_text_reports_progress_without_a_terminal_and_writes_each_character() {
     let t = json(&out.join("track.json"));
     assert_eq!(t["chars"].as_array().unwrap().len(), 8);
 }
+
+/// A device or a FIFO given as an input file (a measurements CSV, a brush profile, a font, a
+/// generator) is refused before it is read: `/dev/zero` never ends (the CSV reader once grew
+/// until the process aborted) and a FIFO blocks until a writer comes.
+#[test]
+fn devices_and_fifos_are_refused_as_input_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let fifo = dir.path().join("fifo.csv");
+    assert!(Command::new("mkfifo").arg(&fifo).status().is_ok_and(|s| s.success()), "mkfifo");
+    for input in ["/dev/zero", s(&fifo)] {
+        fails(&maobi(&["calibrate", input, "-o", s(&out.join("b.json"))]), "not a regular file");
+        fails(&maobi(&["write", "永", "--brush", input, "--size", "64", "-o", s(&out)]), "not a regular file");
+        fails(&maobi(&["write", "永", "--font", input, "--size", "64", "-o", s(&out)]), "not a regular file");
+    }
+    // Weights that are a FIFO, beside a good config.
+    let weights = dir.path().join("g.safetensors");
+    assert!(Command::new("mkfifo").arg(&weights).status().is_ok_and(|s| s.success()), "mkfifo");
+    let pen1 = Path::new(env!("CARGO_MANIFEST_DIR")).join("../neural-gen/data/pen1.json");
+    std::fs::copy(pen1, dir.path().join("g.json")).unwrap();
+    fails(&maobi(&["eval-generator", "--generator", s(&weights)]), "not a regular file");
+    assert!(!out.exists(), "nothing written");
+}

@@ -122,7 +122,8 @@ pub fn read_sfnt(path: &Path) -> Result<Vec<u8>, GlyphError> {
     if len > limits::MAX_FONT_BYTES {
         return Err(malformed(path, format!("{len} bytes; a font is at most {} bytes", limits::MAX_FONT_BYTES)));
     }
-    sfnt_from_bytes(path, std::fs::read(path).map_err(io)?)
+    let too_large = || malformed(path, format!("a font is at most {} bytes", limits::MAX_FONT_BYTES));
+    sfnt_from_bytes(path, brush_model::read_regular(path, limits::MAX_FONT_BYTES).map_err(io)?.ok_or_else(too_large)?)
 }
 
 /// The OpenType (sfnt) bytes of a font file's contents `data`: WOFF and WOFF2 are decoded, the
