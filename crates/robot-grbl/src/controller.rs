@@ -156,6 +156,7 @@ impl Controller for GrblPlotter {
                     elapsed_s: p.elapsed_s,
                     remaining_s: Some(p.remaining_s),
                     at: p.work_mm.map(|[x_mm, y_mm, z_mm]| Position::Plotter { x_mm, y_mm, z_mm }),
+                    lines: Some([p.lines_acked, p.lines_total]),
                 })
             })
             .map_err(to_robot)?;

@@ -133,6 +133,9 @@ pub struct Progress {
     pub remaining_s: Option<f64>,
     /// Where the machine was last reported.
     pub at: Option<Position>,
+    /// Program lines acknowledged and in the program, `[done, total]`, where the controller
+    /// streams the program line by line (a G-code plotter); `None` for the arms.
+    pub lines: Option<[usize; 2]>,
 }
 
 /// What a run is watched by: the stop request and the progress callback.

@@ -658,13 +658,24 @@ fn send(a: SendArgs) -> Result<()> {
     println!("{}: checked before moving: {}", preflight.controller, preflight.checks.join("; "));
     let pb = progress(program.strokes.len() as u64, "strokes");
     let started = std::time::Instant::now();
+    // Without a terminal (the bar), a line per stroke once the run is longer than a moment, and
+    // one every 10 s within a long stroke (a plotter reports each acknowledged line).
+    let mut printed: Option<(usize, f64)> = None;
     let mut show = |p: &Progress| {
         pb.set_position(p.strokes_done as u64);
-        // Without a terminal (the bar), a line per stroke once the run is longer than a moment.
+        let lines = p.lines.map_or(String::new(), |[done, total]| format!(", line {done}/{total}"));
+        pb.set_message(format!("strokes{lines}"));
         use std::io::IsTerminal;
-        if !std::io::stderr().is_terminal() && started.elapsed().as_secs_f64() >= PROGRESS_QUIET_S {
+        let due = printed.is_none_or(|(strokes, at_s)| p.strokes_done > strokes || p.elapsed_s >= at_s + 10.0);
+        if !std::io::stderr().is_terminal() && started.elapsed().as_secs_f64() >= PROGRESS_QUIET_S && due {
+            printed = Some((p.strokes_done, p.elapsed_s));
             let left = p.remaining_s.map_or(String::new(), |s| format!(", about {} left", clock(s)));
-            eprintln!("send: {}/{} strokes, elapsed {}{left}", p.strokes_done, p.strokes_total, clock(p.elapsed_s));
+            eprintln!(
+                "send: {}/{} strokes{lines}, elapsed {}{left}",
+                p.strokes_done,
+                p.strokes_total,
+                clock(p.elapsed_s)
+            );
         }
     };
     let result = controller.run(&mut Watch { stop: &stop, progress: &mut show });

@@ -53,6 +53,13 @@ impl Progress {
         eprintln!("{}: {done}/{} ({pct}%)  elapsed {}  ETA {}", self.what, self.total, clock(elapsed), clock(eta));
     }
 
+    /// The words beside the bar on a terminal (nothing without one).
+    pub fn set_message(&self, msg: String) {
+        if let Some(pb) = &self.bar {
+            pb.set_message(msg);
+        }
+    }
+
     /// Removes the bar (lines already printed stay).
     pub fn finish_and_clear(&self) {
         if let Some(pb) = &self.bar {

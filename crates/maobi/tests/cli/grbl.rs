@@ -36,8 +36,16 @@ fn a_character_is_written_on_the_grbl_firmware_from_the_command_line() {
     assert!(dry.contains("lines of G-code") && dry.contains("nothing connected"), "{dry}");
     let mut m = Machine::start(fw, SETUP);
     m.relay(Inject::None);
-    let o = maobi(&["robot", "send", s(&track), "--robot", s(&robot), "--controller", "grbl", "--serial", &m.device]);
+    // Progress from the start (without a terminal: plain lines on stderr).
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_maobi"))
+        .args(["robot", "send", s(&track), "--robot", s(&robot), "--controller", "grbl", "--serial", &m.device])
+        .env("MAOBI_PROGRESS_AFTER_S", "0")
+        .output()
+        .unwrap();
     let stdout = ok(&o);
+    // The plotter's progress counts the G-code lines acknowledged.
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.lines().any(|l| l.starts_with("send: ") && l.contains(" strokes, line ")), "{stderr}");
     // Shown with --nocapture: the time taken beside the planned time.
     println!("{stdout}");
     assert!(stdout.contains("Grbl 1.1h: checked before moving"), "{stdout}");

@@ -213,6 +213,7 @@ impl Controller for AuboRpc {
                     elapsed_s: t0.elapsed().as_secs_f64(),
                     remaining_s: Some(left),
                     at: None,
+                    lines: None,
                 });
             },
         )?;

@@ -354,6 +354,7 @@ impl ScriptRun<'_> {
                     strokes_total: total,
                     elapsed_s: self.t0.elapsed().as_secs_f64(),
                     remaining_s: Some(left),
+                    lines: None,
                     at: Some(Position::Tcp(pose)),
                 });
             }
