@@ -38,8 +38,8 @@ mod profile;
 mod regression;
 mod units;
 
-pub use input::{open_regular, read_regular};
 pub use footprint::{BoundsMm, CubicMm, Footprint, GeometryError, Outline};
+pub use input::{open_regular, read_regular};
 pub use measurements::{
     MEASUREMENT_COLUMNS, Measurement, MeasurementError, load_measurements, measurement_fields, read_measurements,
     write_measurements,

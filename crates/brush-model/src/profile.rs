@@ -402,9 +402,8 @@ impl BrushProfile {
             reason: format!("more than {MAX_PROFILE_BYTES} bytes; a profile is at most {MAX_PROFILE_BYTES} bytes"),
         };
         let bytes = crate::read_regular(path, MAX_PROFILE_BYTES).map_err(io)?.ok_or_else(too_large)?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            io(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text: {e}")))
-        })?;
+        let text = String::from_utf8(bytes)
+            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("not UTF-8 text: {e}"))))?;
         Self::from_json(&text, &path.display().to_string())
     }
 
