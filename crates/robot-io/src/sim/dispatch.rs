@@ -673,56 +673,10 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
             _ => err(&id, -32602, "getKinematicsCompensate takes one argument, `ref_temperature` (°C, a number)"),
         },
         // What changes motion: for the session that owns it.
-        "RobotConfig.setTcpOffset" => {
-            let st = match shared.claim(shared.lock(), session, &id) {
-                Ok(st) => st,
-                Err(refused) => return refused,
-            };
-            let mut st = st;
-            match tcp_offset(params) {
-                Some(tcp) => {
-                    st.tcp = tcp;
-                    let q = st.joints;
-                    st.pose = Pose::from_iso(&shared.options.kinematics.forward(&q, &tcp));
-                    ok(&id, json!(0))
-                }
-                None => ok(&id, json!(INVALID_ARGUMENT)),
-            }
-        }
-        "MotionControl.setSpeedFraction" => {
-            let mut st = match shared.claim(shared.lock(), session, &id) {
-                Ok(st) => st,
-                Err(refused) => return refused,
-            };
-            match arg(params, "fraction", 0).and_then(Value::as_f64) {
-                Some(f)
-                    if arity(params, &["fraction"], &[])
-                        && (MIN_SPEED_FRACTION..=CONTROLLER_MAX_SPEED_FRACTION).contains(&f) =>
-                {
-                    st.speed_fraction = f;
-                    ok(&id, json!(0))
-                }
-                _ => ok(&id, json!(INVALID_ARGUMENT)),
-            }
-        }
+        "RobotConfig.setTcpOffset" => set_tcp_offset(shared, session, params, &id),
+        "MotionControl.setSpeedFraction" => set_speed_fraction(shared, session, params, &id),
         "MotionControl.moveJoint" | "MotionControl.moveLine" => {
-            let joint = rest == "MotionControl.moveJoint";
-            let st = match shared.start_move(session, &id) {
-                Ok(st) => st,
-                Err(reply) => return reply,
-            };
-            let Some(m) = MoveArgs::parse(params, joint) else {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            };
-            let v = m.v * st.speed_fraction;
-            if v < MIN_MOVE_SPEED {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            }
-            if joint || (m.blend <= 0.0 && st.chain.is_empty()) {
-                drop(st);
-                return ok(&id, json!(execute(shared, &m, v)));
-            }
-            ok(&id, json!(chain_line(shared, st, &m, v)))
+            move_one(shared, session, params, &id, rest == "MotionControl.moveJoint")
         }
         "MotionControl.pathBufferAlloc"
         | "MotionControl.pathBufferAppend"
@@ -730,38 +684,99 @@ pub(super) fn handle(v: &Value, shared: &Shared, session: u64) -> Reply {
         | "MotionControl.pathBufferFree"
         | "MotionControl.pathBufferList"
         | "MotionControl.pathBufferValid" => path_buffer(shared, rest, params, &id),
-        "MotionControl.movePathBuffer" => {
-            let st = match shared.start_move(session, &id) {
-                Ok(st) => st,
-                Err(reply) => return reply,
-            };
-            let name = match arg(params, "name", 0).and_then(Value::as_str) {
-                Some(n) if arity(params, &["name"], &[]) => n,
-                _ => return ok(&id, json!(INVALID_ARGUMENT)),
-            };
-            let Some(b) = st.buffers.get(name) else { return ok(&id, json!(INVALID_ARGUMENT)) };
-            let Some(interval) = b.valid_interval_s else { return ok(&id, json!(INVALID_ARGUMENT)) };
-            // The buffer starts where the arm is: a controller does not jump to its first waypoint.
-            let from = st.joints;
-            if b.waypoints[0].iter().zip(&from).any(|(a, b)| (a - b).abs() > PATH_START_TOLERANCE_RAD) {
-                return ok(&id, json!(INVALID_ARGUMENT));
-            }
-            let waypoints = b.waypoints.clone();
-            let (tcp, t0) = (st.tcp, st.time_s);
-            drop(st);
-            let dh = &shared.options.kinematics;
-            let samples = path_motion(dh, &waypoints, interval, &tcp, t0);
-            let last = *waypoints.last().expect("a valid buffer has waypoints");
-            {
-                let mut st = shared.lock();
-                st.joints = last;
-                st.pose = Pose::from_iso(&dh.forward(&last, &tcp));
-            }
-            shared.record(&samples);
-            ok(&id, json!(0))
-        }
+        "MotionControl.movePathBuffer" => move_path_buffer(shared, session, params, &id),
         _ => err(&id, -32601, &format!("method not found: {method}")),
     }
+}
+
+/// `RobotConfig.setTcpOffset`, for the session that owns motion.
+fn set_tcp_offset(shared: &Shared, session: u64, params: &Value, id: &Value) -> Reply {
+    let st = match shared.claim(shared.lock(), session, id) {
+        Ok(st) => st,
+        Err(refused) => return refused,
+    };
+    let mut st = st;
+    match tcp_offset(params) {
+        Some(tcp) => {
+            st.tcp = tcp;
+            let q = st.joints;
+            st.pose = Pose::from_iso(&shared.options.kinematics.forward(&q, &tcp));
+            ok(id, json!(0))
+        }
+        None => ok(id, json!(INVALID_ARGUMENT)),
+    }
+}
+
+/// `MotionControl.setSpeedFraction`, for the session that owns motion.
+fn set_speed_fraction(shared: &Shared, session: u64, params: &Value, id: &Value) -> Reply {
+    let mut st = match shared.claim(shared.lock(), session, id) {
+        Ok(st) => st,
+        Err(refused) => return refused,
+    };
+    match arg(params, "fraction", 0).and_then(Value::as_f64) {
+        Some(f)
+            if arity(params, &["fraction"], &[])
+                && (MIN_SPEED_FRACTION..=CONTROLLER_MAX_SPEED_FRACTION).contains(&f) =>
+        {
+            st.speed_fraction = f;
+            ok(id, json!(0))
+        }
+        _ => ok(id, json!(INVALID_ARGUMENT)),
+    }
+}
+
+/// `MotionControl.moveJoint` (`joint`) or `moveLine`, for the session that owns motion: a joint
+/// move or an unblended line executes at once, a blended line waits in the chain.
+fn move_one(shared: &Shared, session: u64, params: &Value, id: &Value, joint: bool) -> Reply {
+    let st = match shared.start_move(session, id) {
+        Ok(st) => st,
+        Err(reply) => return reply,
+    };
+    let Some(m) = MoveArgs::parse(params, joint) else {
+        return ok(id, json!(INVALID_ARGUMENT));
+    };
+    let v = m.v * st.speed_fraction;
+    if v < MIN_MOVE_SPEED {
+        return ok(id, json!(INVALID_ARGUMENT));
+    }
+    if joint || (m.blend <= 0.0 && st.chain.is_empty()) {
+        drop(st);
+        return ok(id, json!(execute(shared, &m, v)));
+    }
+    ok(id, json!(chain_line(shared, st, &m, v)))
+}
+
+/// `MotionControl.movePathBuffer`, for the session that owns motion: the buffer executed from
+/// where the arm is.
+fn move_path_buffer(shared: &Shared, session: u64, params: &Value, id: &Value) -> Reply {
+    let st = match shared.start_move(session, id) {
+        Ok(st) => st,
+        Err(reply) => return reply,
+    };
+    let name = match arg(params, "name", 0).and_then(Value::as_str) {
+        Some(n) if arity(params, &["name"], &[]) => n,
+        _ => return ok(id, json!(INVALID_ARGUMENT)),
+    };
+    let Some(b) = st.buffers.get(name) else { return ok(id, json!(INVALID_ARGUMENT)) };
+    let Some(interval) = b.valid_interval_s else { return ok(id, json!(INVALID_ARGUMENT)) };
+    // The buffer starts where the arm is: a controller does not jump to its first waypoint.
+    let from = st.joints;
+    if b.waypoints[0].iter().zip(&from).any(|(a, b)| (a - b).abs() > PATH_START_TOLERANCE_RAD) {
+        return ok(id, json!(INVALID_ARGUMENT));
+    }
+    let waypoints = b.waypoints.clone();
+    let (tcp, t0) = (st.tcp, st.time_s);
+    drop(st);
+    let dh = &shared.options.kinematics;
+    let samples = path_motion(dh, &waypoints, interval, &tcp, t0);
+    let last = *waypoints.last().expect("a valid buffer has waypoints");
+    {
+        let mut st = shared.lock();
+        st.joints = last;
+        st.pose = Pose::from_iso(&dh.forward(&last, &tcp));
+    }
+    shared.record(&samples);
+    ok(id, json!(0))
 }
 
 /// Most path buffers the simulator holds at once.
