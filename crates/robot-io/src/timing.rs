@@ -638,6 +638,104 @@ impl Piece<'_> {
     }
 }
 
+/// The speed bound at each point of a stroke's path, m/s: the write speed, each joint's speed
+/// and the depth rate over the neighbouring pieces (`qs`, `hs`: rates per metre), and at the
+/// inner points the path's curvature and kink (`xs`: directions) and the joints' acceleration
+/// and jerk (`qss`) within one interval `dt`.
+fn speed_limits(
+    lim: &Limits1,
+    dt: f64,
+    ds: &[f64],
+    xs: &[Vector3<f64>],
+    qs: &[[f64; 6]],
+    hs: &[f64],
+    qss: &[[f64; 6]],
+) -> Vec<f64> {
+    let n = qss.len();
+    let mut vlim = vec![lim.v_write; n];
+    for i in 0..n {
+        let segs = [i.checked_sub(1), (i < n - 1).then_some(i)];
+        for seg in segs.into_iter().flatten() {
+            for j in 0..6 {
+                if qs[seg][j].abs() > 0.0 {
+                    vlim[i] = vlim[i].min(lim.qd / qs[seg][j].abs());
+                }
+            }
+            if hs[seg].abs() > 0.0 {
+                vlim[i] = vlim[i].min(lim.depth_rate / hs[seg].abs());
+            }
+        }
+        if i == 0 || i == n - 1 {
+            continue;
+        }
+        // The joints are interpolated linearly between the points, so a change of direction
+        // at a point (`dx` of the path, `dq` of a joint's rate per metre) falls within one
+        // interval of the waypoints: an acceleration v·dx/dt (v·dq/dt), and for the joints a
+        // jerk v·dq/dt². The bounds keep those within the limits.
+        let m = 0.5 * (ds[i - 1] + ds[i]);
+        let dx = (xs[i] - xs[i - 1]).norm();
+        if dx > 0.0 {
+            // The path's curvature dx/m, and its kink crossed within one interval.
+            vlim[i] = vlim[i].min((lim.a_write * m / dx).sqrt()).min(lim.a_write * dt / dx);
+        }
+        for j in 0..6 {
+            let dq = (qs[i][j] - qs[i - 1][j]).abs();
+            if dq > 0.0 {
+                vlim[i] = vlim[i].min(lim.qdd * dt / dq).min(lim.qddd * dt * dt / dq);
+            }
+        }
+        for j in 0..6 {
+            if qss[i][j].abs() > 0.0 {
+                vlim[i] = vlim[i].min((lim.qdd / qss[i][j].abs()).sqrt());
+            }
+        }
+    }
+    vlim
+}
+
+/// The peaks of a timed stroke's waypoints, by finite differences over `dt`.
+struct Peaks {
+    v: f64,
+    a: f64,
+    h: f64,
+    qd: [f64; 6],
+    qdd: f64,
+    qddd: f64,
+}
+
+impl Peaks {
+    fn of(poses: &[Pose], depth_mm: &[f64], joints: &[[f64; 6]], dt: f64) -> Peaks {
+        let m = joints.len();
+        let pos: Vec<Vector3<f64>> = poses.iter().map(|p| Vector3::from(p.position())).collect();
+        let mut peak_v = 0.0f64;
+        let mut peak_a = 0.0f64;
+        let mut peak_h = 0.0f64;
+        let mut peak_qd = [0.0f64; 6];
+        let (mut peak_qdd, mut peak_qddd) = (0.0f64, 0.0f64);
+        for k in 1..m {
+            peak_v = peak_v.max((pos[k] - pos[k - 1]).norm() / dt);
+            peak_h = peak_h.max((depth_mm[k] - depth_mm[k - 1]).abs() / dt);
+            for j in 0..6 {
+                peak_qd[j] = peak_qd[j].max((joints[k][j] - joints[k - 1][j]).abs() / dt);
+            }
+            if k >= 2 {
+                peak_a = peak_a.max((pos[k] - 2.0 * pos[k - 1] + pos[k - 2]).norm() / (dt * dt));
+                for j in 0..6 {
+                    let a = joints[k][j] - 2.0 * joints[k - 1][j] + joints[k - 2][j];
+                    peak_qdd = peak_qdd.max(a.abs() / (dt * dt));
+                }
+            }
+            if k >= 3 {
+                for j in 0..6 {
+                    let jk = joints[k][j] - 3.0 * joints[k - 1][j] + 3.0 * joints[k - 2][j] - joints[k - 3][j];
+                    peak_qddd = peak_qddd.max(jk.abs() / (dt * dt * dt));
+                }
+            }
+        }
+        Peaks { v: peak_v, a: peak_a, h: peak_h, qd: peak_qd, qdd: peak_qdd, qddd: peak_qddd }
+    }
+}
+
 /// Times one stroke's pressed path (`poses`, with the press depth at each, mm); `None` when it
 /// has fewer than two distinct points.
 ///
@@ -696,44 +794,7 @@ pub fn time_stroke(
         depth_rate: cfg.timing.max_depth_rate_mm_s,
         qddd: cfg.timing.joint_jerk_rad_s3,
     };
-    let mut vlim = vec![lim.v_write; n];
-    for i in 0..n {
-        let segs = [i.checked_sub(1), (i < n - 1).then_some(i)];
-        for seg in segs.into_iter().flatten() {
-            for j in 0..6 {
-                if qs[seg][j].abs() > 0.0 {
-                    vlim[i] = vlim[i].min(lim.qd / qs[seg][j].abs());
-                }
-            }
-            if hs[seg].abs() > 0.0 {
-                vlim[i] = vlim[i].min(lim.depth_rate / hs[seg].abs());
-            }
-        }
-        if i == 0 || i == n - 1 {
-            continue;
-        }
-        // The joints are interpolated linearly between the points, so a change of direction
-        // at a point (`dx` of the path, `dq` of a joint's rate per metre) falls within one
-        // interval of the waypoints: an acceleration v·dx/dt (v·dq/dt), and for the joints a
-        // jerk v·dq/dt². The bounds keep those within the limits.
-        let m = 0.5 * (ds[i - 1] + ds[i]);
-        let dx = (xs[i] - xs[i - 1]).norm();
-        if dx > 0.0 {
-            // The path's curvature dx/m, and its kink crossed within one interval.
-            vlim[i] = vlim[i].min((lim.a_write * m / dx).sqrt()).min(lim.a_write * dt / dx);
-        }
-        for j in 0..6 {
-            let dq = (qs[i][j] - qs[i - 1][j]).abs();
-            if dq > 0.0 {
-                vlim[i] = vlim[i].min(lim.qdd * dt / dq).min(lim.qddd * dt * dt / dq);
-            }
-        }
-        for j in 0..6 {
-            if qss[i][j].abs() > 0.0 {
-                vlim[i] = vlim[i].min((lim.qdd / qss[i][j].abs()).sqrt());
-            }
-        }
-    }
+    let vlim = speed_limits(&lim, dt, &ds, &xs, &qs, &hs, &qss);
     // The brush stops where the path turns back (more than 90°): each piece between stops is
     // timed from rest to rest, so the waypoints reach the turning point itself.
     let mut bounds = vec![0];
@@ -781,46 +842,20 @@ pub fn time_stroke(
         poses_out.push(Pose::from_iso(&want));
         depth_out.push(path.depth_mm[i] + (path.depth_mm[i + 1] - path.depth_mm[i]) * f);
     }
-    let m = joints.len();
-    let pos: Vec<Vector3<f64>> = poses_out.iter().map(|p| Vector3::from(p.position())).collect();
-    let mut peak_v = 0.0f64;
-    let mut peak_a = 0.0f64;
-    let mut peak_h = 0.0f64;
-    let mut peak_qd = [0.0f64; 6];
-    let (mut peak_qdd, mut peak_qddd) = (0.0f64, 0.0f64);
-    for k in 1..m {
-        peak_v = peak_v.max((pos[k] - pos[k - 1]).norm() / dt);
-        peak_h = peak_h.max((depth_out[k] - depth_out[k - 1]).abs() / dt);
-        for j in 0..6 {
-            peak_qd[j] = peak_qd[j].max((joints[k][j] - joints[k - 1][j]).abs() / dt);
-        }
-        if k >= 2 {
-            peak_a = peak_a.max((pos[k] - 2.0 * pos[k - 1] + pos[k - 2]).norm() / (dt * dt));
-            for j in 0..6 {
-                let a = joints[k][j] - 2.0 * joints[k - 1][j] + joints[k - 2][j];
-                peak_qdd = peak_qdd.max(a.abs() / (dt * dt));
-            }
-        }
-        if k >= 3 {
-            for j in 0..6 {
-                let jk = joints[k][j] - 3.0 * joints[k - 1][j] + 3.0 * joints[k - 2][j] - joints[k - 3][j];
-                peak_qddd = peak_qddd.max(jk.abs() / (dt * dt * dt));
-            }
-        }
-    }
+    let pk = Peaks::of(&poses_out, &depth_out, &joints, dt);
     Ok(Some(TimedStroke {
         stroke,
         interval_s: dt,
-        duration_s: (m - 1) as f64 * dt,
+        duration_s: (joints.len() - 1) as f64 * dt,
         reference_s,
         joints,
         poses: poses_out,
-        peak_speed_m_s: peak_v,
-        peak_acc_m_s2: peak_a,
-        peak_depth_rate_mm_s: peak_h,
-        peak_joint_speed_rad_s: peak_qd,
-        peak_joint_acc_rad_s2: peak_qdd,
-        peak_joint_jerk_rad_s3: peak_qddd,
+        peak_speed_m_s: pk.v,
+        peak_acc_m_s2: pk.a,
+        peak_depth_rate_mm_s: pk.h,
+        peak_joint_speed_rad_s: pk.qd,
+        peak_joint_acc_rad_s2: pk.qdd,
+        peak_joint_jerk_rad_s3: pk.qddd,
         min_singular_value: min_sv,
         path_error_m: err_m,
         path_error_rad: err_rad,
