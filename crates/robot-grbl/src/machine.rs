@@ -279,8 +279,16 @@ const AXES: [&str; 3] = ["X", "Y", "Z"];
 /// # Errors
 /// [`GrblError::Refused`] naming the setting or state and what the program needs.
 pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -> Result<Checked, GrblError> {
-    let refuse = |m: String| Err(GrblError::Refused(m));
     let mut checks = Vec::new();
+    check_state(info, program, &mut checks)?;
+    let scale = check_rates(info, program, fit, &mut checks)?;
+    check_travel(info, program, &mut checks)?;
+    Ok(Checked { checks, feed_scale: scale })
+}
+
+/// [`check_program`]'s machine state, units, offsets and line length.
+fn check_state(info: &MachineInfo, program: &GcodeProgram, checks: &mut Vec<String>) -> Result<(), GrblError> {
+    let refuse = |m: String| Err(GrblError::Refused(m));
     let st = &info.status;
     if st.state == State::Alarm {
         return refuse(format!(
@@ -321,6 +329,17 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
             info.rx_buffer
         ));
     }
+    Ok(())
+}
+
+/// [`check_program`]'s maximum rates: the feed scale that fits them (1 when they all do).
+fn check_rates(
+    info: &MachineInfo,
+    program: &GcodeProgram,
+    fit: RateFit,
+    checks: &mut Vec<String>,
+) -> Result<f64, GrblError> {
+    let refuse = |m: String| Err(GrblError::Refused(m));
     // Rates: each feed move's speed along each axis. A maximum rate that is not a positive
     // speed is no machine's (slowing to it would stream feeds of 0 or below).
     for k in 0..3u16 {
@@ -382,6 +401,12 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
     } else {
         checks.push("every feed within the maximum rates ($110-$112)".into());
     }
+    Ok(scale)
+}
+
+/// [`check_program`]'s soft-limit travel.
+fn check_travel(info: &MachineInfo, program: &GcodeProgram, checks: &mut Vec<String>) -> Result<(), GrblError> {
+    let refuse = |m: String| Err(GrblError::Refused(m));
     // Travel.
     let bounds = program.bounds();
     if info.setting(20).is_some_and(|v| v != 0.0) {
@@ -406,7 +431,7 @@ pub fn check_program(info: &MachineInfo, program: &GcodeProgram, fit: RateFit) -
     } else {
         checks.push("soft limits off ($20=0): the travel is not checked by the machine".into());
     }
-    Ok(Checked { checks, feed_scale: scale })
+    Ok(())
 }
 
 fn join(v: &[f64]) -> String {
