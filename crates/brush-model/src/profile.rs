@@ -180,6 +180,32 @@ pub struct PressRanges {
 }
 
 impl PressRanges {
+    /// The smallest ranges that hold every measured press: the calibrated range of a fit to
+    /// `rows` (empty ranges, from +∞ to −∞, when there are none).
+    ///
+    /// # Examples
+    /// ```
+    /// let rows = brush_model::read_measurements(
+    ///     "h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm\n2,0,0,3,1,1\n5,10,0,6,2,2\n".as_bytes(),
+    ///     "example",
+    /// )
+    /// .unwrap();
+    /// let r = brush_model::PressRanges::spanning(&rows);
+    /// assert_eq!((r.h_mm.min, r.h_mm.max), (2.0, 5.0));
+    /// ```
+    pub fn spanning(rows: &[crate::Measurement]) -> PressRanges {
+        let span = |f: fn(&crate::Measurement) -> f64| {
+            let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
+            let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
+            Range::new(lo, hi)
+        };
+        PressRanges {
+            h_mm: span(|m| m.press.h_mm),
+            alpha_rad: span(|m| m.press.alpha_rad),
+            beta_rad: span(|m| m.press.beta_rad),
+        }
+    }
+
     /// The eight corner presses of the range box. With a linear model every footprint length
     /// takes its extremes at corners.
     pub fn corners(&self) -> Vec<Press> {

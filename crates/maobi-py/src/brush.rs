@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use brush_model::{BrushProfile, Extrapolation, Form, Measurement, PressRanges, ProfileError, Range};
+use brush_model::{BrushProfile, Extrapolation, Form, Measurement, PressRanges, ProfileError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -285,16 +285,7 @@ pub(crate) fn calibrate<'py>(
     let name = name.unwrap_or(default_name);
     let (profile, report) = guarded(py, "calibrate", move || {
         let report = brush_model::fit(&rows, form).map_err(|e| lib_err("measurements: cannot fit", e))?;
-        let span = |f: fn(&Measurement) -> f64| {
-            let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
-            let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
-            Range::new(lo, hi)
-        };
-        let ranges = PressRanges {
-            h_mm: span(|m| m.press.h_mm),
-            alpha_rad: span(|m| m.press.alpha_rad),
-            beta_rad: span(|m| m.press.beta_rad),
-        };
+        let ranges = PressRanges::spanning(&rows);
         let profile = BrushProfile::calibrated(&name, base.brush, ranges, report.clone());
         profile
             .validate("the fitted profile")

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use brush_model::{BrushProfile, Form, PressRanges, Range, load_measurements};
+use brush_model::{BrushProfile, Form, PressRanges, load_measurements};
 
 use crate::common::{check_output_file, check_range, load_brush, print_json, write_atomic};
 
@@ -92,16 +92,7 @@ pub fn run(args: Args) -> Result<()> {
         (None, Some(b)) => b,
         (None, None) => load_brush("pen1")?.brush,
     };
-    let span = |f: fn(&brush_model::Measurement) -> f64| {
-        let lo = rows.iter().map(f).fold(f64::INFINITY, f64::min);
-        let hi = rows.iter().map(f).fold(f64::NEG_INFINITY, f64::max);
-        Range::new(lo, hi)
-    };
-    let ranges = PressRanges {
-        h_mm: span(|m| m.press.h_mm),
-        alpha_rad: span(|m| m.press.alpha_rad),
-        beta_rad: span(|m| m.press.beta_rad),
-    };
+    let ranges = PressRanges::spanning(&rows);
     // Named after the file it is written to (`-o out/pen1-cal.json` → `pen1-cal`), so the name
     // and the file agree; without -o after the input.
     let name = args.name.clone().unwrap_or_else(|| {
