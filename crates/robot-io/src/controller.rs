@@ -138,6 +138,22 @@ pub struct Progress {
     pub lines: Option<[usize; 2]>,
 }
 
+impl Progress {
+    /// An arm's progress once `done` of `total` strokes are finished, `elapsed_s` into the run,
+    /// with the TCP at `pose`: the time left is the expected seconds (`strokes_s`, one per
+    /// stroke) of the strokes not yet done.
+    pub(crate) fn of_arm(done: usize, total: usize, strokes_s: &[f64], elapsed_s: f64, pose: Pose) -> Progress {
+        Progress {
+            strokes_done: done,
+            strokes_total: total,
+            elapsed_s,
+            remaining_s: Some(strokes_s.iter().skip(done).sum()),
+            at: Some(Position::Tcp(pose)),
+            lines: None,
+        }
+    }
+}
+
 /// What a run is watched by: the stop request and the progress callback.
 pub struct Watch<'a> {
     /// Set (by Ctrl-C, or another thread) to stop: the controller stops the machine the safe

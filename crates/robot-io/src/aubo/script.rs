@@ -348,15 +348,8 @@ impl ScriptRun<'_> {
             self.check(&pose, k).map_err(|e| (e, false))?;
             if k > self.done {
                 self.done = k;
-                let left: f64 = self.ready.strokes_s.iter().skip(k).sum();
-                (watch.progress)(&Progress {
-                    strokes_done: k,
-                    strokes_total: total,
-                    elapsed_s: self.t0.elapsed().as_secs_f64(),
-                    remaining_s: Some(left),
-                    lines: None,
-                    at: Some(Position::Tcp(pose)),
-                });
+                let elapsed_s = self.t0.elapsed().as_secs_f64();
+                (watch.progress)(&Progress::of_arm(k, total, &self.ready.strokes_s, elapsed_s, pose));
             }
             if s != "Running" {
                 if k == total {

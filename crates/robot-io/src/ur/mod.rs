@@ -561,15 +561,8 @@ impl UrRun<'_> {
             }
             if k > self.done {
                 self.done = k;
-                let left: f64 = self.ready.strokes_s.iter().skip(k).sum();
-                (watch.progress)(&Progress {
-                    strokes_done: k,
-                    strokes_total: total,
-                    elapsed_s: self.t0.elapsed().as_secs_f64(),
-                    remaining_s: Some(left),
-                    lines: None,
-                    at: Some(Position::Tcp(s.pose)),
-                });
+                let elapsed_s = self.t0.elapsed().as_secs_f64();
+                (watch.progress)(&Progress::of_arm(k, total, &self.ready.strokes_s, elapsed_s, s.pose));
             }
             if s.runtime_state != RUNTIME_PLAYING {
                 if k == total && s.runtime_state == RUNTIME_STOPPED {
