@@ -6,11 +6,11 @@
 
 use anyhow::Result;
 use brush_model::{BrushProfile, Track};
-use pipeline::{Grid, RunSample, SheetTrack};
+use pipeline::{ExecutedRun, Grid, RunSample, SheetTrack};
 use robot_io::PaperFrame;
 use robot_io::RobotConfig;
 use robot_io::level_frame_in_front;
-use serde_json::json;
+use serde::Serialize;
 
 /// What the preview shows.
 pub struct PreviewInput<'a> {
@@ -30,8 +30,14 @@ pub struct PreviewInput<'a> {
     pub track: Track,
 }
 
-/// The preview of a sheet track (what `maobi write` writes beside the sheet).
-pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+/// The preview of a sheet track (what `maobi write` writes beside the sheet); `ran`: the run
+/// of the same program already made, if any ([`preview_html`]).
+pub fn sheet_preview(
+    t: &SheetTrack,
+    frame: Option<&PaperFrame>,
+    cfg: Option<&RobotConfig>,
+    ran: Option<&ExecutedRun>,
+) -> Result<String> {
     let input = PreviewInput {
         title: t.char.clone(),
         sheet_mm: t.sheet_mm,
@@ -41,7 +47,7 @@ pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&Ro
         brush: &t.brush,
         track: Track { strokes: t.strokes.clone() },
     };
-    preview_html(&input, frame, cfg)
+    preview_html(&input, frame, cfg, ran)
 }
 
 /// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
@@ -81,10 +87,17 @@ fn r2(v: f64) -> f64 {
 /// ([`pipeline::run_sheet`]); the footprints come from the forward model over the executed path,
 /// each at the time the brush reaches it ([`pipeline::run_footprints`]). A refused program is
 /// previewed from the planned track (timed at the write speed) with the refusal as the verdict.
+/// `ran`: a run already made ([`pipeline::run_sheet_with`]: played only when it is the run of
+/// the program built here, as `maobi write` keeps it for one character).
 ///
 /// # Errors
 /// When the brush profile refuses the track's presses.
-pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+pub fn preview_html(
+    input: &PreviewInput<'_>,
+    paper: Option<&PaperFrame>,
+    cfg: Option<&RobotConfig>,
+    ran: Option<&ExecutedRun>,
+) -> Result<String> {
     let default_cfg = RobotConfig::default();
     let cfg = cfg.unwrap_or(&default_cfg);
     let level = level_frame(input.sheet_mm);
@@ -93,24 +106,22 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     // Checked and timed as `robot check` does it (the nominal i5, the simulator's arm) and
     // played as `robot send` sends it: the timeline's pressed time is the timing's. A timing
     // beyond a limit is a refusal like the check's.
-    let (samples, verdict, safe, dips, strokes_s) =
-        match pipeline::run_sheet(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg) {
+    let (samples, footprints, verdict, safe, dips, strokes_s) =
+        match pipeline::run_sheet_with(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg, ran) {
             Ok(run) => {
                 let v = verdict(&run, cfg, where_);
                 let spans = run.strokes_s.iter().map(|s| [r2(s[0]), r2(s[1])]).collect();
-                (run.samples, v, true, run.report.dips, spans)
+                (run.samples, run.footprints, v, true, run.report.dips, spans)
             }
             // The planned track, pen-down paths at the write speed, a second of travel between.
-            Err(e) => (
-                pipeline::planned_samples(&input.track, cfg.write_speed_m_s),
-                format!("refused ({where_}): {e}"),
-                false,
-                0,
-                Vec::new(),
-            ),
+            Err(e) => {
+                let samples = pipeline::planned_samples(&input.track, cfg.write_speed_m_s);
+                let footprints = pipeline::run_footprints(&samples, input.brush, frame);
+                (samples, footprints, format!("refused ({where_}): {e}"), false, 0, Vec::new())
+            }
         };
     let mut feet: Vec<f64> = Vec::new();
-    for f in pipeline::run_footprints(&samples, input.brush, frame) {
+    for f in footprints {
         feet.push(r2(f.t_s));
         for p in f.outline {
             feet.push(r2(p.x_mm));
@@ -119,25 +130,44 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     }
     let path = path_data(&samples);
     let dip_spans = dip_spans(&samples);
-    let data = json!({
-        "title": input.title,
-        "sheet_mm": input.sheet_mm,
-        "grid": input.grid,
-        "boxes": input.boxes,
-        "verdict": verdict,
-        "safe": safe,
-        "dips": dips,
-        "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
-        "strokes_s": strokes_s,
-        "duration_s": samples.last().map_or(0.0, |s| s.t_s),
-        "path": path,
-        "feet": feet,
-        "brush": input.brush.name,
-    });
+    let data = PageData {
+        boxes: &input.boxes,
+        brush: &input.brush.name,
+        dip_spans: dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect(),
+        dips,
+        duration_s: samples.last().map_or(0.0, |s| s.t_s),
+        feet,
+        grid: input.grid,
+        path,
+        safe,
+        sheet_mm: input.sheet_mm,
+        strokes_s,
+        title: &input.title,
+        verdict,
+    };
     // No `<` at all inside the inline JSON (`\u003c` is the same string to JSON): `</script`
     // would end the element and `<!--` would change how the browser reads the rest of it.
     let data = serde_json::to_string(&data)?.replace('<', "\\u003c");
     Ok(fill(TEMPLATE, &html_escape(&input.title), &data))
+}
+
+/// The data the page's script plays, written straight to JSON (its keys in the order the page
+/// has always had them: sorted).
+#[derive(Serialize)]
+struct PageData<'a> {
+    boxes: &'a [[f64; 3]],
+    brush: &'a str,
+    dip_spans: Vec<[f64; 2]>,
+    dips: usize,
+    duration_s: f64,
+    feet: Vec<f64>,
+    grid: Grid,
+    path: Vec<f64>,
+    safe: bool,
+    sheet_mm: [f64; 2],
+    strokes_s: Vec<[f64; 2]>,
+    title: &'a str,
+    verdict: String,
 }
 
 /// The template with its two placeholders filled in one pass, so that text put in for one can

@@ -114,7 +114,7 @@ pub fn run(a: Args) -> Result<()> {
         brush: &tf.brush,
         track,
     };
-    let html = preview_html(&input, frame.as_ref(), cfg.as_ref())?;
+    let html = preview_html(&input, frame.as_ref(), cfg.as_ref(), None)?;
     check_output_file("-o", &a.output, a.force)?;
     write_atomic(&a.output, html.as_bytes())?;
     println!("preview of {} strokes written to {}", input.track.strokes.len(), a.output.display());
