@@ -11,7 +11,7 @@ use robot_io::RobotConfig;
 use robot_io::TrackFile;
 use serde_json::Value;
 
-use crate::page::{PreviewInput, preview_html};
+use figures::{PreviewInput, preview_html};
 
 use crate::common::{check_output_file, write_atomic};
 

@@ -238,7 +238,7 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
     let ran = out.results.first().filter(|_| single).and_then(|r| r.run.as_ref());
-    let preview = crate::page::sheet_preview(&sheet_track, None, None, ran)?;
+    let preview = figures::sheet_preview(&sheet_track, None, None, ran)?;
     write_atomic(&stage.path().join("preview.html"), preview.as_bytes())?;
     stage.install("--output", &args.output, args.force)?;
     if args.json {
@@ -650,17 +650,12 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
     // The pictures encoded at once on rayon's pool, then written in order.
     let executed = |ex: &bezier_raster::Coverage| -> Result<_> {
         let rows = [("reference (glyph)", &r.reference), ("plan", &r.render), ("executed", ex)];
-        let (png, row) = rayon::join(|| ex.encode_png(), || crate::plot::labelled_row_png(&rows));
+        let (png, row) = rayon::join(|| ex.encode_png(), || figures::labelled_row_png(&rows));
         Ok((png?, row?))
     };
     let ((render, reference), (overlay, executed)) = rayon::join(
         || rayon::join(|| r.render.encode_png(), || r.reference.encode_png()),
-        || {
-            rayon::join(
-                || crate::plot::overlay_legend_png(&r.reference, &r.render),
-                || r.executed.as_ref().map(executed),
-            )
-        },
+        || rayon::join(|| figures::overlay_legend_png(&r.reference, &r.render), || r.executed.as_ref().map(executed)),
     );
     write_atomic(&dir.join("render.png"), &render?)?;
     write_atomic(&dir.join("reference.png"), &reference?)?;
@@ -677,7 +672,7 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
         let series = |f: fn(&track_refine::LossTerms) -> f64| -> Vec<(f64, f64)> {
             rf.curve.iter().enumerate().map(|(i, l)| (i as f64, f(l))).collect()
         };
-        let png = crate::plot::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
+        let png = figures::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
         write_atomic(&dir.join("refine.png"), &png)?;
     }
     Ok(())

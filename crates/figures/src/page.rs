@@ -4,13 +4,14 @@
 //! plays comes from the pipeline ([`pipeline::run_sheet`], [`pipeline::run_footprints`]); this
 //! module only lays it out. `maobi preview` and `maobi write` write it.
 
-use anyhow::Result;
 use brush_model::{BrushProfile, Track};
 use pipeline::{ExecutedRun, Grid, RunSample, SheetTrack};
 use robot_io::PaperFrame;
 use robot_io::RobotConfig;
 use robot_io::level_frame_in_front;
 use serde::Serialize;
+
+use crate::Result;
 
 /// What the preview shows.
 pub struct PreviewInput<'a> {
@@ -91,7 +92,28 @@ fn r2(v: f64) -> f64 {
 /// the program built here, as `maobi write` keeps it for one character).
 ///
 /// # Errors
-/// When the brush profile refuses the track's presses.
+/// When the page's data cannot be written as JSON.
+///
+/// # Examples
+/// ```
+/// use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+///
+/// let pen1 = BrushProfile::builtin("pen1")?;
+/// // A 20 mm stroke pressed 12 mm across an 80 mm sheet.
+/// let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let input = figures::PreviewInput {
+///     title: "一".into(),
+///     sheet_mm: [80.0, 80.0],
+///     grid: pipeline::Grid::None,
+///     boxes: vec![[10.0, 10.0, 60.0]],
+///     stroke_chars: None,
+///     brush: &pen1,
+///     track: Track { strokes: vec![Stroke { points: (0..=20).map(|i| p(30.0 + f64::from(i))).collect() }] },
+/// };
+/// let page = figures::preview_html(&input, None, None, None)?;
+/// assert!(page.starts_with("<!DOCTYPE html>") && page.contains("safe (on a level sheet"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn preview_html(
     input: &PreviewInput<'_>,
     paper: Option<&PaperFrame>,
@@ -249,4 +271,58 @@ fn dip_spans(samples: &[RunSample]) -> Vec<[f64; 2]> {
     dip_spans
 }
 
-const TEMPLATE: &str = include_str!("cmd/preview.html");
+const TEMPLATE: &str = include_str!("preview.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use brush_model::{Stroke, TrackPoint};
+
+    /// The JSON between the page's data element tags.
+    fn data_of(page: &str) -> serde_json::Value {
+        let start = page.find(r#"id="data">"#).unwrap() + r#"id="data">"#.len();
+        let end = start + page[start..].find("</script>").unwrap();
+        serde_json::from_str(&page[start..end]).unwrap()
+    }
+
+    fn input<'a>(brush: &'a BrushProfile, title: &str, h_mm: f64) -> PreviewInput<'a> {
+        let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm, alpha_rad: 0.0, beta_rad: 0.0 };
+        PreviewInput {
+            title: title.into(),
+            sheet_mm: [80.0, 80.0],
+            grid: Grid::None,
+            boxes: vec![[10.0, 10.0, 60.0]],
+            stroke_chars: Some(vec![0]),
+            brush,
+            track: Track { strokes: vec![Stroke { points: (0..=20).map(|i| p(30.0 + f64::from(i))).collect() }] },
+        }
+    }
+
+    #[test]
+    fn the_page_plays_the_run_with_its_footprints_and_escapes_the_title() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let page = preview_html(&input(&pen1, "</script><b>", 12.0), None, None, None).unwrap();
+        // The title is text in the head and a string in the data, never markup.
+        assert!(page.contains("maobi preview: &lt;/script&gt;&lt;b&gt;"));
+        let data = data_of(&page);
+        assert_eq!(data["title"], "</script><b>");
+        assert_eq!(data["safe"], true);
+        assert!(data["verdict"].as_str().unwrap().starts_with("safe (on a level sheet in front of the AUBO-i5)"));
+        // Every footprint is a time and six points; the path is seven numbers a sample.
+        let feet = data["feet"].as_array().unwrap();
+        assert!(!feet.is_empty() && feet.len() % 13 == 0);
+        assert_eq!(data["path"].as_array().unwrap().len() % 7, 0);
+        assert_eq!(data["strokes_s"].as_array().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_refused_program_is_previewed_from_its_plan_with_the_refusal() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        // 500 mm of press: far beyond what the robot check lets through.
+        let page = preview_html(&input(&pen1, "deep", 500.0), None, None, None).unwrap();
+        let data = data_of(&page);
+        assert_eq!(data["safe"], false);
+        assert!(data["verdict"].as_str().unwrap().starts_with("refused"));
+        assert!(!data["path"].as_array().unwrap().is_empty());
+    }
+}
