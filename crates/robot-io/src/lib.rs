@@ -26,11 +26,16 @@
 //! * [`ur`]: Universal Robots e-Series arms driven live: URScript on the script port, RTDE for
 //!   progress and state, the dashboard server to stop ([`ur::UrArm`]).
 //! * Exports: [`aubo_lua`] (ARCS Lua script), [`urscript`], [`gcode`], each read back by its
-//!   parser ([`read_lua`], [`read_urscript`], [`read_gcode`]) before it is returned.
+//!   parser ([`read_lua`], [`read_urscript`], [`read_gcode`]) before it is returned;
+//!   [`export_program`] writes any of them ([`ExportFormat`]) from a [`Plan`].
+//! * `track.json`: [`TrackFile`], its program built and checked ([`TrackFile::build_program`]),
+//!   checked and timed ([`TrackFile::check`]), or placed on a plotter's level sheet
+//!   ([`TrackFile::level_frame`]).
 //! * The pure motion executor (no sockets): [`execute_program`] executes a program as the
 //!   controller would move, sampled in time, tagged by stroke and ink dip
 //!   ([`execute_program_tagged`]), and [`trace_to_states`] turns it back into brush states on the
-//!   paper; [`level_frame_in_front`] is the level sheet in front of the arm.
+//!   paper; [`level_frame_in_front`] is the level sheet in front of the arm; [`read_trace`]
+//!   reads a simulator's trace file back.
 //! * [`sim`]: loopback TCP simulators of the controllers for tests and dry runs.
 //! * [`wire`]: the AUBO controller's wire formats (the SDK's frames, JSON text and login; lines;
 //!   JSON-RPC over HTTP), the transports and the controller's ports.

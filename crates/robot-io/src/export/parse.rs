@@ -395,7 +395,7 @@ fn lua_kinematics<'a>(
     it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
     last: usize,
 ) -> Result<Option<DhParams>, At> {
-    if !it.peek().is_some_and(|(_, l)| *l == "  do") {
+    if it.peek().is_none_or(|(_, l)| *l != "  do") {
         return Ok(None);
     }
     it.next();
