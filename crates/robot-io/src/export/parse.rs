@@ -272,6 +272,27 @@ fn expect<'a>(it: &mut impl Iterator<Item = (usize, &'a str)>, want: &str, last:
     }
 }
 
+/// The next statement of an arm program's body, its `  `-indented comments (`marker`) skipped;
+/// `None` at the closing `end`.
+fn statement<'a>(
+    it: &mut impl Iterator<Item = (usize, &'a str)>,
+    last: usize,
+    marker: &str,
+    target: ExportTarget,
+) -> Result<Option<(usize, &'a str)>, At> {
+    loop {
+        let Some((n, l)) = it.next() else {
+            return Err(At { line: last, reason: "the program does not end with `end`".into() });
+        };
+        if l == "end" {
+            return Ok(None);
+        }
+        if !is_comment(l, "  ", marker, target) {
+            return Ok(Some((n, l)));
+        }
+    }
+}
+
 /// The first line that is not a header comment (`marker` at the start), with the lines after.
 fn after_header<'a>(
     it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
@@ -337,16 +358,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     )?;
     let mut moves = Vec::new();
     let mut path_buffers = Vec::new();
-    loop {
-        let Some((n, l)) = it.next() else {
-            return Err(At { line: last, reason: "the program does not end with `end`".into() });
-        };
-        if l == "end" {
-            break;
-        }
-        if is_comment(l, "  ", "--", ExportTarget::Lua) {
-            continue;
-        }
+    while let Some((n, l)) = statement(&mut it, last, "--", ExportTarget::Lua)? {
         let m = if l == "  do" {
             let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
             if l.starts_with("    local name = ") {
@@ -654,16 +666,7 @@ pub(crate) fn read_urscript_named(text: &str, name: &str) -> Result<ReadProgram,
         urscript_unexpected,
     )?;
     let mut moves = Vec::new();
-    loop {
-        let Some((n, l)) = it.next() else {
-            return Err(At { line: last, reason: "the program does not end with `end`".into() });
-        };
-        if l == "end" {
-            break;
-        }
-        if is_comment(l, "  ", "#", ExportTarget::UrScript) {
-            continue;
-        }
+    while let Some((n, l)) = statement(&mut it, last, "#", ExportTarget::UrScript)? {
         // UR's argument orders (the script manual): movej(q, a, v, t, r), movel(pose, a, v, t,
         // r), movep(pose, a, v, r); maobi names every argument after the target, in that order,
         // with t=0 (the speeds decide the time).
