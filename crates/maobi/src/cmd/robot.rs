@@ -7,11 +7,12 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use robot_io::aubo::{AuboRpc, Link, Motion};
+use robot_io::brush_model::Track;
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::Transport;
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{
-    Controller, ExportFormat, Exported, PaperFrame, Plan, Progress, RobotConfig, RobotError, TrackFile, Watch,
+    Controller, ExportFormat, Exported, PaperFrame, Plan, Program, Progress, RobotConfig, RobotError, TrackFile, Watch,
 };
 
 use crate::common::{PROGRESS_QUIET_S, check_output_file, clock, print_json, progress, write_atomic};
@@ -392,8 +393,24 @@ pub fn run(cmd: RobotCmd) -> Result<()> {
 
 struct Loaded {
     track: TrackFile,
+    /// Its strokes, and the title its programs carry.
+    strokes: Track,
+    title: String,
     frame: PaperFrame,
     cfg: RobotConfig,
+}
+
+impl Loaded {
+    /// `program` (built from this track) as a controller or an exporter takes it.
+    fn plan<'a>(&'a self, program: &'a Program) -> Plan<'a> {
+        Plan {
+            program,
+            config: &self.cfg,
+            track: &self.strokes,
+            stroke_chars: self.track.stroke_chars.as_deref(),
+            title: &self.title,
+        }
+    }
 }
 
 fn load(a: &ProgramArgs, plotter: bool) -> Result<Loaded> {
@@ -407,7 +424,7 @@ fn load(a: &ProgramArgs, plotter: bool) -> Result<Loaded> {
         Some(p) => RobotConfig::load(p)?,
         None => RobotConfig::default(),
     };
-    Ok(Loaded { track, frame, cfg })
+    Ok(Loaded { strokes: track.track(), title: track.title(), track, frame, cfg })
 }
 
 fn check(a: CheckArgs) -> Result<()> {
@@ -479,14 +496,7 @@ fn export(a: ExportArgs) -> Result<()> {
         "urscript" => ExportFormat::UrScript,
         _ => ExportFormat::Gcode,
     };
-    let (track, t) = (l.track.track(), l.track.title());
-    let plan = Plan {
-        program: &program,
-        config: &l.cfg,
-        track: &track,
-        stroke_chars: l.track.stroke_chars.as_deref(),
-        title: &t,
-    };
+    let plan = l.plan(&program);
     // URScript and G-code take only speeds from the timing (no joint is exported), so the
     // nominal arm serves when no other is given.
     let kin = arm.as_ref().map_or(robot_io::DhParams::AUBO_I5, |k| k.kinematics);
@@ -590,14 +600,7 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
 fn send(a: SendArgs) -> Result<()> {
     let l = load(&a.program, a.controller == ControllerKind::Grbl)?;
     let (program, _) = l.track.build_program(&l.frame, &l.cfg)?;
-    let (track, t) = (l.track.track(), l.track.title());
-    let plan = Plan {
-        program: &program,
-        config: &l.cfg,
-        track: &track,
-        stroke_chars: l.track.stroke_chars.as_deref(),
-        title: &t,
-    };
+    let plan = l.plan(&program);
     let mut controller = controller_for(&a)?;
     let to = controller.describe();
     let prepared = controller.prepare(&plan)?;
