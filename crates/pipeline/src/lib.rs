@@ -26,6 +26,7 @@
 //! ```
 
 mod brush_choice;
+mod calibration_photo;
 mod calibration_sheet;
 mod closed_loop;
 mod error;
@@ -40,12 +41,16 @@ mod readback;
 mod registration;
 mod sheet;
 mod sheet_file;
+mod sheet_folder;
 mod sheet_run;
 mod text;
 pub mod tuning;
 mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
+pub use calibration_photo::{
+    LeftOut, MAX_CELL_MM, MAX_LAYOUT_BYTES, MAX_PRESSES, PressReading, SheetReading, read_calibration_sheet,
+};
 pub use calibration_sheet::{
     CALIBRATION_LAYOUT_VERSION, CalibrationLayout, CalibrationPress, CalibrationSheet, CalibrationSheetError,
     calibration_sheet, calibration_sheet_image, press_stroke,
@@ -75,6 +80,7 @@ pub use sheet::{
     layout_on_sheet, parse_sheet, sheet_image, sheet_image_of, sheet_image_with_marks,
 };
 pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
+pub use sheet_folder::{PlannedChar, SheetFolder, SheetFolderError, plan_csim_mean};
 pub use sheet_run::{RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet};
 pub use text::{TextOptions, WrittenText, write_text, write_text_each};
 pub use track_refine::RefineOptions;
