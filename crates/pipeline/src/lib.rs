@@ -33,6 +33,7 @@ mod error;
 mod glyphs;
 mod marks;
 mod means;
+mod model_scores;
 mod next_attempt;
 mod observation;
 mod placement;
@@ -63,6 +64,7 @@ pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{Mark, MarkError, MarkRole, mark_strokes, registration_marks};
 pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
+pub use model_scores::{ModelScores, ModelTarget, ReferenceError, load_reference_photos, score_models};
 pub use next_attempt::{
     MAX_ROUNDS, MAX_SHEET_SUMMARY_BYTES, MIN_OBSERVED_INK_SHARE, NextAttempt, NextOptions, ObservedRun,
     ObservedRunError, Round, RoundChar, same_brush,
