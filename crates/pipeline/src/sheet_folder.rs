@@ -118,7 +118,7 @@ pub enum SheetFolderError {
     },
     /// Scoring the observed ink failed.
     #[error(transparent)]
-    Score(#[from] crate::Error),
+    Score(Box<crate::Error>),
 }
 
 /// One character of a sheet as planned: where its images are, its frame on the paper and the
@@ -252,8 +252,8 @@ impl SheetFolder {
         let c = &self.chars[i];
         let (reference, plan) = c.images()?;
         let observed = rectify(ink, reg, &c.frame);
-        let vs_glyph = similarity(&reference, &observed)?;
-        let vs_plan = similarity(&plan, &observed)?;
+        let score = |image: &Coverage| similarity(image, &observed).map_err(|e| SheetFolderError::Score(Box::new(e)));
+        let (vs_glyph, vs_plan) = (score(&reference)?, score(&plan)?);
         let diagnosis = diagnose(&observed, &plan, &c.frame, &c.paths);
         let char = ObservedChar {
             char: self.track.chars[i].char.clone(),

@@ -43,7 +43,7 @@ fn sheet_error(flag: &str, e: SheetFolderError) -> anyhow::Error {
             "{flag}: {} has no registration marks (written with --no-marks?): write the sheet again with marks",
             path.display()
         ),
-        SheetFolderError::Score(e) => e.into(),
+        SheetFolderError::Score(e) => (*e).into(),
         e => anyhow::Error::new(e).context(flag.to_string()),
     }
 }
