@@ -367,3 +367,30 @@ pub fn train(
         data_seconds,
     })
 }
+
+#[cfg(test)]
+mod record_tests {
+    use super::*;
+
+    #[test]
+    fn the_recipe_and_metrics_record_the_run_as_it_went() {
+        let point = |step, val_mse| TrainPoint { step, train_mse: 0.5, val_mse, lr: 0.002 };
+        let report = TrainReport {
+            history: vec![point(1, None), point(2, Some(0.125))],
+            best_val_mse: 0.125,
+            best_step: 2,
+            steps_run: 2,
+            stopped_early: true,
+            wall_seconds: 3.5,
+            data_seconds: 0.5,
+        };
+        let opts = TrainOptions { steps: 10, batch: 8, lr: 0.002, seed: 9, ..TrainOptions::default() };
+        let r = report.recipe(&opts);
+        assert_eq!((r.steps, r.batch, r.lr, r.seed), (2, 8, 0.002, 9), "the steps run, not asked");
+        assert_eq!((r.loss.as_str(), r.schedule.as_str(), r.wall_seconds), ("mse", SCHEDULE, 3.5));
+        let csim = Summary { count: 40, best: 0.99, worst: 0.9, mean: 0.95 };
+        let ssim = Summary { count: 40, best: 0.98, worst: 0.8, mean: 0.9 };
+        let m = report.metrics(40, &csim, &ssim);
+        assert_eq!((m.n, m.ssim_mean, m.ssim_worst, m.csim_mean, m.val_mse), (40, 0.9, 0.8, 0.95, 0.125));
+    }
+}
