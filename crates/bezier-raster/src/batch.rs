@@ -132,18 +132,20 @@ pub fn render_stamps(
     width: u32,
     height: u32,
 ) -> Coverage {
+    // A stamp's anchor relative to the image's top-left corner.
+    let relative = |anchor: PointMm| PointMm::new(anchor.x_mm - origin_mm.x_mm, anchor.y_mm - origin_mm.y_mm);
     let threads = rayon::current_num_threads();
     let pixels = u64::from(width) * u64::from(height);
     if threads < 2 || stamps.len() < 2 * PARALLEL_STAMPS || pixels > PARALLEL_MAX_PIXELS {
-        return render_stamps_serial(stamps, model, origin_mm, px_per_mm, width, height);
+        // On the calling thread.
+        let mut c = Compositor::new(width, height, px_per_mm);
+        for s in stamps {
+            c.stamp(model, &Stamp { anchor: relative(s.anchor), ..*s });
+        }
+        return c.into_image();
     }
-    let paths: Vec<kurbo::BezPath> = stamps
-        .par_iter()
-        .map(|s| {
-            let anchor = PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm);
-            model.outline(&s.footprint, anchor, s.beta_rad)
-        })
-        .collect();
+    let paths: Vec<kurbo::BezPath> =
+        stamps.par_iter().map(|s| model.outline(&s.footprint, relative(s.anchor), s.beta_rad)).collect();
     let share = stamps.len().div_ceil(threads).max(PARALLEL_STAMPS);
     // The scratch mask's size when each share starts, as one rasteriser going through them all
     // would have it: the running maximum of the boxes drawn so far.
@@ -184,24 +186,6 @@ const PARALLEL_STAMPS: usize = 256;
 /// Above this many pixels (64 MiB of f32) an image per worker costs more memory than it saves
 /// time: rendered serially.
 const PARALLEL_MAX_PIXELS: u64 = 1 << 24;
-
-/// [`render_stamps`] on the calling thread.
-fn render_stamps_serial(
-    stamps: &[Stamp],
-    model: &dyn StrokeModel,
-    origin_mm: PointMm,
-    px_per_mm: f64,
-    width: u32,
-    height: u32,
-) -> Coverage {
-    let mut c = Compositor::new(width, height, px_per_mm);
-    for s in stamps {
-        let shifted =
-            Stamp { anchor: PointMm::new(s.anchor.x_mm - origin_mm.x_mm, s.anchor.y_mm - origin_mm.y_mm), ..*s };
-        c.stamp(model, &shifted);
-    }
-    c.into_image()
-}
 
 /// Renders a track into a `width × height` image whose top-left corner is paper point
 /// `origin_mm`, at `px_per_mm`, composing footprints by per-pixel max.

@@ -120,11 +120,7 @@ pub(crate) fn render_presses<'py>(
     model: &str,
     extrapolate: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let pts = presses_arg(presses)?;
-    let b = box_arg(box_mm, "box_mm")?;
-    let size = size_arg(size_px)?;
-    check_scale(&b, size, "box_mm")?;
-    let profile = brush_arg(brush)?;
+    let PressesRender { pts, b, size, profile } = PressesRender::new(presses, box_mm, size_px, brush)?;
     let kind = model_arg(model)?;
     let ex = if extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let img = guarded(py, "render_presses", move || {
@@ -139,6 +135,36 @@ pub(crate) fn render_presses<'py>(
         Ok(render_stamps(&stamps, kind.model(), PointMm::new(b.x0_mm, b.y0_mm), size as f64 / b.size_mm, size, size))
     })?;
     image_out(py, img)
+}
+
+/// The arguments the three press renderers share, checked in the order their errors are
+/// raised: `presses`, `box_mm`, `size_px`, the box's scale at that size, `brush`.
+struct PressesRender {
+    /// The presses, one per row.
+    pts: Vec<TrackPoint>,
+    /// The paper square the image shows.
+    b: CharBox,
+    /// The image's side, px.
+    size: u32,
+    /// The brush (the default one when none was given).
+    profile: brush_model::BrushProfile,
+}
+
+impl PressesRender {
+    /// Reads and checks `presses`, `box_mm`, `size_px` and `brush`.
+    fn new(
+        presses: &Bound<'_, PyAny>,
+        box_mm: &Bound<'_, PyAny>,
+        size_px: i64,
+        brush: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let pts = presses_arg(presses)?;
+        let b = box_arg(box_mm, "box_mm")?;
+        let size = size_arg(size_px)?;
+        check_scale(&b, size, "box_mm")?;
+        let profile = brush_arg(brush)?;
+        Ok(PressesRender { pts, b, size, profile })
+    }
 }
 
 /// The soft canvas of a box at `size` px.
@@ -186,11 +212,7 @@ pub(crate) fn render_presses_soft<'py>(
     edge_px: f64,
     extrapolate: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let pts = presses_arg(presses)?;
-    let b = box_arg(box_mm, "box_mm")?;
-    let size = size_arg(size_px)?;
-    check_scale(&b, size, "box_mm")?;
-    let profile = brush_arg(brush)?;
+    let PressesRender { pts, b, size, profile } = PressesRender::new(presses, box_mm, size_px, brush)?;
     let c = canvas(&b, size, edge_px)?;
     let img = guarded(py, "render_presses_soft", move || {
         check_ranges(&pts, &profile, extrapolate)?;
@@ -216,11 +238,7 @@ pub(crate) fn render_presses_soft_vjp<'py>(
     edge_px: f64,
     extrapolate: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let pts = presses_arg(presses)?;
-    let b = box_arg(box_mm, "box_mm")?;
-    let size = size_arg(size_px)?;
-    check_scale(&b, size, "box_mm")?;
-    let profile = brush_arg(brush)?;
+    let PressesRender { pts, b, size, profile } = PressesRender::new(presses, box_mm, size_px, brush)?;
     let c = canvas(&b, size, edge_px)?;
     let up = crate::arrays::f64_array(grad_image, "grad_image")?;
     if up.shape != [size as usize, size as usize] {
@@ -291,13 +309,14 @@ fn pair(a: &Bound<'_, PyAny>, b: &Bound<'_, PyAny>) -> PyResult<(Image, Vec<f32>
     Ok((ia, ib.0))
 }
 
-fn metric(
+/// `f` of two images of one size (the GIL released), its errors named after `what`.
+fn metric<T: Send>(
     py: Python<'_>,
     a: &Bound<'_, PyAny>,
     b: &Bound<'_, PyAny>,
     what: &'static str,
-    f: fn(stroke_metrics::GrayRef<'_>, stroke_metrics::GrayRef<'_>) -> Result<f64, stroke_metrics::MetricsError>,
-) -> PyResult<f64> {
+    f: fn(stroke_metrics::GrayRef<'_>, stroke_metrics::GrayRef<'_>) -> Result<T, stroke_metrics::MetricsError>,
+) -> PyResult<T> {
     let ((da, h, w), db) = pair(a, b)?;
     guarded(py, what, move || {
         let ga = stroke_metrics::GrayRef::new(&da, w, h).map_err(|e| lib_err(what, e))?;
@@ -344,12 +363,7 @@ pub(crate) fn compare<'py>(
         }
     };
     let (a, b) = (load(a, "a")?, load(b, "b")?);
-    let ((da, h, w), db) = pair(&a, &b)?;
-    let s = guarded(py, "compare", move || {
-        let ga = stroke_metrics::GrayRef::new(&da, w, h).map_err(|e| lib_err("compare", e))?;
-        let gb = stroke_metrics::GrayRef::new(&db, w, h).map_err(|e| lib_err("compare", e))?;
-        stroke_metrics::compare(ga, gb).map_err(|e| lib_err("compare", e))
-    })?;
+    let s = metric(py, &a, &b, "compare", stroke_metrics::compare)?;
     let v = serde_json::to_value(s).map_err(|e| lib_err("compare", e))?;
     crate::arrays::json_to_py(py, &v)
 }

@@ -6,6 +6,7 @@
 //!   steps, the iteration count and the stop).
 //! * [`gaussian_blur`]: a separable Gaussian blur of a row-major raster of `f32` or `f64`
 //!   ([`Pixel`]), zero or clamped edges ([`Edge`]).
+//! * [`for_each_block`]: the square blocks of a row-major raster, for statistics per block.
 //! * [`SplitMix64`]: a tiny seedable generator whose streams never change (fixtures are compared
 //!   byte for byte), with uniform and normal draws, and its finaliser [`SplitMix64::mix`] as a
 //!   64-bit hash.
@@ -33,10 +34,12 @@
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
+mod blocks;
 mod blur;
 mod nelder_mead;
 mod splitmix;
 
+pub use blocks::for_each_block;
 pub use blur::{Edge, Normalise, Pixel, gaussian_blur};
 pub use nelder_mead::{NelderMead, OutsideContraction, nelder_mead};
 pub use splitmix::SplitMix64;

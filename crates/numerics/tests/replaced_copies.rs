@@ -1,9 +1,11 @@
 //! The shared functions reproduce, bit for bit, the copies they replaced (kept here verbatim as
-//! they were in stroke-fit's `fit.rs` and `synth.rs`, trajectory's `template.rs`, `raster.rs`
-//! and `scan.rs`, and xtask's `rng.rs`): same values, same calls of the objective in the same
+//! they were in stroke-fit's `fit.rs`, `synth.rs` and `photo.rs`, trajectory's `template.rs`,
+//! `raster.rs`, `scan.rs` and `glyph/bitmap.rs`, and xtask's `rng.rs`): same values, same calls of the objective in the same
 //! order, same random streams. Fixtures built with the old copies are compared byte for byte.
 
-use numerics::{Edge, NelderMead, Normalise, OutsideContraction, SplitMix64, gaussian_blur, nelder_mead};
+use numerics::{
+    Edge, NelderMead, Normalise, OutsideContraction, SplitMix64, for_each_block, gaussian_blur, nelder_mead,
+};
 
 // ---- the old copies, verbatim (names suffixed) ----
 
@@ -257,6 +259,51 @@ fn objective(kind: usize, p: &[f64]) -> f64 {
     }
 }
 
+/// stroke-fit `photo.rs` (`flatten_background`'s blocks): each block's centre and 90th
+/// percentile (truncated index).
+fn blocks_stroke_fit(g: &[f32], w: usize, h: usize) -> Vec<(f64, f64, f64)> {
+    const B: usize = 32;
+    let (bw, bh) = (w.div_ceil(B), h.div_ceil(B));
+    let mut blocks = Vec::with_capacity(bw * bh);
+    let mut vals = Vec::with_capacity(B * B);
+    for by in 0..bh {
+        for bx in 0..bw {
+            vals.clear();
+            for y in by * B..((by + 1) * B).min(h) {
+                vals.extend_from_slice(&g[y * w + bx * B..y * w + ((bx + 1) * B).min(w)]);
+            }
+            vals.sort_by(f32::total_cmp);
+            let cx = ((bx * B + ((bx + 1) * B).min(w)) as f64) / 2.0;
+            let cy = ((by * B + ((by + 1) * B).min(h)) as f64) / 2.0;
+            blocks.push((cx, cy, vals[((vals.len() - 1) as f32 * 0.9) as usize] as f64));
+        }
+    }
+    blocks
+}
+
+/// trajectory `glyph/bitmap.rs` (`paper_level`'s grid): each block's 90th percentile (rounded
+/// index).
+fn grid_trajectory(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
+    let b = (w.max(h) / 32).max(4);
+    let (gw, gh) = (w.div_ceil(b), h.div_ceil(b));
+    let pct90 = |vals: &mut Vec<u8>| -> f32 {
+        vals.sort_unstable();
+        vals[((vals.len() - 1) as f64 * 0.9).round() as usize] as f32
+    };
+    let mut grid = vec![0.0f32; gw * gh];
+    let mut vals = Vec::with_capacity(b * b);
+    for gy in 0..gh {
+        for gx in 0..gw {
+            vals.clear();
+            for y in gy * b..((gy + 1) * b).min(h) {
+                vals.extend_from_slice(&raw[y * w + gx * b..y * w + ((gx + 1) * b).min(w)]);
+            }
+            grid[gy * gw + gx] = pct90(&mut vals);
+        }
+    }
+    grid
+}
+
 #[test]
 fn nelder_mead_reproduces_stroke_fit_and_template_bit_for_bit() {
     let mut rng = SplitMix64(0xF17);
@@ -361,5 +408,33 @@ fn splitmix_streams_are_unchanged() {
                 _ => assert_eq!(xtask.normal().to_bits(), c.normal().to_bits()),
             }
         }
+    }
+}
+
+#[test]
+fn the_blocks_reproduce_stroke_fit_and_trajectory_bit_for_bit() {
+    let mut rng = SplitMix64(0xB10C);
+    for (w, h) in [(1, 1), (31, 33), (32, 64), (65, 40), (200, 7), (130, 129)] {
+        let g: Vec<f32> = (0..w * h).map(|_| rng.next_f64() as f32).collect();
+        const B: usize = 32;
+        let mut blocks = Vec::new();
+        for_each_block(&g, w, h, B, |bx, by, vals| {
+            vals.sort_by(f32::total_cmp);
+            let cx = ((bx * B + ((bx + 1) * B).min(w)) as f64) / 2.0;
+            let cy = ((by * B + ((by + 1) * B).min(h)) as f64) / 2.0;
+            blocks.push((cx, cy, vals[((vals.len() - 1) as f32 * 0.9) as usize] as f64));
+        });
+        let bits = |v: &[(f64, f64, f64)]| v.iter().map(|b| [b.0, b.1, b.2].map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&blocks_stroke_fit(&g, w, h)), bits(&blocks), "stroke-fit {w}×{h}");
+
+        let raw: Vec<u8> = (0..w * h).map(|_| (rng.next_u64() >> 56) as u8).collect();
+        let b = (w.max(h) / 32).max(4);
+        let gw = w.div_ceil(b);
+        let mut grid = vec![0.0f32; gw * h.div_ceil(b)];
+        for_each_block(&raw, w, h, b, |gx, gy, vals| {
+            vals.sort_unstable();
+            grid[gy * gw + gx] = vals[((vals.len() - 1) as f64 * 0.9).round() as usize] as f32;
+        });
+        assert_eq!(grid_trajectory(&raw, w, h), grid, "trajectory {w}×{h}");
     }
 }

@@ -171,21 +171,13 @@ pub fn mask_from_gray(gray: Vec<f32>, w: usize, h: usize, name: impl AsRef<Path>
 /// by ink do not bias it.
 fn flatten_background(g: &[f32], w: usize, h: usize) -> Vec<f32> {
     const B: usize = 32;
-    let (bw, bh) = (w.div_ceil(B), h.div_ceil(B));
-    let mut blocks = Vec::with_capacity(bw * bh);
-    let mut vals = Vec::with_capacity(B * B);
-    for by in 0..bh {
-        for bx in 0..bw {
-            vals.clear();
-            for y in by * B..((by + 1) * B).min(h) {
-                vals.extend_from_slice(&g[y * w + bx * B..y * w + ((bx + 1) * B).min(w)]);
-            }
-            vals.sort_by(f32::total_cmp);
-            let cx = ((bx * B + ((bx + 1) * B).min(w)) as f64) / 2.0;
-            let cy = ((by * B + ((by + 1) * B).min(h)) as f64) / 2.0;
-            blocks.push((cx, cy, vals[((vals.len() - 1) as f32 * 0.9) as usize] as f64));
-        }
-    }
+    let mut blocks = Vec::with_capacity(w.div_ceil(B) * h.div_ceil(B));
+    numerics::for_each_block(g, w, h, B, |bx, by, vals| {
+        vals.sort_by(f32::total_cmp);
+        let cx = ((bx * B + ((bx + 1) * B).min(w)) as f64) / 2.0;
+        let cy = ((by * B + ((by + 1) * B).min(h)) as f64) / 2.0;
+        blocks.push((cx, cy, vals[((vals.len() - 1) as f32 * 0.9) as usize] as f64));
+    });
     let top = blocks.iter().map(|b| b.2).fold(0.0, f64::max);
     let paper: Vec<_> = blocks.iter().filter(|b| b.2 >= 0.8 * top).collect();
     // Least squares for p(x, y) = a + b·x + c·y (normal equations, 3×3).

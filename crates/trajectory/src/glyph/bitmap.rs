@@ -57,22 +57,13 @@ pub fn glyph_from_gray(ch: char, name: &str, gray: &GrayImage) -> Result<Glyph, 
 fn paper_level(raw: &[u8], w: usize, h: usize) -> Vec<f32> {
     let b = (w.max(h) / 32).max(4);
     let (gw, gh) = (w.div_ceil(b), h.div_ceil(b));
-    let pct90 = |vals: &mut Vec<u8>| -> f32 {
+    let pct90 = |vals: &mut [u8]| -> f32 {
         vals.sort_unstable();
         vals[((vals.len() - 1) as f64 * 0.9).round() as usize] as f32
     };
     let floor = 0.45 * pct90(&mut raw.to_vec());
     let mut grid = vec![0.0f32; gw * gh];
-    let mut vals = Vec::with_capacity(b * b);
-    for gy in 0..gh {
-        for gx in 0..gw {
-            vals.clear();
-            for y in gy * b..((gy + 1) * b).min(h) {
-                vals.extend_from_slice(&raw[y * w + gx * b..y * w + ((gx + 1) * b).min(w)]);
-            }
-            grid[gy * gw + gx] = pct90(&mut vals);
-        }
-    }
+    numerics::for_each_block(raw, w, h, b, |gx, gy, vals| grid[gy * gw + gx] = pct90(vals));
     let filt = |g: &[f32], r: i64, max: bool| -> Vec<f32> {
         let mut out = vec![0.0f32; gw * gh];
         for y in 0..gh as i64 {

@@ -336,50 +336,43 @@ fn corner_spur(g: &Graph, k: usize, junction: usize, opts: &GraphOptions) -> boo
     s.dot(others[0]) < lim && s.dot(others[1]) < lim
 }
 
+/// Contracts short edges between two branching nodes (a crossing that thinning drew as a small
+/// cluster of junctions), never one to a free end: the first such edge, then the first in the
+/// graph it leaves, until none is left.
 pub(super) fn merge_junctions(g: &mut Graph, opts: &GraphOptions) {
-    loop {
-        let mut merged = false;
-        for k in 0..g.edges.len() {
-            if !g.edges[k].alive {
-                continue;
+    let short = |g: &Graph, k: usize| {
+        let e = &g.edges[k];
+        let (a, b) = (e.a, e.b);
+        e.alive
+            && a != b
+            && degree(g, a) >= 2
+            && degree(g, b) >= 2
+            && length(&e.pts) < opts.merge_factor * g.nodes[a].width.max(g.nodes[b].width).max(1.0)
+    };
+    while let Some(k) = (0..g.edges.len()).find(|&k| short(g, k)) {
+        let (a, b) = (g.edges[k].a, g.edges[k].b);
+        let w = g.nodes[a].width.max(g.nodes[b].width).max(1.0);
+        // Contract b into a.
+        g.edges[k].alive = false;
+        let pos = g.nodes[a].pos.midpoint(g.nodes[b].pos);
+        g.nodes[a].pos = pos;
+        g.nodes[a].width = w;
+        g.nodes[b].alive = false;
+        for e in g.edges.iter_mut().filter(|e| e.alive) {
+            if e.a == b {
+                e.a = a;
+                e.pts[0] = pos;
             }
-            let (a, b) = (g.edges[k].a, g.edges[k].b);
-            // Contract short edges between two branching nodes (a crossing that thinning drew as
-            // a small cluster of junctions), never one to a free end.
-            if a == b || degree(g, a) < 2 || degree(g, b) < 2 {
-                continue;
+            if e.b == b {
+                e.b = a;
+                *e.pts.last_mut().expect("non-empty") = pos;
             }
-            let w = g.nodes[a].width.max(g.nodes[b].width).max(1.0);
-            if length(&g.edges[k].pts) >= opts.merge_factor * w {
-                continue;
+            if e.a == a {
+                e.pts[0] = pos;
             }
-            // Contract b into a.
-            g.edges[k].alive = false;
-            let pos = g.nodes[a].pos.midpoint(g.nodes[b].pos);
-            g.nodes[a].pos = pos;
-            g.nodes[a].width = w;
-            g.nodes[b].alive = false;
-            for e in g.edges.iter_mut().filter(|e| e.alive) {
-                if e.a == b {
-                    e.a = a;
-                    e.pts[0] = pos;
-                }
-                if e.b == b {
-                    e.b = a;
-                    *e.pts.last_mut().expect("non-empty") = pos;
-                }
-                if e.a == a {
-                    e.pts[0] = pos;
-                }
-                if e.b == a {
-                    *e.pts.last_mut().expect("non-empty") = pos;
-                }
+            if e.b == a {
+                *e.pts.last_mut().expect("non-empty") = pos;
             }
-            merged = true;
-            break;
-        }
-        if !merged {
-            break;
         }
     }
 }
