@@ -488,7 +488,10 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("neural-gen-save-{}", std::process::id()));
         g.save(&dir.join("g.safetensors")).unwrap();
         g.varmap.save(dir.join("candle.safetensors")).unwrap();
-        assert_eq!(std::fs::read(dir.join("g.safetensors")).unwrap(), std::fs::read(dir.join("candle.safetensors")).unwrap());
+        assert_eq!(
+            std::fs::read(dir.join("g.safetensors")).unwrap(),
+            std::fs::read(dir.join("candle.safetensors")).unwrap()
+        );
         let config: GeneratorConfig = serde_json::from_slice(&std::fs::read(dir.join("g.json")).unwrap()).unwrap();
         assert_eq!(config.arch, g.config.arch);
         // Nothing else is left in the folder (no temporary file).

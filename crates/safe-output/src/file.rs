@@ -89,7 +89,9 @@ impl TempFile {
             let mut h = std::collections::hash_map::RandomState::new().build_hasher();
             h.write_u32(std::process::id());
             h.write_u64(COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed));
-            h.write_u128(std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos()));
+            h.write_u128(
+                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos()),
+            );
             let path = dir.join(format!(".tmp{:08x}.tmp", h.finish() as u32));
             let mut open = std::fs::OpenOptions::new();
             open.write(true).create_new(true);
@@ -164,10 +166,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
 /// assert_eq!(std::fs::read_to_string(&path).unwrap(), "0,0\n1,1\n2,4\n");
 /// # std::fs::remove_file(&path).unwrap();
 /// ```
-pub fn write_atomic_with(
-    path: &Path,
-    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), Error> {
+pub fn write_atomic_with(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<(), Error> {
     let target = output_target(path)?;
     let path = target.as_path();
     let dir = match path.parent() {

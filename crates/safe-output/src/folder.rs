@@ -237,7 +237,11 @@ pub fn check_output_folder(names: Names<'_>, out: &Path, force: bool) -> Result<
         return Ok(());
     }
     if !folder_is_empty(out, &meta)? {
-        return Err(Error::NotEmpty { label: names.output.into(), replace: names.replace.into(), out: out.to_path_buf() });
+        return Err(Error::NotEmpty {
+            label: names.output.into(),
+            replace: names.replace.into(),
+            out: out.to_path_buf(),
+        });
     }
     Ok(())
 }
@@ -353,7 +357,12 @@ impl Stage {
         let restore = |e: Error| -> Error {
             if had_old {
                 if let Err(restore) = std::fs::rename(&old, out) {
-                    return Error::NotRestored { out: out.to_path_buf(), old: old.clone(), restore, source: Box::new(e) };
+                    return Error::NotRestored {
+                        out: out.to_path_buf(),
+                        old: old.clone(),
+                        restore,
+                        source: Box::new(e),
+                    };
                 }
             }
             e
@@ -591,7 +600,10 @@ mod tests {
         std::fs::remove_dir_all(&out).unwrap();
         std::fs::write(&out, "f").unwrap();
         let e = check_output_folder(NAMES, &out, true).unwrap_err();
-        assert_eq!(e.to_string(), format!("out {}: exists and is not a folder; overwrite replaces folders only", out.display()));
+        assert_eq!(
+            e.to_string(),
+            format!("out {}: exists and is not a folder; overwrite replaces folders only", out.display())
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 
@@ -600,7 +612,9 @@ mod tests {
         let d = scratch("apart");
         std::fs::create_dir(d.join("in")).unwrap();
         let input = d.join("in");
-        for (out, how) in [(d.join("in"), Overlap::Is), (d.join("in/x/../y"), Overlap::LiesInside), (d.clone(), Overlap::Holds)] {
+        for (out, how) in
+            [(d.join("in"), Overlap::Is), (d.join("in/x/../y"), Overlap::LiesInside), (d.clone(), Overlap::Holds)]
+        {
             match check_output_apart("out", &out, &[("input", &input)]) {
                 Err(Error::Overlaps { how: h, .. }) => assert_eq!(h, how, "{}", out.display()),
                 r => panic!("{}: {r:?}", out.display()),

@@ -5,8 +5,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use safe_output::{
-    Stage, TempGuard, freeze_outputs, output_gate, record_signal, remove_on_interrupt, remove_temporaries,
-    signal_count,
+    Stage, TempGuard, freeze_outputs, output_gate, record_signal, remove_on_interrupt, remove_temporaries, signal_count,
 };
 
 #[test]
