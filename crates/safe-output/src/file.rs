@@ -248,19 +248,10 @@ pub fn check_output_file(names: Names<'_>, path: &Path, force: bool) -> Result<(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tests::names;
 
     fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("safe-output-file-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn names(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> =
-            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        v.sort();
-        v
+        crate::tests::scratch(&format!("file-{name}"))
     }
 
     #[test]

@@ -479,22 +479,13 @@ pub fn check_output_apart(label: &str, out: &Path, inputs: &[(&str, &Path)]) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::tests::names;
 
     /// A process id that runs nowhere (Linux's largest is 2^22).
     const DEAD: u32 = 4_000_000_000;
 
     fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("safe-output-folder-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn names(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> =
-            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        v.sort();
-        v
+        crate::tests::scratch(&format!("folder-{name}"))
     }
 
     const NAMES: Names<'static> = Names { output: "out", replace: "overwrite" };
