@@ -10,7 +10,6 @@ mod figures;
 mod fixtures;
 mod gates;
 mod io;
-mod picture;
 mod refine_gate;
 mod skeleton_counts;
 mod skeleton_train;

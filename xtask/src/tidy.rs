@@ -19,6 +19,9 @@
 //! the `robot` command (the edge that checks, exports and sends a program to an arm, and serves
 //! the simulators) builds or times a program ([`CLI_PROGRAM`]), and no function there runs over
 //! [`CLI_MAX_FN_LINES`] lines.
+//!
+//! And no function in a library crate's sources (`crates/*/src`, the CLI's excepted) runs over
+//! [`LIBRARY_MAX_FN_LINES`] lines ([`library_functions_short`]).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -111,7 +114,44 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
     println!(
         "tidy: {CLI_DIR} only speaks (no program run, no footprint swept, no function over {CLI_MAX_FN_LINES} lines)"
     );
+    let n = library_functions_short(&root)?;
+    println!("tidy: no function over {LIBRARY_MAX_FN_LINES} lines in the {n} library crates");
     Ok(())
+}
+
+/// The longest function a library crate may hold, lines (signature to closing brace, tests
+/// included).
+const LIBRARY_MAX_FN_LINES: usize = 120;
+
+/// Fails naming every function over [`LIBRARY_MAX_FN_LINES`] lines in the sources of a library
+/// crate (`crates/*/src`, all but the CLI's, which has its own limit); returns how many crates
+/// it read.
+fn library_functions_short(root: &Path) -> Result<usize> {
+    let crates = root.join("crates");
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&crates)
+        .with_context(|| format!("listing {}", crates.display()))?
+        .map(|e| e.map(|e| e.path().join("src")))
+        .collect::<std::io::Result<_>>()?;
+    dirs.retain(|d| d.is_dir() && !d.starts_with(root.join(CLI_DIR)));
+    dirs.sort();
+    let mut problems = Vec::new();
+    for dir in &dirs {
+        let mut files = Vec::new();
+        rust_files(dir, &mut files)?;
+        for f in files {
+            let text = std::fs::read_to_string(&f).with_context(|| format!("reading {}", f.display()))?;
+            for (line, name, n) in long_functions(&text, LIBRARY_MAX_FN_LINES) {
+                problems.push(format!("{}:{line}: fn {name} is {n} lines", rel(root, &f)));
+            }
+        }
+    }
+    if !problems.is_empty() {
+        bail!(
+            "library functions over {LIBRARY_MAX_FN_LINES} lines (split them into named steps):\n{}",
+            problems.join("\n")
+        );
+    }
+    Ok(dirs.len())
 }
 
 const CLI_DIR: &str = "crates/maobi/src";
@@ -495,5 +535,24 @@ mod cli_awareness_tests {
     #[test]
     fn the_cli_passes() {
         cli_not_pipeline(&crate::fixtures::root()).unwrap();
+    }
+
+    #[test]
+    fn the_libraries_pass_and_a_long_function_is_named() {
+        let root = crate::fixtures::root();
+        assert!(library_functions_short(&root).unwrap() >= 10);
+        // A library with one function over the limit, the CLI with one too (its own rule).
+        let dir = std::env::temp_dir().join(format!("maobi-tidy-{}", std::process::id()));
+        let long = format!("pub fn long() {{\n{}}}\n", "    let _ = 1;\n".repeat(LIBRARY_MAX_FN_LINES));
+        for (krate, text) in [("lib-a", "pub fn short() {}\n".to_string()), ("lib-b", long.clone()), ("maobi", long)] {
+            std::fs::create_dir_all(dir.join("crates").join(krate).join("src")).unwrap();
+            std::fs::write(dir.join("crates").join(krate).join("src/lib.rs"), text).unwrap();
+        }
+        let e = library_functions_short(&dir).unwrap_err().to_string();
+        let _ = std::fs::remove_dir_all(&dir);
+        assert!(
+            e.ends_with(&format!("\ncrates/lib-b/src/lib.rs:1: fn long is {} lines", LIBRARY_MAX_FN_LINES + 2)),
+            "{e}"
+        );
     }
 }

@@ -327,7 +327,8 @@ fn strip(
     for (s, img) in specs.iter().zip(inks) {
         panels.push((s.clone(), overlay(&r.reference, img)?));
     }
-    let png = crate::picture::labelled_row(&panels)?;
+    let panels: Vec<(&str, &image::RgbImage)> = panels.iter().map(|(l, img)| (l.as_str(), img)).collect();
+    let png = figures::labelled_row_rgb_png(&panels)?;
     write_atomic(&dir.join(format!("{c}-{what}.png")), &png)
 }
 

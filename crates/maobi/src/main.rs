@@ -13,8 +13,6 @@ use clap::{Parser, Subcommand};
 mod cmd;
 mod common;
 mod generator;
-mod page;
-mod plot;
 
 // Training and rendering create and drop large buffers all the time; glibc hands allocations
 // above its mmap threshold back to the OS on every free, so each new tensor pays a page fault

@@ -75,15 +75,17 @@ pub use sheet::{
     layout_on_sheet, parse_sheet, sheet_image, sheet_image_of, sheet_image_with_marks,
 };
 pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
-pub use sheet_run::{RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet};
+pub use sheet_run::{
+    RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet, run_sheet_with,
+};
 pub use text::{TextOptions, WrittenText, write_text, write_text_each};
 pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]
 pub use write::rerender_with_generator;
 pub use write::{
-    BrushReport, CharReport, CharResult, Execution, PlanReport, RefineReport, Similarity, TimingMs, WriteOptions,
-    execute_track, execute_track_with, level_frame_for, refine_target, render_char, render_states, side_by_side,
-    similarity, write_char,
+    BrushReport, CharReport, CharResult, ExecutedRun, Execution, PlanReport, RefineReport, Similarity, TimingMs,
+    WriteOptions, execute_track, execute_track_with, level_frame_for, refine_target, render_char, render_states,
+    side_by_side, similarity, write_char,
 };
 
 // The README's example runs as a doctest.

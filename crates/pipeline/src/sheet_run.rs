@@ -5,9 +5,9 @@
 //! return.
 
 use brush_model::{BrushProfile, Extrapolation, ForwardModel, PointMm, Track, TrackPoint};
-use robot_io::DhParams;
 use robot_io::PaperFrame;
-use robot_io::sim::{SendMotion, execute_as_sent_tagged};
+
+use crate::ExecutedRun;
 use robot_io::{CheckReport, RobotConfig, build_program_chars};
 use robot_io::{ProgramTiming, RobotError, TaggedEntry, TraceEntry, TraceKind, trace_to_states};
 
@@ -34,6 +34,8 @@ pub struct SheetRun {
     pub samples: Vec<RunSample>,
     /// When each stroke's path buffer runs, `[start, end]` s on the samples' clock.
     pub strokes_s: Vec<[f64; 2]>,
+    /// The footprints the brush leaves along the samples ([`run_footprints`]).
+    pub footprints: Vec<TimedFootprint>,
 }
 
 /// A footprint left along a run: when the brush reaches it and its outline (the upper and
@@ -49,7 +51,7 @@ pub struct TimedFootprint {
 /// Builds `track`'s program on `frame` with `cfg` (strokes tagged with their characters by
 /// `stroke_chars`), checks it, times it on the nominal AUBO-i5 and runs it on the simulator's
 /// arm as `robot send` sends it (each pressed stroke one path buffer on its timing, the other
-/// moves on the controller's time law).
+/// moves on the controller's time law); sweeps the footprints the brush leaves along it.
 ///
 /// # Errors
 /// The robot check's or the timing's [`RobotError`]: the program refused.
@@ -67,6 +69,7 @@ pub struct TimedFootprint {
 /// let run = run_sheet(&track, None, &pen1, &frame, &robot_io::RobotConfig::default())?;
 /// assert_eq!(run.strokes_s.len(), 1);
 /// assert!(run.samples.iter().any(|s| s.point.h_mm > 0.0));
+/// assert!(!run.footprints.is_empty());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn run_sheet(
@@ -76,11 +79,49 @@ pub fn run_sheet(
     frame: &PaperFrame,
     cfg: &RobotConfig,
 ) -> Result<SheetRun, RobotError> {
-    let (program, report) = build_program_chars(track, stroke_chars, brush, frame, cfg)?;
-    let kin = DhParams::AUBO_I5;
-    let timing = robot_io::time_program(&program, &kin, cfg)?;
-    let tagged = execute_as_sent_tagged(&program, &kin, SendMotion::PathBuffer(&timing))?;
-    let samples = timed_samples(&tagged, frame);
+    run_sheet_with(track, stroke_chars, brush, frame, cfg, None)
+}
+
+/// [`run_sheet`], playing `kept` when it is the run of the very program built here with the
+/// same `cfg` (what [`crate::write_char`] keeps with [`crate::WriteOptions::keep_run`]: the
+/// preview of one character written plays the run its executed figure scored) rather than
+/// timing and running it again. The program is always built and checked here (while the kept
+/// run's footprints are swept beside it, used only when it is played).
+///
+/// # Errors
+/// As [`run_sheet`].
+pub fn run_sheet_with(
+    track: &Track,
+    stroke_chars: Option<&[usize]>,
+    brush: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+    kept: Option<&ExecutedRun>,
+) -> Result<SheetRun, RobotError> {
+    let build = || build_program_chars(track, stroke_chars, brush, frame, cfg);
+    let played = |k: &ExecutedRun| {
+        let samples = timed_samples(&k.trace, frame);
+        let footprints = run_footprints(&samples, brush, frame);
+        (samples, footprints)
+    };
+    let ((program, report), ran) = match kept {
+        Some(k) => {
+            let (built, swept) = rayon::join(build, || played(k));
+            let built = built?;
+            let ran = k.is_of(&built.0, cfg).then_some((k, swept));
+            (built, ran)
+        }
+        None => (build()?, None),
+    };
+    let fresh;
+    let (run, (samples, footprints)) = match ran {
+        Some(ran) => ran,
+        None => {
+            fresh = ExecutedRun::run(program, cfg)?;
+            (&fresh, played(&fresh))
+        }
+    };
+    let tagged = &run.trace[..];
     // The timeline starts where the start move ends, as in `timed_samples`.
     let t0 = tagged.iter().take_while(|e| e.stroke.is_none()).last().map_or(0.0, |e| e.entry.t_s);
     let mut strokes_s: Vec<[f64; 2]> = Vec::new();
@@ -95,7 +136,7 @@ pub fn run_sheet(
             }
         }
     }
-    Ok(SheetRun { report, timing, samples, strokes_s })
+    Ok(SheetRun { report, timing: run.timing.clone(), samples, strokes_s, footprints })
 }
 
 /// The tagged trace as timed samples in paper coordinates, from the end of the first joint
@@ -114,8 +155,10 @@ fn timed_samples(tagged: &[TaggedEntry], frame: &PaperFrame) -> Vec<RunSample> {
 /// end), each stamp timed by the nearest sample along the contact. A press the profile refuses
 /// leaves none.
 pub fn run_footprints(samples: &[RunSample], brush: &BrushProfile, frame: &PaperFrame) -> Vec<TimedFootprint> {
-    let model = ForwardModel::default();
-    let mut feet = Vec::new();
+    use rayon::prelude::*;
+    // The contacts first, then each swept on rayon's pool (in order: the same footprints as one
+    // pass over them).
+    let mut contacts = Vec::new();
     let mut i = 0;
     while i < samples.len() {
         let s = &samples[i];
@@ -127,9 +170,13 @@ pub fn run_footprints(samples: &[RunSample], brush: &BrushProfile, frame: &Paper
         while i < samples.len() && samples[i].point.h_mm > 0.0 && !samples[i].dip {
             i += 1;
         }
-        let (a, b) = (start.saturating_sub(1), (i + 1).min(samples.len()));
+        contacts.push((start.saturating_sub(1), (i + 1).min(samples.len())));
+    }
+    let model = ForwardModel::default();
+    let contact_feet = |&(a, b): &(usize, usize)| {
         let run: Vec<TrackPoint> = samples[a..b].iter().map(|s| s.point).collect();
         let sweep = model.sweep(brush, &run, Extrapolation::Refuse);
+        let mut feet = Vec::with_capacity(sweep.stamps.len());
         let mut j = 0usize;
         for st in &sweep.stamps {
             // Advance along the run to the nearest sample (stamps are in path order).
@@ -146,8 +193,10 @@ pub fn run_footprints(samples: &[RunSample], brush: &BrushProfile, frame: &Paper
             let (u, l) = (&o.upper.points, &o.lower.points);
             feet.push(TimedFootprint { t_s: samples[a + j].t_s, outline: [u[0], u[1], u[2], l[0], l[1], l[2]] });
         }
-    }
-    feet
+        feet
+    };
+    let per_contact: Vec<Vec<TimedFootprint>> = contacts.par_iter().map(contact_feet).collect();
+    per_contact.concat()
 }
 
 /// The planned track as timed samples, for a program that was refused: each stroke's points at
@@ -184,4 +233,52 @@ pub fn render_trace(
     let states = trace_to_states(trace, frame);
     let img = crate::render_states(&states, brush, model, Extrapolation::Refuse, char_box, size_px);
     (img, states)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{WriteOptions, prepare, write_char};
+    use trajectory::{CharBox, embedded_glyph};
+
+    /// The run `write_char` keeps is played when the same program is built again (the same
+    /// sheet run as timing and running it afresh), and only then.
+    #[test]
+    fn a_kept_run_is_played_for_its_own_program_only() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let p = prepare(embedded_glyph('十').unwrap(), None).unwrap();
+        // The box centred on an 80 mm sheet: the sheet's level frame and the executed figure's
+        // frame put the same point in front of the arm, so the programs are the same.
+        let b = CharBox { x0_mm: 10.0, y0_mm: 10.0, size_mm: 60.0 };
+        let opts = WriteOptions { size: 64, keep_run: true, ..WriteOptions::default() };
+        let r = write_char(&p, &pen1, b, &opts).unwrap();
+        let kept = r.executed_run.as_ref().expect("kept with keep_run");
+        let frame = robot_io::level_frame_in_front([40.0, 40.0], [0.0, 0.0, 80.0, 80.0]);
+        let cfg = RobotConfig::default();
+        let chars = vec![0; r.track.strokes.len()];
+        let run = |k: Option<&ExecutedRun>| run_sheet_with(&r.track, Some(&chars), &pen1, &frame, &cfg, k).unwrap();
+        let fresh = run(None);
+        let played = run(Some(kept));
+        assert_eq!(
+            (&played.samples, &played.strokes_s, &played.timing),
+            (&fresh.samples, &fresh.strokes_s, &fresh.timing)
+        );
+        assert_eq!(played.report, fresh.report);
+        // Played, not run again: a run whose clock goes at half speed shows.
+        let mut slow = kept.clone();
+        slow.trace.iter_mut().for_each(|e| e.entry.t_s *= 2.0);
+        assert_ne!(run(Some(&slow)).samples, fresh.samples);
+        // A run made with another configuration, or of another program, is not played.
+        let mut other_cfg = slow.clone();
+        other_cfg.cfg.write_speed_m_s *= 0.5;
+        assert_eq!(run(Some(&other_cfg)).samples, fresh.samples);
+        let mut other_program = slow;
+        other_program.program.strokes.pop();
+        assert_eq!(run(Some(&other_program)).samples, fresh.samples);
+        // Nothing is kept unless asked.
+        let plain = write_char(&p, &pen1, b, &WriteOptions { keep_run: false, ..opts }).unwrap();
+        assert!(plain.executed_run.is_none());
+        // Keeping it changes no figure.
+        assert_eq!(plain.report.executed, r.report.executed);
+    }
 }

@@ -34,6 +34,10 @@ pub struct WriteOptions {
     /// How the program is executed for the executed figure (default: as `robot send` sends it,
     /// [`Execution::PathBuffer`]).
     pub execution: Execution,
+    /// Keep the executed program as it ran ([`CharResult::executed_run`], a few MB a
+    /// character), so that a preview of the same program plays it rather than running it again
+    /// ([`crate::run_sheet_with`]); off by default.
+    pub keep_run: bool,
     /// Refine the built track by gradient descent against the glyph (`track_refine`); `None`
     /// leaves the track as built.
     pub refine: Option<RefineOptions>,
@@ -54,6 +58,7 @@ impl std::fmt::Debug for WriteOptions {
             .field("free_widths", &self.free_widths)
             .field("execute", &self.execute)
             .field("execution", &self.execution)
+            .field("keep_run", &self.keep_run)
             .field("refine", &self.refine);
         #[cfg(feature = "generator")]
         d.field("generator", &self.generator.as_ref().map(|_| "a generator"));
@@ -72,6 +77,7 @@ impl Default for WriteOptions {
             free_widths: false,
             execute: true,
             execution: Execution::default(),
+            keep_run: false,
             refine: None,
             #[cfg(feature = "generator")]
             generator: None,
@@ -236,6 +242,37 @@ pub struct CharResult {
     pub executed: Option<Coverage>,
     /// The executed brush states on the paper (when [`WriteOptions::execute`]).
     pub executed_states: Option<Vec<TrackPoint>>,
+    /// The program behind [`CharResult::executed_states`] as it ran (with
+    /// [`WriteOptions::keep_run`] and [`Execution::PathBuffer`]).
+    pub executed_run: Option<ExecutedRun>,
+}
+
+/// A program as the simulator's arm ran it, as `robot send` sends it ([`Execution::PathBuffer`]),
+/// kept with the configuration it was built and timed with: what [`crate::run_sheet_with`]
+/// plays when it builds the same program, rather than timing and running it again.
+#[derive(Clone, Debug)]
+pub struct ExecutedRun {
+    pub(crate) program: robot_io::Program,
+    pub(crate) cfg: RobotConfig,
+    pub(crate) timing: robot_io::ProgramTiming,
+    pub(crate) trace: Vec<robot_io::TaggedEntry>,
+}
+
+impl ExecutedRun {
+    /// Builds `program`'s run on the nominal AUBO-i5 (each pressed stroke one path buffer on its
+    /// timing with `cfg`, the other moves on the controller's time law).
+    pub(crate) fn run(program: robot_io::Program, cfg: &RobotConfig) -> Result<Self, robot_io::RobotError> {
+        use robot_io::sim::{SendMotion, execute_as_sent_tagged};
+        let kin = robot_io::DhParams::AUBO_I5;
+        let timing = robot_io::time_program(&program, &kin, cfg)?;
+        let trace = execute_as_sent_tagged(&program, &kin, SendMotion::PathBuffer(&timing))?;
+        Ok(Self { program, cfg: cfg.clone(), timing, trace })
+    }
+
+    /// Whether this is the run of `program` built and timed with `cfg`.
+    pub(crate) fn is_of(&self, program: &robot_io::Program, cfg: &RobotConfig) -> bool {
+        self.program == *program && self.cfg == *cfg
+    }
 }
 
 /// The paper frame `maobi write` runs its program on: a level sheet
@@ -320,23 +357,34 @@ pub fn execute_track_with(
     cfg: &RobotConfig,
     how: Execution,
 ) -> Result<Vec<TrackPoint>, robot_io::RobotError> {
+    Ok(execute_run(track, profile, frame, cfg, how)?.0)
+}
+
+/// [`execute_track_with`], and with [`Execution::PathBuffer`] the run itself.
+fn execute_run(
+    track: &Track,
+    profile: &BrushProfile,
+    frame: &PaperFrame,
+    cfg: &RobotConfig,
+    how: Execution,
+) -> Result<(Vec<TrackPoint>, Option<ExecutedRun>), robot_io::RobotError> {
     use robot_io::DhParams;
     use robot_io::sim::{SendMotion, execute_as_sent};
     let (program, _) = build_program(track, profile, frame, cfg)?;
-    let trace = match how {
-        Execution::Plain => robot_io::execute_program(&program),
+    let (trace, run) = match how {
+        Execution::Plain => (robot_io::execute_program(&program), None),
         Execution::PathBuffer => {
-            let timing = robot_io::time_program(&program, &DhParams::AUBO_I5, cfg)?;
-            execute_as_sent(&program, &DhParams::AUBO_I5, SendMotion::PathBuffer(&timing))?
+            let run = ExecutedRun::run(program, cfg)?;
+            (run.trace.iter().map(|e| e.entry).collect(), Some(run))
         }
         Execution::Moves => {
             let compact = robot_io::compact_program(&program, cfg);
-            execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?
+            (execute_as_sent(&compact, &DhParams::AUBO_I5, SendMotion::Moves)?, None)
         }
     };
     // Depths as executed: a press at the range's end read back a little outside it is the
     // forward model's to take (`brush_model::DEPTH_EDGE_TOLERANCE_MM`).
-    Ok(robot_io::trace_to_states(&trace, frame))
+    Ok((robot_io::trace_to_states(&trace, frame), run))
 }
 
 /// Renders brush states (an executed path) through the forward model over a char box onto a
@@ -411,12 +459,12 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
     };
     let (plan, executed) = rayon::join(plan, executed);
     let (render, reference, sim, chamfer, millis, free_widths) = plan?;
-    let (executed, agreement, executed_img, executed_states) = match executed? {
-        Some((states, img)) => {
+    let (executed, agreement, executed_img, executed_states, executed_run) = match executed? {
+        Some((states, img, run)) => {
             let (executed, agreement) = rayon::join(|| similarity(&reference, &img), || similarity(&render, &img));
-            (Some(executed?), Some(agreement?), Some(img), Some(states))
+            (Some(executed?), Some(agreement?), Some(img), Some(states), run)
         }
-        None => (None, None, None, None),
+        None => (None, None, None, None, None),
     };
     let report = CharReport {
         char: p.glyph.ch.to_string(),
@@ -445,8 +493,16 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
         refine: None,
         template: p.template.clone(),
     };
-    let mut result =
-        CharResult { report, track: built.track, char_box, render, reference, executed: executed_img, executed_states };
+    let mut result = CharResult {
+        report,
+        track: built.track,
+        char_box,
+        render,
+        reference,
+        executed: executed_img,
+        executed_states,
+        executed_run,
+    };
     if let Some(ro) = &opts.refine {
         let target = refine_target(&p.glyph, &result.char_box, ro.analysis_px)?;
         refine_result(&mut result, p, profile, opts, ro, &target)?;
@@ -457,19 +513,23 @@ pub fn write_char(p: &Prepared, profile: &BrushProfile, char_box: CharBox, opts:
 /// What `write` runs for its executed figure: the track's program on [`level_frame_for`] the
 /// char box with the default `robot.json`, executed as [`WriteOptions::execution`] says
 /// ([`execute_track_with`]), rendered like the plan
-/// ([`render_states`]). Returns the executed states and their render.
+/// ([`render_states`]). Returns the executed states, their render and the run when
+/// [`WriteOptions::keep_run`] asks for it.
 fn execute_and_render(
     track: &Track,
     profile: &BrushProfile,
     opts: &WriteOptions,
     char_box: &CharBox,
-) -> Result<(Vec<TrackPoint>, Coverage), robot_io::RobotError> {
-    let states =
-        execute_track_with(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
+) -> Result<Executed, robot_io::RobotError> {
+    let (states, run) =
+        execute_run(track, profile, &level_frame_for(char_box), &RobotConfig::default(), opts.execution)?;
     let stamps = sweep_stamps(&states, profile, Extrapolation::Refuse);
     let img = render_over(&stamps, opts.model, char_box, opts.size);
-    Ok((states, img))
+    Ok((states, img, run.filter(|_| opts.keep_run)))
 }
+
+/// The executed states, their render and the run kept ([`execute_and_render`]).
+type Executed = (Vec<TrackPoint>, Coverage, Option<ExecutedRun>);
 
 /// The glyph raster a track is refined against: the em box (the char box on the paper) at
 /// `px²`.
@@ -513,9 +573,9 @@ pub(crate) fn refine_result(
     let mut executed = None;
     if opts.execute {
         match execute_and_render(&refined.track, profile, opts, &r.char_box) {
-            Ok((states, img)) => {
+            Ok((states, img, run)) => {
                 executed_after = Some(similarity(&r.reference, &img)?);
-                executed = Some((img, states));
+                executed = Some((img, states, run));
             }
             Err(e) => rejected = Some(format!("the refined track fails `robot check`: {e}")),
         }
@@ -539,11 +599,12 @@ pub(crate) fn refine_result(
     if rejected.is_none() {
         r.report.plan.set_similarity(planned_after);
         r.report.plan.points = refined.track.point_count();
-        if let Some((img, states)) = executed {
+        if let Some((img, states, run)) = executed {
             r.report.executed = executed_after;
             r.report.agreement = Some(similarity(&render, &img)?);
             r.executed = Some(img);
             r.executed_states = Some(states);
+            r.executed_run = run;
         }
         if let Some(m) = p.glyph.medians.as_ref() {
             r.report.plan.chamfer_pct = Some(chamfer_pct(&refined.track, &r.char_box, m));

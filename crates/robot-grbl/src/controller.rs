@@ -4,7 +4,8 @@
 use std::time::Duration;
 
 use robot_io::{
-    Controller, DhParams, Plan, Position, Preflight, Prepared, Progress, RobotError, RunSummary, Watch, point_times,
+    Controller, DhParams, ExportFormat, Exported, Plan, Position, Preflight, Prepared, Progress, RobotError,
+    RunSummary, Watch, export_program,
 };
 
 use crate::link::{Port, SerialLink, TcpLink};
@@ -112,9 +113,7 @@ impl Controller for GrblPlotter {
     }
 
     fn prepare(&mut self, plan: &Plan<'_>) -> Result<Prepared, RobotError> {
-        let timing = robot_io::time_program(plan.program, &DhParams::AUBO_I5, plan.config)?;
-        let times = point_times(plan.program, &timing)?;
-        let (text, warnings) = robot_io::gcode_chars(plan.track, plan.stroke_chars, &times, plan.config, plan.title)?;
+        let Exported { text, warnings, .. } = export_program(plan, ExportFormat::Gcode, &DhParams::AUBO_I5)?;
         let program = GcodeProgram::from_export(&text, plan.config.travel_speed_m_s * 60_000.0)?;
         let moves = program.lines.iter().filter(|l| matches!(l.kind, LineKind::Travel | LineKind::Feed)).count();
         let prepared = Prepared {

@@ -112,144 +112,31 @@ impl Grbl {
         stop: &AtomicBool,
         progress: &mut dyn FnMut(&StreamProgress),
     ) -> Result<StreamReport, GrblError> {
-        let texts = streamed_lines(program, feed_scale);
-        let planned: Vec<f64> = program
-            .lines
-            .iter()
-            .map(|l| if l.kind == LineKind::Feed && feed_scale < 1.0 { l.planned_s / feed_scale } else { l.planned_s })
-            .collect();
-        let planned_total: f64 = planned.iter().sum();
-        // Strictly less than the buffer, as GRBL's own stream.py keeps it.
-        let limit = info.rx_buffer - 1;
-        let mut next = 0;
-        let mut in_flight: VecDeque<InFlight> = VecDeque::new();
-        let mut in_flight_bytes = 0;
-        let mut acked = 0;
-        let mut max_in_flight = 0;
-        let mut bytes = 0;
-        let mut messages = Vec::new();
-        let mut last: Option<Status> = None;
-        let start = Instant::now();
-        let mut last_poll: Option<Instant> = None;
-        let mut last_heard = Instant::now();
-        let mut finished_at: Option<Instant> = None;
+        let mut run = Run::new(info, program, feed_scale);
         let timeout = self.opts.timeout;
         // The whole stream's bound: twice its plan and ten time-outs. Status reports keep a
         // link alive (`last_heard`); they do not keep a run that acknowledges nothing going.
-        let overdue = Duration::from_secs_f64((2.0 * planned_total).clamp(0.0, 1e7)) + timeout * 10;
-        let report = |acked: usize, last: &Option<Status>, progress: &mut dyn FnMut(&StreamProgress)| {
-            let strokes_done = strokes_done(program, acked);
-            progress(&StreamProgress {
-                lines_acked: acked,
-                lines_total: texts.len(),
-                strokes_done,
-                strokes_total: program.strokes,
-                elapsed_s: start.elapsed().as_secs_f64(),
-                remaining_s: planned[acked..].iter().sum(),
-                work_mm: last.as_ref().and_then(|s| work(s, info.wco)),
-                state: last.as_ref().map(|s| s.state),
-            });
-        };
-        let fault = |g: &mut Grbl, cause: Fault, acked: usize, last: &Option<Status>| -> GrblError {
-            let safe = g.safe_stop(info, program, &cause, last.as_ref());
-            stopped(program, cause, acked, safe)
-        };
+        let overdue = Duration::from_secs_f64((2.0 * run.planned_total).clamp(0.0, 1e7)) + timeout * 10;
         loop {
             if stop.load(Ordering::SeqCst) {
-                return Err(fault(self, Fault::Interrupted, acked, &last));
+                return Err(run.fault(self, Fault::Interrupted));
             }
-            // The line and its `\n` must fit.
-            while next < texts.len() && in_flight_bytes + texts[next].len() < limit {
-                let mut line = texts[next].clone().into_bytes();
-                line.push(b'\n');
-                if let Err(e) = self.lines.write(&line) {
-                    return Err(stopped(program, Fault::Link(e.to_string()), acked, lost()));
-                }
-                in_flight_bytes += line.len();
-                bytes += line.len();
-                max_in_flight = max_in_flight.max(in_flight_bytes);
-                in_flight.push_back(InFlight { index: next, bytes: line.len() });
-                next += 1;
-            }
+            run.send(self)?;
             let now = Instant::now();
-            if last_poll.is_none_or(|t| now - t >= POLL) {
-                if let Err(e) = self.lines.write(b"?") {
-                    return Err(stopped(program, Fault::Link(e.to_string()), acked, lost()));
-                }
-                last_poll = Some(now);
+            run.poll(self, now)?;
+            if let Some(cause) = run.late(now, timeout, overdue) {
+                return Err(run.fault(self, cause));
             }
-            if now - last_heard > timeout {
-                let cause = Fault::Quiet(timeout.as_secs_f64());
-                return Err(fault(self, cause, acked, &last));
-            }
-            if now - start > overdue {
-                let cause = Fault::Overdue { elapsed_s: (now - start).as_secs_f64(), planned_s: planned_total };
-                return Err(fault(self, cause, acked, &last));
-            }
-            let deadline = last_poll.map_or(now, |t| t + POLL).max(now + Duration::from_millis(5));
+            let deadline = run.last_poll.map_or(now, |t| t + POLL).max(now + Duration::from_millis(5));
             let line = match self.lines.next_line(deadline) {
                 Ok(Some(l)) => l,
                 Ok(None) => continue,
-                Err(e) => return Err(stopped(program, Fault::Link(e.to_string()), acked, lost())),
+                Err(e) => return Err(run.link_lost(&e)),
             };
-            let response = Response::parse(&line);
-            // What GRBL says in answer (acknowledgements, refusals, status reports); noise,
-            // settings and messages, however many, are not an answer.
-            if !matches!(response, Response::Bracket(_) | Response::Setting(..) | Response::Other(_)) {
-                last_heard = Instant::now();
-            }
-            match response {
-                Response::Ok => {
-                    let Some(f) = in_flight.pop_front() else {
-                        let cause = Fault::Protocol("an `ok` with no line waiting for it".into());
-                        return Err(fault(self, cause, acked, &last));
-                    };
-                    in_flight_bytes -= f.bytes;
-                    acked = f.index + 1;
-                    if acked == texts.len() {
-                        finished_at = Some(Instant::now());
-                        // The next status report decides: Idle ends the run.
-                        last_poll = None;
-                    }
-                    report(acked, &last, progress);
-                }
-                Response::Error(code) => {
-                    let index = in_flight.front().map_or(acked, |f| f.index);
-                    let cause = Fault::Firmware {
-                        what: describe("error", code),
-                        line: program.lines[index].source_line,
-                        text: texts[index].clone(),
-                    };
-                    return Err(fault(self, cause, acked, &last));
-                }
-                Response::Alarm(code) => {
-                    return Err(fault(self, Fault::Alarm(code), acked, &last));
-                }
-                Response::Banner(v) => {
-                    return Err(fault(self, Fault::Reset(v), acked, &last));
-                }
-                Response::Status(s) => {
-                    if s.state == State::Alarm {
-                        last = Some(s);
-                        return Err(fault(self, Fault::AlarmState, acked, &last));
-                    }
-                    let idle = s.state == State::Idle;
-                    last = Some(s);
-                    if finished_at.is_some() && idle && in_flight.is_empty() {
-                        return Ok(StreamReport {
-                            lines: texts.len(),
-                            bytes,
-                            max_in_flight,
-                            elapsed_s: start.elapsed().as_secs_f64(),
-                            planned_s: planned_total,
-                            work_mm: last.as_ref().and_then(|s| work(s, info.wco)),
-                            messages,
-                        });
-                    }
-                    report(acked, &last, progress);
-                }
-                Response::Bracket(b) => keep(&mut messages, b),
-                Response::Setting(..) | Response::Other(_) => {}
+            match run.answer(Response::parse(&line), progress) {
+                Answer::Go => {}
+                Answer::Done(report) => return Ok(report),
+                Answer::Stop(cause) => return Err(run.fault(self, cause)),
             }
         }
     }
@@ -413,6 +300,206 @@ impl Grbl {
     fn command(&mut self, cmd: &str) -> Result<(), String> {
         let mut messages = Vec::new();
         self.query(cmd, &mut messages).map(|_| ()).map_err(|e| format!("`{cmd}`: {e}"))
+    }
+}
+
+/// What one answer from the machine means for a run.
+enum Answer {
+    /// Go on streaming.
+    Go,
+    /// The last line is acknowledged and the machine is idle.
+    Done(StreamReport),
+    /// Stop, and make the brush safe.
+    Stop(Fault),
+}
+
+/// One run of [`Grbl::stream`]: the lines as streamed, what is in flight and acknowledged, and
+/// what the machine last said.
+struct Run<'a> {
+    info: &'a MachineInfo,
+    program: &'a GcodeProgram,
+    /// The lines as streamed (feeds scaled).
+    texts: Vec<String>,
+    /// Each line's planned time at the feeds streamed, s.
+    planned: Vec<f64>,
+    planned_total: f64,
+    /// The most bytes that may be in flight: strictly less than the receive buffer, as GRBL's
+    /// own stream.py keeps it.
+    limit: usize,
+    /// The next line to send.
+    next: usize,
+    in_flight: VecDeque<InFlight>,
+    in_flight_bytes: usize,
+    acked: usize,
+    max_in_flight: usize,
+    bytes: usize,
+    messages: Vec<String>,
+    last: Option<Status>,
+    start: Instant,
+    last_poll: Option<Instant>,
+    last_heard: Instant,
+    /// Whether every line has been acknowledged (the next `Idle` ends the run).
+    all_acked: bool,
+}
+
+impl<'a> Run<'a> {
+    fn new(info: &'a MachineInfo, program: &'a GcodeProgram, feed_scale: f64) -> Self {
+        let planned: Vec<f64> = program
+            .lines
+            .iter()
+            .map(|l| if l.kind == LineKind::Feed && feed_scale < 1.0 { l.planned_s / feed_scale } else { l.planned_s })
+            .collect();
+        let now = Instant::now();
+        Run {
+            info,
+            program,
+            texts: streamed_lines(program, feed_scale),
+            planned_total: planned.iter().sum(),
+            planned,
+            limit: info.rx_buffer - 1,
+            next: 0,
+            in_flight: VecDeque::new(),
+            in_flight_bytes: 0,
+            acked: 0,
+            max_in_flight: 0,
+            bytes: 0,
+            messages: Vec::new(),
+            last: None,
+            start: now,
+            last_poll: None,
+            last_heard: now,
+            all_acked: false,
+        }
+    }
+
+    /// Sends the next lines while they (each with its `\n`) fit below the limit.
+    fn send(&mut self, g: &mut Grbl) -> Result<(), GrblError> {
+        while self.next < self.texts.len() && self.in_flight_bytes + self.texts[self.next].len() < self.limit {
+            let mut line = self.texts[self.next].clone().into_bytes();
+            line.push(b'\n');
+            if let Err(e) = g.lines.write(&line) {
+                return Err(self.link_lost(&e));
+            }
+            self.in_flight_bytes += line.len();
+            self.bytes += line.len();
+            self.max_in_flight = self.max_in_flight.max(self.in_flight_bytes);
+            self.in_flight.push_back(InFlight { index: self.next, bytes: line.len() });
+            self.next += 1;
+        }
+        Ok(())
+    }
+
+    /// Asks for a status report when the last ask is [`POLL`] old (or none is out).
+    fn poll(&mut self, g: &mut Grbl, now: Instant) -> Result<(), GrblError> {
+        if self.last_poll.is_none_or(|t| now - t >= POLL) {
+            if let Err(e) = g.lines.write(b"?") {
+                return Err(self.link_lost(&e));
+            }
+            self.last_poll = Some(now);
+        }
+        Ok(())
+    }
+
+    /// The fault when the machine has been quiet over `timeout` or the run is `overdue`.
+    fn late(&self, now: Instant, timeout: Duration, overdue: Duration) -> Option<Fault> {
+        if now - self.last_heard > timeout {
+            return Some(Fault::Quiet(timeout.as_secs_f64()));
+        }
+        if now - self.start > overdue {
+            return Some(Fault::Overdue { elapsed_s: (now - self.start).as_secs_f64(), planned_s: self.planned_total });
+        }
+        None
+    }
+
+    /// Takes one answer of the machine's: acknowledgements move the run on, refusals, alarms
+    /// and resets stop it, status reports end it once every line is acknowledged and the
+    /// machine is `Idle`.
+    fn answer(&mut self, response: Response, progress: &mut dyn FnMut(&StreamProgress)) -> Answer {
+        // What GRBL says in answer (acknowledgements, refusals, status reports); noise,
+        // settings and messages, however many, are not an answer.
+        if !matches!(response, Response::Bracket(_) | Response::Setting(..) | Response::Other(_)) {
+            self.last_heard = Instant::now();
+        }
+        match response {
+            Response::Ok => {
+                let Some(f) = self.in_flight.pop_front() else {
+                    return Answer::Stop(Fault::Protocol("an `ok` with no line waiting for it".into()));
+                };
+                self.in_flight_bytes -= f.bytes;
+                self.acked = f.index + 1;
+                if self.acked == self.texts.len() {
+                    self.all_acked = true;
+                    // The next status report decides: Idle ends the run.
+                    self.last_poll = None;
+                }
+                self.report(progress);
+            }
+            Response::Error(code) => {
+                let index = self.in_flight.front().map_or(self.acked, |f| f.index);
+                return Answer::Stop(Fault::Firmware {
+                    what: describe("error", code),
+                    line: self.program.lines[index].source_line,
+                    text: self.texts[index].clone(),
+                });
+            }
+            Response::Alarm(code) => return Answer::Stop(Fault::Alarm(code)),
+            Response::Banner(v) => return Answer::Stop(Fault::Reset(v)),
+            Response::Status(s) => {
+                let state = s.state;
+                self.last = Some(s);
+                if state == State::Alarm {
+                    return Answer::Stop(Fault::AlarmState);
+                }
+                if self.all_acked && state == State::Idle && self.in_flight.is_empty() {
+                    return Answer::Done(self.finish());
+                }
+                self.report(progress);
+            }
+            Response::Bracket(b) => keep(&mut self.messages, b),
+            Response::Setting(..) | Response::Other(_) => {}
+        }
+        Answer::Go
+    }
+
+    /// Tells `progress` how far the run has got.
+    fn report(&self, progress: &mut dyn FnMut(&StreamProgress)) {
+        progress(&StreamProgress {
+            lines_acked: self.acked,
+            lines_total: self.texts.len(),
+            strokes_done: strokes_done(self.program, self.acked),
+            strokes_total: self.program.strokes,
+            elapsed_s: self.start.elapsed().as_secs_f64(),
+            remaining_s: self.planned[self.acked..].iter().sum(),
+            work_mm: self.work_mm(),
+            state: self.last.as_ref().map(|s| s.state),
+        });
+    }
+
+    fn work_mm(&self) -> Option<[f64; 3]> {
+        self.last.as_ref().and_then(|s| work(s, self.info.wco))
+    }
+
+    fn finish(&mut self) -> StreamReport {
+        StreamReport {
+            lines: self.texts.len(),
+            bytes: self.bytes,
+            max_in_flight: self.max_in_flight,
+            elapsed_s: self.start.elapsed().as_secs_f64(),
+            planned_s: self.planned_total,
+            work_mm: self.work_mm(),
+            messages: std::mem::take(&mut self.messages),
+        }
+    }
+
+    /// Stops on `cause`, making the brush safe where the machine still answers.
+    fn fault(&self, g: &mut Grbl, cause: Fault) -> GrblError {
+        let safe = g.safe_stop(self.info, self.program, &cause, self.last.as_ref());
+        stopped(self.program, cause, self.acked, safe)
+    }
+
+    /// Stops on a lost link: nothing more can be sent, the brush cannot be made safe.
+    fn link_lost(&self, e: &dyn std::fmt::Display) -> GrblError {
+        stopped(self.program, Fault::Link(e.to_string()), self.acked, lost())
     }
 }
 

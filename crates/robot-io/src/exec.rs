@@ -124,20 +124,9 @@ pub(crate) fn pose_between(a: &nalgebra::Isometry3<f64>, b: &nalgebra::Isometry3
 }
 
 /// Executes a joint move: joints interpolated linearly at joint speed `v_rad_s`, the TCP pose by
-/// forward kinematics ([`DhParams::AUBO_I5`]), sampled as [`line_motion`] (at most
-/// [`MAX_SAMPLES_PER_MOVE`] samples).
+/// forward kinematics with the arm's parameters `dh` (the AUBO-i5's: [`DhParams::AUBO_I5`]),
+/// sampled as [`line_motion`] (at most [`MAX_SAMPLES_PER_MOVE`] samples).
 pub fn joint_motion(
-    from: &[f64; 6],
-    to: &[f64; 6],
-    v_rad_s: f64,
-    tcp: &nalgebra::Isometry3<f64>,
-    t0_s: f64,
-) -> Vec<TraceEntry> {
-    joint_motion_dh(&DhParams::AUBO_I5, from, to, v_rad_s, tcp, t0_s)
-}
-
-/// [`joint_motion`] with the arm's parameters `dh`.
-pub(crate) fn joint_motion_dh(
     dh: &DhParams,
     from: &[f64; 6],
     to: &[f64; 6],
@@ -204,7 +193,7 @@ fn execute_with(program: &Program, mut sink: impl FnMut(&[TraceEntry], Option<us
     let mut run = |m: &Move, stroke: Option<usize>, dip: bool| {
         let samples = match *m {
             Move::Joint { q: q1, v, .. } => {
-                let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                let s = joint_motion(&DhParams::AUBO_I5, &q, &q1, v * f, &tcp, t);
                 q = q1;
                 s
             }
@@ -213,7 +202,7 @@ fn execute_with(program: &Program, mut sink: impl FnMut(&[TraceEntry], Option<us
                 // poses are reachable, so the straight line is only a fallback.
                 match kinematics::inverse(&p1, &tcp, Some(&q)) {
                     Some(q1) => {
-                        let s = joint_motion(&q, &q1, v * f, &tcp, t);
+                        let s = joint_motion(&DhParams::AUBO_I5, &q, &q1, v * f, &tcp, t);
                         q = q1;
                         s
                     }

@@ -26,11 +26,16 @@
 //! * [`ur`]: Universal Robots e-Series arms driven live: URScript on the script port, RTDE for
 //!   progress and state, the dashboard server to stop ([`ur::UrArm`]).
 //! * Exports: [`aubo_lua`] (ARCS Lua script), [`urscript`], [`gcode`], each read back by its
-//!   parser ([`read_lua`], [`read_urscript`], [`read_gcode`]) before it is returned.
+//!   parser ([`read_lua`], [`read_urscript`], [`read_gcode`]) before it is returned;
+//!   [`export_program`] writes any of them ([`ExportFormat`]) from a [`Plan`].
+//! * `track.json`: [`TrackFile`], its program built and checked ([`TrackFile::build_program`]),
+//!   checked and timed ([`TrackFile::check`]), or placed on a plotter's level sheet
+//!   ([`TrackFile::level_frame`]).
 //! * The pure motion executor (no sockets): [`execute_program`] executes a program as the
 //!   controller would move, sampled in time, tagged by stroke and ink dip
 //!   ([`execute_program_tagged`]), and [`trace_to_states`] turns it back into brush states on the
-//!   paper; [`level_frame_in_front`] is the level sheet in front of the arm.
+//!   paper; [`level_frame_in_front`] is the level sheet in front of the arm; [`read_trace`]
+//!   reads a simulator's trace file back.
 //! * [`sim`]: loopback TCP simulators of the controllers for tests and dry runs.
 //! * [`wire`]: the AUBO controller's wire formats (the SDK's frames, JSON text and login; lines;
 //!   JSON-RPC over HTTP), the transports and the controller's ports.
@@ -69,6 +74,8 @@ mod pose;
 mod program;
 pub mod sim;
 mod timing;
+mod trace;
+mod track_file;
 pub mod ur;
 pub mod wire;
 
@@ -86,11 +93,11 @@ pub use exec::{
     trace_to_states,
 };
 pub use export::{
-    ArmKinematics, ExportTarget, GCODE_MERGE_TOLERANCE_MM, GcodeStatement, KINEMATICS_TOLERANCE, MAX_COMMENT_CHARS,
-    PROGRESS_VARIABLE, PointTimes, ReadMove, ReadPathBuffer, ReadProgram, URSCRIPT_FUNCTIONS, URSCRIPT_PROGRAM,
-    URSCRIPT_PROGRESS_REGISTER, aubo_lua, aubo_lua_path_buffer, comment_text, gcode, gcode_chars, gcode_merge,
-    point_times, read_gcode, read_lua, read_urscript, urscript, verify_gcode, verify_lua, verify_lua_path_buffer,
-    verify_urscript,
+    ArmKinematics, ExportFormat, ExportTarget, Exported, GCODE_MERGE_TOLERANCE_MM, GcodeStatement,
+    KINEMATICS_TOLERANCE, MAX_COMMENT_CHARS, PROGRESS_VARIABLE, PointTimes, ReadMove, ReadPathBuffer, ReadProgram,
+    URSCRIPT_FUNCTIONS, URSCRIPT_PROGRAM, URSCRIPT_PROGRESS_REGISTER, aubo_lua, aubo_lua_path_buffer, comment_text,
+    export_program, gcode, gcode_chars, gcode_merge, point_times, read_gcode, read_lua, read_urscript, urscript,
+    verify_gcode, verify_lua, verify_lua_path_buffer, verify_urscript,
 };
 pub use follow::{MAX_REACH_M, NEIGHBOURHOOD_M, ORIENTATION_TOLERANCE_RAD, POSE_TOLERANCE_M};
 pub use frame::{
@@ -108,11 +115,12 @@ pub use timing::{
     PATH_TOLERANCE_RAD, ProgramTiming, TURN_LENGTH_M, TimedStroke, pressed_path, time_program, time_program_from,
     time_stroke,
 };
+pub use trace::{Trace, read_trace};
+pub use track_file::{TrackCheck, TrackFile};
 
 use std::path::{Path, PathBuf};
 
-use brush_model::{BrushProfile, ProfileError, Stroke, Track};
-use serde::{Deserialize, Serialize};
+use brush_model::ProfileError;
 use thiserror::Error;
 
 /// Errors of robot-io.
@@ -136,6 +144,20 @@ pub enum RobotError {
         /// The parser's error.
         #[source]
         source: serde_json::Error,
+    },
+    /// A file is not a simulator trace ([`read_trace`]): `line` (from 1) names the sample's line
+    /// when one is wrong, `source` the parser's error when there is one.
+    #[error("{}{}: {message}", path.display(), line.map_or(String::new(), |l| format!(":{l}")))]
+    Trace {
+        /// The file.
+        path: PathBuf,
+        /// The line, from 1.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+        /// The parser's error.
+        #[source]
+        source: Option<serde_json::Error>,
     },
     /// A configuration value is invalid (`file` names the file, or the configuration when
     /// there is none).
@@ -320,122 +342,3 @@ pub(crate) fn load_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T
 /// The largest `paper.json`, `robot.json` or `track.json` read, bytes (64 MiB: an A4 sheet's
 /// track of 44 strokes is about 10 MiB).
 pub const MAX_FILE_BYTES: u64 = 64 << 20;
-
-/// A sheet `track.json`'s characters, as far as [`TrackFile::load`] checks them.
-#[derive(Deserialize)]
-struct SheetChars {
-    #[serde(default)]
-    chars: Option<Vec<SheetCharRange>>,
-}
-
-/// One character's stroke range in a sheet `track.json`.
-#[derive(Deserialize)]
-struct SheetCharRange {
-    #[serde(default)]
-    strokes: Option<[usize; 2]>,
-}
-
-/// `track.json` as `maobi write` writes it for one character and reads it back: the brush
-/// profile and the strokes, with where the character sits. A sheet's `track.json` (more fields,
-/// which this type ignores) reads through it too.
-#[derive(Clone, Debug, Deserialize, Serialize)]
-pub struct TrackFile {
-    /// The character, if recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub char: Option<String>,
-    /// The char box on the paper, `[x0, y0, size]` mm, if recorded.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub char_box_mm: Option<[f64; 3]>,
-    /// The sheet the character was laid out on, `[width, height]` mm, if any.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sheet_mm: Option<[f64; 2]>,
-    /// The brush profile the track was made for.
-    pub brush: BrushProfile,
-    /// The strokes.
-    pub strokes: Vec<Stroke>,
-    /// For a sheet: the character (index) of each stroke, which the ink reload rule
-    /// `before_each_char` needs (absent for a single character).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stroke_chars: Option<Vec<usize>>,
-}
-
-impl TrackFile {
-    /// Loads and validates `track.json`.
-    ///
-    /// # Errors
-    /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Profile`]
-    /// (naming the file) for an invalid brush profile.
-    pub fn load(path: &Path) -> Result<Self, RobotError> {
-        let t: TrackFile = load_json(path)?;
-        t.brush.validate(&path.display().to_string())?;
-        let chars: SheetChars = load_json(path)?;
-        t.checked(chars, path)
-    }
-
-    /// As [`TrackFile::load`], from the text of a `track.json` (`name` labels errors: a file
-    /// name, or what the text came from), with the same validation.
-    ///
-    /// # Errors
-    /// As [`TrackFile::load`].
-    pub fn from_json(text: &str, name: &str) -> Result<Self, RobotError> {
-        let path = Path::new(name);
-        let json = |source| RobotError::Json { path: path.to_path_buf(), source };
-        if text.len() as u64 > MAX_FILE_BYTES {
-            return Err(RobotError::Config {
-                file: path.to_path_buf(),
-                message: format!("larger than {} MiB: not a track file maobi writes", MAX_FILE_BYTES >> 20),
-            });
-        }
-        let t: TrackFile = serde_json::from_str(text).map_err(json)?;
-        t.brush.validate(name)?;
-        let chars: SheetChars = serde_json::from_str(text).map_err(json)?;
-        t.checked(chars, path)
-    }
-
-    /// A sheet's character boundaries, checked against what they index: `stroke_chars` (the
-    /// ink reload rule's) against the strokes and the sheet's `chars`.
-    fn checked(self, chars: SheetChars, path: &Path) -> Result<Self, RobotError> {
-        self.check_stroke_chars(chars.chars.as_deref()).map_err(|message| RobotError::Config {
-            file: path.to_path_buf(),
-            message: format!("field `stroke_chars`: {message}"),
-        })?;
-        Ok(self)
-    }
-
-    /// `stroke_chars`, when there: one entry per stroke, the characters in writing order (each
-    /// the last one or the next, from 0); with the sheet's `chars`, each entry one of them and
-    /// each character's stroke range its own (the marks' strokes before them count as the
-    /// first character's).
-    fn check_stroke_chars(&self, chars: Option<&[SheetCharRange]>) -> Result<(), String> {
-        let Some(sc) = &self.stroke_chars else { return Ok(()) };
-        let n = self.strokes.len();
-        if sc.len() != n {
-            return Err(format!("{} entries for {n} strokes: expected one per stroke", sc.len()));
-        }
-        let mut last = 0;
-        for (s, &c) in sc.iter().enumerate() {
-            if c != last && c != last + 1 || (s == 0 && c != 0) {
-                return Err(format!(
-                    "stroke {s} is given character {c} after character {last}: expected the characters in writing order from 0"
-                ));
-            }
-            last = c;
-        }
-        let Some(chars) = chars else { return Ok(()) };
-        if let Some(s) = sc.iter().position(|&c| c >= chars.len()) {
-            return Err(format!("stroke {s} names character {}, the sheet has {}", sc[s], chars.len()));
-        }
-        for (i, c) in chars.iter().enumerate() {
-            let Some([a, b]) = c.strokes else { continue };
-            if a > b || b > n || sc[a..b].iter().any(|&x| x != i) {
-                return Err(format!("character {i}'s strokes [{a}, {b}) are not all its own (of {n} strokes)"));
-            }
-        }
-        Ok(())
-    }
-
-    /// The strokes as a [`Track`].
-    pub fn track(&self) -> Track {
-        Track { strokes: self.strokes.clone() }
-    }
-}

@@ -87,7 +87,7 @@ pub fn run(args: Args) -> Result<()> {
             beta_rad: 0.0,
         };
         crate::common::check_output_file("--plot", plot, args.force)?;
-        crate::common::write_atomic(plot, &crate::plot::models_png(&profile, &press)?)?;
+        crate::common::write_atomic(plot, &figures::models_png(&profile, &press)?)?;
         eprintln!("wrote {}: every stroke model's footprint of one press, axes in mm", plot.display());
     }
     let (targets, size, models, reference) = match &args.reference {

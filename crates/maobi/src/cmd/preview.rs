@@ -11,7 +11,7 @@ use robot_io::RobotConfig;
 use robot_io::TrackFile;
 use serde_json::Value;
 
-use crate::page::{PreviewInput, preview_html};
+use figures::{PreviewInput, preview_html};
 
 use crate::common::{check_output_file, write_atomic};
 
@@ -114,7 +114,7 @@ pub fn run(a: Args) -> Result<()> {
         brush: &tf.brush,
         track,
     };
-    let html = preview_html(&input, frame.as_ref(), cfg.as_ref())?;
+    let html = preview_html(&input, frame.as_ref(), cfg.as_ref(), None)?;
     check_output_file("-o", &a.output, a.force)?;
     write_atomic(&a.output, html.as_bytes())?;
     println!("preview of {} strokes written to {}", input.track.strokes.len(), a.output.display());

@@ -7,11 +7,12 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use robot_io::aubo::{AuboRpc, Link, Motion};
+use robot_io::brush_model::Track;
 use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::Transport;
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{
-    Controller, PaperFrame, Plan, Progress, RobotConfig, RobotError, TrackFile, Watch, build_program_chars,
+    Controller, ExportFormat, Exported, PaperFrame, Plan, Program, Progress, RobotConfig, RobotError, TrackFile, Watch,
 };
 
 use crate::common::{PROGRESS_QUIET_S, check_output_file, clock, print_json, progress, write_atomic};
@@ -67,9 +68,7 @@ impl ControllerArgs {
     /// `host:port`, the port the transport's default when not given; refuses a timeout out of
     /// range.
     fn addr(&self) -> Result<String> {
-        if !(1..=600_000).contains(&self.timeout_ms) {
-            bail!("--timeout-ms must be between 1 and 600000, got {}", self.timeout_ms);
-        }
+        between("--timeout-ms", self.timeout_ms, 1, 600_000)?;
         let host = self.host.as_deref().context("--host is required: the controller's address")?;
         Ok(format!("{host}:{}", self.port.unwrap_or(self.rpc_transport().default_port())))
     }
@@ -372,6 +371,14 @@ pub struct SimArgs {
     kinematics: Option<PathBuf>,
 }
 
+/// Refuses a whole-number flag outside `lo..=hi`, naming it and the value.
+fn between(flag: &str, v: u64, lo: u64, hi: u64) -> Result<()> {
+    if !(lo..=hi).contains(&v) {
+        bail!("{flag} must be between {lo} and {hi}, got {v}");
+    }
+    Ok(())
+}
+
 /// Runs a `maobi robot` subcommand.
 pub fn run(cmd: RobotCmd) -> Result<()> {
     match cmd {
@@ -386,57 +393,47 @@ pub fn run(cmd: RobotCmd) -> Result<()> {
 
 struct Loaded {
     track: TrackFile,
+    /// Its strokes, and the title its programs carry.
+    strokes: Track,
+    title: String,
     frame: PaperFrame,
     cfg: RobotConfig,
+}
+
+impl Loaded {
+    /// `program` (built from this track) as a controller or an exporter takes it.
+    fn plan<'a>(&'a self, program: &'a Program) -> Plan<'a> {
+        Plan {
+            program,
+            config: &self.cfg,
+            track: &self.strokes,
+            stroke_chars: self.track.stroke_chars.as_deref(),
+            title: &self.title,
+        }
+    }
 }
 
 fn load(a: &ProgramArgs, plotter: bool) -> Result<Loaded> {
     let track = TrackFile::load(&a.track)?;
     let frame = match &a.paper {
         Some(p) => PaperFrame::load(p)?,
-        None if plotter => plotter_frame(&track),
+        None if plotter => track.level_frame(),
         None => bail!("--paper is required: paper.json, the touched points that place the sheet for the arm"),
     };
     let cfg = match &a.robot {
         Some(p) => RobotConfig::load(p)?,
         None => RobotConfig::default(),
     };
-    Ok(Loaded { track, frame, cfg })
-}
-
-/// The frame a plotter's program is checked and timed on: the sheet (or the char box, or the
-/// track) level in front of the nominal arm, as `maobi write` places it for its executed figure.
-/// A plotter moves in the paper's own millimetres: only the checks and speeds come from here.
-fn plotter_frame(t: &TrackFile) -> PaperFrame {
-    let [x0, y0, x1, y1] = match (t.sheet_mm, t.char_box_mm) {
-        (Some([w, h]), _) => [0.0, 0.0, w, h],
-        (None, Some([x, y, s])) => [x - s, y - s, x + 2.0 * s, y + 2.0 * s],
-        (None, None) => {
-            let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-            for p in t.strokes.iter().flat_map(|s| &s.points) {
-                b = [b[0].min(p.x_mm), b[1].min(p.y_mm), b[2].max(p.x_mm), b[3].max(p.y_mm)];
-            }
-            if b[0] > b[2] { [0.0, 0.0, 1.0, 1.0] } else { [b[0] - 10.0, b[1] - 10.0, b[2] + 10.0, b[3] + 10.0] }
-        }
-    };
-    robot_io::level_frame_in_front([(x0 + x1) / 2.0, (y0 + y1) / 2.0], [x0, y0, x1, y1])
-}
-
-fn title(t: &TrackFile) -> String {
-    t.char.clone().unwrap_or_else(|| "track".into())
+    Ok(Loaded { strokes: track.track(), title: track.title(), track, frame, cfg })
 }
 
 fn check(a: CheckArgs) -> Result<()> {
     let l = load(&a.program, false)?;
-    let (program, report) =
-        build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
-    // Timed with the nominal AUBO-i5 (the simulator's arm); `send` times again with the
-    // controller's own parameters before anything moves.
-    let timing = robot_io::time_program(&program, &robot_io::DhParams::AUBO_I5, &l.cfg)?;
+    let check = l.track.check(&l.frame, &l.cfg)?;
+    let (report, timing) = (&check.report, &check.timing);
     if a.json {
-        let mut v = serde_json::to_value(&report)?;
-        v["timing"] = serde_json::to_value(&timing)?;
-        print_json(&v)?;
+        // As a value: its keys in the order every other JSON of the CLI prints them.
+        print_json(&serde_json::to_value(&check)?)?;
     } else {
         println!(
             "safe: {} strokes, {} points, {} moves, {} ink dips; deepest press {:.2} mm (range max {} mm); paper fit residual {:.3} mm; about {:.0} s",
@@ -486,9 +483,7 @@ fn export(a: ExportArgs) -> Result<()> {
         Some(p) => Some(robot_io::ArmKinematics::load(p)?),
         None => None,
     };
-    let track = l.track.track();
-    let chars = l.track.stroke_chars.as_deref();
-    let (program, _) = build_program_chars(&track, chars, &l.track.brush, &l.frame, &l.cfg)?;
+    let (program, _) = l.track.build_program(&l.frame, &l.cfg)?;
     if lua && !by_moves && arm.is_none() && !a.accept_nominal_kinematics {
         bail!(
             "--format aubo-lua writes joint waypoints, which need the arm's own kinematics: give --kinematics ARM.json \
@@ -496,40 +491,19 @@ fn export(a: ExportArgs) -> Result<()> {
              then stops before moving an arm whose controller reports other parameters), or --motion moves"
         );
     }
+    let format = match a.format.as_str() {
+        "aubo-lua" => ExportFormat::AuboLua(if by_moves { Motion::Moves } else { Motion::PathBuffer }),
+        "urscript" => ExportFormat::UrScript,
+        _ => ExportFormat::Gcode,
+    };
+    let plan = l.plan(&program);
     // URScript and G-code take only speeds from the timing (no joint is exported), so the
     // nominal arm serves when no other is given.
     let kin = arm.as_ref().map_or(robot_io::DhParams::AUBO_I5, |k| k.kinematics);
-    let t = title(&l.track);
-    let (text, what) = match a.format.as_str() {
-        "aubo-lua" if by_moves => {
-            let compact = robot_io::compact_program(&program, &l.cfg);
-            robot_io::check_blends(&compact)?;
-            let text = robot_io::aubo_lua(&compact, &t)?;
-            (text, format!("{} moves", compact.move_count()))
-        }
-        "aubo-lua" => {
-            let text = robot_io::aubo_lua_path_buffer(&program, &kin, &l.cfg, &t)?;
-            let buffers = text.matches("movePathBuffer(name)").count();
-            let calls = text.lines().filter(|l| l.trim_start().starts_with("move")).count();
-            (text, format!("{buffers} path buffers, {calls} motion calls"))
-        }
-        "urscript" => {
-            let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
-            let text = robot_io::urscript(&program, &timing, &l.cfg, &t)?;
-            let moves = text.lines().filter(|l| l.starts_with("  move")).count();
-            (text, format!("{moves} moves"))
-        }
-        _ => {
-            let timing = robot_io::time_program(&program, &kin, &l.cfg)?;
-            let times = robot_io::point_times(&program, &timing)?;
-            let (g, warnings) = robot_io::gcode_chars(&track, chars, &times, &l.cfg, &t)?;
-            for w in warnings {
-                eprintln!("warning: {w}");
-            }
-            let moves = g.lines().filter(|l| l.starts_with("G0") || l.starts_with("G1")).count();
-            (g, format!("{moves} moves"))
-        }
-    };
+    let Exported { text, summary: what, warnings } = robot_io::export_program(&plan, format, &kin)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
     if lua && !by_moves && arm.is_none() {
         eprintln!(
             "warning: the path buffer's joints were computed on the nominal AUBO-i5 parameters \
@@ -606,9 +580,7 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
                 (None, Some(addr)) => robot_grbl::Endpoint::Tcp(addr.clone()),
                 _ => bail!("--controller grbl needs --serial DEVICE or --tcp HOST:PORT"),
             };
-            if !(1..=600_000).contains(&c.timeout_ms) {
-                bail!("--timeout-ms must be between 1 and 600000, got {}", c.timeout_ms);
-            }
+            between("--timeout-ms", c.timeout_ms, 1, 600_000)?;
             let fit = if g.slow_to_machine { robot_grbl::RateFit::Slow } else { robot_grbl::RateFit::Refuse };
             Box::new(robot_grbl::GrblPlotter::new(endpoint, c.timeout(), fit))
         }
@@ -627,17 +599,8 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
 
 fn send(a: SendArgs) -> Result<()> {
     let l = load(&a.program, a.controller == ControllerKind::Grbl)?;
-    let (program, _) =
-        build_program_chars(&l.track.track(), l.track.stroke_chars.as_deref(), &l.track.brush, &l.frame, &l.cfg)?;
-    let track = l.track.track();
-    let t = title(&l.track);
-    let plan = Plan {
-        program: &program,
-        config: &l.cfg,
-        track: &track,
-        stroke_chars: l.track.stroke_chars.as_deref(),
-        title: &t,
-    };
+    let (program, _) = l.track.build_program(&l.frame, &l.cfg)?;
+    let plan = l.plan(&program);
     let mut controller = controller_for(&a)?;
     let to = controller.describe();
     let prepared = controller.prepare(&plan)?;
@@ -727,15 +690,9 @@ fn sim(a: SimArgs) -> Result<()> {
             _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
         }
     }
-    if !(1..=1024).contains(&a.max_connections) {
-        bail!("--max-connections must be between 1 and 1024, got {}", a.max_connections);
-    }
-    if !(1..=65_536).contains(&a.trace_max_mib) {
-        bail!("--trace-max-mib must be between 1 and 65536, got {}", a.trace_max_mib);
-    }
-    if !(1..=86_400).contains(&a.idle_timeout_s) {
-        bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
-    }
+    between("--max-connections", a.max_connections as u64, 1, 1024)?;
+    between("--trace-max-mib", a.trace_max_mib, 1, 65_536)?;
+    between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
     let port = a.port.unwrap_or(RPC_PORT);
     let mut listen = vec![Listen { bind: format!("127.0.0.1:{port}"), transports: a.transports.clone() }];
     for (port, t) in
@@ -825,12 +782,8 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
             ),
         }
     }
-    if !(1..=1024).contains(&a.max_connections) {
-        bail!("--max-connections must be between 1 and 1024, got {}", a.max_connections);
-    }
-    if !(1..=86_400).contains(&a.idle_timeout_s) {
-        bail!("--idle-timeout-s must be between 1 and 86400, got {}", a.idle_timeout_s);
-    }
+    between("--max-connections", a.max_connections as u64, 1, 1024)?;
+    between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
     if !(a.tcp_offset_mm.is_finite() && a.tcp_offset_mm.abs() <= 500.0) {
         bail!("--tcp-offset-mm must be within ±500 mm, got {}", a.tcp_offset_mm);
     }
@@ -877,55 +830,6 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
     Ok(())
 }
 
-/// Reads a simulator trace: JSON lines (one sample per line, as `robot sim --trace` writes), or
-/// one JSON array. A last line cut short (the simulator stopped mid-write, or its disk filled)
-/// is skipped with a warning on stderr; a bad line before it is an error.
-fn read_trace(path: &std::path::Path) -> Result<Vec<robot_io::TraceEntry>> {
-    let name = path.display().to_string();
-    let bytes = std::fs::read(path).with_context(|| format!("{name}: cannot read"))?;
-    // A cut can split a UTF-8 character: the text is read up to what decodes.
-    let text = match std::str::from_utf8(&bytes) {
-        Ok(t) => t,
-        Err(e) => std::str::from_utf8(&bytes[..e.valid_up_to()]).unwrap_or_default(),
-    };
-    if text.trim_start().starts_with('[') {
-        return serde_json::from_str(text).with_context(|| format!("{name}: not a simulator trace"));
-    }
-    let mut out = Vec::new();
-    let lines: Vec<&str> = text.split('\n').collect();
-    let last = lines.iter().rposition(|l| !l.trim().is_empty());
-    for (i, line) in lines.iter().enumerate() {
-        if line.trim().is_empty() {
-            continue;
-        }
-        match serde_json::from_str(line) {
-            Ok(t) => out.push(t),
-            // The last line, unfinished: the file was cut there.
-            // (A last line that is complete JSON but not a sample is an error like any other.)
-            Err(e)
-                if Some(i) == last
-                    && (e.is_eof()
-                        || (!text.ends_with('\n') && serde_json::from_str::<serde_json::Value>(line).is_err())) =>
-            {
-                eprintln!(
-                    "warning: {name}:{}: skipped a cut last line ({} bytes): the trace ends at the sample before",
-                    i + 1,
-                    line.len()
-                );
-            }
-            Err(e) => {
-                return Err(e).with_context(|| {
-                    format!("{name}:{}: not a simulator trace sample (expected {{\"t_s\", \"kind\", \"pose\"}})", i + 1)
-                });
-            }
-        }
-    }
-    if out.is_empty() {
-        bail!("{name}: the trace is empty (did the simulator execute any move?)");
-    }
-    Ok(out)
-}
-
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
     check_output_file("-o", &a.output, a.force)?;
     let name = a.track.display().to_string();
@@ -938,11 +842,17 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
     }
     let tf = TrackFile::load(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
-    let trace = read_trace(&a.trace)?;
+    let trace = robot_io::read_trace(&a.trace)?;
+    if let Some((line, bytes)) = trace.cut_line {
+        eprintln!(
+            "warning: {}:{line}: skipped a cut last line ({bytes} bytes): the trace ends at the sample before",
+            a.trace.display()
+        );
+    }
     let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
     let (img, states) =
-        pipeline::render_trace(&trace, &frame, &tf.brush, bezier_raster::ModelKind::Bsm, &char_box, a.size);
+        pipeline::render_trace(&trace.samples, &frame, &tf.brush, bezier_raster::ModelKind::Bsm, &char_box, a.size);
     write_atomic(&a.output, &img.encode_png()?)?;
     let pressed = states.iter().filter(|p| p.h_mm > 0.0).count();
     println!("{} trace samples ({pressed} pressed) rendered to {}", states.len(), a.output.display());

@@ -232,7 +232,7 @@ fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainRepor
         let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
         let val: Vec<(f64, f64)> =
             report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
-        let png = crate::plot::loss_png(&[("train", train), ("validation", val)])?;
+        let png = figures::loss_png(&[("train", train), ("validation", val)])?;
         std::fs::write(&staged_png, png).with_context(|| format!("cannot write {}", staged_png.display()))?;
         // Through symlinks; folders and special files refused before anything moves.
         let targets = [

@@ -237,7 +237,8 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(&stage.path().join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
         write_atomic_with(&stage.path().join("track.json"), |w| Ok(serde_json::to_writer_pretty(w, &sheet_track)?))?;
     }
-    let preview = crate::page::sheet_preview(&sheet_track, None, None)?;
+    let ran = out.results.first().filter(|_| single).and_then(|r| r.run.as_ref());
+    let preview = figures::sheet_preview(&sheet_track, None, None, ran)?;
     write_atomic(&stage.path().join("preview.html"), preview.as_bytes())?;
     stage.install("--output", &args.output, args.force)?;
     if args.json {
@@ -343,6 +344,8 @@ fn write_chars(
         size: args.size,
         execution: args.execution,
         free_widths: args.free_widths,
+        // One character's preview plays the program its executed figure ran.
+        keep_run: prepared.len() == 1,
         alpha_rad: plan.alpha_rad,
         // With --observed the refinement runs after writing, against the ILC target.
         refine: if observed.is_some() { None } else { plan.refine },
@@ -627,31 +630,38 @@ fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json
     json!(fit)
 }
 
-/// One character's files in `dir` (created by the first write, under the output gate).
-/// What is kept of a character once its files are written: its report, track and box.
+/// What is kept of a character once its files are written: its report, track and box, and
+/// its program as it ran when kept for the preview ([`WriteOptions::keep_run`]).
 struct Written {
     report: CharReport,
     track: brush_model::Track,
     char_box: trajectory::CharBox,
+    run: Option<pipeline::ExecutedRun>,
 }
 
 impl From<CharResult> for Written {
     fn from(r: CharResult) -> Self {
-        Written { report: r.report, track: r.track, char_box: r.char_box }
+        Written { report: r.report, track: r.track, char_box: r.char_box, run: r.executed_run }
     }
 }
 
+/// One character's files in `dir` (created by the first write, under the output gate).
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
-    write_atomic(&dir.join("render.png"), &r.render.encode_png()?)?;
-    write_atomic(&dir.join("reference.png"), &r.reference.encode_png()?)?;
-    write_atomic(&dir.join("overlay.png"), &crate::plot::overlay_legend_png(&r.reference, &r.render)?)?;
-    if let Some(ex) = &r.executed {
-        write_atomic(&dir.join("executed.png"), &ex.encode_png()?)?;
-        let row = crate::plot::labelled_row_png(&[
-            ("reference (glyph)", &r.reference),
-            ("plan", &r.render),
-            ("executed", ex),
-        ])?;
+    // The pictures encoded at once on rayon's pool, then written in order.
+    let executed = |ex: &bezier_raster::Coverage| -> Result<_> {
+        let rows = [("reference (glyph)", &r.reference), ("plan", &r.render), ("executed", ex)];
+        let (png, row) = rayon::join(|| ex.encode_png(), || figures::labelled_row_png(&rows));
+        Ok((png?, row?))
+    };
+    let ((render, reference), (overlay, executed)) = rayon::join(
+        || rayon::join(|| r.render.encode_png(), || r.reference.encode_png()),
+        || rayon::join(|| figures::overlay_legend_png(&r.reference, &r.render), || r.executed.as_ref().map(executed)),
+    );
+    write_atomic(&dir.join("render.png"), &render?)?;
+    write_atomic(&dir.join("reference.png"), &reference?)?;
+    write_atomic(&dir.join("overlay.png"), &overlay?)?;
+    if let Some((png, row)) = executed.transpose()? {
+        write_atomic(&dir.join("executed.png"), &png)?;
         write_atomic(&dir.join("side-by-side.png"), &row)?;
     }
     // Where this character sits: in its box and, with --sheet, on the sheet, in paper mm.
@@ -662,7 +672,7 @@ fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Opti
         let series = |f: fn(&track_refine::LossTerms) -> f64| -> Vec<(f64, f64)> {
             rf.curve.iter().enumerate().map(|(i, l)| (i as f64, f(l))).collect()
         };
-        let png = crate::plot::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
+        let png = figures::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
         write_atomic(&dir.join("refine.png"), &png)?;
     }
     Ok(())

@@ -172,7 +172,7 @@ fn a_hostile_char_field_stays_text_in_the_page() {
     let p = dir.path().join("p.html");
     ok(&maobi(&["preview", s(&track), "-o", s(&p)]));
     let html = std::fs::read_to_string(&p).unwrap();
-    let template = include_str!("../../src/cmd/preview.html");
+    let template = include_str!("../../../figures/src/preview.html");
     assert_eq!(html.matches("<script").count(), template.matches("<script").count());
     assert_eq!(html.matches("</script").count(), template.matches("</script").count());
     assert!(!html.contains("<!--"), "a comment opener reached the page");

@@ -12,12 +12,14 @@
 //! print) is an error, and no text is returned.
 
 mod arm;
+mod format;
 mod lua;
 mod parse;
 mod text;
 mod timed;
 
 pub use arm::ArmKinematics;
+pub use format::{ExportFormat, Exported, export_program};
 pub use lua::{KINEMATICS_TOLERANCE, PROGRESS_VARIABLE};
 pub(crate) use parse::read_urscript_named;
 pub use parse::{

@@ -272,6 +272,27 @@ fn expect<'a>(it: &mut impl Iterator<Item = (usize, &'a str)>, want: &str, last:
     }
 }
 
+/// The next statement of an arm program's body, its `  `-indented comments (`marker`) skipped;
+/// `None` at the closing `end`.
+fn statement<'a>(
+    it: &mut impl Iterator<Item = (usize, &'a str)>,
+    last: usize,
+    marker: &str,
+    target: ExportTarget,
+) -> Result<Option<(usize, &'a str)>, At> {
+    loop {
+        let Some((n, l)) = it.next() else {
+            return Err(At { line: last, reason: "the program does not end with `end`".into() });
+        };
+        if l == "end" {
+            return Ok(None);
+        }
+        if !is_comment(l, "  ", marker, target) {
+            return Ok(Some((n, l)));
+        }
+    }
+}
+
 /// The first line that is not a header comment (`marker` at the start), with the lines after.
 fn after_header<'a>(
     it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
@@ -320,59 +341,24 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
     for want in lua::head_lines() {
         expect(&mut it, &want, last)?;
     }
-    // A path-buffer program: the controller's kinematics checked first.
-    let kinematics = if it.peek().is_some_and(|(_, l)| *l == "  do") {
-        it.next();
-        let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before the kinematics".into() })?;
-        let k = whole(l, |c| {
-            c.lit(lua::WANT_PREFIX)?;
-            let a_m = c.nums::<6>()?;
-            c.lit("}, alpha = {")?;
-            let alpha_rad = c.nums::<6>()?;
-            c.lit("}, d = {")?;
-            let d_m = c.nums::<6>()?;
-            c.lit("}, theta = {")?;
-            let theta_rad = c.nums::<6>()?;
-            c.lit("}}")?;
-            Some(DhParams { a_m, alpha_rad, d_m, theta_rad })
-        })
-        .ok_or_else(|| unexpected(n, l, "`    local want = {a = {...}, alpha = {...}, d = {...}, theta = {...}}`"))?;
-        k.validate().map_err(|why| At { line: n, reason: format!("the kinematics: {why}") })?;
-        for want in lua::kinematics_check_lines() {
-            expect(&mut it, &want, last)?;
-        }
-        Some(k)
-    } else {
-        None
-    };
-    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setTcpOffset".into() })?;
-    let tcp_offset_m = whole(l, |c| {
-        c.lit("  setTcpOffset({0, 0, ")?;
-        let z = c.num()?;
-        c.lit(", 0, 0, 0})")?;
-        Some(z)
-    })
-    .ok_or_else(|| unexpected(n, l, "`  setTcpOffset({0, 0, z, 0, 0, 0})`"))?;
-    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before setSpeedFraction".into() })?;
-    let speed_fraction = whole(l, |c| {
-        c.lit("  setSpeedFraction(")?;
-        let f = c.num()?;
-        c.lit(")")?;
-        Some(f)
-    })
-    .ok_or_else(|| unexpected(n, l, "`  setSpeedFraction(f)`"))?;
+    let kinematics = lua_kinematics(&mut it, last)?;
+    let tcp_offset_m = one_number(
+        &mut it,
+        last,
+        ("setTcpOffset", "  setTcpOffset({0, 0, ", ", 0, 0, 0})"),
+        "`  setTcpOffset({0, 0, z, 0, 0, 0})`",
+        unexpected,
+    )?;
+    let speed_fraction = one_number(
+        &mut it,
+        last,
+        ("setSpeedFraction", "  setSpeedFraction(", ")"),
+        "`  setSpeedFraction(f)`",
+        unexpected,
+    )?;
     let mut moves = Vec::new();
     let mut path_buffers = Vec::new();
-    loop {
-        let Some((n, l)) = it.next() else {
-            return Err(At { line: last, reason: "the program does not end with `end`".into() });
-        };
-        if l == "end" {
-            break;
-        }
-        if is_comment(l, "  ", "--", ExportTarget::Lua) {
-            continue;
-        }
+    while let Some((n, l)) = statement(&mut it, last, "--", ExportTarget::Lua)? {
         let m = if l == "  do" {
             let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
             if l.starts_with("    local name = ") {
@@ -389,39 +375,7 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
                 moves.push(lift);
                 continue;
             }
-            let (qnear, pose) = whole(l, |c| {
-                c.lit("    local q, ret = inverseKinematics(")?;
-                let qnear = if c.lit("getJointPositions()").is_some() {
-                    None
-                } else {
-                    c.lit("{")?;
-                    let q = c.nums::<6>()?;
-                    c.lit("}")?;
-                    Some(q)
-                };
-                c.lit(", {")?;
-                let p = c.nums::<6>()?;
-                c.lit("})")?;
-                Some((qnear, p))
-            })
-            .ok_or_else(|| unexpected(m, l, "`    local q, ret = inverseKinematics(qnear, {pose})`"))?;
-            expect(
-                &mut it,
-                &format!(
-                    "    if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end"
-                ),
-                last,
-            )?;
-            let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
-            let (a, v) = whole(l, |c| {
-                c.lit("    moveJoint(q, ")?;
-                let [a, v] = c.nums::<2>()?;
-                c.lit(", 0, 0)")?;
-                Some((a, v))
-            })
-            .ok_or_else(|| unexpected(m, l, "`    moveJoint(q, a, v, 0, 0)`"))?;
-            expect(&mut it, "  end", last)?;
-            ReadMove::JointPose { target: pose, a, v, qnear }
+            lua_joint_pose(&mut it, (m, l), last)?
         } else if let Some(k) = whole(l, |c| {
             c.lit(&format!("  setInt32(\"{}\", ", lua::PROGRESS_VARIABLE))?;
             let k = c.int()?;
@@ -444,6 +398,100 @@ fn read_lua_at(text: &str) -> Result<ReadProgram, At> {
         return Err(unexpected(n, l, "nothing after the final `end`"));
     }
     Ok(ReadProgram { tcp_offset_m, speed_fraction: Some(speed_fraction), moves, kinematics, path_buffers })
+}
+
+/// The kinematics a path-buffer program checks first (`  do`, `    local want = {a = {…},
+/// alpha = {…}, d = {…}, theta = {…}}` and the check's fixed lines), or `None` where the
+/// program does not begin so.
+fn lua_kinematics<'a>(
+    it: &mut std::iter::Peekable<impl Iterator<Item = (usize, &'a str)>>,
+    last: usize,
+) -> Result<Option<DhParams>, At> {
+    if it.peek().is_none_or(|(_, l)| *l != "  do") {
+        return Ok(None);
+    }
+    it.next();
+    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before the kinematics".into() })?;
+    let k = whole(l, |c| {
+        c.lit(lua::WANT_PREFIX)?;
+        let a_m = c.nums::<6>()?;
+        c.lit("}, alpha = {")?;
+        let alpha_rad = c.nums::<6>()?;
+        c.lit("}, d = {")?;
+        let d_m = c.nums::<6>()?;
+        c.lit("}, theta = {")?;
+        let theta_rad = c.nums::<6>()?;
+        c.lit("}}")?;
+        Some(DhParams { a_m, alpha_rad, d_m, theta_rad })
+    })
+    .ok_or_else(|| unexpected(n, l, "`    local want = {a = {...}, alpha = {...}, d = {...}, theta = {...}}`"))?;
+    k.validate().map_err(|why| At { line: n, reason: format!("the kinematics: {why}") })?;
+    for want in lua::kinematics_check_lines() {
+        expect(it, &want, last)?;
+    }
+    Ok(Some(k))
+}
+
+/// The next line, which must be `prefix`, one number and `suffix` (`what`: the statement's
+/// name, for a text that ends before it; `want`: the expected line, for `unexpected`).
+fn one_number<'a>(
+    it: &mut impl Iterator<Item = (usize, &'a str)>,
+    last: usize,
+    (what, prefix, suffix): (&str, &str, &str),
+    want: &str,
+    unexpected: fn(usize, &str, &str) -> At,
+) -> Result<f64, At> {
+    let (n, l) = it.next().ok_or_else(|| At { line: last, reason: format!("the text ends before {what}") })?;
+    whole(l, |c| {
+        c.lit(prefix)?;
+        let v = c.num()?;
+        c.lit(suffix)?;
+        Some(v)
+    })
+    .ok_or_else(|| unexpected(n, l, want))
+}
+
+/// A joint move to a pose inside `  do` (`first`: the line after it): the controller's
+/// `inverseKinematics`, the refusal when it fails, `moveJoint(q, a, v, 0, 0)`, `  end`.
+fn lua_joint_pose<'a>(
+    it: &mut impl Iterator<Item = (usize, &'a str)>,
+    first: (usize, &str),
+    last: usize,
+) -> Result<ReadMove, At> {
+    let (m, l) = first;
+    let (qnear, pose) = whole(l, |c| {
+        c.lit("    local q, ret = inverseKinematics(")?;
+        let qnear = if c.lit("getJointPositions()").is_some() {
+            None
+        } else {
+            c.lit("{")?;
+            let q = c.nums::<6>()?;
+            c.lit("}")?;
+            Some(q)
+        };
+        c.lit(", {")?;
+        let p = c.nums::<6>()?;
+        c.lit("})")?;
+        Some((qnear, p))
+    })
+    .ok_or_else(|| unexpected(m, l, "`    local q, ret = inverseKinematics(qnear, {pose})`"))?;
+    expect(
+        it,
+        &format!(
+            "    if type(q) ~= \"table\" or #q ~= 6 or (ret ~= nil and ret ~= 0) then error(\"{LUA_IK_ERROR}\") end"
+        ),
+        last,
+    )?;
+    let (m, l) = it.next().ok_or(At { line: last, reason: "the text ends inside `do`".into() })?;
+    let (a, v) = whole(l, |c| {
+        c.lit("    moveJoint(q, ")?;
+        let [a, v] = c.nums::<2>()?;
+        c.lit(", 0, 0)")?;
+        Some((a, v))
+    })
+    .ok_or_else(|| unexpected(m, l, "`    moveJoint(q, a, v, 0, 0)`"))?;
+    expect(it, "  end", last)?;
+    Ok(ReadMove::JointPose { target: pose, a, v, qnear })
 }
 
 /// A Lua `moveJoint({q}, a, v, 0, 0)` or `moveLine({pose}, a, v, blend, 0)` after `indent`.
@@ -610,25 +658,15 @@ pub(crate) fn read_urscript_named(text: &str, name: &str) -> Result<ReadProgram,
     let mut it = all.into_iter().peekable();
     after_header(&mut it, "#", ExportTarget::UrScript)?;
     expect(&mut it, &format!("def {name}():"), last)?;
-    let (n, l) = it.next().ok_or(At { line: last, reason: "the text ends before set_tcp".into() })?;
-    let tcp_offset_m = whole(l, |c| {
-        c.lit("  set_tcp(p[0, 0, ")?;
-        let z = c.num()?;
-        c.lit(", 0, 0, 0])")?;
-        Some(z)
-    })
-    .ok_or_else(|| urscript_unexpected(n, l, "`  set_tcp(p[0, 0, z, 0, 0, 0])`"))?;
+    let tcp_offset_m = one_number(
+        &mut it,
+        last,
+        ("set_tcp", "  set_tcp(p[0, 0, ", ", 0, 0, 0])"),
+        "`  set_tcp(p[0, 0, z, 0, 0, 0])`",
+        urscript_unexpected,
+    )?;
     let mut moves = Vec::new();
-    loop {
-        let Some((n, l)) = it.next() else {
-            return Err(At { line: last, reason: "the program does not end with `end`".into() });
-        };
-        if l == "end" {
-            break;
-        }
-        if is_comment(l, "  ", "#", ExportTarget::UrScript) {
-            continue;
-        }
+    while let Some((n, l)) = statement(&mut it, last, "#", ExportTarget::UrScript)? {
         // UR's argument orders (the script manual): movej(q, a, v, t, r), movel(pose, a, v, t,
         // r), movep(pose, a, v, r); maobi names every argument after the target, in that order,
         // with t=0 (the speeds decide the time).

@@ -13,7 +13,7 @@ use serde_json::{Value, json};
 use super::blend::{BlendMove, blended_line_motion, check_blend};
 use super::{MIN_MOVE_SPEED, MIN_SPEED_FRACTION, MOTION_OWNED, SIM_ROBOT, SimOptions};
 use crate::RobotError;
-use crate::exec::{TraceEntry, joint_motion_dh, line_motion};
+use crate::exec::{TraceEntry, joint_motion, line_motion};
 use crate::kinematics;
 use crate::pose::Pose;
 use crate::program::{
@@ -554,7 +554,7 @@ pub fn ramped_joint_motion(
 ) -> Vec<TraceEntry> {
     let dq = from.iter().zip(to).map(|(a, b)| (b - a).abs()).fold(0.0, f64::max);
     if dq <= 0.0 {
-        return joint_motion_dh(dh, from, to, v_rad_s, tcp, t0_s);
+        return joint_motion(dh, from, to, v_rad_s, tcp, t0_s);
     }
     let (total, at) = trapezoid(dq, v_rad_s, a_rad_s2);
     let n = timed_count(total, v_rad_s, dq, 0.0, dq);

@@ -425,3 +425,38 @@ fn point_times_follow_the_timed_strokes() {
     let e = point_times(&p, &timing(&other, &cfg)).unwrap_err().to_string();
     assert!(e.contains("does not lie on the stroke's pressed path"), "{e}");
 }
+
+#[test]
+fn export_program_writes_each_format_as_its_exporter_does() {
+    use robot_io::aubo::Motion;
+    use robot_io::{ExportFormat, Plan, aubo_lua_path_buffer, check_blends, export_program, gcode_chars};
+    let cfg = inked();
+    let (p, track) = (program(&cfg), small_track());
+    let plan = Plan { program: &p, config: &cfg, track: &track, stroke_chars: None, title: "二" };
+    let kin = DhParams::AUBO_I5;
+    let export = |f| export_program(&plan, f, &kin).unwrap();
+    // Moves: the compacted program, its blends checked.
+    let compact = compact_program(&p, &cfg);
+    check_blends(&compact).unwrap();
+    let moves = export(ExportFormat::AuboLua(Motion::Moves));
+    assert_eq!(moves.text, aubo_lua(&compact, "二").unwrap());
+    assert_eq!(moves.summary, format!("{} moves", compact.move_count()));
+    let buffers = export(ExportFormat::AuboLua(Motion::PathBuffer));
+    assert_eq!(buffers.text, aubo_lua_path_buffer(&p, &kin, &cfg, "二").unwrap());
+    let calls = buffers.text.lines().filter(|l| l.trim_start().starts_with("move")).count();
+    assert_eq!(buffers.summary, format!("{} path buffers, {calls} motion calls", p.strokes.len()));
+    let ur = export(ExportFormat::UrScript);
+    assert_eq!(ur.text, urscript(&p, &timing(&p, &cfg), &cfg, "二").unwrap());
+    let ur_moves =
+        read_urscript(&ur.text).unwrap().moves.iter().filter(|(_, m)| !matches!(m, ReadMove::Progress { .. })).count();
+    assert_eq!(ur.summary, format!("{ur_moves} moves"));
+    let g = export(ExportFormat::Gcode);
+    let (text, warnings) = gcode_chars(&track, None, &times(&cfg), &cfg, "二").unwrap();
+    assert_eq!((&g.text, &g.warnings), (&text, &warnings));
+    let g_moves = read_gcode(&text).unwrap().iter().filter(|(_, s)| matches!(s, GcodeStatement::Move { .. })).count();
+    assert_eq!(g.summary, format!("{g_moves} moves"));
+    // The speeds are timed on the arm given.
+    let ur5e = time_program(&p, &DhParams::UR5E, &cfg).unwrap();
+    let other = export_program(&plan, ExportFormat::UrScript, &DhParams::UR5E).unwrap();
+    assert_eq!(other.text, urscript(&p, &ur5e, &cfg, "二").unwrap());
+}

@@ -373,3 +373,47 @@ fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kine
     let miss_m = (end_of_start.pose.to_iso().translation.vector - above.to_iso().translation.vector).norm();
     assert!(miss_m < 2e-5, "the first move ends {:.3} mm from the pose above the first stroke", miss_m * 1e3);
 }
+
+#[test]
+fn a_track_file_places_checks_and_times_its_program() {
+    use robot_io::{IN_FRONT_M, TrackFile, time_program};
+    let track = small_track();
+    let tf = |sheet_mm, char_box_mm| TrackFile {
+        char: None,
+        char_box_mm,
+        sheet_mm,
+        brush: pen1(),
+        strokes: track.strokes.clone(),
+        stroke_chars: None,
+    };
+    // A plotter's level sheet: the whole sheet, else the char box and one box size around it,
+    // else the strokes' extent (x 40..70, y 40..85 mm) and 10 mm; its middle in front of the arm.
+    for (t, bounds) in [
+        (tf(Some([210.0, 297.0]), Some([20.0, 30.0, 80.0])), [0.0, 0.0, 210.0, 297.0]),
+        (tf(None, Some([20.0, 30.0, 80.0])), [-60.0, -50.0, 180.0, 190.0]),
+        (tf(None, None), [30.0, 30.0, 80.0, 95.0]),
+        (TrackFile { strokes: Vec::new(), ..tf(None, None) }, [0.0, 0.0, 1.0, 1.0]),
+    ] {
+        let f = t.level_frame();
+        assert_eq!(f.bounds_mm, bounds);
+        let [x, y, depth] = f.to_paper(IN_FRONT_M);
+        let mid = [(bounds[0] + bounds[2]) / 2.0, (bounds[1] + bounds[3]) / 2.0];
+        assert!((x - mid[0]).abs() < 1e-9 && (y - mid[1]).abs() < 1e-9 && depth.abs() < 1e-9, "{bounds:?}");
+    }
+    assert_eq!(tf(None, None).title(), "track");
+    assert_eq!(TrackFile { char: Some("永".into()), ..tf(None, None) }.title(), "永");
+    // The check: the program built and checked on the frame, timed on the nominal AUBO-i5; as
+    // JSON the report's fields with the timing beside them.
+    let cfg = sparse();
+    let check = tf(None, None).check(&paper(), &cfg).unwrap();
+    let (program, report) = build_program(&track, &pen1(), &paper(), &cfg).unwrap();
+    assert_eq!(tf(None, None).build_program(&paper(), &cfg).unwrap(), (program.clone(), report.clone()));
+    let timing = time_program(&program, &DhParams::AUBO_I5, &cfg).unwrap();
+    assert_eq!((&check.report, &check.timing), (&report, &timing));
+    let mut want = serde_json::to_value(&report).unwrap();
+    want["timing"] = serde_json::to_value(&timing).unwrap();
+    assert_eq!(serde_json::to_value(&check).unwrap(), want);
+    // A frame the track does not fit is refused as the program's check refuses it.
+    let small = PaperFrame::level([0.35, 0.15, 0.05], [50.0, 50.0]);
+    assert!(matches!(tf(None, None).check(&small, &cfg), Err(RobotError::Unsafe { .. })));
+}

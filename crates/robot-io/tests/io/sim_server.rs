@@ -261,6 +261,9 @@ fn a_full_trace_disk_does_not_stop_the_simulator() {
     let text = std::fs::read_to_string(&path).unwrap();
     assert_eq!(text.lines().count() as u64, sim.samples_recorded());
     assert!(sim.trace_error().is_none());
+    // It reads back as the samples the simulator executed.
+    let back = robot_io::read_trace(&path).unwrap();
+    assert_eq!((back.samples, back.cut_line), (sim.trace(), None));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

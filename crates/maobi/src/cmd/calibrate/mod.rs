@@ -110,7 +110,7 @@ pub fn run(args: Args) -> Result<()> {
             .with_context(|| format!("not writing {}: the fitted model is not a usable profile", out.display()))?;
         // Every file's bytes first: a failure writes nothing.
         let plot = (args.images.is_some() || sheet_csv.is_some())
-            .then(|| crate::plot::regression_png(&rows, &profile))
+            .then(|| figures::regression_png(&rows, &profile))
             .transpose()?;
         if let Some(csv) = &sheet_csv {
             write_atomic(&out.with_file_name("measurements.csv"), csv.as_bytes())?;

@@ -510,23 +510,45 @@ fn serve_script(mut stream: TcpStream, sh: &Shared, stop: &AtomicBool) {
     let mut chunk = vec![0u8; 16 * 1024];
     let mut last = Instant::now();
     while !stop.load(Ordering::SeqCst) {
-        match stream.read(&mut chunk) {
-            Ok(0) => break,
-            Ok(n) => {
-                if chunk[..n].iter().any(|b| !b.is_ascii_whitespace()) {
-                    last = Instant::now();
-                }
-                buf.extend_from_slice(&chunk[..n]);
+        match read_text(&mut stream, &mut chunk, &mut buf, &mut last) {
+            TextRead::Closed => break,
+            TextRead::Got => {
                 if !take_programs(&mut buf, sh) {
                     break;
                 }
             }
-            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
-            Err(_) => break,
+            TextRead::Quiet => {}
         }
         if last.elapsed() >= sh.options.idle_timeout {
             break;
         }
+    }
+}
+
+/// What one read of a text port (script, dashboard) gave.
+enum TextRead {
+    /// The peer closed the connection, or it failed.
+    Closed,
+    /// Nothing within the read time-out.
+    Quiet,
+    /// Bytes, appended to the buffer.
+    Got,
+}
+
+/// Reads what `stream` has into `chunk` and appends it to `buf`; `last` becomes now when any of
+/// it is not white space (the idle time-out counts from there).
+fn read_text(stream: &mut TcpStream, chunk: &mut [u8], buf: &mut Vec<u8>, last: &mut Instant) -> TextRead {
+    match stream.read(chunk) {
+        Ok(0) => TextRead::Closed,
+        Ok(n) => {
+            if chunk[..n].iter().any(|b| !b.is_ascii_whitespace()) {
+                *last = Instant::now();
+            }
+            buf.extend_from_slice(&chunk[..n]);
+            TextRead::Got
+        }
+        Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => TextRead::Quiet,
+        Err(_) => TextRead::Closed,
     }
 }
 
@@ -766,16 +788,8 @@ fn serve_dashboard(mut stream: TcpStream, sh: &Shared, stop: &AtomicBool) {
     let mut chunk = [0u8; 1024];
     let mut last = Instant::now();
     while !stop.load(Ordering::SeqCst) {
-        match stream.read(&mut chunk) {
-            Ok(0) => return,
-            Ok(n) => {
-                if chunk[..n].iter().any(|b| !b.is_ascii_whitespace()) {
-                    last = Instant::now();
-                }
-                buf.extend_from_slice(&chunk[..n]);
-            }
-            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut) => {}
-            Err(_) => return,
+        if let TextRead::Closed = read_text(&mut stream, &mut chunk, &mut buf, &mut last) {
+            return;
         }
         while let Some(i) = buf.iter().position(|&b| b == b'\n') {
             let line: Vec<u8> = buf.drain(..=i).collect();

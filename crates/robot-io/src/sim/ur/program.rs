@@ -66,58 +66,40 @@ pub(super) fn compile(text: &str, dh: &DhParams, q0: &[f64; 6], tcp0: &Isometry3
     let read = read_urscript_named(text, name).map_err(|at| format!("line {}: {}", at.line, at.reason))?;
     let tcp = Pose([0.0, 0.0, read.tcp_offset_m, 0.0, 0.0, 0.0]).to_iso();
     let _ = tcp0;
-    let mut out = Compiled {
-        name: name.to_string(),
-        samples: Vec::new(),
-        joints: Vec::new(),
-        registers: Vec::new(),
-        tcp,
-        error: None,
+    let mut arm = Arm {
+        dh,
+        q: *q0,
+        at: Pose::from_iso(&dh.forward(q0, &tcp)),
+        t: 0.0,
+        out: Compiled {
+            name: name.to_string(),
+            samples: Vec::new(),
+            joints: Vec::new(),
+            registers: Vec::new(),
+            tcp,
+            error: None,
+        },
     };
-    let mut q = *q0;
-    let mut at = Pose::from_iso(&dh.forward(&q, &tcp));
-    let mut t = 0.0;
     let mut chain: Vec<(usize, BlendMove)> = Vec::new();
     let moves = read.moves;
-    let mut i = 0;
-    while i < moves.len() {
-        let (line, m) = moves[i];
-        let range = |what: &str, v: f64, max: f64| {
-            if v.is_finite() && v > 0.0 && v <= max {
-                Ok(())
-            } else {
-                Err(format!("line {line}: {what} {v} is outside (0, {max}]"))
-            }
-        };
+    for (i, &(line, m)) in moves.iter().enumerate() {
         match m {
             ReadMove::Progress { strokes } => {
                 let v = i32::try_from(strokes)
                     .map_err(|_| format!("line {line}: register value {strokes} out of range"))?;
-                out.registers.push((t, URSCRIPT_PROGRESS_REGISTER, v));
-                i += 1;
+                arm.out.registers.push((arm.t, URSCRIPT_PROGRESS_REGISTER, v));
             }
             ReadMove::Joint { q: target, a, v } | ReadMove::JointPose { target, a, v, .. } => {
-                range("the joint acceleration", a, CONTROLLER_MAX_ACC)?;
-                range("the joint speed", v, CONTROLLER_MAX_SPEED)?;
-                let to = match m {
-                    ReadMove::Joint { .. } => Some(target),
-                    _ => dh.inverse(&pose_from_ur(&target), &tcp, Some(&q)),
-                };
-                let Some(to) = to else {
-                    out.error = Some((t, format!("line {line}: movej: the pose is out of the arm's reach")));
+                in_range(line, "the joint acceleration", a, CONTROLLER_MAX_ACC)?;
+                in_range(line, "the joint speed", v, CONTROLLER_MAX_SPEED)?;
+                let pose = matches!(m, ReadMove::JointPose { .. });
+                if !arm.joint_move(line, target, pose, a, v)? {
                     break;
-                };
-                let samples = ramped_joint_motion(dh, &q, &to, v, a, &tcp, t);
-                push(&mut out, samples, line)?;
-                q = to;
-                at = Pose::from_iso(&dh.forward(&q, &tcp));
-                t = out.samples.last().map_or(t, |s| s.t_s);
-                out.joints.push((t, q));
-                i += 1;
+                }
             }
             ReadMove::Line { target, a, v, blend_m } | ReadMove::Process { target, a, v, blend_m } => {
-                range("the tool acceleration", a, CONTROLLER_MAX_ACC)?;
-                range("the tool speed", v, CONTROLLER_MAX_SPEED)?;
+                in_range(line, "the tool acceleration", a, CONTROLLER_MAX_ACC)?;
+                in_range(line, "the tool speed", v, CONTROLLER_MAX_SPEED)?;
                 if !(blend_m.is_finite() && (0.0..=CONTROLLER_MAX_BLEND_M).contains(&blend_m)) {
                     return Err(format!(
                         "line {line}: the blend radius {blend_m} is outside [0, {CONTROLLER_MAX_BLEND_M}]"
@@ -125,70 +107,122 @@ pub(super) fn compile(text: &str, dh: &DhParams, q0: &[f64; 6], tcp0: &Isometry3
                 }
                 let pose = pose_from_ur(&target);
                 chain.push((line, BlendMove { pose, v_m_s: v, a_m_s2: a, blend_m }));
-                i += 1;
-                let next_blends = matches!(moves.get(i), Some((_, ReadMove::Line { .. } | ReadMove::Process { .. })));
+                let next_blends =
+                    matches!(moves.get(i + 1), Some((_, ReadMove::Line { .. } | ReadMove::Process { .. })));
                 if blend_m > 0.0 && next_blends && chain.len() < MAX_BLEND_CHAIN {
                     continue;
                 }
-                // The chain ends here: its blends checked (UR's rule: neighbouring blends must not
-                // overlap; maobi's stricter one, at most half of either move, implies it), every
-                // target solved, then executed.
-                let mut lens = Vec::with_capacity(chain.len());
-                let mut from = at;
-                for (_, bm) in &chain {
-                    lens.push(
-                        (nalgebra::Vector3::from(bm.pose.position()) - nalgebra::Vector3::from(from.position())).norm(),
-                    );
-                    from = bm.pose;
-                }
-                // UR's rule (the script manual, movej/movel): a blend region must not overlap the
-                // blend of the waypoint before or after it; neither may it reach past the move's
-                // start. (1 nm of slack for the printed digits.)
-                let n = chain.len();
-                let r = |k: usize| if k + 1 < n { chain[k].1.blend_m } else { 0.0 };
-                for k in 0..n {
-                    let before = if k == 0 { 0.0 } else { r(k - 1) };
-                    let overlaps = r(k) + before > lens[k] + BLEND_SLACK_M;
-                    if overlaps {
-                        return Err(format!(
-                            "line {}: blend radius {} m and the one before ({} m) overlap on a move of {} m (UR skips such a move with 'Overlapping Blends')",
-                            chain[k].0,
-                            r(k),
-                            before,
-                            lens[k]
-                        ));
-                    }
-                }
-                for (l, bm) in &chain {
-                    let Some(qk) = dh.inverse(&bm.pose, &tcp, Some(&q)) else {
-                        out.error = Some((t, format!("line {l}: the pose is out of the arm's reach")));
-                        break;
-                    };
-                    q = qk;
-                }
-                if out.error.is_some() {
+                // The chain ends here: its blends checked, every target solved, then executed.
+                check_blends(&arm.at, &chain)?;
+                if !arm.line_moves(&chain)? {
                     break;
                 }
-                let mut moves_: Vec<BlendMove> = chain.iter().map(|(_, m)| *m).collect();
-                if let Some(last) = moves_.last_mut() {
-                    last.blend_m = 0.0;
-                }
-                let samples = if moves_.len() == 1 {
-                    let m = moves_[0];
-                    ramped_line_motion(&at, &m.pose, m.v_m_s, m.a_m_s2, t)
-                } else {
-                    blended_line_motion(&at, &moves_, t)
-                };
-                push(&mut out, samples, chain[0].0)?;
-                at = moves_.last().map_or(at, |m| m.pose);
-                t = out.samples.last().map_or(t, |s| s.t_s);
-                out.joints.push((t, q));
                 chain.clear();
             }
             ReadMove::PathBuffer { .. } => return Err(format!("line {line}: not URScript")),
         }
     }
-    Ok(out)
+    Ok(arm.out)
+}
+
+/// A speed or acceleration `v` of the move on `line` in the controller's range `(0, max]`.
+fn in_range(line: usize, what: &str, v: f64, max: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 && v <= max {
+        Ok(())
+    } else {
+        Err(format!("line {line}: {what} {v} is outside (0, {max}]"))
+    }
+}
+
+/// UR's rule (the script manual, movej/movel): a blend region must not overlap the blend of the
+/// waypoint before or after it; neither may it reach past the move's start (maobi's stricter
+/// rule, at most half of either move, implies it). `at`: where the chain starts. (1 nm of slack
+/// for the printed digits.)
+fn check_blends(at: &Pose, chain: &[(usize, BlendMove)]) -> Result<(), String> {
+    let mut lens = Vec::with_capacity(chain.len());
+    let mut from = *at;
+    for (_, bm) in chain {
+        lens.push((nalgebra::Vector3::from(bm.pose.position()) - nalgebra::Vector3::from(from.position())).norm());
+        from = bm.pose;
+    }
+    let n = chain.len();
+    let r = |k: usize| if k + 1 < n { chain[k].1.blend_m } else { 0.0 };
+    for k in 0..n {
+        let before = if k == 0 { 0.0 } else { r(k - 1) };
+        let overlaps = r(k) + before > lens[k] + BLEND_SLACK_M;
+        if overlaps {
+            return Err(format!(
+                "line {}: blend radius {} m and the one before ({} m) overlap on a move of {} m (UR skips such a move with 'Overlapping Blends')",
+                chain[k].0,
+                r(k),
+                before,
+                lens[k]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The stand-in arm as a program moves it: its joints, TCP pose and clock, and the path so far.
+struct Arm<'a> {
+    dh: &'a DhParams,
+    q: [f64; 6],
+    at: Pose,
+    t: f64,
+    out: Compiled,
+}
+
+impl Arm<'_> {
+    /// A joint move to `target` (joints, or with `pose` a UR pose solved near the current
+    /// joints) at joint speed `v` and acceleration `a`. `Ok(false)`: the pose is out of reach,
+    /// the program stops there (the runtime error recorded).
+    fn joint_move(&mut self, line: usize, target: [f64; 6], pose: bool, a: f64, v: f64) -> Result<bool, String> {
+        let tcp = self.out.tcp;
+        let to = if pose { self.dh.inverse(&pose_from_ur(&target), &tcp, Some(&self.q)) } else { Some(target) };
+        let Some(to) = to else {
+            self.out.error = Some((self.t, format!("line {line}: movej: the pose is out of the arm's reach")));
+            return Ok(false);
+        };
+        let samples = ramped_joint_motion(self.dh, &self.q, &to, v, a, &tcp, self.t);
+        push(&mut self.out, samples, line)?;
+        self.q = to;
+        self.at = Pose::from_iso(&self.dh.forward(&self.q, &tcp));
+        self.ended();
+        Ok(true)
+    }
+
+    /// A chain of line and process moves (`(line, move)`, the last one's blend ignored): every
+    /// target solved, then one straight or blended motion. `Ok(false)`: a target is out of
+    /// reach, the program stops there (the runtime error recorded).
+    fn line_moves(&mut self, chain: &[(usize, BlendMove)]) -> Result<bool, String> {
+        for (l, bm) in chain {
+            let Some(qk) = self.dh.inverse(&bm.pose, &self.out.tcp, Some(&self.q)) else {
+                self.out.error = Some((self.t, format!("line {l}: the pose is out of the arm's reach")));
+                return Ok(false);
+            };
+            self.q = qk;
+        }
+        let mut moves: Vec<BlendMove> = chain.iter().map(|(_, m)| *m).collect();
+        if let Some(last) = moves.last_mut() {
+            last.blend_m = 0.0;
+        }
+        let samples = if moves.len() == 1 {
+            let m = moves[0];
+            ramped_line_motion(&self.at, &m.pose, m.v_m_s, m.a_m_s2, self.t)
+        } else {
+            blended_line_motion(&self.at, &moves, self.t)
+        };
+        push(&mut self.out, samples, chain[0].0)?;
+        self.at = moves.last().map_or(self.at, |m| m.pose);
+        self.ended();
+        Ok(true)
+    }
+
+    /// A move ended: the clock at its last sample, the joints recorded there.
+    fn ended(&mut self) {
+        self.t = self.out.samples.last().map_or(self.t, |s| s.t_s);
+        self.out.joints.push((self.t, self.q));
+    }
 }
 
 /// Appends a move's samples, refusing a program whose path grows beyond

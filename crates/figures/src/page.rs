@@ -4,13 +4,14 @@
 //! plays comes from the pipeline ([`pipeline::run_sheet`], [`pipeline::run_footprints`]); this
 //! module only lays it out. `maobi preview` and `maobi write` write it.
 
-use anyhow::Result;
 use brush_model::{BrushProfile, Track};
-use pipeline::{Grid, RunSample, SheetTrack};
+use pipeline::{ExecutedRun, Grid, RunSample, SheetTrack};
 use robot_io::PaperFrame;
 use robot_io::RobotConfig;
 use robot_io::level_frame_in_front;
-use serde_json::json;
+use serde::Serialize;
+
+use crate::Result;
 
 /// What the preview shows.
 pub struct PreviewInput<'a> {
@@ -30,8 +31,14 @@ pub struct PreviewInput<'a> {
     pub track: Track,
 }
 
-/// The preview of a sheet track (what `maobi write` writes beside the sheet).
-pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+/// The preview of a sheet track (what `maobi write` writes beside the sheet); `ran`: the run
+/// of the same program already made, if any ([`preview_html`]).
+pub fn sheet_preview(
+    t: &SheetTrack,
+    frame: Option<&PaperFrame>,
+    cfg: Option<&RobotConfig>,
+    ran: Option<&ExecutedRun>,
+) -> Result<String> {
     let input = PreviewInput {
         title: t.char.clone(),
         sheet_mm: t.sheet_mm,
@@ -41,7 +48,7 @@ pub fn sheet_preview(t: &SheetTrack, frame: Option<&PaperFrame>, cfg: Option<&Ro
         brush: &t.brush,
         track: Track { strokes: t.strokes.clone() },
     };
-    preview_html(&input, frame, cfg)
+    preview_html(&input, frame, cfg, ran)
 }
 
 /// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
@@ -81,10 +88,38 @@ fn r2(v: f64) -> f64 {
 /// ([`pipeline::run_sheet`]); the footprints come from the forward model over the executed path,
 /// each at the time the brush reaches it ([`pipeline::run_footprints`]). A refused program is
 /// previewed from the planned track (timed at the write speed) with the refusal as the verdict.
+/// `ran`: a run already made ([`pipeline::run_sheet_with`]: played only when it is the run of
+/// the program built here, as `maobi write` keeps it for one character).
 ///
 /// # Errors
-/// When the brush profile refuses the track's presses.
-pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: Option<&RobotConfig>) -> Result<String> {
+/// When the page's data cannot be written as JSON.
+///
+/// # Examples
+/// ```
+/// use brush_model::{BrushProfile, Stroke, Track, TrackPoint};
+///
+/// let pen1 = BrushProfile::builtin("pen1")?;
+/// // A 20 mm stroke pressed 12 mm across an 80 mm sheet.
+/// let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+/// let input = figures::PreviewInput {
+///     title: "一".into(),
+///     sheet_mm: [80.0, 80.0],
+///     grid: pipeline::Grid::None,
+///     boxes: vec![[10.0, 10.0, 60.0]],
+///     stroke_chars: None,
+///     brush: &pen1,
+///     track: Track { strokes: vec![Stroke { points: (0..=20).map(|i| p(30.0 + f64::from(i))).collect() }] },
+/// };
+/// let page = figures::preview_html(&input, None, None, None)?;
+/// assert!(page.starts_with("<!DOCTYPE html>") && page.contains("safe (on a level sheet"));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn preview_html(
+    input: &PreviewInput<'_>,
+    paper: Option<&PaperFrame>,
+    cfg: Option<&RobotConfig>,
+    ran: Option<&ExecutedRun>,
+) -> Result<String> {
     let default_cfg = RobotConfig::default();
     let cfg = cfg.unwrap_or(&default_cfg);
     let level = level_frame(input.sheet_mm);
@@ -93,24 +128,22 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     // Checked and timed as `robot check` does it (the nominal i5, the simulator's arm) and
     // played as `robot send` sends it: the timeline's pressed time is the timing's. A timing
     // beyond a limit is a refusal like the check's.
-    let (samples, verdict, safe, dips, strokes_s) =
-        match pipeline::run_sheet(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg) {
+    let (samples, footprints, verdict, safe, dips, strokes_s) =
+        match pipeline::run_sheet_with(&input.track, input.stroke_chars.as_deref(), input.brush, frame, cfg, ran) {
             Ok(run) => {
                 let v = verdict(&run, cfg, where_);
                 let spans = run.strokes_s.iter().map(|s| [r2(s[0]), r2(s[1])]).collect();
-                (run.samples, v, true, run.report.dips, spans)
+                (run.samples, run.footprints, v, true, run.report.dips, spans)
             }
             // The planned track, pen-down paths at the write speed, a second of travel between.
-            Err(e) => (
-                pipeline::planned_samples(&input.track, cfg.write_speed_m_s),
-                format!("refused ({where_}): {e}"),
-                false,
-                0,
-                Vec::new(),
-            ),
+            Err(e) => {
+                let samples = pipeline::planned_samples(&input.track, cfg.write_speed_m_s);
+                let footprints = pipeline::run_footprints(&samples, input.brush, frame);
+                (samples, footprints, format!("refused ({where_}): {e}"), false, 0, Vec::new())
+            }
         };
     let mut feet: Vec<f64> = Vec::new();
-    for f in pipeline::run_footprints(&samples, input.brush, frame) {
+    for f in footprints {
         feet.push(r2(f.t_s));
         for p in f.outline {
             feet.push(r2(p.x_mm));
@@ -119,25 +152,44 @@ pub fn preview_html(input: &PreviewInput<'_>, paper: Option<&PaperFrame>, cfg: O
     }
     let path = path_data(&samples);
     let dip_spans = dip_spans(&samples);
-    let data = json!({
-        "title": input.title,
-        "sheet_mm": input.sheet_mm,
-        "grid": input.grid,
-        "boxes": input.boxes,
-        "verdict": verdict,
-        "safe": safe,
-        "dips": dips,
-        "dip_spans": dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect::<Vec<_>>(),
-        "strokes_s": strokes_s,
-        "duration_s": samples.last().map_or(0.0, |s| s.t_s),
-        "path": path,
-        "feet": feet,
-        "brush": input.brush.name,
-    });
+    let data = PageData {
+        boxes: &input.boxes,
+        brush: &input.brush.name,
+        dip_spans: dip_spans.iter().map(|d| [r2(d[0]), r2(d[1])]).collect(),
+        dips,
+        duration_s: samples.last().map_or(0.0, |s| s.t_s),
+        feet,
+        grid: input.grid,
+        path,
+        safe,
+        sheet_mm: input.sheet_mm,
+        strokes_s,
+        title: &input.title,
+        verdict,
+    };
     // No `<` at all inside the inline JSON (`\u003c` is the same string to JSON): `</script`
     // would end the element and `<!--` would change how the browser reads the rest of it.
     let data = serde_json::to_string(&data)?.replace('<', "\\u003c");
     Ok(fill(TEMPLATE, &html_escape(&input.title), &data))
+}
+
+/// The data the page's script plays, written straight to JSON (its keys in the order the page
+/// has always had them: sorted).
+#[derive(Serialize)]
+struct PageData<'a> {
+    boxes: &'a [[f64; 3]],
+    brush: &'a str,
+    dip_spans: Vec<[f64; 2]>,
+    dips: usize,
+    duration_s: f64,
+    feet: Vec<f64>,
+    grid: Grid,
+    path: Vec<f64>,
+    safe: bool,
+    sheet_mm: [f64; 2],
+    strokes_s: Vec<[f64; 2]>,
+    title: &'a str,
+    verdict: String,
 }
 
 /// The template with its two placeholders filled in one pass, so that text put in for one can
@@ -219,4 +271,58 @@ fn dip_spans(samples: &[RunSample]) -> Vec<[f64; 2]> {
     dip_spans
 }
 
-const TEMPLATE: &str = include_str!("cmd/preview.html");
+const TEMPLATE: &str = include_str!("preview.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use brush_model::{Stroke, TrackPoint};
+
+    /// The JSON between the page's data element tags.
+    fn data_of(page: &str) -> serde_json::Value {
+        let start = page.find(r#"id="data">"#).unwrap() + r#"id="data">"#.len();
+        let end = start + page[start..].find("</script>").unwrap();
+        serde_json::from_str(&page[start..end]).unwrap()
+    }
+
+    fn input<'a>(brush: &'a BrushProfile, title: &str, h_mm: f64) -> PreviewInput<'a> {
+        let p = |x: f64| TrackPoint { x_mm: x, y_mm: 40.0, h_mm, alpha_rad: 0.0, beta_rad: 0.0 };
+        PreviewInput {
+            title: title.into(),
+            sheet_mm: [80.0, 80.0],
+            grid: Grid::None,
+            boxes: vec![[10.0, 10.0, 60.0]],
+            stroke_chars: Some(vec![0]),
+            brush,
+            track: Track { strokes: vec![Stroke { points: (0..=20).map(|i| p(30.0 + f64::from(i))).collect() }] },
+        }
+    }
+
+    #[test]
+    fn the_page_plays_the_run_with_its_footprints_and_escapes_the_title() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let page = preview_html(&input(&pen1, "</script><b>", 12.0), None, None, None).unwrap();
+        // The title is text in the head and a string in the data, never markup.
+        assert!(page.contains("maobi preview: &lt;/script&gt;&lt;b&gt;"));
+        let data = data_of(&page);
+        assert_eq!(data["title"], "</script><b>");
+        assert_eq!(data["safe"], true);
+        assert!(data["verdict"].as_str().unwrap().starts_with("safe (on a level sheet in front of the AUBO-i5)"));
+        // Every footprint is a time and six points; the path is seven numbers a sample.
+        let feet = data["feet"].as_array().unwrap();
+        assert!(!feet.is_empty() && feet.len() % 13 == 0);
+        assert_eq!(data["path"].as_array().unwrap().len() % 7, 0);
+        assert_eq!(data["strokes_s"].as_array().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_refused_program_is_previewed_from_its_plan_with_the_refusal() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        // 500 mm of press: far beyond what the robot check lets through.
+        let page = preview_html(&input(&pen1, "deep", 500.0), None, None, None).unwrap();
+        let data = data_of(&page);
+        assert_eq!(data["safe"], false);
+        assert!(data["verdict"].as_str().unwrap().starts_with("refused"));
+        assert!(!data["path"].as_array().unwrap().is_empty());
+    }
+}

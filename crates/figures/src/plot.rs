@@ -3,9 +3,10 @@
 
 use std::sync::Once;
 
-use anyhow::{Result, anyhow};
 use brush_model::{BrushProfile, Measurement};
 use plotters::prelude::*;
+
+use crate::{FigureError, Result};
 
 static FONT: &[u8] = include_bytes!("../data/DejaVuSans-subset.ttf");
 
@@ -18,7 +19,7 @@ fn register_font() {
 }
 
 fn to_png(rgb: Vec<u8>, w: u32, h: u32) -> Result<Vec<u8>> {
-    let img = image::RgbImage::from_raw(w, h, rgb).ok_or_else(|| anyhow!("plot buffer has the wrong size"))?;
+    let img = image::RgbImage::from_raw(w, h, rgb).ok_or(FigureError::Size { width: w, height: h })?;
     let mut out = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)?;
     Ok(out)
@@ -42,7 +43,7 @@ pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Ve
     let mut buf = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        root.fill(&WHITE).map_err(FigureError::draw)?;
         let cells = root.split_evenly((3, 2));
         let n = rows.len().max(1) as f64;
         let mean_h = rows.iter().map(|m| m.press.h_mm).sum::<f64>() / n;
@@ -78,17 +79,17 @@ pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Ve
                     .x_label_area_size(35)
                     .y_label_area_size(50)
                     .build_cartesian_2d((x0 - px)..(x1 + px), (y0 - py)..(y1 + py))
-                    .map_err(|e| anyhow!("{e}"))?;
+                    .map_err(FigureError::draw)?;
                 chart
                     .configure_mesh()
                     .x_desc(xlabel)
                     .y_desc(*label)
                     .label_style(("sans-serif", 14))
                     .draw()
-                    .map_err(|e| anyhow!("{e}"))?;
+                    .map_err(FigureError::draw)?;
                 chart
                     .draw_series(xs.iter().zip(&ys).map(|(&x, &y)| Circle::new((x, y), 3, BLUE.mix(0.6).filled())))
-                    .map_err(|e| anyhow!("{e}"))?;
+                    .map_err(FigureError::draw)?;
                 let line: Vec<(f64, f64)> = (0..=40)
                     .map(|i| {
                         let x = x0 + (x1 - x0) * i as f64 / 40.0;
@@ -100,10 +101,10 @@ pub fn regression_png(rows: &[Measurement], profile: &BrushProfile) -> Result<Ve
                         (x, y)
                     })
                     .collect();
-                chart.draw_series(LineSeries::new(line, RED.stroke_width(2))).map_err(|e| anyhow!("{e}"))?;
+                chart.draw_series(LineSeries::new(line, RED.stroke_width(2))).map_err(FigureError::draw)?;
             }
         }
-        root.present().map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(FigureError::draw)?;
     }
     to_png(buf, w, h)
 }
@@ -118,7 +119,7 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
     let mut buf = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        root.fill(&WHITE).map_err(FigureError::draw)?;
         let all: Vec<(f64, f64)> = series.iter().flat_map(|s| s.1.iter().copied()).filter(|p| p.1 > 0.0).collect();
         let x1 = all.iter().map(|p| p.0).fold(1.0, f64::max);
         let y0 = all.iter().map(|p| p.1).fold(f64::INFINITY, f64::min).max(1e-8);
@@ -129,19 +130,19 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
             .x_label_area_size(40)
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..x1, (y0..y1).log_scale())
-            .map_err(|e| anyhow!("{e}"))?;
+            .map_err(FigureError::draw)?;
         chart
             .configure_mesh()
             .x_desc("step")
             .y_desc("MSE")
             .label_style(("sans-serif", 14))
             .draw()
-            .map_err(|e| anyhow!("{e}"))?;
+            .map_err(FigureError::draw)?;
         for (i, (name, pts)) in series.iter().enumerate() {
             let colour = Palette99::pick(i).to_rgba();
             chart
                 .draw_series(LineSeries::new(pts.iter().copied().filter(|p| p.1 > 0.0), colour.stroke_width(2)))
-                .map_err(|e| anyhow!("{e}"))?
+                .map_err(FigureError::draw)?
                 .label(*name)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
@@ -151,8 +152,8 @@ pub fn loss_png(series: &[(&str, Vec<(f64, f64)>)]) -> Result<Vec<u8>> {
             .border_style(BLACK)
             .label_font(("sans-serif", 14))
             .draw()
-            .map_err(|e| anyhow!("{e}"))?;
-        root.present().map_err(|e| anyhow!("{e}"))?;
+            .map_err(FigureError::draw)?;
+        root.present().map_err(FigureError::draw)?;
     }
     to_png(buf, w, h)
 }
@@ -207,7 +208,7 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
     let mut buf = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        root.fill(&WHITE).map_err(FigureError::draw)?;
         let root = root
             .titled(
                 &format!(
@@ -222,7 +223,7 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
                 ),
                 ("sans-serif", 20),
             )
-            .map_err(|e| anyhow!("{e}"))?;
+            .map_err(FigureError::draw)?;
         let cells = root.split_evenly((1, outlines.len()));
         for (cell, (name, polys)) in cells.iter().zip(&outlines) {
             // y runs down the page, as on the paper.
@@ -232,7 +233,7 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
                 .x_label_area_size(35)
                 .y_label_area_size(45)
                 .build_cartesian_2d(x0..x1, y1..y0)
-                .map_err(|e| anyhow!("{e}"))?;
+                .map_err(FigureError::draw)?;
             chart
                 .configure_mesh()
                 .x_desc("x (mm)")
@@ -241,12 +242,12 @@ pub fn models_png(profile: &BrushProfile, press: &brush_model::Press) -> Result<
                 .y_labels(5)
                 .label_style(("sans-serif", 13))
                 .draw()
-                .map_err(|e| anyhow!("{e}"))?;
+                .map_err(FigureError::draw)?;
             chart
                 .draw_series(polys.iter().map(|p| Polygon::new(p.clone(), BLACK.filled())))
-                .map_err(|e| anyhow!("{e}"))?;
+                .map_err(FigureError::draw)?;
         }
-        root.present().map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(FigureError::draw)?;
     }
     to_png(buf, w, h)
 }
@@ -267,7 +268,7 @@ fn draw_lines(
 ) -> Result<()> {
     for (i, (text, colour)) in lines.iter().enumerate() {
         let style = ("sans-serif", px).into_font().color(colour);
-        root.draw(&Text::new(*text, (x, y + i as i32 * (px as i32 + 2)), style)).map_err(|e| anyhow!("{e}"))?;
+        root.draw(&Text::new(*text, (x, y + i as i32 * (px as i32 + 2)), style)).map_err(FigureError::draw)?;
     }
     Ok(())
 }
@@ -278,34 +279,50 @@ fn draw_lines(
 /// # Errors
 /// When drawing or encoding fails.
 pub fn labelled_row_png(panels: &[(&str, &bezier_raster::Coverage)]) -> Result<Vec<u8>> {
+    let rgb: Vec<(&str, image::RgbImage)> = panels
+        .iter()
+        .map(|(label, c)| {
+            let gray = c.to_gray8();
+            let rgb = gray.iter().flat_map(|&v| [v, v, v]).collect();
+            let img = image::RgbImage::from_raw(c.width(), c.height(), rgb)
+                .ok_or(FigureError::Size { width: c.width(), height: c.height() })?;
+            Ok((*label, img))
+        })
+        .collect::<Result<_>>()?;
+    let panels: Vec<(&str, &image::RgbImage)> = rgb.iter().map(|(l, img)| (*l, img)).collect();
+    labelled_row_rgb_png(&panels)
+}
+
+/// [`labelled_row_png`] of colour panels (each label above its panel, 4 px white gaps).
+///
+/// # Errors
+/// When drawing or encoding fails.
+pub fn labelled_row_rgb_png(panels: &[(&str, &image::RgbImage)]) -> Result<Vec<u8>> {
     register_font();
     let gap = 4u32;
-    let img_h = panels.iter().map(|(_, c)| c.height()).max().unwrap_or(0);
-    let px = panels.iter().map(|(_, c)| label_px(c.width())).min().unwrap_or(9);
+    let img_h = panels.iter().map(|(_, p)| p.height()).max().unwrap_or(0);
+    let px = panels.iter().map(|(_, p)| label_px(p.width())).min().unwrap_or(9);
     let strip = px + 8;
-    let w = panels.iter().map(|(_, c)| c.width()).sum::<u32>() + gap * panels.len().saturating_sub(1) as u32;
+    let w = panels.iter().map(|(_, p)| p.width()).sum::<u32>() + gap * panels.len().saturating_sub(1) as u32;
     let h = strip + img_h;
     let mut buf = vec![255u8; (w * h * 3) as usize];
     let mut x0 = 0u32;
-    for (_, c) in panels {
-        let g = c.to_gray8();
-        for y in 0..c.height() {
-            for x in 0..c.width() {
-                let v = g[(y * c.width() + x) as usize];
-                let o = (((strip + y) * w + x0 + x) * 3) as usize;
-                buf[o..o + 3].copy_from_slice(&[v, v, v]);
-            }
+    for (_, p) in panels {
+        let row = (p.width() * 3) as usize;
+        for (y, src) in p.as_raw().chunks_exact(row).enumerate() {
+            let o = (((strip + y as u32) * w + x0) * 3) as usize;
+            buf[o..o + row].copy_from_slice(src);
         }
-        x0 += c.width() + gap;
+        x0 += p.width() + gap;
     }
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         let mut x0 = 0i32;
-        for (label, c) in panels {
+        for (label, p) in panels {
             draw_lines(&root, &[(label, BLACK)], x0 + 4, 3, px)?;
-            x0 += (c.width() + gap) as i32;
+            x0 += (p.width() + gap) as i32;
         }
-        root.present().map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(FigureError::draw)?;
     }
     to_png(buf, w, h)
 }
@@ -333,7 +350,63 @@ pub fn overlay_legend_png(reference: &bezier_raster::Coverage, render: &bezier_r
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         draw_lines(&root, &lines, 4, img_h as i32 + 4, px)?;
-        root.present().map_err(|e| anyhow!("{e}"))?;
+        root.present().map_err(FigureError::draw)?;
     }
     to_png(buf, w, h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bezier_raster::Coverage;
+
+    fn bar(w: u32, h: u32) -> Coverage {
+        let mut c = Coverage::new(w, h);
+        for (i, v) in c.data_mut().iter_mut().enumerate() {
+            *v = if (i as u32 % w) < w / 2 { 1.0 } else { 0.0 };
+        }
+        c
+    }
+
+    #[test]
+    fn a_labelled_row_of_coverages_is_the_row_of_their_gray_pictures() {
+        let (a, b) = (bar(64, 48), Coverage::new(32, 48));
+        let png = labelled_row_png(&[("a", &a), ("b", &b)]).unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        // 64 + 4 + 32 px wide; a strip for the labels above the 48 px panels.
+        assert_eq!(img.width(), 100);
+        let strip = img.height() - 48;
+        assert_eq!(strip, label_px(32) + 8);
+        // Ink is black, paper white, the gap white; the label strip has dark text on white.
+        assert_eq!(img.get_pixel(0, strip).0, [0, 0, 0]);
+        assert_eq!(img.get_pixel(63, strip).0, [255, 255, 255]);
+        assert_eq!(img.get_pixel(65, strip + 10).0, [255, 255, 255]);
+        assert!((0..100).any(|x| (0..strip).any(|y| img.get_pixel(x, y).0[0] < 128)));
+        let gray = |c: &Coverage| {
+            let rgb = c.to_gray8().iter().flat_map(|&v| [v, v, v]).collect();
+            image::RgbImage::from_raw(c.width(), c.height(), rgb).unwrap()
+        };
+        assert_eq!(png, labelled_row_rgb_png(&[("a", &gray(&a)), ("b", &gray(&b))]).unwrap());
+    }
+
+    #[test]
+    fn bad_inputs_are_named_errors() {
+        let e = overlay_legend_png(&bar(32, 32), &bar(16, 32)).unwrap_err();
+        assert!(matches!(e, FigureError::Raster(_)), "{e}");
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let deep = brush_model::Press { h_mm: 500.0, alpha_rad: 0.0, beta_rad: 0.0 };
+        let e = models_png(&pen1, &deep).unwrap_err();
+        assert!(matches!(e, FigureError::Profile(_)), "{e}");
+    }
+
+    #[test]
+    fn the_plots_are_pngs_of_their_sizes() {
+        let curve = vec![(0.0, 1.0), (1.0, 0.5), (2.0, 0.25)];
+        let img = image::load_from_memory(&loss_png(&[("total", curve)]).unwrap()).unwrap();
+        assert!(img.width() > 100 && img.height() > 100);
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let press = brush_model::Press { h_mm: 12.0, alpha_rad: 0.0, beta_rad: 0.0 };
+        let img = image::load_from_memory(&models_png(&pen1, &press).unwrap()).unwrap();
+        assert!(img.width() > 100 && img.height() > 100);
+    }
 }
