@@ -63,6 +63,29 @@ impl DatasetSpec {
         Ok(Sample { index, press, footprint, anchor_px: self.canvas.anchor_px(&footprint, press.beta_rad) })
     }
 
+    /// The header of a dataset's `labels.csv`: `file`, brush-model's measurement columns
+    /// (angles in degrees), the scale and the footprint's origin in pixels; with its line end.
+    pub fn labels_header() -> String {
+        format!("file,{},px_per_mm,anchor_u,anchor_v\n", brush_model::MEASUREMENT_COLUMNS)
+    }
+
+    /// The `labels.csv` row of `sample` saved as `file` (under [`DatasetSpec::labels_header`],
+    /// every number with all its digits), with its line end.
+    ///
+    /// # Examples
+    /// ```
+    /// use bezier_raster::DatasetSpec;
+    /// let spec = DatasetSpec::new(brush_model::BrushProfile::builtin("pen1")?, 64, 3);
+    /// let row = spec.label_row("fp_000000.png", &spec.sample(0)?);
+    /// assert_eq!(row.trim_end().split(',').count(), DatasetSpec::labels_header().trim_end().split(',').count());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn label_row(&self, file: &str, sample: &Sample) -> String {
+        let m = brush_model::Measurement { press: sample.press, footprint: sample.footprint };
+        let fields = brush_model::measurement_fields(&m, None);
+        format!("{file},{fields},{},{},{}\n", self.canvas.px_per_mm, sample.anchor_px[0], sample.anchor_px[1])
+    }
+
     /// Renders a sample with `model` into `out` (which must be `size × size`).
     pub fn render(&self, sample: &Sample, model: &dyn StrokeModel, raster: &mut Rasterizer, out: &mut Coverage) {
         let anchor = self.canvas.anchor_mm(&sample.footprint, sample.press.beta_rad);

@@ -55,7 +55,7 @@ pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Reci
 pub use eval::{HELD_OUT_SEED, evaluate};
 pub use model::{Generator, config_path};
 pub use net::Tape;
-pub use train::{TrainOptions, TrainPoint, TrainReport, train};
+pub use train::{SCHEDULE, TrainOptions, TrainPoint, TrainReport, checkpoint_path, train};
 pub use vjp::InputVjp;
 
 /// What the benchmarks and speed examples measure beside the generator, not part of the API a

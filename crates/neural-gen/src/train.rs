@@ -1,6 +1,6 @@
 //! Training on footprints rendered on the fly by bezier-raster.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use bezier_raster::{Bsm, Coverage, DatasetSpec, Rasterizer, StrokeCanvas};
@@ -17,7 +17,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::model::Generator;
-use crate::{ConfigError, NeuralGenError};
+use crate::{ConfigError, Metrics, NeuralGenError, Recipe};
+use stroke_metrics::Summary;
 
 #[cfg(any(test, feature = "bench"))]
 fn cerr(e: candle_core::Error) -> NeuralGenError {
@@ -79,6 +80,68 @@ pub struct TrainReport {
     pub wall_seconds: f64,
     /// Time spent rendering training data, s.
     pub data_seconds: f64,
+}
+
+/// The learning-rate schedule [`train`] follows, as a [`Recipe`] records it.
+pub const SCHEDULE: &str = "linear warm-up over 5% of the steps, cosine decay to 5%";
+
+impl TrainReport {
+    /// The recipe of this run of [`train`] with `opts` (the steps actually run, the MSE loss,
+    /// [`SCHEDULE`], the wall time and rayon's thread count), for [`GeneratorConfig::recipe`](crate::GeneratorConfig).
+    pub fn recipe(&self, opts: &TrainOptions) -> Recipe {
+        Recipe {
+            steps: self.steps_run,
+            batch: opts.batch,
+            lr: opts.lr,
+            seed: opts.seed,
+            loss: "mse".into(),
+            schedule: SCHEDULE.into(),
+            wall_seconds: self.wall_seconds,
+            threads: rayon::current_num_threads(),
+        }
+    }
+
+    /// The held-out metrics of the trained generator: [`crate::evaluate`]'s CSIM and SSIM over
+    /// `n` presses, with this run's best validation MSE.
+    pub fn metrics(&self, n: usize, csim: &Summary, ssim: &Summary) -> Metrics {
+        Metrics { n, ssim_mean: ssim.mean, ssim_worst: ssim.worst, csim_mean: csim.mean, val_mse: self.best_val_mse }
+    }
+
+    /// The loss curve as CSV: `step,train_mse,val_mse,lr`, one row per step, `val_mse` empty
+    /// where the step was not validated.
+    ///
+    /// # Examples
+    /// ```
+    /// use neural_gen::{TrainPoint, TrainReport};
+    /// let point = |step, val_mse| TrainPoint { step, train_mse: 0.5, val_mse, lr: 0.001 };
+    /// let report = TrainReport {
+    ///     history: vec![point(1, None), point(2, Some(0.25))],
+    ///     best_val_mse: 0.25, best_step: 2, steps_run: 2, stopped_early: false, wall_seconds: 1.0, data_seconds: 0.1,
+    /// };
+    /// assert_eq!(report.loss_csv(), "step,train_mse,val_mse,lr\n1,0.5,,0.001\n2,0.5,0.25,0.001\n");
+    /// ```
+    pub fn loss_csv(&self) -> String {
+        let mut csv = String::from("step,train_mse,val_mse,lr\n");
+        for p in &self.history {
+            let val = p.val_mse.map_or(String::new(), |v| v.to_string());
+            csv.push_str(&format!("{},{},{val},{}\n", p.step, p.train_mse, p.lr));
+        }
+        csv
+    }
+}
+
+/// Where [`train`]'s checkpoints of a run that will save to `output` go (set
+/// [`TrainOptions::checkpoint`] to it): `NAME.checkpoint.safetensors` beside it (its config at
+/// [`config_path`](crate::config_path) of that).
+///
+/// # Examples
+/// ```
+/// use std::path::Path;
+/// assert_eq!(neural_gen::checkpoint_path(Path::new("out/pen2.safetensors")), Path::new("out/pen2.checkpoint.safetensors"));
+/// ```
+pub fn checkpoint_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
+    output.with_file_name(format!("{stem}.checkpoint.safetensors"))
 }
 
 /// The fixed validation grid: h at 6 levels, α at 4, β at 2 (48 presses), inside the ranges.
@@ -303,4 +366,31 @@ pub fn train(
         wall_seconds: t0.elapsed().as_secs_f64(),
         data_seconds,
     })
+}
+
+#[cfg(test)]
+mod record_tests {
+    use super::*;
+
+    #[test]
+    fn the_recipe_and_metrics_record_the_run_as_it_went() {
+        let point = |step, val_mse| TrainPoint { step, train_mse: 0.5, val_mse, lr: 0.002 };
+        let report = TrainReport {
+            history: vec![point(1, None), point(2, Some(0.125))],
+            best_val_mse: 0.125,
+            best_step: 2,
+            steps_run: 2,
+            stopped_early: true,
+            wall_seconds: 3.5,
+            data_seconds: 0.5,
+        };
+        let opts = TrainOptions { steps: 10, batch: 8, lr: 0.002, seed: 9, ..TrainOptions::default() };
+        let r = report.recipe(&opts);
+        assert_eq!((r.steps, r.batch, r.lr, r.seed), (2, 8, 0.002, 9), "the steps run, not asked");
+        assert_eq!((r.loss.as_str(), r.schedule.as_str(), r.wall_seconds), ("mse", SCHEDULE, 3.5));
+        let csim = Summary { count: 40, best: 0.99, worst: 0.9, mean: 0.95 };
+        let ssim = Summary { count: 40, best: 0.98, worst: 0.8, mean: 0.9 };
+        let m = report.metrics(40, &csim, &ssim);
+        assert_eq!((m.n, m.ssim_mean, m.ssim_worst, m.csim_mean, m.val_mse), (40, 0.9, 0.8, 0.95, 0.125));
+    }
 }

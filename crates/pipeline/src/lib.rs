@@ -26,12 +26,14 @@
 //! ```
 
 mod brush_choice;
+mod calibration_photo;
 mod calibration_sheet;
 mod closed_loop;
 mod error;
 mod glyphs;
 mod marks;
 mod means;
+mod model_scores;
 mod next_attempt;
 mod observation;
 mod placement;
@@ -40,12 +42,16 @@ mod readback;
 mod registration;
 mod sheet;
 mod sheet_file;
+mod sheet_folder;
 mod sheet_run;
 mod text;
 pub mod tuning;
 mod write;
 
 pub use brush_choice::{BrushChoice, builtin_brushes, choose_brush};
+pub use calibration_photo::{
+    LeftOut, MAX_CELL_MM, MAX_LAYOUT_BYTES, MAX_PRESSES, PressReading, SheetReading, read_calibration_sheet,
+};
 pub use calibration_sheet::{
     CALIBRATION_LAYOUT_VERSION, CalibrationLayout, CalibrationPress, CalibrationSheet, CalibrationSheetError,
     calibration_sheet, calibration_sheet_image, press_stroke,
@@ -58,6 +64,7 @@ pub use error::{Error, Result};
 pub use glyphs::{GlyphInput, prepare_loaded};
 pub use marks::{Mark, MarkError, MarkRole, mark_strokes, registration_marks};
 pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
+pub use model_scores::{ModelScores, ModelTarget, ReferenceError, load_reference_photos, score_models};
 pub use next_attempt::{
     MAX_ROUNDS, MAX_SHEET_SUMMARY_BYTES, MIN_OBSERVED_INK_SHARE, NextAttempt, NextOptions, ObservedRun,
     ObservedRunError, Round, RoundChar, same_brush,
@@ -75,6 +82,7 @@ pub use sheet::{
     layout_on_sheet, parse_sheet, sheet_image, sheet_image_of, sheet_image_with_marks,
 };
 pub use sheet_file::{MAX_SHEET_CHARS, MAX_SHEET_TRACK_BYTES, SHEET_MAX_CHAR_MM, SHEET_MIN_CHAR_MM};
+pub use sheet_folder::{PlannedChar, SheetFolder, SheetFolderError, plan_csim_mean};
 pub use sheet_run::{
     RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet, run_sheet_with,
 };

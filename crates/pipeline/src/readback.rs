@@ -52,6 +52,28 @@ pub enum ReadBackError {
         /// What was found and what was expected.
         expected: String,
     },
+    /// A file of another kind, or of a version this build does not read.
+    #[error("{} is a `{kind}` layout of version {version}; expected a {expected} layout of version {expected_version}", path.display())]
+    Kind {
+        /// The file.
+        path: PathBuf,
+        /// The kind it says it is.
+        kind: String,
+        /// Its version.
+        version: u32,
+        /// The kind expected.
+        expected: &'static str,
+        /// The version this build reads.
+        expected_version: u32,
+    },
+    /// A list that must hold something is empty.
+    #[error("{} lists no {what}", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// What it lists none of.
+        what: &'static str,
+    },
     /// The sheet's brush profile is invalid (the same validation as `--brush`).
     #[error("{}", path.display())]
     Profile {

@@ -23,10 +23,16 @@ pub use crate::calibration_sheet::{
     PRESS_TOUCH_FRACTION,
 };
 
+// Which presses of a calibration sheet's photo are used.
+pub use crate::calibration_photo::{MAX_PRESS_ROOT_MM, MAX_PRESS_TURN_RAD, MIN_MEASURED_SHARE};
+
 // The registration marks.
 pub use crate::marks::{
     MARK_CLEARANCE_MM, MARK_DEPTH_FRACTION, MARK_GAP_MM, MARK_MARGIN_MM, MARK_SPACING_MM, MARK_TRAVEL_MM,
 };
+
+// Whether a photo is of the sheet it is observed against.
+pub use crate::sheet_folder::MIN_PLAN_CSIM;
 
 // The closed loop's brush correction.
 pub use crate::closed_loop::{

@@ -4,7 +4,9 @@
 //! `(h, α, β)` leaves strokes; each photo is normalised ([`load_ink`]: scale from metadata,
 //! background flattened, Otsu threshold, the one ink blob) and a B-BSM footprint is fitted to it
 //! ([`fit_footprint`]: moments and principal axis to start, Nelder–Mead on the soft IoU to refine, both
-//! ends tried as the root). [`synthetic_photo`] makes synthetic stroke photos from known footprints.
+//! ends tried as the root). [`read_labels`] reads the presses a folder of photos was made with,
+//! [`fit_overlay`] draws a fit over its photo, and [`synthetic_photo`] makes synthetic stroke
+//! photos from known footprints.
 //!
 //! The measurements then go to `brush_model::fit` as usual.
 
@@ -21,9 +23,13 @@ pub use brush_model;
 struct ReadmeDoctests;
 
 mod fit;
+mod labels;
+mod overlay;
 mod photo;
 mod synth;
 
 pub use fit::{StrokeFit, fit_footprint};
+pub use labels::{LabelsError, MAX_LABELS_BYTES, MAX_LABELS_ROWS, StrokeLabel, read_labels};
+pub use overlay::fit_overlay;
 pub use photo::{InkMask, PhotoError, load_ink, mask_from_gray, scale_from_metadata};
 pub use synth::{Degradation, png_with_scale, synthetic_photo};

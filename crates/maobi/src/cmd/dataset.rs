@@ -75,10 +75,7 @@ pub fn run(args: Args) -> Result<()> {
         std::fs::File::create(&labels_path).with_context(|| format!("cannot write {}", labels_path.display()))?,
     );
     let write_err = || format!("cannot write {}", labels_path.display());
-    labels
-        .write_all(format!("file,{},px_per_mm,anchor_u,anchor_v\n", brush_model::MEASUREMENT_COLUMNS).as_bytes())
-        .and_then(|()| labels.flush())
-        .with_context(write_err)?;
+    labels.write_all(DatasetSpec::labels_header().as_bytes()).and_then(|()| labels.flush()).with_context(write_err)?;
     crate::common::stop_on_interrupt();
     let digits = (args.n - 1).to_string().len().max(6);
     let file_name = |i: u64| format!("fp_{i:0digits$}.png");
@@ -171,11 +168,7 @@ fn render_chunk(
                 }
                 write_atomic(&dir.join(&file), &img.encode_png()?)?;
                 pb.inc(1);
-                let fields = brush_model::measurement_fields(
-                    &brush_model::Measurement { press: s.press, footprint: s.footprint },
-                    None,
-                );
-                Ok(Some(format!("{file},{fields},{},{},{}\n", spec.canvas.px_per_mm, s.anchor_px[0], s.anchor_px[1])))
+                Ok(Some(spec.label_row(&file, &s)))
             },
         )
         .collect()

@@ -5,10 +5,11 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::Result;
-use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
-use rayon::prelude::*;
+use bezier_raster::{DatasetSpec, ModelKind, StrokeCanvas};
+use brush_model::Extrapolation;
+use pipeline::{ModelTarget, score_models};
 use serde_json::json;
-use stroke_metrics::{SsimWorkspace, Summary, csim};
+use stroke_metrics::Summary;
 
 use crate::common::{check_range, print_json, print_model_table};
 
@@ -40,33 +41,12 @@ pub fn run(args: Args) -> Result<()> {
         canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm),
         seed: neural_gen::HELD_OUT_SEED,
     };
-    let rows: Vec<Vec<(f64, f64)>> = (0..args.n as u64)
-        .into_par_iter()
-        .map_init(
-            || (Rasterizer::new(), Coverage::new(s, s), Coverage::new(s, s), SsimWorkspace::new()),
-            |(r, truth, img, ws), i| {
-                let smp = spec.sample(i).expect("in range");
-                spec.render(&smp, ModelKind::Bsm.model(), r, truth);
-                ModelKind::BASELINES
-                    .iter()
-                    .map(|m| {
-                        spec.render(&smp, m.model(), r, img);
-                        (
-                            csim(truth.as_gray(), img.as_gray()).expect("same size"),
-                            ws.ssim(truth.as_gray(), img.as_gray()).expect("same size"),
-                        )
-                    })
-                    .collect()
-            },
-        )
-        .collect();
+    let targets = ModelTarget::presses(&spec, args.n as u64);
+    let baselines = score_models(&spec.profile, &targets, s, &ModelKind::BASELINES, Extrapolation::Refuse, &|| {})?;
     let mut table: BTreeMap<String, (Summary, Summary)> = BTreeMap::new();
     table.insert("b-bsmg".into(), (gc, gs));
-    for (k, m) in ModelKind::BASELINES.iter().enumerate() {
-        table.insert(
-            m.name().into(),
-            (Summary::of(rows.iter().map(|r| r[k].0)), Summary::of(rows.iter().map(|r| r[k].1))),
-        );
+    for (name, m) in baselines {
+        table.insert(name.into(), (m.csim, m.ssim));
     }
     if args.json {
         let models: BTreeMap<_, _> =

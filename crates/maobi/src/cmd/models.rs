@@ -2,18 +2,15 @@
 //! against real stroke photos.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use bezier_raster::{Coverage, DatasetSpec, ModelKind, Rasterizer, StrokeCanvas};
+use bezier_raster::{DatasetSpec, ModelKind};
 use brush_model::{Extrapolation, Press};
-use rayon::prelude::*;
+use pipeline::{ModelScores, ModelTarget, load_reference_photos, score_models};
 use serde::Serialize;
-use stroke_metrics::{SsimWorkspace, Summary, csim};
 
-use crate::common::{
-    BrushArg, check_range, load_brush, load_image, print_json, print_model_table, progress, read_stroke_labels,
-};
+use crate::common::{BrushArg, check_range, load_brush, print_json, print_model_table, progress};
 
 /// Arguments of `maobi models`.
 #[derive(clap::Args, Debug)]
@@ -46,15 +43,6 @@ pub struct Args {
     force: bool,
 }
 
-/// CSIM and SSIM summaries of one model.
-#[derive(Serialize, Debug, Clone, Copy)]
-pub struct ModelScores {
-    /// Cosine similarity over the set.
-    pub csim: Summary,
-    /// Structural similarity over the set.
-    pub ssim: Summary,
-}
-
 #[derive(Serialize)]
 struct Report {
     reference: String,
@@ -62,13 +50,6 @@ struct Report {
     brush: String,
     size: u32,
     models: BTreeMap<&'static str, ModelScores>,
-}
-
-/// One comparison target: the press and, for photos, the image.
-struct Target {
-    press: Press,
-    photo: Option<Coverage>,
-    px_per_mm: f64,
 }
 
 /// Runs the command.
@@ -93,55 +74,17 @@ pub fn run(args: Args) -> Result<()> {
     let (targets, size, models, reference) = match &args.reference {
         None => {
             let spec = DatasetSpec::new(profile.clone(), args.size, args.seed);
-            let t = (0..args.n)
-                .map(|i| Target { press: spec.press(i), photo: None, px_per_mm: spec.canvas.px_per_mm })
-                .collect();
-            (t, args.size, ModelKind::BASELINES.to_vec(), "bsm".to_string())
+            (ModelTarget::presses(&spec, args.n), args.size, ModelKind::BASELINES.to_vec(), "bsm".to_string())
         }
         Some(dir) => {
-            let (t, size) = load_reference(dir, &profile)?;
+            let (t, size) = load_reference_photos(dir, &profile)?;
             (t, size, ModelKind::ALL.to_vec(), format!("photos:{}", dir.display()))
         }
     };
     let pb = progress(targets.len() as u64, "models");
     let ex = if args.reference.is_some() { Extrapolation::Allow } else { Extrapolation::Refuse };
-    // Per target: (csim, ssim) for each model.
-    let scores: Vec<Vec<(f64, f64)>> = targets
-        .par_iter()
-        .map_init(
-            || (Rasterizer::new(), Coverage::new(size, size), Coverage::new(size, size), SsimWorkspace::new()),
-            |(raster, truth, img, ws), t| -> Result<Vec<(f64, f64)>> {
-                let fp = profile.predict(&t.press, ex)?;
-                let canvas = StrokeCanvas::with_scale(size, t.px_per_mm);
-                let anchor = canvas.anchor_mm(&fp, t.press.beta_rad);
-                let truth: &Coverage = match &t.photo {
-                    Some(p) => p,
-                    None => {
-                        raster.render(ModelKind::Bsm.model(), &fp, anchor, t.press.beta_rad, t.px_per_mm, truth);
-                        truth
-                    }
-                };
-                let mut out = Vec::with_capacity(models.len());
-                for m in &models {
-                    raster.render(m.model(), &fp, anchor, t.press.beta_rad, t.px_per_mm, img);
-                    out.push((csim(truth.as_gray(), img.as_gray())?, ws.ssim(truth.as_gray(), img.as_gray())?));
-                }
-                pb.inc(1);
-                Ok(out)
-            },
-        )
-        .collect::<Result<_>>()?;
+    let table = score_models(&profile, &targets, size, &models, ex, &|| pb.inc(1))?;
     pb.finish_and_clear();
-    let mut table = BTreeMap::new();
-    for (k, m) in models.iter().enumerate() {
-        table.insert(
-            m.name(),
-            ModelScores {
-                csim: Summary::of(scores.iter().map(|s| s[k].0)),
-                ssim: Summary::of(scores.iter().map(|s| s[k].1)),
-            },
-        );
-    }
     let report = Report { reference, n: targets.len(), brush: profile.name.clone(), size, models: table };
     if args.json {
         print_json(&report)?;
@@ -158,27 +101,4 @@ pub fn run(args: Args) -> Result<()> {
         }))?;
     }
     Ok(())
-}
-
-fn load_reference(dir: &Path, profile: &brush_model::BrushProfile) -> Result<(Vec<Target>, u32)> {
-    let mut targets = Vec::new();
-    let mut size = None;
-    for l in read_stroke_labels(&dir.join("labels.csv"))? {
-        let file = dir.join(&l.file);
-        let photo = load_image(&file)?;
-        if photo.width() != photo.height() {
-            bail!(
-                "{}: expected a square image registered to the stroke canvas, got {}×{}",
-                file.display(),
-                photo.width(),
-                photo.height()
-            );
-        }
-        if *size.get_or_insert(photo.width()) != photo.width() {
-            bail!("{}: all reference images must have the same size", file.display());
-        }
-        let px_per_mm = l.px_per_mm.unwrap_or_else(|| StrokeCanvas::for_profile(profile, photo.width()).px_per_mm);
-        targets.push(Target { press: l.press, photo: Some(photo), px_per_mm });
-    }
-    Ok((targets, size.expect("at least one row")))
 }

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use neural_gen::{Arch, Generator, GeneratorConfig, Metrics, Recipe, TrainOptions};
+use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 
 use crate::common::{
     BrushArg, OutputLock, StepProgress, TempGuard, check_output_file, check_range, load_brush, output_gate,
@@ -58,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     check_output_file("-o", &args.output, args.force)?;
     check_output_file("-o", &neural_gen::config_path(&args.output), args.force)
         .context("the config beside the weights")?;
-    let checkpoint = checkpoint_path(&args.output);
+    let checkpoint = neural_gen::checkpoint_path(&args.output);
     // The checkpoints are written to these and renamed (neural_gen::Generator::save).
     crate::common::remove_on_interrupt(&checkpoint.with_extension("safetensors.tmp"));
     crate::common::remove_on_interrupt(&neural_gen::config_path(&checkpoint).with_extension("json.tmp"));
@@ -92,7 +92,8 @@ pub fn run(args: Args) -> Result<()> {
     })?;
     progress.finish();
     let (csim, ssim) = neural_gen::evaluate(&g, args.eval_n)?;
-    record(&mut g, &args, &report, &csim, &ssim);
+    g.config.recipe = Some(report.recipe(&opts));
+    g.config.metrics = Some(report.metrics(args.eval_n, &csim, &ssim));
     let dir = install_outputs(&g, &args.output, &report)?;
     for p in [checkpoint.clone(), neural_gen::config_path(&checkpoint)] {
         let _ = std::fs::remove_file(p);
@@ -158,39 +159,6 @@ fn start_generator(args: &Args, profile: brush_model::BrushProfile) -> Result<Ge
     })
 }
 
-/// Writes the recipe and the held-out metrics into the generator's config.
-fn record(
-    g: &mut Generator,
-    args: &Args,
-    report: &neural_gen::TrainReport,
-    csim: &stroke_metrics::Summary,
-    ssim: &stroke_metrics::Summary,
-) {
-    g.config.recipe = Some(Recipe {
-        steps: report.steps_run,
-        batch: args.batch,
-        lr: args.lr,
-        seed: args.seed,
-        loss: "mse".into(),
-        schedule: "linear warm-up over 5% of the steps, cosine decay to 5%".into(),
-        wall_seconds: report.wall_seconds,
-        threads: rayon::current_num_threads(),
-    });
-    g.config.metrics = Some(Metrics {
-        n: args.eval_n,
-        ssim_mean: ssim.mean,
-        ssim_worst: ssim.worst,
-        csim_mean: csim.mean,
-        val_mse: report.best_val_mse,
-    });
-}
-
-/// Where the checkpoints of a run writing `output` go: `NAME.checkpoint.safetensors` beside it.
-pub fn checkpoint_path(output: &Path) -> PathBuf {
-    let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
-    output.with_file_name(format!("{stem}.checkpoint.safetensors"))
-}
-
 /// Writes the weights, their config, `loss.csv` and `loss.png` beside one another: each first to
 /// a hidden temporary file (`.NAME.maobi-partial-PID…`) so that a failure (a full disk) changes
 /// none of the outputs, then all renamed into place, with Ctrl-C held off until the last rename.
@@ -218,16 +186,7 @@ fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainRepor
     let result = (|| -> Result<()> {
         let _gate = output_gate();
         g.save(&staged)?;
-        let mut csv = String::from("step,train_mse,val_mse,lr\n");
-        for p in &report.history {
-            csv.push_str(&format!(
-                "{},{},{},{}\n",
-                p.step,
-                p.train_mse,
-                p.val_mse.map_or(String::new(), |v| v.to_string()),
-                p.lr
-            ));
-        }
+        let csv = report.loss_csv();
         std::fs::write(&staged_csv, csv).with_context(|| format!("cannot write {}", staged_csv.display()))?;
         let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
         let val: Vec<(f64, f64)> =

@@ -1,8 +1,6 @@
 //! Flags shared by several commands.
 
-use std::path::Path;
-
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 
 use brush_model::BrushProfile;
 
@@ -92,67 +90,6 @@ impl PressArgs {
         check_range("--beta", self.beta_deg, -360.0, 360.0, "degrees")?;
         Ok(brush_model::Press::from_degrees(self.h_mm, self.alpha_deg, self.beta_deg))
     }
-}
-
-/// One row of a stroke-photo labels file.
-pub struct StrokeLabel {
-    /// Image file, relative to the labels' folder.
-    pub file: String,
-    /// The press that made the stroke.
-    pub press: brush_model::Press,
-    /// Scale of this photo, when given.
-    pub px_per_mm: Option<f64>,
-}
-
-/// Reads `file,h_mm,alpha_deg,beta_deg[,px_per_mm]` (extra columns ignored); errors name the
-/// file, line and column.
-pub fn read_stroke_labels(path: &Path) -> Result<Vec<StrokeLabel>> {
-    const MAX_BYTES: u64 = 64 << 20;
-    const MAX_ROWS: usize = 100_000;
-    let name = path.display().to_string();
-    let len = std::fs::metadata(path).with_context(|| format!("{name}: cannot read"))?.len();
-    if len > MAX_BYTES {
-        bail!("{name}: {len} bytes; a labels file is at most {MAX_BYTES} bytes");
-    }
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{name}: cannot read"))?;
-    let header = rdr.headers().with_context(|| format!("{name}: cannot read the header"))?.clone();
-    let col = |c: &str| header.iter().position(|h| h == c);
-    let need = |c: &'static str| {
-        col(c).with_context(|| format!("{name}: header has no column `{c}` (need file,h_mm,alpha_deg,beta_deg)"))
-    };
-    let (fi, hi, ai, bi) = (need("file")?, need("h_mm")?, need("alpha_deg")?, need("beta_deg")?);
-    let si = col("px_per_mm");
-    let mut out = Vec::new();
-    for rec in rdr.records() {
-        let rec = rec.with_context(|| format!("{name}: malformed CSV"))?;
-        if out.len() == MAX_ROWS {
-            bail!("{name}: more than {MAX_ROWS} rows");
-        }
-        let line = rec.position().map_or(0, |p| p.line());
-        let num = |i: usize, c: &str| -> Result<f64> {
-            let v = rec.get(i).unwrap_or("");
-            v.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .with_context(|| format!("{name}: line {line}, column `{c}`: expected a number, got {v:?}"))
-        };
-        let px = match si {
-            Some(i) if !rec.get(i).unwrap_or("").is_empty() => Some(num(i, "px_per_mm")?),
-            _ => None,
-        };
-        out.push(StrokeLabel {
-            file: rec.get(fi).unwrap_or("").to_string(),
-            press: brush_model::Press::from_degrees(num(hi, "h_mm")?, num(ai, "alpha_deg")?, num(bi, "beta_deg")?),
-            px_per_mm: px,
-        });
-    }
-    if out.is_empty() {
-        anyhow::bail!("{name}: no rows");
-    }
-    Ok(out)
 }
 
 /// `--renderer analytic|neural` and `--generator` of `maobi write`.

@@ -4,16 +4,16 @@
 use std::path::Path;
 
 use anyhow::Result;
-use brush_model::{Footprint, Measurement};
+use brush_model::Measurement;
 use rayon::prelude::*;
 
-use crate::common::{fit_photo, progress, read_stroke_labels, write_atomic};
+use crate::common::{fit_photo, progress, write_atomic};
 
 /// Fits every photo listed in the labels (in parallel, with a progress bar), lists and drops
 /// the poor fits, writes `measurements.csv` beside `profile_out`, and returns the measurements.
 pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Path) -> Result<Vec<Measurement>> {
     let labels_path = labels.map(Path::to_path_buf).unwrap_or_else(|| dir.join("labels.csv"));
-    let labels = read_stroke_labels(&labels_path)?;
+    let labels = stroke_fit::read_labels(&labels_path)?;
     let pb = progress(labels.len() as u64, "fitting");
     let results: Vec<(usize, Result<stroke_fit::StrokeFit>)> = labels
         .par_iter()
@@ -38,29 +38,17 @@ pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Pa
     if !failed.is_empty() {
         eprintln!("left out {} photo(s) that could not be fitted: {}", failed.len(), failed.join("; "));
     }
-    let mut csv = String::from("file,h_mm,alpha_deg,beta_deg,lt_mm,lh_mm,lr_mm,iou\n");
+    let mut csv = format!("file,{},iou\n", brush_model::MEASUREMENT_COLUMNS);
     let mut rows = Vec::new();
     let mut poor = Vec::new();
     for (i, f) in &fits {
         let l = &labels[*i];
-        csv.push_str(&format!(
-            "{},{},{},{},{:.4},{:.4},{:.4},{:.4}\n",
-            l.file,
-            l.press.h_mm,
-            l.press.alpha_rad.to_degrees(),
-            l.press.beta_rad.to_degrees(),
-            f.lt_mm,
-            f.lh_mm,
-            f.lr_mm,
-            f.iou
-        ));
+        let m = Measurement { press: l.press, footprint: f.footprint() };
+        csv.push_str(&format!("{},{},{:.4}\n", l.file, brush_model::measurement_fields(&m, Some(4)), f.iou));
         if f.iou < min_iou {
             poor.push(format!("{} (IoU {:.3})", l.file, f.iou));
         } else {
-            rows.push(Measurement {
-                press: l.press,
-                footprint: Footprint { lt_mm: f.lt_mm, lh_mm: f.lh_mm, lr_mm: f.lr_mm },
-            });
+            rows.push(m);
         }
     }
     write_atomic(&profile_out.with_file_name("measurements.csv"), csv.as_bytes())?;
