@@ -6,15 +6,9 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Writes `bytes` to `path` through a temporary file beside it and a rename, creating the
-/// folder; a reader never sees half a file.
+/// folder; a reader never sees half a file (`safe_output::write_atomic`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-    }
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, bytes).with_context(|| tmp.display().to_string())?;
-    std::fs::rename(&tmp, path).with_context(|| path.display().to_string())?;
-    Ok(())
+    Ok(safe_output::write_atomic(path, bytes)?)
 }
 
 /// A bar over `len` characters labelled `what`.

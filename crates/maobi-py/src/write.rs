@@ -21,19 +21,15 @@ const MAX_WRITE_PIXELS: u64 = 1 << 28;
 /// The most strokes of a `Track` made from Python (a sheet of 100 characters has about 1,500).
 const MAX_STROKES: usize = 100_000;
 
-/// Writes `bytes` to `path` through a temporary file beside it, renamed into place.
+/// Writes `bytes` to `path` through a temporary file beside it, renamed into place
+/// (`safe_output::write_atomic`: the folder is created, a symlink is written through, a folder
+/// or a special file is refused). Errors say `writing PATH: ` and why.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> PyResult<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let io = |e: std::io::Error| lib_err(&format!("writing {}", path.display()), e);
-    std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
+    let context = format!("writing {}", path.display());
+    safe_output::write_atomic(path, bytes).map_err(|e| match e {
+        // The operating system's error after the path already said.
+        safe_output::Error::Io { source, .. } => lib_err(&context, source),
+        e => lib_err(&context, e),
     })
 }
 

@@ -86,6 +86,9 @@ pub enum NeuralGenError {
         #[source]
         source: std::io::Error,
     },
+    /// A file could not be written (the error names it; nothing was half-written).
+    #[error(transparent)]
+    Write(#[from] safe_output::Error),
     /// The weights could not be saved.
     #[error("{}: cannot save the weights", path.display())]
     Save {

@@ -321,31 +321,20 @@ impl Generator {
     }
 
     /// Saves the weights (`path`, safetensors) and the config (`path` with extension `.json`),
-    /// each written to a temporary file first and renamed.
+    /// each written whole to a temporary file first and renamed (`safe_output::write_atomic`:
+    /// the folder is created, a symlink is written through).
     ///
     /// # Errors
-    /// [`NeuralGenError::Io`].
+    /// [`NeuralGenError::Save`] (the weights cannot be serialised), [`NeuralGenError::Write`].
     pub fn save(&self, path: &Path) -> Result<(), NeuralGenError> {
-        let io = |p: &Path, context: &'static str| {
-            let path = p.to_path_buf();
-            move |source| NeuralGenError::Io { path, context, source }
+        let weights = {
+            let data = self.varmap.data().lock().expect("varmap");
+            safetensors::tensor::serialize(data.iter().map(|(k, v)| (k, v.as_tensor())), None)
+                .map_err(|e| NeuralGenError::Save { path: path.to_path_buf(), source: e.into() })?
         };
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(io(dir, "cannot create the folder"))?;
-        }
-        let tmp = path.with_extension("safetensors.tmp");
-        self.varmap.save(&tmp).map_err(|source| NeuralGenError::Save { path: tmp.clone(), source })?;
-        std::fs::rename(&tmp, path).map_err(io(path, "cannot rename the temporary file onto it"))?;
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            let _ = std::fs::set_permissions(path, std::fs::Permissions::from_mode(0o644));
-        }
-        let cfg = config_path(path);
-        let tmp = cfg.with_extension("json.tmp");
-        std::fs::write(&tmp, serde_json::to_string_pretty(&self.config).expect("serialises"))
-            .map_err(io(&tmp, "cannot write"))?;
-        std::fs::rename(&tmp, &cfg).map_err(io(&cfg, "cannot rename the temporary file onto it"))?;
+        safe_output::write_atomic(path, &weights)?;
+        let config = serde_json::to_string_pretty(&self.config).expect("serialises");
+        safe_output::write_atomic(&config_path(path), config.as_bytes())?;
         Ok(())
     }
 
@@ -485,4 +474,28 @@ fn build(config: &GeneratorConfig, vb: &VarBuilder<'_>) -> candle_core::Result<(
         })
         .collect::<candle_core::Result<_>>()?;
     Ok((fcs, convs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Arch;
+
+    #[test]
+    fn saved_weights_are_the_bytes_candle_writes() {
+        let profile = brush_model::BrushProfile::builtin("pen1").unwrap();
+        let g = Generator::new(GeneratorConfig::new(profile, Arch::tiny_32()), 3).unwrap();
+        let dir = std::env::temp_dir().join(format!("neural-gen-save-{}", std::process::id()));
+        g.save(&dir.join("g.safetensors")).unwrap();
+        g.varmap.save(dir.join("candle.safetensors")).unwrap();
+        assert_eq!(
+            std::fs::read(dir.join("g.safetensors")).unwrap(),
+            std::fs::read(dir.join("candle.safetensors")).unwrap()
+        );
+        let config: GeneratorConfig = serde_json::from_slice(&std::fs::read(dir.join("g.json")).unwrap()).unwrap();
+        assert_eq!(config.arch, g.config.arch);
+        // Nothing else is left in the folder (no temporary file).
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
