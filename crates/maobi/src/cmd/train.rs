@@ -59,9 +59,6 @@ pub fn run(args: Args) -> Result<()> {
     check_output_file("-o", &neural_gen::config_path(&args.output), args.force)
         .context("the config beside the weights")?;
     let checkpoint = neural_gen::checkpoint_path(&args.output);
-    // The checkpoints are written to these and renamed (neural_gen::Generator::save).
-    crate::common::remove_on_interrupt(&checkpoint.with_extension("safetensors.tmp"));
-    crate::common::remove_on_interrupt(&neural_gen::config_path(&checkpoint).with_extension("json.tmp"));
     let profile = load_brush(&args.brush.brush)?;
     let mut g = start_generator(&args, profile)?;
     let a = &g.config.arch;
@@ -173,14 +170,7 @@ fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainRepor
     let staged_csv = dir.join(format!(".loss.csv.maobi-partial-{pid}"));
     let staged_png = dir.join(format!(".loss.png.maobi-partial-{pid}"));
     // Removed on Ctrl-C while they live; removed below on any error (a rename moves them away).
-    let temps = [
-        staged.clone(),
-        staged.with_extension("safetensors.tmp"),
-        staged_cfg.clone(),
-        staged_cfg.with_extension("json.tmp"),
-        staged_csv.clone(),
-        staged_png.clone(),
-    ];
+    let temps = [staged.clone(), staged_cfg.clone(), staged_csv.clone(), staged_png.clone()];
     let _guards: Vec<TempGuard> = temps.iter().map(|p| TempGuard::new(p)).collect();
     let signals = signal_count();
     let result = (|| -> Result<()> {
