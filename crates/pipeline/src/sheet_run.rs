@@ -260,8 +260,8 @@ mod tests {
         let fresh = run(None);
         let played = run(Some(kept));
         assert_eq!(
-            (&played.samples, &played.strokes_s, &played.timing),
-            (&fresh.samples, &fresh.strokes_s, &fresh.timing)
+            (&played.samples, &played.strokes_s, &played.timing, &played.footprints),
+            (&fresh.samples, &fresh.strokes_s, &fresh.timing, &fresh.footprints)
         );
         assert_eq!(played.report, fresh.report);
         // Played, not run again: a run whose clock goes at half speed shows.
