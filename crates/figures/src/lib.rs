@@ -1,6 +1,7 @@
 //! # figures
 //!
-//! The pictures maobi's results come as, beside their JSON: labelled rows of images
+//! The pictures maobi's results come as, beside their JSON: a written character's pictures
+//! ([`char_pictures`]), labelled rows of images
 //! ([`labelled_row_png`]), a render over its glyph with a legend ([`overlay_legend_png`]), the
 //! calibration's regression plot ([`regression_png`]), loss curves ([`loss_png`]), every stroke
 //! model's outline of one press ([`models_png`]), and the preview page of a robot program
@@ -15,10 +16,12 @@
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
+mod char;
 mod error;
 mod page;
 mod plot;
 
+pub use char::char_pictures;
 pub use error::FigureError;
 pub use page::{PreviewInput, preview_html, sheet_preview};
 pub use plot::{labelled_row_png, labelled_row_rgb_png, loss_png, models_png, overlay_legend_png, regression_png};

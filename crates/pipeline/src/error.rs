@@ -100,9 +100,29 @@ pub enum Error {
     #[cfg(feature = "generator")]
     #[error(transparent)]
     Generator(#[from] neural_gen::NeuralGenError),
+    /// A folder of character images ([`crate::image_folder`]) could not be read or holds no
+    /// usable image (`path`: the folder, or the file whose name is not one character).
+    #[error("{}: {what}", path.display())]
+    ImageFolder {
+        /// The folder or file.
+        path: PathBuf,
+        /// What was wrong or expected.
+        what: &'static str,
+        /// The I/O error, when reading failed.
+        #[source]
+        source: Option<std::io::Error>,
+    },
     /// A sheet could not be understood or laid out.
     #[error(transparent)]
     Sheet(#[from] crate::sheet::SheetError),
+}
+
+impl Error {
+    /// Whether the glyph source does not cover the character (a font or folder without it),
+    /// as opposed to a source that could not be read.
+    pub fn is_uncovered(&self) -> bool {
+        matches!(self, Error::Glyph(GlyphError::Unknown { .. }))
+    }
 }
 
 /// The pipeline's result.

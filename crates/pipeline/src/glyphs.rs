@@ -68,6 +68,49 @@ impl GlyphInput {
     }
 }
 
+/// The character images of a folder, for [`GlyphInput::Images`]: files `<char>.png`, `.jpg` or
+/// `.jpeg` (any case), each named after its one character, sorted by character (the first of
+/// two files for one character kept); other files are passed over.
+///
+/// # Errors
+/// [`Error::ImageFolder`] when the folder cannot be read, an image's name is not one
+/// character, or there is no image.
+///
+/// # Examples
+/// ```no_run
+/// # fn main() -> Result<(), pipeline::Error> {
+/// let images = pipeline::image_folder(std::path::Path::new("scans"))?;
+/// let input = pipeline::GlyphInput::Images(images, None);
+/// let p = input.prepare('永', None)?;
+/// println!("{} strokes", p.paths.len());
+/// # Ok(())
+/// # }
+/// ```
+pub fn image_folder(dir: &Path) -> Result<Vec<(char, PathBuf)>> {
+    let fail = |path: &Path, what, source| Error::ImageFolder { path: path.to_path_buf(), what, source };
+    let entries = std::fs::read_dir(dir).map_err(|e| fail(dir, "cannot read the folder", Some(e)))?;
+    let mut out = Vec::new();
+    for e in entries {
+        let path = e.map_err(|e| fail(dir, "cannot list the folder", Some(e)))?.path();
+        let ext = path.extension().and_then(|x| x.to_str()).map(str::to_ascii_lowercase);
+        if !matches!(ext.as_deref(), Some("png" | "jpg" | "jpeg")) {
+            continue;
+        }
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        let mut cs = stem.chars();
+        match (cs.next(), cs.next()) {
+            (Some(c), None) => out.push((c, path)),
+            _ => return Err(fail(&path, "expected an image named after its one character (e.g. 永.png)", None)),
+        }
+    }
+    out.sort();
+    out.dedup_by(|a, b| a.0 == b.0);
+    if out.is_empty() {
+        return Err(fail(dir, "no <char>.png, .jpg or .jpeg files", None));
+    }
+    Ok(out)
+}
+
 /// Finds the centre lines of a loaded glyph and its template (see [`prepare_with_template`]),
 /// refusing a glyph that gave no strokes and a registration where most template strokes found
 /// no ink (the glyph is then not this character, or not legible: writing the template where
@@ -89,4 +132,27 @@ pub fn prepare_loaded(loaded: (Glyph, Option<Glyph>), method: Option<Method>) ->
         return Err(Error::NoStrokes { ch: p.glyph.ch, image, missing: missing.filter(|_| mostly_missing) });
     }
     Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_folder_lists_one_character_images_and_refuses_others() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["永.png", "十.JPG", "notes.txt", "口.jpeg"] {
+            std::fs::write(dir.path().join(name), b"").unwrap();
+        }
+        let found: String = image_folder(dir.path()).unwrap().iter().map(|(c, _)| *c).collect();
+        assert_eq!(found, "十口永");
+        std::fs::write(dir.path().join("永字.png"), b"").unwrap();
+        let e = image_folder(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("永字.png") && e.contains("named after its one character"), "{e}");
+        let empty = tempfile::tempdir().unwrap();
+        let e = image_folder(empty.path()).unwrap_err().to_string();
+        assert!(e.contains("no <char>.png"), "{e}");
+        let e = image_folder(&empty.path().join("missing")).unwrap_err();
+        assert!(e.to_string().contains("cannot read the folder") && std::error::Error::source(&e).is_some());
+    }
 }

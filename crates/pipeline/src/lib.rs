@@ -44,6 +44,7 @@ mod sheet;
 mod sheet_file;
 mod sheet_folder;
 mod sheet_run;
+mod summary;
 mod text;
 pub mod tuning;
 mod write;
@@ -61,9 +62,9 @@ pub use closed_loop::{
     ilc_target, predict_attempt, refine_observed,
 };
 pub use error::{Error, Result};
-pub use glyphs::{GlyphInput, prepare_loaded};
+pub use glyphs::{GlyphInput, image_folder, prepare_loaded};
 pub use marks::{Mark, MarkError, MarkRole, mark_strokes, registration_marks};
-pub use means::{RefineMeans, ReportMeans, SimilarityMeans};
+pub use means::{RefineMeans, ReportMeans, SimilarityMeans, methods_used};
 pub use model_scores::{ModelScores, ModelTarget, ReferenceError, load_reference_photos, score_models};
 pub use next_attempt::{
     MAX_ROUNDS, MAX_SHEET_SUMMARY_BYTES, MIN_OBSERVED_INK_SHARE, NextAttempt, NextOptions, ObservedRun,
@@ -86,6 +87,7 @@ pub use sheet_folder::{PlannedChar, SheetFolder, SheetFolderError, plan_csim_mea
 pub use sheet_run::{
     RunSample, SheetRun, TimedFootprint, planned_samples, render_trace, run_footprints, run_sheet, run_sheet_with,
 };
+pub use summary::{Agreement, Figures, SheetSummary, TextSummary};
 pub use text::{TextOptions, WrittenText, write_text, write_text_each};
 pub use track_refine::RefineOptions;
 #[cfg(feature = "generator")]

@@ -1,7 +1,7 @@
 //! Means over character reports: the one computation behind `maobi evaluate`'s summary,
 //! `maobi write`'s summary.json and the character and refinement gates.
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 
 use crate::write::{CharReport, Similarity};
 
@@ -39,7 +39,11 @@ impl SimilarityMeans {
 }
 
 /// Means and counts over character reports ([`ReportMeans::of`]).
-#[derive(Clone, Debug, Serialize, PartialEq)]
+///
+/// Serialises as `maobi evaluate --json`'s `summary` (docs/outputs.md): `count`, the plan's
+/// `csim`, `ssim` and `iou`, `chamfer_pct`, `strokes_match_fraction`, `millis_mean`,
+/// `executed` and `agreement` (with `csim_min`), `free_widths`, and `refine` when there is one.
+#[derive(Clone, Debug, PartialEq)]
 pub struct ReportMeans {
     /// Reports.
     pub count: usize,
@@ -63,7 +67,10 @@ pub struct ReportMeans {
 }
 
 /// Means over the refinement reports ([`crate::RefineReport`]).
-#[derive(Clone, Debug, Serialize, PartialEq)]
+///
+/// Serialises as `maobi evaluate --json`'s `summary.refine`: the counts, the four figures
+/// (`csim`, `ssim`, `iou` each) and the times.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RefineMeans {
     /// Refined reports.
     pub count: usize,
@@ -140,6 +147,15 @@ impl ReportMeans {
     }
 }
 
+/// The centre-line methods `reports` used: one name, or the names in order joined by `+` when
+/// they differ (`"medians"`, `"medians+template"`).
+pub fn methods_used(reports: &[CharReport]) -> String {
+    let mut names: Vec<&str> = reports.iter().map(|r| r.method).collect();
+    names.sort_unstable();
+    names.dedup();
+    names.join("+")
+}
+
 impl RefineMeans {
     /// The means over `reports`, `None` when there are none.
     pub fn of<'a>(reports: impl IntoIterator<Item = &'a crate::RefineReport>) -> Option<Self> {
@@ -160,5 +176,153 @@ impl RefineMeans {
             millis_mean: ms.iter().sum::<f64>() / ms.len() as f64,
             millis_max: ms.iter().copied().fold(0.0, f64::max),
         })
+    }
+}
+
+/// A figure's three means, as the summaries print them.
+#[derive(Serialize)]
+struct Means3 {
+    csim: f64,
+    ssim: f64,
+    iou: f64,
+}
+
+/// A figure's three means and its worst CSIM.
+#[derive(Serialize)]
+struct Means4 {
+    csim: f64,
+    ssim: f64,
+    iou: f64,
+    csim_min: f64,
+}
+
+impl From<SimilarityMeans> for Means3 {
+    fn from(s: SimilarityMeans) -> Self {
+        Means3 { csim: s.csim, ssim: s.ssim, iou: s.iou }
+    }
+}
+
+impl From<SimilarityMeans> for Means4 {
+    fn from(s: SimilarityMeans) -> Self {
+        Means4 { csim: s.csim, ssim: s.ssim, iou: s.iou, csim_min: s.csim_min }
+    }
+}
+
+impl Serialize for ReportMeans {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Summary<'a> {
+            count: usize,
+            csim: f64,
+            ssim: f64,
+            iou: f64,
+            chamfer_pct: Option<f64>,
+            strokes_match_fraction: Option<f64>,
+            millis_mean: f64,
+            executed: Option<Means4>,
+            agreement: Option<Means4>,
+            free_widths: Option<Means3>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            refine: Option<&'a RefineMeans>,
+        }
+        Summary {
+            count: self.count,
+            csim: self.plan.csim,
+            ssim: self.plan.ssim,
+            iou: self.plan.iou,
+            chamfer_pct: self.chamfer_pct,
+            strokes_match_fraction: self.strokes_match_fraction,
+            millis_mean: self.plan_millis,
+            executed: self.executed.map(Means4::from),
+            agreement: self.agreement.map(Means4::from),
+            free_widths: self.free_widths.map(Means3::from),
+            refine: self.refine.as_ref(),
+        }
+        .serialize(s)
+    }
+}
+
+impl Serialize for RefineMeans {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Summary {
+            count: usize,
+            rejected: usize,
+            executed_before: Option<Means3>,
+            executed_after: Option<Means3>,
+            planned_before: Means3,
+            planned_after: Means3,
+            millis_mean: f64,
+            millis_max: f64,
+        }
+        Summary {
+            count: self.count,
+            rejected: self.rejected,
+            executed_before: self.executed_before.map(Means3::from),
+            executed_after: self.executed_after.map(Means3::from),
+            planned_before: self.planned_before.into(),
+            planned_after: self.planned_after.into(),
+            millis_mean: self.millis_mean,
+            millis_max: self.millis_max,
+        }
+        .serialize(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn means(csim: f64) -> SimilarityMeans {
+        SimilarityMeans { count: 2, csim, ssim: 0.5, iou: 0.25, csim_min: csim - 0.1 }
+    }
+
+    #[test]
+    fn the_means_serialise_as_evaluates_summary() {
+        let mut m = ReportMeans {
+            count: 2,
+            plan: means(0.9),
+            chamfer_pct: None,
+            strokes_match_fraction: Some(1.0),
+            plan_millis: 12.0,
+            executed: Some(means(0.8)),
+            agreement: None,
+            free_widths: Some(means(0.7)),
+            refine: None,
+        };
+        let v = serde_json::to_value(&m).unwrap();
+        let keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
+        let want = [
+            "agreement",
+            "chamfer_pct",
+            "count",
+            "csim",
+            "executed",
+            "free_widths",
+            "iou",
+            "millis_mean",
+            "ssim",
+            "strokes_match_fraction",
+        ];
+        assert_eq!(keys, want);
+        assert_eq!(v["csim"], 0.9);
+        assert_eq!(v["millis_mean"], 12.0);
+        assert_eq!(v["executed"]["csim_min"].as_f64(), Some(0.8 - 0.1));
+        assert!(v["free_widths"].get("csim_min").is_none() && v["agreement"].is_null());
+        m.refine = Some(RefineMeans {
+            count: 2,
+            rejected: 1,
+            executed_before: None,
+            executed_after: Some(means(0.85)),
+            planned_before: means(0.9),
+            planned_after: means(0.95),
+            executed_csim_gain: None,
+            millis_mean: 30.0,
+            millis_max: 40.0,
+        });
+        let rf = &serde_json::to_value(&m).unwrap()["refine"];
+        assert_eq!(rf["rejected"], 1);
+        assert_eq!(rf["planned_after"]["csim"], 0.95);
+        assert!(rf["executed_before"].is_null() && rf.get("executed_csim_gain").is_none());
     }
 }

@@ -2,12 +2,10 @@
 
 use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
-use pipeline::{
-    BoxRule, CharReport, GlyphInput, RefineMeans, ReportMeans, SimilarityMeans, WriteOptions, write_placed,
-};
+use pipeline::{BoxRule, CharReport, GlyphInput, ReportMeans, WriteOptions, write_placed};
 use rayon::prelude::*;
 use serde_json::json;
-use trajectory::{GlyphError, Method, embedded_chars};
+use trajectory::{Method, embedded_chars};
 
 use crate::common::{BrushArg, check_range, load_brush, parse_method, parse_model, print_json, progress};
 use crate::common::{MAX_CHAR_MM, MIN_CHAR_MM, PlacementArg, RefineArgs, glyph_input, prepare_char};
@@ -121,26 +119,25 @@ pub fn run(args: Args) -> Result<()> {
     }
     pb.finish_and_clear();
     let means = ReportMeans::of(&reports);
-    let mut summary = summary_json(&means);
-    if !args.font.is_empty() {
-        summary["uncovered"] = json!({"count": uncovered.chars().count(), "chars": uncovered});
-    }
-    if let Some(r) = &means.refine {
-        summary["refine"] = refine_json(r);
-    }
+    let uncovered = (!args.font.is_empty()).then_some(uncovered.as_str());
     if args.json {
+        let mut summary = serde_json::to_value(&means)?;
+        if let Some(u) = uncovered {
+            summary["uncovered"] = json!({"count": u.chars().count(), "chars": u});
+        }
+        let method = pipeline::methods_used(&reports);
         print_json(
-            &json!({"method": method_name(&reports), "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
+            &json!({"method": method, "model": args.model.name(), "brush": profile.name, "summary": summary, "chars": reports}),
         )?;
     } else {
         crate::outln!(
             "{} characters, {} via {}, brush {} (plan: the track as built; executed: its program as the simulator runs it; scores against the glyph):",
             reports.len(),
             args.model.name(),
-            method_name(&reports),
+            pipeline::methods_used(&reports),
             profile.name
         )?;
-        print_table(&reports, &summary)?;
+        print_table(&reports, &means, uncovered)?;
     }
     Ok(())
 }
@@ -151,9 +148,9 @@ fn column(text: &str) -> String {
     format!("{text}{}", " ".repeat(5usize.saturating_sub(width)))
 }
 
-/// The per-character table, the means last, then what the summary adds (free widths, fonts'
+/// The per-character table, the means last, then what the means add (free widths, fonts'
 /// uncovered characters, refinement).
-fn print_table(reports: &[CharReport], summary: &serde_json::Value) -> Result<()> {
+fn print_table(reports: &[CharReport], m: &ReportMeans, uncovered: Option<&str>) -> Result<()> {
     let f4 = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
     let line = |ch: &str,
                 strokes: String,
@@ -189,140 +186,58 @@ fn print_table(reports: &[CharReport], summary: &serde_json::Value) -> Result<()
         let p = &r.plan;
         let strokes = format!("{}{}", p.strokes_found, p.strokes_expected.map_or(String::new(), |e| format!("/{e}")));
         let ex = r.executed;
+        let ex = [ex.map(|e| e.csim), ex.map(|e| e.ssim), ex.map(|e| e.iou)];
         line(
             &column(&r.char),
             strokes,
             Some(p.csim),
-            [ex.map(|e| e.csim), ex.map(|e| e.ssim), ex.map(|e| e.iou)],
+            ex,
             r.agreement.map(|a| a.csim),
             p.chamfer_pct,
             r.timing_ms.plan,
         )?;
     }
-    let g = |v: &serde_json::Value| v.as_f64();
-    let ex = &summary["executed"];
-    let strokes = summary["strokes_match_fraction"].as_f64().map_or("-".to_string(), |f| format!("{:.0}%", 100.0 * f));
-    line(
-        &column("mean"),
-        strokes,
-        g(&summary["csim"]),
-        [g(&ex["csim"]), g(&ex["ssim"]), g(&ex["iou"])],
-        g(&summary["agreement"]["csim"]),
-        g(&summary["chamfer_pct"]),
-        g(&summary["millis_mean"]).unwrap_or(f64::NAN),
-    )?;
-    if let Some(w) = g(&ex["csim_min"]) {
+    let strokes = m.strokes_match_fraction.map_or("-".to_string(), |f| format!("{:.0}%", 100.0 * f));
+    let ex = m.executed;
+    let ex = [ex.map(|e| e.csim), ex.map(|e| e.ssim), ex.map(|e| e.iou)];
+    line(&column("mean"), strokes, Some(m.plan.csim), ex, m.agreement.map(|a| a.csim), m.chamfer_pct, m.plan_millis)?;
+    if let Some(ex) = m.executed {
         crate::outln!(
-            "worst executed CSIM {w:.4}; plan SSIM {} and IoU {} (means)",
-            f4(g(&summary["ssim"])),
-            f4(g(&summary["iou"]))
+            "worst executed CSIM {:.4}; plan SSIM {:.4} and IoU {:.4} (means)",
+            ex.csim_min,
+            m.plan.ssim,
+            m.plan.iou
         )?;
     }
-    let fw = &summary["free_widths"];
-    if let Some(c) = g(&fw["csim"]) {
-        crate::outln!("plan with footprints sized freely from the glyph (not a bound): CSIM {c:.4} (mean)")?;
+    if let Some(fw) = m.free_widths {
+        crate::outln!("plan with footprints sized freely from the glyph (not a bound): CSIM {:.4} (mean)", fw.csim)?;
     }
-    if let Some(n) = summary["uncovered"]["count"].as_u64().filter(|n| *n > 0) {
-        crate::outln!("not in the font: {n} ({})", summary["uncovered"]["chars"].as_str().unwrap_or(""))?;
+    if let Some(u) = uncovered.filter(|u| !u.is_empty()) {
+        crate::outln!("not in the font: {} ({u})", u.chars().count())?;
     }
-    if let Some(rf) = summary.get("refine") {
+    if let Some(rf) = &m.refine {
         crate::outln!(
             "refined {} ({} rejected): executed CSIM {} → {}, {:.0} ms each on average",
-            rf["count"],
-            rf["rejected"],
-            f4(g(&rf["executed_before"]["csim"])),
-            f4(g(&rf["executed_after"]["csim"])),
-            g(&rf["millis_mean"]).unwrap_or(f64::NAN)
+            rf.count,
+            rf.rejected,
+            f4(rf.executed_before.map(|s| s.csim)),
+            f4(rf.executed_after.map(|s| s.csim)),
+            rf.millis_mean
         )?;
     }
     Ok(())
 }
 
-/// The summary's means and counts over the character reports ([`ReportMeans`]).
-fn summary_json(m: &ReportMeans) -> serde_json::Value {
-    let sim = |s: Option<SimilarityMeans>| {
-        s.map_or(
-            serde_json::Value::Null,
-            |s| json!({"csim": s.csim, "ssim": s.ssim, "iou": s.iou, "csim_min": s.csim_min}),
-        )
-    };
-    let fw = m.free_widths.map_or(serde_json::Value::Null, |u| json!({"csim": u.csim, "ssim": u.ssim, "iou": u.iou}));
-    json!({
-        "count": m.count,
-        "csim": m.plan.csim,
-        "ssim": m.plan.ssim,
-        "iou": m.plan.iou,
-        "chamfer_pct": m.chamfer_pct,
-        "strokes_match_fraction": m.strokes_match_fraction,
-        "millis_mean": m.plan_millis,
-        "executed": sim(m.executed),
-        "agreement": sim(m.agreement),
-        // The plan with footprints sized freely from the glyph (not a bound: see CharReport).
-        "free_widths": fw,
-    })
-}
-
-/// The refinement's before/after means.
-fn refine_json(rf: &RefineMeans) -> serde_json::Value {
-    let sim = |s: Option<SimilarityMeans>| {
-        s.map_or(serde_json::Value::Null, |s| json!({"csim": s.csim, "ssim": s.ssim, "iou": s.iou}))
-    };
-    json!({
-        "count": rf.count,
-        "rejected": rf.rejected,
-        "executed_before": sim(rf.executed_before),
-        "executed_after": sim(rf.executed_after),
-        "planned_before": sim(Some(rf.planned_before)),
-        "planned_after": sim(Some(rf.planned_after)),
-        "millis_mean": rf.millis_mean,
-        "millis_max": rf.millis_max,
-    })
-}
-
-/// The method the reports used: one name, or the names joined by `+` when they differ.
-fn method_name(reports: &[CharReport]) -> String {
-    let mut names: Vec<&str> = reports.iter().map(|r| r.method).collect();
-    names.sort_unstable();
-    names.dedup();
-    names.join("+")
-}
-
 /// Whether a glyph error says the fonts do not cover the character.
 fn is_uncovered(e: &anyhow::Error) -> bool {
-    matches!(e.downcast_ref::<pipeline::Error>(), Some(pipeline::Error::Glyph(GlyphError::Unknown { .. })))
-}
-
-/// The images of `--images DIR`: files `<char>.png|jpg|jpeg`, one character per name, sorted.
-fn image_files(dir: &std::path::Path) -> Result<Vec<(char, std::path::PathBuf)>> {
-    let entries =
-        std::fs::read_dir(dir).with_context(|| format!("--images {}: cannot read the folder", dir.display()))?;
-    let mut out = Vec::new();
-    for e in entries {
-        let path = e.with_context(|| format!("--images {}", dir.display()))?.path();
-        let ext = path.extension().and_then(|x| x.to_str()).map(str::to_ascii_lowercase);
-        if !matches!(ext.as_deref(), Some("png" | "jpg" | "jpeg")) {
-            continue;
-        }
-        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
-        let mut cs = stem.chars();
-        match (cs.next(), cs.next()) {
-            (Some(c), None) => out.push((c, path)),
-            _ => bail!("{}: expected an image named after its one character (e.g. 永.png)", path.display()),
-        }
-    }
-    out.sort();
-    out.dedup_by(|a, b| a.0 == b.0);
-    if out.is_empty() {
-        bail!("--images {}: no <char>.png, .jpg or .jpeg files", dir.display());
-    }
-    Ok(out)
+    e.downcast_ref::<pipeline::Error>().is_some_and(pipeline::Error::is_uncovered)
 }
 
 /// The characters to evaluate and where their glyphs come from (`--font`, `--images`, a
 /// hanzi-writer-data folder or the embedded set), checked against each other.
 fn chars_and_input(args: &Args) -> Result<(Vec<char>, GlyphInput)> {
     let image_files = match &args.images {
-        Some(dir) => image_files(dir)?,
+        Some(dir) => pipeline::image_folder(dir).context("--images")?,
         None => Vec::new(),
     };
     let mut chars: Vec<char> = match &args.chars {

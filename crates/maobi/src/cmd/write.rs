@@ -6,8 +6,8 @@ use anyhow::{Context, Result, bail};
 use bezier_raster::ModelKind;
 use brush_model::BrushProfile;
 use pipeline::{
-    BrushChoice, BrushFit, BrushMiss, CharReport, CharResult, Flow, Grid, Layout, NextAttempt, NextOptions,
-    ObservedRun, Prepared, Sheet, SheetTrack, TextOptions, WriteOptions, WrittenText, auto_layout, layout_on_sheet,
+    BrushChoice, BrushMiss, CharReport, CharResult, Flow, Grid, Layout, NextAttempt, NextOptions, ObservedRun,
+    Prepared, Sheet, SheetTrack, TextOptions, TextSummary, WriteOptions, WrittenText, auto_layout, layout_on_sheet,
     parse_sheet, rerender_with_generator, write_text, write_text_each,
 };
 use rayon::prelude::*;
@@ -209,8 +209,16 @@ pub fn run(args: Args) -> Result<()> {
     let on_sheet = sheet.as_ref().and(text.layout.clone());
     let out = write_chars(&args, &plan, prepared, &text, observed.as_ref(), on_sheet.as_ref(), &stage)?;
     let reports: Vec<&CharReport> = out.results.iter().map(|r| &r.report).collect();
-    let mut summary = summary_json(&args, &chars, &out.lay, flow, &plan.profile, &reports, out.brush_mm);
-    summary["brush_choice"] = json!(plan.choice.as_ref().or(plan.next.as_ref().and_then(|n| n.choice.as_ref())));
+    let mut text_summary =
+        TextSummary::new(&reports, &out.lay, flow, &plan.profile.name, args.model.name(), out.brush_mm);
+    text_summary.brush_choice = plan.choice.as_ref().or(plan.next.as_ref().and_then(|n| n.choice.as_ref()));
+    let fit = &mut text_summary.brush_fit;
+    match fit.miss {
+        Some(BrushMiss::TooWide) => fit.note.push_str(": give a larger sheet, fewer characters or a smaller brush"),
+        Some(BrushMiss::TooNarrow) => fit.note.push_str(": give --char-mm or a larger brush"),
+        None => {}
+    }
+    let mut summary = serde_json::to_value(&text_summary)?;
     if let (Some(o), Some(n)) = (&observed, &plan.next) {
         let this = n.round(o, out.warm_started);
         let rounds = NextAttempt::rounds(o, &this);
@@ -247,7 +255,7 @@ pub fn run(args: Args) -> Result<()> {
     for r in &reports {
         print_char(r);
     }
-    print_closing(&args, &out.lay, &summary, &plan, observed.as_ref());
+    print_closing(&args, &out.lay, &text_summary.brush_fit.note, &plan, observed.as_ref());
     Ok(())
 }
 
@@ -421,20 +429,14 @@ fn sheet_track(
 
 /// The closing lines on stdout: the sheet, the outputs and the brush (with `--observed`, what
 /// the photo corrected).
-fn print_closing(
-    args: &Args,
-    lay: &Layout,
-    summary: &serde_json::Value,
-    plan: &BrushPlan,
-    observed: Option<&ObservedRun>,
-) {
+fn print_closing(args: &Args, lay: &Layout, fit_note: &str, plan: &BrushPlan, observed: Option<&ObservedRun>) {
     println!(
         "{} sheet {:.0}×{:.0} mm, char box {:.1} mm ({}); outputs in {} (preview.html to watch it)",
         lay.sheet.name,
         lay.sheet.width_mm,
         lay.sheet.height_mm,
         lay.char_mm,
-        summary["brush_fit"]["note"].as_str().unwrap_or(""),
+        fit_note,
         args.output.display()
     );
     let profile = &plan.profile;
@@ -583,53 +585,6 @@ fn planned_sheet(args: &Args, n: usize, flow: Flow) -> Result<(Option<Sheet>, Op
     Ok((Some(sheet), Some(layout)))
 }
 
-/// `summary.json`: the text, the sheet, the means and every character's report.
-fn summary_json(
-    args: &Args,
-    chars: &[char],
-    lay: &Layout,
-    flow: Flow,
-    profile: &BrushProfile,
-    reports: &[&CharReport],
-    brush_mm: f64,
-) -> serde_json::Value {
-    let char_mm = lay.char_mm;
-    let m = pipeline::ReportMeans::of(reports.iter().copied());
-    // Executed figures are means over every character (null unless all were executed).
-    let all = |s: Option<pipeline::SimilarityMeans>| s.filter(|s| s.count == m.count);
-    json!({
-        "text": chars.iter().collect::<String>(),
-        "char_mm": char_mm,
-        "brush": profile.name,
-        "model": args.model.name(),
-        "plan_mean": {"csim": m.plan.csim, "ssim": m.plan.ssim, "iou": m.plan.iou},
-        "executed_mean": {
-            "csim": all(m.executed).map(|s| s.csim),
-            "ssim": all(m.executed).map(|s| s.ssim),
-            "iou": all(m.executed).map(|s| s.iou),
-        },
-        "agreement_mean": {"csim": all(m.agreement).map(|s| s.csim)},
-        "sheet": {
-            "name": lay.sheet.name, "size_mm": [lay.sheet.width_mm, lay.sheet.height_mm],
-            "margin_mm": lay.margin_mm, "flow": flow, "per_line": lay.per_line, "lines": lay.lines,
-        },
-        "brush_fit": brush_fit(reports, char_mm, brush_mm),
-        "chars": reports,
-    })
-}
-
-/// Whether the brush's width range covers the glyphs at the chosen size
-/// ([`pipeline::BrushFit`]), with what to change when it does not.
-fn brush_fit(reports: &[&CharReport], char_mm: f64, brush_mm: f64) -> serde_json::Value {
-    let mut fit = BrushFit::of(reports, char_mm, brush_mm);
-    match fit.miss {
-        Some(BrushMiss::TooWide) => fit.note.push_str(": give a larger sheet, fewer characters or a smaller brush"),
-        Some(BrushMiss::TooNarrow) => fit.note.push_str(": give --char-mm or a larger brush"),
-        None => {}
-    }
-    json!(fit)
-}
-
 /// What is kept of a character once its files are written: its report, track and box, and
 /// its program as it ran when kept for the preview ([`WriteOptions::keep_run`]).
 struct Written {
@@ -647,34 +602,14 @@ impl From<CharResult> for Written {
 
 /// One character's files in `dir` (created by the first write, under the output gate).
 fn write_outputs(dir: &Path, r: &CharResult, profile: &BrushProfile, sheet: Option<&Layout>) -> Result<()> {
-    // The pictures encoded at once on rayon's pool, then written in order.
-    let executed = |ex: &bezier_raster::Coverage| -> Result<_> {
-        let rows = [("reference (glyph)", &r.reference), ("plan", &r.render), ("executed", ex)];
-        let (png, row) = rayon::join(|| ex.encode_png(), || figures::labelled_row_png(&rows));
-        Ok((png?, row?))
-    };
-    let ((render, reference), (overlay, executed)) = rayon::join(
-        || rayon::join(|| r.render.encode_png(), || r.reference.encode_png()),
-        || rayon::join(|| figures::overlay_legend_png(&r.reference, &r.render), || r.executed.as_ref().map(executed)),
-    );
-    write_atomic(&dir.join("render.png"), &render?)?;
-    write_atomic(&dir.join("reference.png"), &reference?)?;
-    write_atomic(&dir.join("overlay.png"), &overlay?)?;
-    if let Some((png, row)) = executed.transpose()? {
-        write_atomic(&dir.join("executed.png"), &png)?;
-        write_atomic(&dir.join("side-by-side.png"), &row)?;
+    // The pictures encoded at once, then written in order.
+    for (name, png) in figures::char_pictures(r)? {
+        write_atomic(&dir.join(name), &png)?;
     }
     // Where this character sits: in its box and, with --sheet, on the sheet, in paper mm.
     let track = r.track_file(profile, sheet.map(|l| [l.sheet.width_mm, l.sheet.height_mm]));
     write_atomic(&dir.join("track.json"), serde_json::to_string_pretty(&track)?.as_bytes())?;
     write_atomic(&dir.join("report.json"), serde_json::to_string_pretty(&r.report)?.as_bytes())?;
-    if let Some(rf) = &r.report.refine {
-        let series = |f: fn(&track_refine::LossTerms) -> f64| -> Vec<(f64, f64)> {
-            rf.curve.iter().enumerate().map(|(i, l)| (i as f64, f(l))).collect()
-        };
-        let png = figures::loss_png(&[("total", series(|l| l.total)), ("image", series(|l| l.image))])?;
-        write_atomic(&dir.join("refine.png"), &png)?;
-    }
     Ok(())
 }
 
