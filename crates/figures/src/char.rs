@@ -17,9 +17,9 @@ use crate::{Result, labelled_row_png, loss_png, overlay_legend_png};
 /// # Examples
 /// ```no_run
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-/// use pipeline::{BoxRule, WriteOptions, prepare, write_placed};
+/// use pipeline::{BoxRule, GlyphInput, WriteOptions, write_placed};
 /// let pen1 = brush_model::BrushProfile::builtin("pen1")?;
-/// let p = prepare(trajectory::embedded_glyph('永')?, None)?;
+/// let p = GlyphInput::Hanzi(None).prepare('永', None)?;
 /// let r = write_placed(&p, &pen1, &WriteOptions::default(), BoxRule::Auto)?;
 /// for (name, png) in figures::char_pictures(&r)? {
 ///     std::fs::write(name, png)?;

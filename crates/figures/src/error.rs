@@ -26,6 +26,21 @@ pub enum FigureError {
     /// The press is outside the brush profile's calibrated range.
     #[error(transparent)]
     Profile(#[from] brush_model::ProfileError),
+    /// A `track.json` could not be read ([`crate::track_preview`]).
+    #[error(transparent)]
+    Read(#[from] pipeline::ReadBackError),
+    /// A `track.json` is not a valid track ([`crate::track_preview`]).
+    #[error(transparent)]
+    Track(#[from] robot_io::RobotError),
+    /// A `track.json` cannot be previewed ([`crate::track_preview`]): no points, no usable
+    /// sheet, or a sheet's fields of the wrong shape.
+    #[error("{}: {what}", path.display())]
+    TrackFile {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What was wrong.
+        what: String,
+    },
     /// The preview page's data could not be written as JSON.
     #[error("writing the preview's data failed")]
     Json(#[from] serde_json::Error),

@@ -23,7 +23,7 @@ mod plot;
 
 pub use char::char_pictures;
 pub use error::FigureError;
-pub use page::{PreviewInput, preview_html, sheet_preview};
+pub use page::{PreviewInput, TrackPreview, preview_html, sheet_preview, track_preview};
 pub use plot::{labelled_row_png, labelled_row_rgb_png, loss_png, models_png, overlay_legend_png, regression_png};
 
 /// This crate's results.

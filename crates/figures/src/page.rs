@@ -4,14 +4,16 @@
 //! plays comes from the pipeline ([`pipeline::run_sheet`], [`pipeline::run_footprints`]); this
 //! module only lays it out. `maobi preview` and `maobi write` write it.
 
+use std::path::Path;
+
 use brush_model::{BrushProfile, Track};
 use pipeline::{ExecutedRun, Grid, RunSample, SheetTrack};
 use robot_io::PaperFrame;
 use robot_io::RobotConfig;
-use robot_io::level_frame_in_front;
-use serde::Serialize;
+use robot_io::{TrackFile, level_frame_in_front};
+use serde::{Deserialize, Serialize};
 
-use crate::Result;
+use crate::{FigureError, Result};
 
 /// What the preview shows.
 pub struct PreviewInput<'a> {
@@ -49,6 +51,95 @@ pub fn sheet_preview(
         track: Track { strokes: t.strokes.clone() },
     };
     preview_html(&input, frame, cfg, ran)
+}
+
+/// A preview page made from a `track.json` file ([`track_preview`]).
+#[derive(Clone, Debug)]
+pub struct TrackPreview {
+    /// The page.
+    pub html: String,
+    /// The strokes it plays.
+    pub strokes: usize,
+}
+
+/// What a sheet's `track.json` adds for the preview to what [`TrackFile`] reads.
+#[derive(Deserialize)]
+struct SheetFields {
+    #[serde(default)]
+    chars: Option<Vec<CharBoxField>>,
+    #[serde(default)]
+    grid: Option<Grid>,
+}
+
+/// A sheet character's box.
+#[derive(Deserialize)]
+struct CharBoxField {
+    char_box_mm: [f64; 3],
+}
+
+/// The preview of a `track.json` as `maobi write` writes it (a character's or a sheet's), on
+/// the sheet `sheet_mm` (`[w, h]` mm; default: the file's sheet, else the box around its
+/// strokes and character boxes with a 10 mm margin), checked on `frame` and `cfg` as
+/// [`preview_html`] does.
+///
+/// # Errors
+/// [`FigureError::Read`] when the file cannot be read, [`FigureError::Track`] when it is not a
+/// valid track, [`FigureError::TrackFile`] when it has no points or gives no usable sheet size;
+/// and the errors of [`preview_html`].
+///
+/// # Examples
+/// ```no_run
+/// let page = figures::track_preview(std::path::Path::new("out/track.json"), None, None, None)?;
+/// std::fs::write("preview.html", page.html)?;
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn track_preview(
+    path: &Path,
+    sheet_mm: Option<[f64; 2]>,
+    frame: Option<&PaperFrame>,
+    cfg: Option<&RobotConfig>,
+) -> Result<TrackPreview> {
+    let refused = |what: String| FigureError::TrackFile { path: path.to_path_buf(), what };
+    let bytes = pipeline::read_bounded(path, robot_io::MAX_FILE_BYTES, "a track file maobi writes")?;
+    let text = String::from_utf8(bytes).map_err(|_| refused("not UTF-8 text".into()))?;
+    let tf = TrackFile::from_json(&text, &path.display().to_string())?;
+    let extra: SheetFields = serde_json::from_str(&text)
+        .map_err(|e| refused(format!("chars[].char_box_mm must be [x0, y0, size] and grid a grid name ({e})")))?;
+    let track = tf.track();
+    if track.point_count() == 0 {
+        return Err(refused("the track has no points".into()));
+    }
+    let boxes: Vec<[f64; 3]> = match (extra.chars, tf.char_box_mm) {
+        (Some(chars), _) => chars.iter().map(|c| c.char_box_mm).collect(),
+        (None, b) => b.into_iter().collect(),
+    };
+    let sheet_mm = sheet_mm.or(tf.sheet_mm).unwrap_or_else(|| {
+        // The box around the strokes and the character boxes, with a margin.
+        let (mut w, mut h) = (0.0f64, 0.0f64);
+        for p in track.points() {
+            w = w.max(p.x_mm);
+            h = h.max(p.y_mm);
+        }
+        for b in &boxes {
+            w = w.max(b[0] + b[2]);
+            h = h.max(b[1] + b[2]);
+        }
+        [w + 10.0, h + 10.0]
+    });
+    if !(sheet_mm.iter().all(|v| v.is_finite() && *v > 0.0 && *v <= pipeline::MAX_SHEET_MM)) {
+        return Err(refused(format!("the sheet {sheet_mm:?} mm is not a usable size")));
+    }
+    let input = PreviewInput {
+        title: tf.char.clone().unwrap_or_else(|| "track".into()),
+        sheet_mm,
+        grid: extra.grid.unwrap_or(Grid::None),
+        boxes,
+        stroke_chars: tf.stroke_chars.clone(),
+        brush: &tf.brush,
+        track,
+    };
+    let html = preview_html(&input, frame, cfg, None)?;
+    Ok(TrackPreview { html, strokes: input.track.strokes.len() })
 }
 
 /// A level sheet in front of the AUBO-i5, its centre at base (0.45, 0.05, 0.05) m (as
@@ -324,5 +415,37 @@ mod tests {
         assert_eq!(data["safe"], false);
         assert!(data["verdict"].as_str().unwrap().starts_with("refused"));
         assert!(!data["path"].as_array().unwrap().is_empty());
+    }
+
+    #[test]
+    fn a_track_file_is_previewed_on_its_sheet_or_the_box_around_it() {
+        let pen1 = BrushProfile::builtin("pen1").unwrap();
+        let i = input(&pen1, "一", 1.0);
+        let file = |sheet_mm: Option<[f64; 2]>, strokes| TrackFile {
+            char: Some("一".into()),
+            char_box_mm: Some([10.0, 10.0, 60.0]),
+            sheet_mm,
+            brush: pen1.clone(),
+            strokes,
+            stroke_chars: None,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("track.json");
+        let save = |t: &TrackFile| std::fs::write(&path, serde_json::to_string(t).unwrap()).unwrap();
+        save(&file(None, i.track.strokes.clone()));
+        let page = track_preview(&path, None, None, None).unwrap();
+        assert_eq!(page.strokes, 1);
+        // No sheet: the box around the strokes and the char box, 10 mm beyond.
+        assert_eq!(data_of(&page.html)["sheet_mm"], serde_json::json!([80.0, 80.0]));
+        save(&file(Some([210.0, 297.0]), i.track.strokes.clone()));
+        let page = track_preview(&path, None, None, None).unwrap();
+        assert_eq!(data_of(&page.html)["sheet_mm"], serde_json::json!([210.0, 297.0]));
+        let page = track_preview(&path, Some([100.0, 100.0]), None, None).unwrap();
+        assert_eq!(data_of(&page.html)["sheet_mm"], serde_json::json!([100.0, 100.0]));
+        save(&file(None, vec![]));
+        let e = track_preview(&path, None, None, None).unwrap_err().to_string();
+        assert!(e.contains("track.json") && e.contains("no points"), "{e}");
+        let e = track_preview(&dir.path().join("none.json"), None, None, None).unwrap_err();
+        assert!(matches!(e, FigureError::Read(_)), "{e}");
     }
 }
