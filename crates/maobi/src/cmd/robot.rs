@@ -8,7 +8,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use robot_io::aubo::{AuboRpc, Link, Motion};
 use robot_io::brush_model::Track;
-use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
+use robot_io::sim::{FaultSpecError, Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::Transport;
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{
@@ -675,21 +675,23 @@ fn advice(e: RobotError, to: &str) -> anyhow::Error {
     }
 }
 
+/// A `--fault` spec's refusal as the flag's: `--fault SPEC: ` before the library's reason, and
+/// `for_controller` after an unknown key.
+fn fault_error(e: FaultSpecError, for_controller: &str) -> anyhow::Error {
+    let flag = format!("--fault {}", e.spec());
+    match e {
+        FaultSpecError::Unknown { key, known, .. } => {
+            anyhow::anyhow!("{flag}: unknown fault `{key}`{for_controller} ({})", known.join(", "))
+        }
+        e => anyhow::Error::new(e).context(flag),
+    }
+}
+
 fn sim(a: SimArgs) -> Result<()> {
     if a.controller == ControllerKind::Ur {
         return sim_ur(&a);
     }
-    let mut faults = Faults::default();
-    for f in &a.fault {
-        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
-        let n: u64 = v.parse().with_context(|| format!("--fault {f}: {v} is not a whole number"))?;
-        match k {
-            "drop-after" => faults.drop_after_moves = Some(n as usize),
-            "delay-ms" => faults.delay_ms = Some(n),
-            "queue-full-every" => faults.queue_full_every = Some(n as usize),
-            _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
-        }
-    }
+    let faults = Faults::parse(&a.fault).map_err(|e| fault_error(e, ""))?;
     between("--max-connections", a.max_connections as u64, 1, 1024)?;
     between("--trace-max-mib", a.trace_max_mib, 1, 65_536)?;
     between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
@@ -765,23 +767,7 @@ fn sim(a: SimArgs) -> Result<()> {
 
 /// `maobi robot sim --controller ur`: the UR5e stand-in until Ctrl-C, its refusals on stderr.
 fn sim_ur(a: &SimArgs) -> Result<()> {
-    let mut faults = robot_io::sim::UrFaults::default();
-    for f in &a.fault {
-        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
-        let t: f64 = v
-            .parse()
-            .ok()
-            .filter(|t: &f64| t.is_finite() && *t >= 0.0)
-            .with_context(|| format!("--fault {f}: {v} is not a time in seconds"))?;
-        match k {
-            "protective-stop-at-s" => faults.protective_stop_at_s = Some(t),
-            "program-stop-at-s" => faults.program_stop_at_s = Some(t),
-            "pose-offset-at-s" => faults.pose_offset_at_s = Some(t),
-            _ => bail!(
-                "--fault {f}: unknown fault `{k}` for --controller ur (protective-stop-at-s, program-stop-at-s, pose-offset-at-s)"
-            ),
-        }
-    }
+    let faults = robot_io::sim::UrFaults::parse(&a.fault).map_err(|e| fault_error(e, " for --controller ur"))?;
     between("--max-connections", a.max_connections as u64, 1, 1024)?;
     between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
     if !(a.tcp_offset_mm.is_finite() && a.tcp_offset_mm.abs() <= 500.0) {

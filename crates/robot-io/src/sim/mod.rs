@@ -17,6 +17,7 @@ pub use dispatch::{
     MAX_BLEND_CHAIN, MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
     ramped_joint_motion, ramped_line_motion,
 };
+mod fault_spec;
 mod replay;
 mod script;
 mod server;
@@ -30,6 +31,7 @@ pub use ur::{
     UrListen, UrSimOptions, UrSimulator,
 };
 
+pub use fault_spec::{AUBO_FAULT_KEYS, FaultSpecError, UR_FAULT_KEYS};
 pub use replay::{SendMotion, execute_as_sent, execute_as_sent_tagged};
 
 use std::path::PathBuf;
