@@ -37,7 +37,8 @@ pub struct TrackFile {
     /// The character, if recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char: Option<String>,
-    /// The char box on the paper, `[x0, y0, size]` mm, if recorded.
+    /// The char box on the paper, `[x0, y0, size]` mm, if recorded ([`TrackFile::load`]
+    /// refuses one whose size is not positive).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char_box_mm: Option<[f64; 3]>,
     /// The sheet the character was laid out on, `[width, height]` mm, if any.
@@ -58,7 +59,9 @@ impl TrackFile {
     ///
     /// # Errors
     /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Profile`]
-    /// (naming the file) for an invalid brush profile.
+    /// (naming the file) for an invalid brush profile; [`RobotError::Config`] naming the file
+    /// and the field for a char box whose size is not positive or `stroke_chars` that do not
+    /// fit the strokes.
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let t: TrackFile = load_json(path)?;
         t.brush.validate(&path.display().to_string())?;
@@ -86,9 +89,18 @@ impl TrackFile {
         t.checked(chars, path)
     }
 
-    /// A sheet's character boundaries, checked against what they index: `stroke_chars` (the
-    /// ink reload rule's) against the strokes and the sheet's `chars`.
+    /// The char box, when recorded, with a positive size; a sheet's character boundaries,
+    /// checked against what they index: `stroke_chars` (the ink reload rule's) against the
+    /// strokes and the sheet's `chars`.
     fn checked(self, chars: SheetChars, path: &Path) -> Result<Self, RobotError> {
+        if let Some(b) = self.char_box_mm
+            && !(b.iter().all(|v| v.is_finite()) && b[2] > 0.0)
+        {
+            return Err(RobotError::Config {
+                file: path.to_path_buf(),
+                message: "field `char_box_mm` must be [x0, y0, size] with size > 0".into(),
+            });
+        }
         self.check_stroke_chars(chars.chars.as_deref()).map_err(|message| RobotError::Config {
             file: path.to_path_buf(),
             message: format!("field `stroke_chars`: {message}"),

@@ -818,15 +818,10 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
 
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
     check_output_file("-o", &a.output, a.force)?;
-    let name = a.track.display().to_string();
-    let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
-    let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;
-    let b: Vec<f64> = serde_json::from_value(v["char_box_mm"].clone())
-        .with_context(|| format!("{name}: field `char_box_mm` must be [x0, y0, size]"))?;
-    if b.len() != 3 || b[2] <= 0.0 {
-        bail!("{name}: field `char_box_mm` must be [x0, y0, size] with size > 0");
-    }
+    // A char box recorded is a valid one (TrackFile::load refuses a size that is not positive).
     let tf = TrackFile::load(&a.track)?;
+    let [x0_mm, y0_mm, size_mm] =
+        tf.char_box_mm.with_context(|| format!("{}: field `char_box_mm` must be [x0, y0, size]", a.track.display()))?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = robot_io::read_trace(&a.trace)?;
     if let Some((line, bytes)) = trace.cut_line {
@@ -835,7 +830,7 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
             a.trace.display()
         );
     }
-    let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
+    let char_box = trajectory::CharBox { x0_mm, y0_mm, size_mm };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
     let (img, states) =
         pipeline::render_trace(&trace.samples, &frame, &tf.brush, bezier_raster::ModelKind::Bsm, &char_box, a.size);

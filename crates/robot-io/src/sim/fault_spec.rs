@@ -111,7 +111,11 @@ impl Faults {
                 "delay-ms" => faults.delay_ms = Some(n),
                 "queue-full-every" => faults.queue_full_every = Some(count),
                 _ => {
-                    return Err(FaultSpecError::Unknown { spec: spec.into(), key: key.into(), known: &AUBO_FAULT_KEYS });
+                    return Err(FaultSpecError::Unknown {
+                        spec: spec.into(),
+                        key: key.into(),
+                        known: &AUBO_FAULT_KEYS,
+                    });
                 }
             }
         }

@@ -374,6 +374,32 @@ fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kine
     assert!(miss_m < 2e-5, "the first move ends {:.3} mm from the pose above the first stroke", miss_m * 1e3);
 }
 
+/// A recorded char box must have a positive size: `TrackFile` refuses another at load, naming
+/// the file and the field; a track without one reads (its box is `None`).
+#[test]
+fn a_track_file_refuses_a_char_box_without_a_positive_size() {
+    use robot_io::TrackFile;
+    let tf = TrackFile {
+        char: Some("一".into()),
+        char_box_mm: Some([20.0, 30.0, 80.0]),
+        sheet_mm: None,
+        brush: pen1(),
+        strokes: small_track().strokes,
+        stroke_chars: None,
+    };
+    let mut v = serde_json::to_value(&tf).unwrap();
+    let read = |v: &serde_json::Value| TrackFile::from_json(&v.to_string(), "t.json");
+    assert_eq!(read(&v).unwrap().char_box_mm, Some([20.0, 30.0, 80.0]));
+    for size in [0.0, -30.0] {
+        v["char_box_mm"][2] = serde_json::json!(size);
+        let e = read(&v).unwrap_err();
+        assert!(matches!(e, RobotError::Config { .. }), "{e:?}");
+        assert_eq!(e.to_string(), "t.json: field `char_box_mm` must be [x0, y0, size] with size > 0");
+    }
+    v.as_object_mut().unwrap().remove("char_box_mm");
+    assert_eq!(read(&v).unwrap().char_box_mm, None);
+}
+
 #[test]
 fn a_track_file_places_checks_and_times_its_program() {
     use robot_io::{IN_FRONT_M, TrackFile, time_program};
