@@ -293,6 +293,14 @@ pub struct UrPortArgs {
     dashboard_port: u16,
 }
 
+impl UrPortArgs {
+    /// These ports with the script port `--port` names (UR's 30002 by default).
+    fn with_script(&self, port: Option<u16>) -> robot_io::ur::UrPorts {
+        let script = port.unwrap_or(robot_io::ur::SCRIPT_PORT);
+        robot_io::ur::UrPorts { script, rtde: self.rtde_port, dashboard: self.dashboard_port }
+    }
+}
+
 /// Arguments of `maobi robot sim`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
@@ -587,12 +595,7 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
         ControllerKind::Ur => {
             c.addr()?; // the host and the timeout's range
             let host = c.host.as_deref().unwrap_or_default();
-            let ports = robot_io::ur::UrPorts {
-                script: c.port.unwrap_or(robot_io::ur::SCRIPT_PORT),
-                rtde: a.ur.rtde_port,
-                dashboard: a.ur.dashboard_port,
-            };
-            Box::new(robot_io::ur::UrArm::new(host, ports, c.timeout()))
+            Box::new(robot_io::ur::UrArm::new(host, a.ur.with_script(c.port), c.timeout()))
         }
     })
 }
@@ -695,15 +698,9 @@ fn sim(a: SimArgs) -> Result<()> {
     between("--max-connections", a.max_connections as u64, 1, 1024)?;
     between("--trace-max-mib", a.trace_max_mib, 1, 65_536)?;
     between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
-    let port = a.port.unwrap_or(RPC_PORT);
-    let mut listen = vec![Listen { bind: format!("127.0.0.1:{port}"), transports: a.transports.clone() }];
-    for (port, t) in
-        [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)]
-    {
-        if let Some(p) = port {
-            listen.push(Listen { bind: format!("127.0.0.1:{p}"), transports: vec![t] });
-        }
-    }
+    let alone = [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)];
+    let alone = alone.into_iter().filter_map(|(port, t)| Some((port?, t)));
+    let listen = Listen::loopback_ports(a.port.unwrap_or(RPC_PORT), &a.transports, alone);
     let arm = a.kinematics.as_deref().map(robot_io::ArmKinematics::load).transpose()?;
     let options = SimOptions {
         faults,
@@ -737,7 +734,7 @@ fn sim(a: SimArgs) -> Result<()> {
         a.user,
         ports.join(", ")
     );
-    if sim.addrs().iter().any(|(ts, _)| ts.iter().any(|t| *t != Transport::Framed)) {
+    if sim.serves_without_login() {
         eprintln!("warning: the lines and http transports have no login: anyone who reaches them can move the arm");
     }
     if let Some(p) = a.script_port {
@@ -776,11 +773,7 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
     if !(a.payload_kg.is_finite() && (0.0..=16.0).contains(&a.payload_kg)) {
         bail!("--payload-kg must be from 0 to 16 kg, got {}", a.payload_kg);
     }
-    let listen = robot_io::sim::UrListen {
-        script: format!("127.0.0.1:{}", a.port.unwrap_or(robot_io::ur::SCRIPT_PORT)),
-        rtde: format!("127.0.0.1:{}", a.ur_ports.rtde_port),
-        dashboard: format!("127.0.0.1:{}", a.ur_ports.dashboard_port),
-    };
+    let listen = robot_io::sim::UrListen::loopback(a.ur_ports.with_script(a.port));
     let options = robot_io::sim::UrSimOptions {
         tcp_offset: [0.0, 0.0, a.tcp_offset_mm / 1000.0, 0.0, 0.0, 0.0],
         payload_kg: a.payload_kg,
