@@ -547,14 +547,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
         Some(r) => r.clone(),
         None => names.first().cloned().with_context(|| format!("{addr}: the controller reports no robot"))?,
     };
-    let params =
-        client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
-    let arm = robot_io::ArmKinematics {
-        robot: robot.clone(),
-        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.rpc_transport()),
-        real: true,
-        kinematics: params,
-    };
+    let arm = client.arm_kinematics(&robot).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
     let mut text = serde_json::to_string_pretty(&arm)?;
     text.push('\n');
     write_atomic(&a.output, text.as_bytes())?;
