@@ -804,10 +804,8 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
 
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
     check_output_file("-o", &a.output, a.force)?;
-    // A char box recorded is a valid one (TrackFile::load refuses a size that is not positive).
     let tf = TrackFile::load(&a.track)?;
-    let [x0_mm, y0_mm, size_mm] =
-        tf.char_box_mm.with_context(|| format!("{}: field `char_box_mm` must be [x0, y0, size]", a.track.display()))?;
+    let [x0_mm, y0_mm, size_mm] = tf.char_box(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = robot_io::read_trace(&a.trace)?;
     if let Some((line, bytes)) = trace.cut_line {
