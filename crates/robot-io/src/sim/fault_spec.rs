@@ -71,9 +71,25 @@ impl FaultSpecError {
     }
 }
 
-/// `spec` split at its first `=`.
-fn key_value(spec: &str) -> Result<(&str, &str), FaultSpecError> {
-    spec.split_once('=').ok_or_else(|| FaultSpecError::NotKeyValue { spec: spec.into() })
+/// The faults of `specs`, each split at its first `=`, its value read by `value` (from the spec,
+/// the key and the value) and set by `set`, which says whether it knows the key (else
+/// [`FaultSpecError::Unknown`] with `known`).
+fn parse_specs<F: Default, V, S: AsRef<str>>(
+    specs: impl IntoIterator<Item = S>,
+    known: &'static [&'static str],
+    value: impl Fn(&str, &str, &str) -> Result<V, FaultSpecError>,
+    set: impl Fn(&mut F, &str, V) -> bool,
+) -> Result<F, FaultSpecError> {
+    let mut faults = F::default();
+    for spec in specs {
+        let spec = spec.as_ref();
+        let (key, v) = spec.split_once('=').ok_or_else(|| FaultSpecError::NotKeyValue { spec: spec.into() })?;
+        let v = value(spec, key, v)?;
+        if !set(&mut faults, key, v) {
+            return Err(FaultSpecError::Unknown { spec: spec.into(), key: key.into(), known });
+        }
+    }
+    Ok(faults)
 }
 
 impl Faults {
@@ -95,31 +111,24 @@ impl Faults {
     /// [`FaultSpecError`] for the first spec without `=`, with an unknown key or with a value
     /// that is not a whole number.
     pub fn parse<S: AsRef<str>>(specs: impl IntoIterator<Item = S>) -> Result<Self, FaultSpecError> {
-        let mut faults = Faults::default();
-        for spec in specs {
-            let spec = spec.as_ref();
-            let (key, value) = key_value(spec)?;
-            let n: u64 = value.parse().map_err(|source| FaultSpecError::NotWholeNumber {
+        let whole = |spec: &str, key: &str, value: &str| {
+            value.parse::<u64>().map_err(|source| FaultSpecError::NotWholeNumber {
                 spec: spec.into(),
                 key: key.into(),
                 value: value.into(),
                 source,
-            })?;
+            })
+        };
+        parse_specs(specs, &AUBO_FAULT_KEYS, whole, |f: &mut Faults, key, n| {
             let count = usize::try_from(n).unwrap_or(usize::MAX);
             match key {
-                "drop-after" => faults.drop_after_moves = Some(count),
-                "delay-ms" => faults.delay_ms = Some(n),
-                "queue-full-every" => faults.queue_full_every = Some(count),
-                _ => {
-                    return Err(FaultSpecError::Unknown {
-                        spec: spec.into(),
-                        key: key.into(),
-                        known: &AUBO_FAULT_KEYS,
-                    });
-                }
+                "drop-after" => f.drop_after_moves = Some(count),
+                "delay-ms" => f.delay_ms = Some(n),
+                "queue-full-every" => f.queue_full_every = Some(count),
+                _ => return false,
             }
-        }
-        Ok(faults)
+            true
+        })
     }
 }
 
@@ -141,21 +150,21 @@ impl UrFaults {
     /// [`FaultSpecError`] for the first spec without `=`, with an unknown key or with a value
     /// that is not a time in seconds.
     pub fn parse<S: AsRef<str>>(specs: impl IntoIterator<Item = S>) -> Result<Self, FaultSpecError> {
-        let mut faults = UrFaults::default();
-        for spec in specs {
-            let spec = spec.as_ref();
-            let (key, value) = key_value(spec)?;
-            let t = value.parse::<f64>().ok().filter(|t| t.is_finite() && *t >= 0.0).ok_or_else(|| {
-                FaultSpecError::NotSeconds { spec: spec.into(), key: key.into(), value: value.into() }
-            })?;
+        let seconds =
+            |spec: &str, key: &str, value: &str| {
+                value.parse::<f64>().ok().filter(|t| t.is_finite() && *t >= 0.0).ok_or_else(|| {
+                    FaultSpecError::NotSeconds { spec: spec.into(), key: key.into(), value: value.into() }
+                })
+            };
+        parse_specs(specs, &UR_FAULT_KEYS, seconds, |f: &mut UrFaults, key, t| {
             match key {
-                "protective-stop-at-s" => faults.protective_stop_at_s = Some(t),
-                "program-stop-at-s" => faults.program_stop_at_s = Some(t),
-                "pose-offset-at-s" => faults.pose_offset_at_s = Some(t),
-                _ => return Err(FaultSpecError::Unknown { spec: spec.into(), key: key.into(), known: &UR_FAULT_KEYS }),
+                "protective-stop-at-s" => f.protective_stop_at_s = Some(t),
+                "program-stop-at-s" => f.program_stop_at_s = Some(t),
+                "pose-offset-at-s" => f.pose_offset_at_s = Some(t),
+                _ => return false,
             }
-        }
-        Ok(faults)
+            true
+        })
     }
 }
 
