@@ -37,7 +37,8 @@ pub struct TrackFile {
     /// The character, if recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char: Option<String>,
-    /// The char box on the paper, `[x0, y0, size]` mm, if recorded.
+    /// The char box on the paper, `[x0, y0, size]` mm, if recorded (as read: see
+    /// [`TrackFile::char_box`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub char_box_mm: Option<[f64; 3]>,
     /// The sheet the character was laid out on, `[width, height]` mm, if any.
@@ -58,7 +59,9 @@ impl TrackFile {
     ///
     /// # Errors
     /// [`RobotError::Read`] or [`RobotError::Json`] naming the file; [`RobotError::Profile`]
-    /// (naming the file) for an invalid brush profile.
+    /// (naming the file) for an invalid brush profile; [`RobotError::Config`] naming the file
+    /// and the field for `stroke_chars` that do not fit the strokes. The char box is checked
+    /// where it is needed ([`TrackFile::char_box`]).
     pub fn load(path: &Path) -> Result<Self, RobotError> {
         let t: TrackFile = load_json(path)?;
         t.brush.validate(&path.display().to_string())?;
@@ -126,6 +129,23 @@ impl TrackFile {
             }
         }
         Ok(())
+    }
+
+    /// The char box `[x0, y0, size]` mm, for a caller that places the character by it (a
+    /// render of what the arm wrote): recorded, finite and with a positive size. `path` names
+    /// the file in the error.
+    ///
+    /// # Errors
+    /// [`RobotError::Config`] naming `path` and the field when no char box is recorded, or its
+    /// size is not positive.
+    pub fn char_box(&self, path: &Path) -> Result<[f64; 3], RobotError> {
+        let shape = "field `char_box_mm` must be [x0, y0, size]";
+        let config = |message: String| RobotError::Config { file: path.to_path_buf(), message };
+        let b = self.char_box_mm.ok_or_else(|| config(shape.into()))?;
+        if !(b.iter().all(|v| v.is_finite()) && b[2] > 0.0) {
+            return Err(config(format!("{shape} with size > 0")));
+        }
+        Ok(b)
     }
 
     /// The strokes as a [`Track`].

@@ -8,7 +8,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use robot_io::aubo::{AuboRpc, Link, Motion};
 use robot_io::brush_model::Track;
-use robot_io::sim::{Faults, Listen, SimOptions, Simulator};
+use robot_io::sim::{FaultSpecError, Faults, Listen, SimOptions, Simulator};
 use robot_io::wire::Transport;
 use robot_io::wire::{RPC_PORT, SCRIPT_PORT};
 use robot_io::{
@@ -293,6 +293,14 @@ pub struct UrPortArgs {
     dashboard_port: u16,
 }
 
+impl UrPortArgs {
+    /// These ports with the script port `--port` names (UR's 30002 by default).
+    fn with_script(&self, port: Option<u16>) -> robot_io::ur::UrPorts {
+        let script = port.unwrap_or(robot_io::ur::SCRIPT_PORT);
+        robot_io::ur::UrPorts { script, rtde: self.rtde_port, dashboard: self.dashboard_port }
+    }
+}
+
 /// Arguments of `maobi robot sim`.
 #[derive(clap::Args, Debug)]
 pub struct SimArgs {
@@ -539,14 +547,7 @@ fn kinematics(a: KinematicsArgs) -> Result<()> {
         Some(r) => r.clone(),
         None => names.first().cloned().with_context(|| format!("{addr}: the controller reports no robot"))?,
     };
-    let params =
-        client.kinematics_params(&robot, true).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
-    let arm = robot_io::ArmKinematics {
-        robot: robot.clone(),
-        source: format!("{addr} ({}): RobotConfig.getKinematicsParam(true)", c.rpc_transport()),
-        real: true,
-        kinematics: params,
-    };
+    let arm = client.arm_kinematics(&robot).with_context(|| format!("reading {robot}'s kinematics from {addr}"))?;
     let mut text = serde_json::to_string_pretty(&arm)?;
     text.push('\n');
     write_atomic(&a.output, text.as_bytes())?;
@@ -587,12 +588,7 @@ fn controller_for(a: &SendArgs) -> Result<Box<dyn Controller>> {
         ControllerKind::Ur => {
             c.addr()?; // the host and the timeout's range
             let host = c.host.as_deref().unwrap_or_default();
-            let ports = robot_io::ur::UrPorts {
-                script: c.port.unwrap_or(robot_io::ur::SCRIPT_PORT),
-                rtde: a.ur.rtde_port,
-                dashboard: a.ur.dashboard_port,
-            };
-            Box::new(robot_io::ur::UrArm::new(host, ports, c.timeout()))
+            Box::new(robot_io::ur::UrArm::new(host, a.ur.with_script(c.port), c.timeout()))
         }
     })
 }
@@ -675,33 +671,29 @@ fn advice(e: RobotError, to: &str) -> anyhow::Error {
     }
 }
 
+/// A `--fault` spec's refusal as the flag's: `--fault SPEC: ` before the library's reason, and
+/// `for_controller` after an unknown key.
+fn fault_error(e: FaultSpecError, for_controller: &str) -> anyhow::Error {
+    let flag = format!("--fault {}", e.spec());
+    match e {
+        FaultSpecError::Unknown { key, known, .. } => {
+            anyhow::anyhow!("{flag}: unknown fault `{key}`{for_controller} ({})", known.join(", "))
+        }
+        e => anyhow::Error::new(e).context(flag),
+    }
+}
+
 fn sim(a: SimArgs) -> Result<()> {
     if a.controller == ControllerKind::Ur {
         return sim_ur(&a);
     }
-    let mut faults = Faults::default();
-    for f in &a.fault {
-        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
-        let n: u64 = v.parse().with_context(|| format!("--fault {f}: {v} is not a whole number"))?;
-        match k {
-            "drop-after" => faults.drop_after_moves = Some(n as usize),
-            "delay-ms" => faults.delay_ms = Some(n),
-            "queue-full-every" => faults.queue_full_every = Some(n as usize),
-            _ => bail!("--fault {f}: unknown fault `{k}` (drop-after, delay-ms, queue-full-every)"),
-        }
-    }
+    let faults = Faults::parse(&a.fault).map_err(|e| fault_error(e, ""))?;
     between("--max-connections", a.max_connections as u64, 1, 1024)?;
     between("--trace-max-mib", a.trace_max_mib, 1, 65_536)?;
     between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
-    let port = a.port.unwrap_or(RPC_PORT);
-    let mut listen = vec![Listen { bind: format!("127.0.0.1:{port}"), transports: a.transports.clone() }];
-    for (port, t) in
-        [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)]
-    {
-        if let Some(p) = port {
-            listen.push(Listen { bind: format!("127.0.0.1:{p}"), transports: vec![t] });
-        }
-    }
+    let alone = [(a.framed_port, Transport::Framed), (a.lines_port, Transport::Lines), (a.http_port, Transport::Http)];
+    let alone = alone.into_iter().filter_map(|(port, t)| Some((port?, t)));
+    let listen = Listen::loopback_ports(a.port.unwrap_or(RPC_PORT), &a.transports, alone);
     let arm = a.kinematics.as_deref().map(robot_io::ArmKinematics::load).transpose()?;
     let options = SimOptions {
         faults,
@@ -735,7 +727,7 @@ fn sim(a: SimArgs) -> Result<()> {
         a.user,
         ports.join(", ")
     );
-    if sim.addrs().iter().any(|(ts, _)| ts.iter().any(|t| *t != Transport::Framed)) {
+    if sim.serves_without_login() {
         eprintln!("warning: the lines and http transports have no login: anyone who reaches them can move the arm");
     }
     if let Some(p) = a.script_port {
@@ -765,23 +757,7 @@ fn sim(a: SimArgs) -> Result<()> {
 
 /// `maobi robot sim --controller ur`: the UR5e stand-in until Ctrl-C, its refusals on stderr.
 fn sim_ur(a: &SimArgs) -> Result<()> {
-    let mut faults = robot_io::sim::UrFaults::default();
-    for f in &a.fault {
-        let (k, v) = f.split_once('=').with_context(|| format!("--fault {f}: expected KEY=VALUE"))?;
-        let t: f64 = v
-            .parse()
-            .ok()
-            .filter(|t: &f64| t.is_finite() && *t >= 0.0)
-            .with_context(|| format!("--fault {f}: {v} is not a time in seconds"))?;
-        match k {
-            "protective-stop-at-s" => faults.protective_stop_at_s = Some(t),
-            "program-stop-at-s" => faults.program_stop_at_s = Some(t),
-            "pose-offset-at-s" => faults.pose_offset_at_s = Some(t),
-            _ => bail!(
-                "--fault {f}: unknown fault `{k}` for --controller ur (protective-stop-at-s, program-stop-at-s, pose-offset-at-s)"
-            ),
-        }
-    }
+    let faults = robot_io::sim::UrFaults::parse(&a.fault).map_err(|e| fault_error(e, " for --controller ur"))?;
     between("--max-connections", a.max_connections as u64, 1, 1024)?;
     between("--idle-timeout-s", a.idle_timeout_s, 1, 86_400)?;
     if !(a.tcp_offset_mm.is_finite() && a.tcp_offset_mm.abs() <= 500.0) {
@@ -790,11 +766,7 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
     if !(a.payload_kg.is_finite() && (0.0..=16.0).contains(&a.payload_kg)) {
         bail!("--payload-kg must be from 0 to 16 kg, got {}", a.payload_kg);
     }
-    let listen = robot_io::sim::UrListen {
-        script: format!("127.0.0.1:{}", a.port.unwrap_or(robot_io::ur::SCRIPT_PORT)),
-        rtde: format!("127.0.0.1:{}", a.ur_ports.rtde_port),
-        dashboard: format!("127.0.0.1:{}", a.ur_ports.dashboard_port),
-    };
+    let listen = robot_io::sim::UrListen::loopback(a.ur_ports.with_script(a.port));
     let options = robot_io::sim::UrSimOptions {
         tcp_offset: [0.0, 0.0, a.tcp_offset_mm / 1000.0, 0.0, 0.0, 0.0],
         payload_kg: a.payload_kg,
@@ -832,15 +804,8 @@ fn sim_ur(a: &SimArgs) -> Result<()> {
 
 fn render_trace(a: RenderTraceArgs) -> Result<()> {
     check_output_file("-o", &a.output, a.force)?;
-    let name = a.track.display().to_string();
-    let text = std::fs::read_to_string(&a.track).with_context(|| format!("{name}: cannot read"))?;
-    let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{name}: not JSON"))?;
-    let b: Vec<f64> = serde_json::from_value(v["char_box_mm"].clone())
-        .with_context(|| format!("{name}: field `char_box_mm` must be [x0, y0, size]"))?;
-    if b.len() != 3 || b[2] <= 0.0 {
-        bail!("{name}: field `char_box_mm` must be [x0, y0, size] with size > 0");
-    }
     let tf = TrackFile::load(&a.track)?;
+    let [x0_mm, y0_mm, size_mm] = tf.char_box(&a.track)?;
     let frame = PaperFrame::load(&a.paper)?;
     let trace = robot_io::read_trace(&a.trace)?;
     if let Some((line, bytes)) = trace.cut_line {
@@ -849,7 +814,7 @@ fn render_trace(a: RenderTraceArgs) -> Result<()> {
             a.trace.display()
         );
     }
-    let char_box = trajectory::CharBox { x0_mm: b[0], y0_mm: b[1], size_mm: b[2] };
+    let char_box = trajectory::CharBox { x0_mm, y0_mm, size_mm };
     // The same forward model and renderer as `maobi write`'s plan and executed renders.
     let (img, states) =
         pipeline::render_trace(&trace.samples, &frame, &tf.brush, bezier_raster::ModelKind::Bsm, &char_box, a.size);

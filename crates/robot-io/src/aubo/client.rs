@@ -683,6 +683,18 @@ impl AuboClient {
         dh_rows(&m, &r)
     }
 
+    /// The arm's calibrated parameters as `arm.json` records them: `robot`'s
+    /// `RobotConfig.getKinematicsParam(true)` ([`AuboClient::kinematics_params`]), `real`, with
+    /// where they were read (this connection's address and transport) as their source.
+    ///
+    /// # Errors
+    /// As [`AuboClient::kinematics_params`].
+    pub fn arm_kinematics(&mut self, robot: &str) -> Result<crate::ArmKinematics, RobotError> {
+        let kinematics = self.kinematics_params(robot, true)?;
+        let source = format!("{} ({}): RobotConfig.getKinematicsParam(true)", self.host, self.transport);
+        Ok(crate::ArmKinematics { robot: robot.into(), source, real: true, kinematics })
+    }
+
     /// `<robot>.RobotConfig.getKinematicsCompensate(ref_temperature)`: the compensation the
     /// controller adds to its nominal modified-DH parameters at `ref_temperature_c` (°C), as
     /// four arrays of increments `a`, `alpha`, `d`, `theta` (m, rad; a `beta` array, which

@@ -17,6 +17,7 @@ pub use dispatch::{
     MAX_BLEND_CHAIN, MAX_BUFFER_NAME, MAX_BUFFER_WAYPOINTS, MAX_PATH_BUFFERS, MAX_TOTAL_WAYPOINTS, PATH_BUFFER_SPLINE,
     ramped_joint_motion, ramped_line_motion,
 };
+mod fault_spec;
 mod replay;
 mod script;
 mod server;
@@ -30,6 +31,7 @@ pub use ur::{
     UrListen, UrSimOptions, UrSimulator,
 };
 
+pub use fault_spec::{AUBO_FAULT_KEYS, FaultSpecError, UR_FAULT_KEYS};
 pub use replay::{SendMotion, execute_as_sent, execute_as_sent_tagged};
 
 use std::path::PathBuf;
@@ -150,6 +152,34 @@ pub struct Listen {
     pub transports: Vec<Transport>,
 }
 
+impl Listen {
+    /// `127.0.0.1:port` (port 0: any free one) serving `transports`.
+    pub fn loopback(port: u16, transports: &[Transport]) -> Self {
+        Listen { bind: format!("127.0.0.1:{port}"), transports: transports.to_vec() }
+    }
+
+    /// The listeners of a simulator on loopback: `port` serving `transports` (each connection's
+    /// first bytes telling them apart), then each port of `alone` serving its one transport.
+    ///
+    /// # Examples
+    /// ```
+    /// use robot_io::sim::Listen;
+    /// use robot_io::wire::Transport;
+    /// let l = Listen::loopback_ports(30004, &[Transport::Framed], [(9012, Transport::Http)]);
+    /// assert_eq!(l, [Listen::loopback(30004, &[Transport::Framed]), Listen::loopback(9012, &[Transport::Http])]);
+    /// assert_eq!(l[1].bind, "127.0.0.1:9012");
+    /// ```
+    pub fn loopback_ports(
+        port: u16,
+        transports: &[Transport],
+        alone: impl IntoIterator<Item = (u16, Transport)>,
+    ) -> Vec<Self> {
+        std::iter::once(Listen::loopback(port, transports))
+            .chain(alone.into_iter().map(|(p, t)| Listen::loopback(p, &[t])))
+            .collect()
+    }
+}
+
 /// A running simulator.
 pub struct Simulator {
     /// The address it listens on (the first listener's).
@@ -205,6 +235,12 @@ impl Simulator {
     /// Every listener: the transports it serves and its address.
     pub fn addrs(&self) -> &[(Vec<Transport>, std::net::SocketAddr)] {
         &self.addrs
+    }
+
+    /// Whether a listener serves a transport without login (lines or HTTP: anyone who reaches
+    /// it can move the arm).
+    pub fn serves_without_login(&self) -> bool {
+        self.addrs.iter().any(|(ts, _)| ts.iter().any(|t| *t != Transport::Framed))
     }
 
     /// The first address serving `transport`.

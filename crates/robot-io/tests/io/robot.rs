@@ -374,6 +374,37 @@ fn the_first_move_lands_above_the_first_stroke_on_a_controller_with_its_own_kine
     assert!(miss_m < 2e-5, "the first move ends {:.3} mm from the pose above the first stroke", miss_m * 1e3);
 }
 
+/// The char box a render places the character by: recorded, with a positive size, else refused
+/// naming the file and the field. Reading the track does not check it (a track without one, or
+/// with a bad one, still checks, exports and sends).
+#[test]
+fn a_track_file_gives_its_char_box_only_when_recorded_with_a_positive_size() {
+    use robot_io::TrackFile;
+    let tf = TrackFile {
+        char: Some("一".into()),
+        char_box_mm: Some([20.0, 30.0, 80.0]),
+        sheet_mm: None,
+        brush: pen1(),
+        strokes: small_track().strokes,
+        stroke_chars: None,
+    };
+    let mut v = serde_json::to_value(&tf).unwrap();
+    let read = |v: &serde_json::Value| TrackFile::from_json(&v.to_string(), "t.json").unwrap();
+    let path = std::path::Path::new("t.json");
+    assert_eq!(read(&v).char_box(path).unwrap(), [20.0, 30.0, 80.0]);
+    for size in [0.0, -30.0] {
+        v["char_box_mm"][2] = serde_json::json!(size);
+        let e = read(&v).char_box(path).unwrap_err();
+        assert!(matches!(e, RobotError::Config { .. }), "{e:?}");
+        assert_eq!(e.to_string(), "t.json: field `char_box_mm` must be [x0, y0, size] with size > 0");
+    }
+    let nan = TrackFile { char_box_mm: Some([f64::NAN, 0.0, 10.0]), ..tf.clone() };
+    assert!(nan.char_box(path).unwrap_err().to_string().ends_with("with size > 0"));
+    v.as_object_mut().unwrap().remove("char_box_mm");
+    let e = read(&v).char_box(path).unwrap_err();
+    assert_eq!(e.to_string(), "t.json: field `char_box_mm` must be [x0, y0, size]");
+}
+
 #[test]
 fn a_track_file_places_checks_and_times_its_program() {
     use robot_io::{IN_FRONT_M, TrackFile, time_program};

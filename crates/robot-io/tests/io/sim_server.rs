@@ -391,6 +391,14 @@ fn the_simulator_moves_and_answers_with_the_kinematics_it_is_given() {
     let k = c.call("rob1.RobotConfig.getKinematicsParam", json!({"real": true})).unwrap();
     assert_eq!(serde_json::from_value::<[f64; 6]>(k["alpha"].clone()).unwrap(), dh.alpha_rad);
     assert_eq!(serde_json::from_value::<[f64; 6]>(k["d"].clone()).unwrap(), dh.d_m);
+    // As `arm.json` records them: the calibrated parameters, where they were read, valid.
+    let addr = sim.addr.to_string();
+    let mut client =
+        robot_io::aubo::AuboClient::open(&addr, &robot_io::aubo::Link::default(), Duration::from_secs(2)).unwrap().0;
+    let arm = client.arm_kinematics("rob1").unwrap();
+    assert_eq!((arm.robot.as_str(), arm.real, arm.kinematics), ("rob1", true, dh));
+    assert_eq!(arm.source, format!("{addr} (framed): RobotConfig.getKinematicsParam(true)"));
+    arm.validate(std::path::Path::new("arm.json")).unwrap();
     // Kinematics that are not finite are refused at start.
     let bad = robot_io::DhParams { a_m: [f64::NAN; 6], ..dh };
     let e = Simulator::start_with(

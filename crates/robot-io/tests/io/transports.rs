@@ -30,12 +30,35 @@ fn program() -> (Program, PaperFrame) {
 
 /// One simulator with a port per transport (and the shared port first).
 fn sim(options: SimOptions) -> Simulator {
-    let any = |t: &[Transport]| Listen { bind: "127.0.0.1:0".into(), transports: t.to_vec() };
-    Simulator::start_with(
-        &[any(&Transport::ALL), any(&[Transport::Framed]), any(&[Transport::Lines]), any(&[Transport::Http])],
-        options,
+    let alone = Transport::ALL.map(|t| (0, t));
+    Simulator::start_with(&Listen::loopback_ports(0, &Transport::ALL, alone), options).unwrap()
+}
+
+/// The loopback listeners as asked: the shared port first, then one per transport alone; and
+/// whether any of them serves a transport without login.
+#[test]
+fn loopback_listeners_serve_what_they_name_and_say_when_one_has_no_login() {
+    let s = sim(SimOptions::default());
+    let served: Vec<Vec<Transport>> = s.addrs().iter().map(|(t, _)| t.clone()).collect();
+    assert_eq!(
+        served,
+        [Transport::ALL.to_vec(), vec![Transport::Framed], vec![Transport::Lines], vec![Transport::Http]]
+    );
+    assert!(s.addrs().iter().all(|(_, a)| a.ip().is_loopback() && a.port() != 0));
+    assert!(s.serves_without_login());
+    let framed = Simulator::start_with(
+        &Listen::loopback_ports(0, &[Transport::Framed], [(0, Transport::Framed)]),
+        SimOptions::default(),
     )
-    .unwrap()
+    .unwrap();
+    assert_eq!(framed.addrs().len(), 2);
+    assert!(!framed.serves_without_login());
+    for t in [Transport::Lines, Transport::Http] {
+        let one = Simulator::start_with(&[Listen::loopback(0, &[t])], SimOptions::default()).unwrap();
+        assert!(one.serves_without_login(), "{t}");
+    }
+    let ur = robot_io::sim::UrListen::loopback(robot_io::ur::UrPorts { script: 1, rtde: 2, dashboard: 3 });
+    assert_eq!([ur.script, ur.rtde, ur.dashboard], ["127.0.0.1:1", "127.0.0.1:2", "127.0.0.1:3"]);
 }
 
 fn port_of(s: &Simulator, t: Transport) -> String {

@@ -26,8 +26,8 @@ use crate::RobotError;
 use crate::exec::TraceEntry;
 use crate::kinematics::{DhParams, UR_HOME_JOINTS};
 use crate::pose::Pose;
-use crate::ur::pose_to_ur;
 use crate::ur::rtde::{self, ControlVersion, FieldType, PackageDecoder, Value};
+use crate::ur::{UrPorts, pose_to_ur};
 use program::Compiled;
 
 /// The longest script the stand-in reads, bytes (8 MiB: 永's program is about 60 KB).
@@ -113,6 +113,14 @@ pub struct UrListen {
     pub rtde: String,
     /// The dashboard server (29999).
     pub dashboard: String,
+}
+
+impl UrListen {
+    /// The stand-in on `127.0.0.1` at `ports` (a port 0: any free one).
+    pub fn loopback(ports: UrPorts) -> Self {
+        let at = |port: u16| format!("127.0.0.1:{port}");
+        UrListen { script: at(ports.script), rtde: at(ports.rtde), dashboard: at(ports.dashboard) }
+    }
 }
 
 /// A program playing (or played): what was compiled and when it started.
