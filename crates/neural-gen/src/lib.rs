@@ -23,6 +23,7 @@
 pub use bezier_raster;
 pub use brush_model;
 pub use candle_core;
+pub use safe_output;
 pub use stroke_metrics;
 
 // The README's examples run as doctests (`cargo test --doc`).
