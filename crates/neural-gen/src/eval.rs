@@ -6,13 +6,33 @@ use rayon::prelude::*;
 use stroke_metrics::{GrayRef, SsimWorkspace, Summary};
 
 use crate::model::Generator;
-use crate::{ConfigError, NeuralGenError};
+use crate::{ConfigError, GeneratorConfig, NeuralGenError};
 
 /// Held-out presses: drawn with a seed training never uses.
 pub const HELD_OUT_SEED: u64 = 0x0048_454c_444f_5554;
 
+/// The held-out presses and canvas [`evaluate`] scores a generator with `config` on: its
+/// profile, its canvas (`size`, `px_per_mm`), [`HELD_OUT_SEED`]. Press `i` is `spec.press(i)`,
+/// so other models can be scored on the same presses (`maobi eval-generator`).
+///
+/// # Examples
+/// ```
+/// use neural_gen::{Arch, GeneratorConfig, held_out_spec};
+/// let profile = neural_gen::brush_model::BrushProfile::builtin("pen1").unwrap();
+/// let config = GeneratorConfig::new(profile, Arch::tiny_32());
+/// let spec = held_out_spec(&config);
+/// assert_eq!((spec.canvas.size, spec.seed), (config.size, neural_gen::HELD_OUT_SEED));
+/// ```
+pub fn held_out_spec(config: &GeneratorConfig) -> DatasetSpec {
+    DatasetSpec {
+        profile: config.profile.clone(),
+        canvas: StrokeCanvas::with_scale(config.size, config.px_per_mm),
+        seed: HELD_OUT_SEED,
+    }
+}
+
 /// CSIM and SSIM summaries of the generator against the analytic footprints over `n` held-out
-/// presses (rendered in batches of 64).
+/// presses ([`held_out_spec`]; rendered in batches of 64).
 ///
 /// # Errors
 /// [`NeuralGenError::Config`] for `n = 0` (metrics of nothing); [`NeuralGenError`] from
@@ -22,11 +42,7 @@ pub fn evaluate(g: &Generator, n: usize) -> Result<(Summary, Summary), NeuralGen
         return Err(NeuralGenError::Config { source_name: "evaluation".into(), problem: ConfigError::NoPresses });
     }
     let s = g.config.size;
-    let spec = DatasetSpec {
-        profile: g.config.profile.clone(),
-        canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm),
-        seed: HELD_OUT_SEED,
-    };
+    let spec = held_out_spec(&g.config);
     let presses: Vec<Press> = (0..n as u64).map(|i| spec.press(i)).collect();
     let mut gen_imgs = Vec::with_capacity(n);
     for chunk in presses.chunks(64) {

@@ -23,6 +23,7 @@
 pub use bezier_raster;
 pub use brush_model;
 pub use candle_core;
+pub use safe_output;
 pub use stroke_metrics;
 
 // The README's examples run as doctests (`cargo test --doc`).
@@ -52,7 +53,7 @@ use thiserror::Error;
 
 pub use compose::render_track;
 pub use config::{Arch, ArchError, CONFIG_VERSION, GeneratorConfig, Metrics, Recipe};
-pub use eval::{HELD_OUT_SEED, evaluate};
+pub use eval::{HELD_OUT_SEED, evaluate, held_out_spec};
 pub use model::{Generator, config_path};
 pub use net::Tape;
 pub use train::{SCHEDULE, TrainOptions, TrainPoint, TrainReport, checkpoint_path, train};

@@ -327,15 +327,49 @@ impl Generator {
     /// # Errors
     /// [`NeuralGenError::Save`] (the weights cannot be serialised), [`NeuralGenError::Write`].
     pub fn save(&self, path: &Path) -> Result<(), NeuralGenError> {
+        let (weights, config) = self.serialise(path)?;
+        safe_output::write_atomic(path, &weights)?;
+        safe_output::write_atomic(&config_path(path), config.as_bytes())?;
+        Ok(())
+    }
+
+    /// Adds the weights (`path`) and the config (`path` with extension `.json`) to `files`, a
+    /// set of files replaced together when it is installed (with the caller's other outputs,
+    /// say a loss curve): as [`Generator::save`], but both files are replaced or neither.
+    ///
+    /// # Errors
+    /// [`NeuralGenError::Save`] (the weights cannot be serialised); the writes themselves fail
+    /// in [`safe_output::FileSet::install`].
+    ///
+    /// # Examples
+    /// ```
+    /// use neural_gen::{Arch, Generator, GeneratorConfig};
+    /// let profile = neural_gen::brush_model::BrushProfile::builtin("pen1")?;
+    /// let g = Generator::new(GeneratorConfig::new(profile, Arch::tiny_32()), 1)?;
+    /// let dir = std::env::temp_dir().join(format!("neural-gen-doc-save-into-{}", std::process::id()));
+    /// let mut files = neural_gen::safe_output::FileSet::new();
+    /// g.save_into(&mut files, &dir.join("g.safetensors"))?;
+    /// files.add(dir.join("notes.txt"), b"trained for a doc test\n".to_vec());
+    /// files.install("save")?;
+    /// assert_eq!(Generator::load(&dir.join("g.safetensors"))?.config, g.config);
+    /// # std::fs::remove_dir_all(&dir)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn save_into(&self, files: &mut safe_output::FileSet<'_>, path: &Path) -> Result<(), NeuralGenError> {
+        let (weights, config) = self.serialise(path)?;
+        files.add(path, weights);
+        files.add(config_path(path), config.into_bytes());
+        Ok(())
+    }
+
+    /// The weights as safetensors and the config as pretty JSON (`path` names errors).
+    fn serialise(&self, path: &Path) -> Result<(Vec<u8>, String), NeuralGenError> {
         let weights = {
             let data = self.varmap.data().lock().expect("varmap");
             safetensors::tensor::serialize(data.iter().map(|(k, v)| (k, v.as_tensor())), None)
                 .map_err(|e| NeuralGenError::Save { path: path.to_path_buf(), source: e.into() })?
         };
-        safe_output::write_atomic(path, &weights)?;
-        let config = serde_json::to_string_pretty(&self.config).expect("serialises");
-        safe_output::write_atomic(&config_path(path), config.as_bytes())?;
-        Ok(())
+        Ok((weights, serde_json::to_string_pretty(&self.config).expect("serialises")))
     }
 
     /// Loads weights and config, checking that they belong together: the config's version and
@@ -496,6 +530,22 @@ mod tests {
         assert_eq!(config.arch, g.config.arch);
         // Nothing else is left in the folder (no temporary file).
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 3);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_set_of_files_gets_the_bytes_save_writes() {
+        let profile = brush_model::BrushProfile::builtin("pen1").unwrap();
+        let g = Generator::new(GeneratorConfig::new(profile, Arch::tiny_32()), 4).unwrap();
+        let dir = std::env::temp_dir().join(format!("neural-gen-save-into-{}", std::process::id()));
+        g.save(&dir.join("a.safetensors")).unwrap();
+        let mut files = safe_output::FileSet::new();
+        g.save_into(&mut files, &dir.join("b.safetensors")).unwrap();
+        files.install("test").unwrap();
+        let read = |name: &str| std::fs::read(dir.join(name)).unwrap();
+        assert_eq!(read("a.safetensors"), read("b.safetensors"));
+        assert_eq!(read("a.json"), read("b.json"));
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 4);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -6,6 +6,9 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum ObserveError {
+    /// The photo file cannot be read or decoded ([`crate::read_sheet_photo`]).
+    #[error(transparent)]
+    Image(#[from] bezier_raster::ImageFileError),
     /// The photo is too small to hold a sheet.
     #[error("the photo is {width}×{height} px: too small to see a sheet of paper (need at least 200 px a side)")]
     TooSmall {

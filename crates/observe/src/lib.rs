@@ -1,7 +1,7 @@
 //! maobi's eye: a photo of a sheet that maobi wrote → its registration marks → the photo →
 //! paper homography → the ink in the paper frame, and how it differs from the plan.
 //!
-//! The steps, each usable alone:
+//! The steps, each usable alone (the first three together: [`read_sheet_photo`]):
 //! - [`Photo::from_image`]: luminance in `[0, 1]` (large photos are reduced first);
 //! - [`ink_map`]: the sheet found against its background, the paper's brightness flattened
 //!   (a smooth field fitted to the bright paper), ink as coverage in `[0, 1]` (1 = ink);
@@ -34,6 +34,7 @@ mod error;
 mod footprint;
 mod homography;
 mod photo;
+mod read;
 mod rectify;
 mod register;
 
@@ -42,6 +43,7 @@ pub use error::ObserveError;
 pub use footprint::{FOOTPRINT_MAX_PX_PER_MM, FOOTPRINT_MIN_PX_PER_MM, FootprintMeasure, measure_footprint};
 pub use homography::Homography;
 pub use photo::{InkMap, MAX_PHOTO_SIDE, Photo, ink_map};
+pub use read::{SheetPhoto, read_sheet_photo};
 pub use rectify::{Frame, rectify};
 pub use register::{
     BLUR_LIMIT_MM, KnownMark, LEAVE_ONE_OUT_LIMIT_MM, MarkFit, RESIDUAL_LIMIT_MM, Registration, register,

@@ -256,7 +256,23 @@ pub enum Error {
         #[source]
         source: Box<Error>,
     },
-    /// A signal arrived ([`crate::record_signal`]) during a swap, which was undone.
+    /// A new file of a [`crate::FileSet`] could not be renamed onto its target.
+    #[error("cannot move the new {} into place", path.display())]
+    MoveIntoPlace {
+        /// The target.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Two files of one [`crate::FileSet`] would be written to the same place.
+    #[error("{}: named twice in one set of files", path.display())]
+    NamedTwice {
+        /// The file (through symlinks, as [`crate::output_target`] resolves it).
+        path: PathBuf,
+    },
+    /// A signal arrived ([`crate::record_signal`]) during a swap, which was undone, or while a
+    /// [`crate::FileSet`] was written, which replaced nothing.
     #[error("interrupted")]
     Interrupted,
     /// A failure injected by [`crate::test_hook`].

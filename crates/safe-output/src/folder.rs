@@ -9,7 +9,7 @@ use crate::interrupt::{TempGuard, output_gate, signal_count, test_hook};
 use crate::{Error, Names, Notice, Overlap};
 
 /// The folder that holds `out` (`.` for a bare name).
-fn parent_of(out: &Path) -> PathBuf {
+pub(crate) fn parent_of(out: &Path) -> PathBuf {
     match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -17,7 +17,7 @@ fn parent_of(out: &Path) -> PathBuf {
 }
 
 /// The last component of `out`, for the hidden names beside it.
-fn name_of(out: &Path) -> String {
+pub(crate) fn name_of(out: &Path) -> String {
     out.file_name().map_or("out".into(), |n| n.to_string_lossy().into_owned())
 }
 
@@ -105,7 +105,7 @@ impl Drop for OutputLock {
 /// Cleans up what runs that died (killed, or the machine stopped) left beside `out`: a moved-aside
 /// old output `.NAME.maobi-partial-PID.old` is put back when `out` is missing (the run died in
 /// the middle of its swap) and removed otherwise (it died after installing its output); a staging
-/// folder `.NAME.maobi-partial-PID` is removed. Only leftovers of processes that no longer run
+/// folder `.NAME.maobi-partial-PID` (or a [`crate::FileSet`]'s file of that name) is removed. Only leftovers of processes that no longer run
 /// are touched, each reported to `notes`. Call it holding the [`OutputLock`].
 ///
 /// # Errors
@@ -148,7 +148,10 @@ pub fn recover_leftovers(out: &Path, notes: &mut dyn FnMut(Notice)) -> Result<()
         }
     }
     for (pid, p) in partials {
-        std::fs::remove_dir_all(&p).map_err(Error::io("cannot remove", &p))?;
+        // A staging folder, or a file a [`crate::FileSet`] was writing.
+        let file = std::fs::symlink_metadata(&p).is_ok_and(|m| !m.is_dir());
+        if file { std::fs::remove_file(&p) } else { std::fs::remove_dir_all(&p) }
+            .map_err(Error::io("cannot remove", &p))?;
         notes(Notice::RemovedPartial { partial: p, pid });
     }
     Ok(())
@@ -532,6 +535,11 @@ mod tests {
         std::fs::create_dir_all(d.join(format!(".o.maobi-partial-{DEAD}.old"))).unwrap();
         recover_leftovers(&out, &mut |_| {}).unwrap();
         assert!(out.join("a").exists() && !d.join(format!(".o.maobi-partial-{DEAD}.old")).exists());
+        // A file a dead run's `FileSet` was writing beside a single-file output goes too.
+        std::fs::write(d.join(format!(".f.txt.maobi-partial-{DEAD}")), "half").unwrap();
+        std::fs::write(d.join("f.txt"), "whole").unwrap();
+        recover_leftovers(&d.join("f.txt"), &mut |_| {}).unwrap();
+        assert_eq!(names(&d), [format!(".other.maobi-partial-{DEAD}"), "f.txt".into(), "o".into()]);
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -9,6 +9,8 @@
 //! * [`Stage`]: an output folder written into a hidden staging folder and swapped in whole by
 //!   [`Stage::install`], which lists what the run wrote ([`MANIFEST`]) so that a later forced
 //!   run replaces only that ([`foreign_files`], [`check_output_folder`]).
+//! * [`FileSet`]: several files that belong together (a model's weights and its config)
+//!   written beside their targets and renamed into place together, or none of them.
 //! * [`OutputLock`]: one run per output; [`recover_leftovers`] cleans up after runs that died.
 //! * [`check_output_file`], [`check_output_folder`], [`check_output_apart`]: the refusals
 //!   before a run starts (an existing output, an output that is one of the inputs).
@@ -47,6 +49,7 @@ mod error;
 mod file;
 mod folder;
 mod interrupt;
+mod set;
 
 pub use error::{Error, Names, Notice, Overlap};
 pub use file::{check_output_file, output_target, write_atomic, write_atomic_with, write_under};
@@ -58,6 +61,7 @@ pub use interrupt::{
     GateGuard, TempGuard, freeze_outputs, output_gate, record_signal, remove_on_interrupt, remove_temporaries,
     signal_count, test_hook,
 };
+pub use set::FileSet;
 
 #[cfg(test)]
 mod tests {

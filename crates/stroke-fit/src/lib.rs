@@ -5,6 +5,7 @@
 //! background flattened, Otsu threshold, the one ink blob) and a B-BSM footprint is fitted to it
 //! ([`fit_footprint`]: moments and principal axis to start, Nelder–Mead on the soft IoU to refine, both
 //! ends tried as the root). [`read_labels`] reads the presses a folder of photos was made with,
+//! [`photo_measurements`] turns the fits into measurements and their `measurements.csv`,
 //! [`fit_overlay`] draws a fit over its photo, and [`synthetic_photo`] makes synthetic stroke
 //! photos from known footprints.
 //!
@@ -24,12 +25,14 @@ struct ReadmeDoctests;
 
 mod fit;
 mod labels;
+mod measure;
 mod overlay;
 mod photo;
 mod synth;
 
 pub use fit::{StrokeFit, fit_footprint};
 pub use labels::{LabelsError, MAX_LABELS_BYTES, MAX_LABELS_ROWS, StrokeLabel, read_labels};
+pub use measure::{PhotoMeasurements, photo_measurements};
 pub use overlay::fit_overlay;
 pub use photo::{InkMask, PhotoError, load_ink, mask_from_gray, scale_from_metadata};
 pub use synth::{Degradation, png_with_scale, synthetic_photo};

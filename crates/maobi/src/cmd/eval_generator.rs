@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::Result;
-use bezier_raster::{DatasetSpec, ModelKind, StrokeCanvas};
+use bezier_raster::ModelKind;
 use brush_model::Extrapolation;
 use pipeline::{ModelTarget, score_models};
 use serde_json::json;
@@ -36,11 +36,7 @@ pub fn run(args: Args) -> Result<()> {
     let (gc, gs) = neural_gen::evaluate(&g, args.n)?;
     let secs = t0.elapsed().as_secs_f64();
     let s = g.config.size;
-    let spec = DatasetSpec {
-        profile: g.config.profile.clone(),
-        canvas: StrokeCanvas::with_scale(s, g.config.px_per_mm),
-        seed: neural_gen::HELD_OUT_SEED,
-    };
+    let spec = neural_gen::held_out_spec(&g.config);
     let targets = ModelTarget::presses(&spec, args.n as u64);
     let baselines = score_models(&spec.profile, &targets, s, &ModelKind::BASELINES, Extrapolation::Refuse, &|| {})?;
     let mut table: BTreeMap<String, (Summary, Summary)> = BTreeMap::new();

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use observe::{Photo, ink_map, register};
+use observe::{SheetPhoto, read_sheet_photo};
 use pipeline::tuning::MIN_PLAN_CSIM;
 use pipeline::{SheetFolder, SheetFolderError, plan_csim_mean};
 
@@ -52,12 +52,8 @@ fn sheet_error(flag: &str, e: SheetFolderError) -> anyhow::Error {
 pub fn run(args: Args) -> Result<()> {
     check_output_apart("--output", &args.output, &[("--sheet", &args.sheet), ("PHOTO", &args.photo)])?;
     let sheet = SheetFolder::load(&args.sheet).map_err(|e| sheet_error("--sheet", e))?;
-    let photo_err = || format!("PHOTO {}", args.photo.display());
-    let img = bezier_raster::decode_image(&args.photo).with_context(photo_err)?;
-    let photo = Photo::from_image(&img).with_context(photo_err)?;
-    drop(img);
-    let ink = ink_map(&photo).with_context(photo_err)?;
-    let reg = register(&ink, &sheet.marks).with_context(photo_err)?;
+    let SheetPhoto { photo, ink, registration: reg } =
+        read_sheet_photo(&args.photo, &sheet.marks).with_context(|| format!("PHOTO {}", args.photo.display()))?;
     let _lock = OutputLock::acquire("--output", &args.output)?;
     recover_leftovers(&args.output)?;
     check_output_folder("--output", &args.output, args.force)?;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use bezier_raster::{Coverage, ModelKind, Rasterizer, StrokeCanvas, svg_document};
+use bezier_raster::{ModelKind, StrokeCanvas};
 use brush_model::Extrapolation;
 use serde_json::json;
 
@@ -62,18 +62,10 @@ pub fn run(args: Args) -> Result<()> {
     let press = args.press.press(&profile)?;
     let ex = if args.extrapolate { Extrapolation::Allow } else { Extrapolation::Refuse };
     let fp = crate::common::predict_or_hint(&profile, &press, ex, "give --extrapolate to use it anyway")?;
-    let anchor = canvas.anchor_mm(&fp, press.beta_rad);
     let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let bytes = match ext.as_deref() {
-        Some("png") => {
-            let mut img = Coverage::new(args.size, args.size);
-            Rasterizer::new().render(args.model.model(), &fp, anchor, press.beta_rad, canvas.px_per_mm, &mut img);
-            img.encode_png()?
-        }
-        Some("svg") => {
-            let path = args.model.model().outline(&fp, anchor, press.beta_rad);
-            svg_document(&path, canvas.size_mm(), canvas.size_mm()).into_bytes()
-        }
+        Some("png") => canvas.draw(args.model.model(), &fp, press.beta_rad).encode_png()?,
+        Some("svg") => canvas.svg(args.model.model(), &fp, press.beta_rad).into_bytes(),
         _ => bail!("-o {}: expected a .png or .svg file name", args.output.display()),
     };
     check_output_file("-o", &args.output, args.force)?;

@@ -6,8 +6,7 @@ use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 
 use crate::common::{
-    BrushArg, OutputLock, StepProgress, TempGuard, check_output_file, check_range, load_brush, output_gate,
-    output_target, signal_count, test_hook,
+    BrushArg, FileSet, OutputLock, StepProgress, check_output_file, check_range, install_files, load_brush,
 };
 
 /// Arguments of `maobi train`.
@@ -156,56 +155,20 @@ fn start_generator(args: &Args, profile: brush_model::BrushProfile) -> Result<Ge
     })
 }
 
-/// Writes the weights, their config, `loss.csv` and `loss.png` beside one another: each first to
-/// a hidden temporary file (`.NAME.maobi-partial-PID…`) so that a failure (a full disk) changes
-/// none of the outputs, then all renamed into place, with Ctrl-C held off until the last rename.
-/// Returns the folder.
+/// Writes the weights, their config, `loss.csv` and `loss.png` beside one another, replaced
+/// together ([`safe_output::FileSet`]: each first to a hidden temporary file
+/// `.NAME.maobi-partial-PID` so that a failure, a full disk, changes none of the outputs; Ctrl-C
+/// held off until the last rename). Returns the folder.
 fn install_outputs(g: &Generator, output: &Path, report: &neural_gen::TrainReport) -> Result<PathBuf> {
     let dir =
         output.parent().filter(|d| !d.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("."));
-    let pid = std::process::id();
-    let stem = output.file_stem().map_or("generator".into(), |s| s.to_string_lossy().into_owned());
-    let staged = dir.join(format!(".{stem}.maobi-partial-{pid}.safetensors"));
-    let staged_cfg = neural_gen::config_path(&staged);
-    let staged_csv = dir.join(format!(".loss.csv.maobi-partial-{pid}"));
-    let staged_png = dir.join(format!(".loss.png.maobi-partial-{pid}"));
-    // Removed on Ctrl-C while they live; removed below on any error (a rename moves them away).
-    let temps = [staged.clone(), staged_cfg.clone(), staged_csv.clone(), staged_png.clone()];
-    let _guards: Vec<TempGuard> = temps.iter().map(|p| TempGuard::new(p)).collect();
-    let signals = signal_count();
-    let result = (|| -> Result<()> {
-        let _gate = output_gate();
-        g.save(&staged)?;
-        let csv = report.loss_csv();
-        std::fs::write(&staged_csv, csv).with_context(|| format!("cannot write {}", staged_csv.display()))?;
-        let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
-        let val: Vec<(f64, f64)> =
-            report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
-        let png = figures::loss_png(&[("train", train), ("validation", val)])?;
-        std::fs::write(&staged_png, png).with_context(|| format!("cannot write {}", staged_png.display()))?;
-        // Through symlinks; folders and special files refused before anything moves.
-        let targets = [
-            (&staged, output_target(output)?),
-            (&staged_cfg, output_target(&neural_gen::config_path(output))?),
-            (&staged_csv, output_target(&dir.join("loss.csv"))?),
-            (&staged_png, output_target(&dir.join("loss.png"))?),
-        ];
-        test_hook("train-install")?;
-        if signal_count() != signals {
-            bail!("interrupted");
-        }
-        for (from, to) in targets {
-            std::fs::rename(from, &to).with_context(|| format!("cannot move the new {} into place", to.display()))?;
-        }
-        Ok(())
-    })();
-    if result.is_err() {
-        for p in &temps {
-            let _ = std::fs::remove_file(p);
-        }
-        if signal_count() != signals {
-            crate::common::exit_interrupted();
-        }
-    }
-    result.map(|()| dir)
+    let train: Vec<(f64, f64)> = report.history.iter().map(|p| (p.step as f64, p.train_mse)).collect();
+    let val: Vec<(f64, f64)> = report.history.iter().filter_map(|p| p.val_mse.map(|v| (p.step as f64, v))).collect();
+    let png = figures::loss_png(&[("train", train), ("validation", val)])?;
+    let mut files = FileSet::new();
+    g.save_into(&mut files, output)?;
+    files.add(dir.join("loss.csv"), report.loss_csv().into_bytes());
+    files.add(dir.join("loss.png"), png);
+    install_files(files, "train-install")?;
+    Ok(dir)
 }

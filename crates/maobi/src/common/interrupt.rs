@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, Result};
 
-pub use safe_output::{TempGuard, output_gate, signal_count};
+pub use safe_output::signal_count;
 
 /// Set by commands that stop by themselves at a consistent point when [`interrupted`] says so.
 static COOPERATIVE: AtomicBool = AtomicBool::new(false);

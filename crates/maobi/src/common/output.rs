@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Result;
 use safe_output::{Names, Notice};
 
-pub use safe_output::{output_is_vacant, output_target, test_hook, write_atomic, write_atomic_with, write_under};
+pub use safe_output::{FileSet, output_is_vacant, test_hook, write_atomic, write_atomic_with, write_under};
 
 use super::interrupt::{exit_interrupted, signal_count};
 
@@ -78,4 +78,15 @@ impl Stage {
         }
         Ok(result?)
     }
+}
+
+/// Replaces the files of `files` together ([`safe_output::FileSet::install`], `step` its name for
+/// `MAOBI_TEST_HOOK`); a failure that a signal caused exits 130.
+pub fn install_files(files: FileSet<'_>, step: &str) -> Result<()> {
+    let signals = signal_count();
+    let result = files.install(step);
+    if result.is_err() && signal_count() != signals {
+        exit_interrupted();
+    }
+    Ok(result?)
 }

@@ -38,23 +38,12 @@ pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Pa
     if !failed.is_empty() {
         eprintln!("left out {} photo(s) that could not be fitted: {}", failed.len(), failed.join("; "));
     }
-    let mut csv = format!("file,{},iou\n", brush_model::MEASUREMENT_COLUMNS);
-    let mut rows = Vec::new();
-    let mut poor = Vec::new();
-    for (i, f) in &fits {
-        let l = &labels[*i];
-        let m = Measurement { press: l.press, footprint: f.footprint() };
-        csv.push_str(&format!("{},{},{:.4}\n", l.file, brush_model::measurement_fields(&m, Some(4)), f.iou));
-        if f.iou < min_iou {
-            poor.push(format!("{} (IoU {:.3})", l.file, f.iou));
-        } else {
-            rows.push(m);
-        }
-    }
-    write_atomic(&profile_out.with_file_name("measurements.csv"), csv.as_bytes())?;
-    if !poor.is_empty() {
+    let m = stroke_fit::photo_measurements(fits.iter().map(|(i, f)| (&labels[*i], f)), min_iou);
+    write_atomic(&profile_out.with_file_name("measurements.csv"), m.csv.as_bytes())?;
+    if !m.poor.is_empty() {
+        let poor: Vec<String> = m.poor.iter().map(|(file, iou)| format!("{file} (IoU {iou:.3})")).collect();
         eprintln!("left out {} photo(s) whose fit IoU is below {min_iou}: {}", poor.len(), poor.join(", "));
     }
-    eprintln!("fitted {} photo(s), {} used", fits.len(), rows.len());
-    Ok(rows)
+    eprintln!("fitted {} photo(s), {} used", fits.len(), m.rows.len());
+    Ok(m.rows)
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use brush_model::{Brush, Measurement};
-use observe::{Photo, ink_map, register};
+use observe::{SheetPhoto, read_sheet_photo};
 use pipeline::{CalibrationLayout, LeftOut};
 
 use crate::common::progress;
@@ -23,10 +23,7 @@ pub fn measure(photo_path: &Path, cal: &Path, min_iou: f64) -> Result<(Vec<Measu
         bail!("--layout: {} lacks registration marks (four corners and at least one more)", path.display());
     };
     let what = || format!("--sheet-photo {}", photo_path.display());
-    let img = bezier_raster::decode_image(photo_path).with_context(what)?;
-    let photo = Photo::from_image(&img).with_context(what)?;
-    let ink = ink_map(&photo).with_context(what)?;
-    let reg = register(&ink, &marks).with_context(what)?;
+    let SheetPhoto { ink, registration: reg, .. } = read_sheet_photo(photo_path, &marks).with_context(what)?;
     let pb = progress(layout.presses.len() as u64, "measuring");
     let reading = pipeline::read_calibration_sheet(&layout, &ink, &reg, min_iou, &|| pb.inc(1));
     pb.finish_and_clear();
