@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use neural_gen::{Arch, Generator, GeneratorConfig, TrainOptions};
 
 use crate::common::{
-    BrushArg, FileSet, OutputLock, StepProgress, check_output_file, check_range, install_files, load_brush,
+    BrushArg, FileSet, OutputLock, check_output_file, check_range, install_files, load_brush, step_progress,
 };
 
 /// Arguments of `maobi train`.
@@ -68,7 +68,7 @@ pub fn run(args: Args) -> Result<()> {
         g.config.size
     );
     // A bar on a terminal; without one (a log, CI) a line every 5 % of the steps.
-    let mut progress = StepProgress::new(args.steps as u64, "train", 5);
+    let progress = step_progress(args.steps as u64, "train");
     let opts = TrainOptions {
         steps: args.steps,
         batch: args.batch,
@@ -86,7 +86,7 @@ pub fn run(args: Args) -> Result<()> {
         let val = if last_val.is_nan() { "-".to_string() } else { format!("{last_val:.6}") };
         progress.step(p.step as u64, &format!("loss {:.6}  validation {val}", p.train_mse));
     })?;
-    progress.finish();
+    progress.finish_and_clear();
     let (csim, ssim) = neural_gen::evaluate(&g, args.eval_n)?;
     g.config.recipe = Some(report.recipe(&opts));
     g.config.metrics = Some(report.metrics(args.eval_n, &csim, &ssim));

@@ -5,10 +5,11 @@
 /// error stays the one line on stderr.
 pub const PROGRESS_QUIET_S: f64 = 20.0;
 
-/// Progress over items done in parallel (`write`, `evaluate`, `dataset`, …): an indicatif bar
-/// when stderr is a terminal; otherwise (a log, a pipe, CI), once the loop has run
-/// [`PROGRESS_QUIET_S`], a line on stderr every 5 % (`evaluate: 120/499 (24%)  elapsed 1:02
-/// ETA 3:16`).
+/// Progress over items done in parallel (`write`, `evaluate`, `dataset`, …) or over the steps
+/// of a long loop (`train`, [`step_progress`]): an indicatif bar when stderr is a terminal;
+/// otherwise (a log, a pipe, CI), once the loop has run [`PROGRESS_QUIET_S`] (at once for
+/// steps), a line on stderr every 5 % (`evaluate: 120/499 (24%)  elapsed 1:02  ETA 3:16`;
+/// `train: step 125/2500 (5%)  loss 0.00123  elapsed 0:41  ETA 13:00`).
 pub struct Progress {
     bar: Option<indicatif::ProgressBar>,
     what: String,
@@ -24,16 +25,23 @@ impl Progress {
     pub fn inc(&self, n: u64) {
         use std::sync::atomic::Ordering::Relaxed;
         let done = self.done.fetch_add(n, Relaxed) + n;
-        self.report(done);
+        self.report(done, None);
     }
 
     /// `done` items are done.
     pub fn set_position(&self, done: u64) {
         self.done.store(done, std::sync::atomic::Ordering::Relaxed);
-        self.report(done);
+        self.report(done, None);
     }
 
-    fn report(&self, done: u64) {
+    /// Step `done` (1-based) is finished; `detail` is what to show with it (`loss 0.00123`).
+    pub fn step(&self, done: u64, detail: &str) {
+        self.done.store(done, std::sync::atomic::Ordering::Relaxed);
+        self.set_message(detail.to_string());
+        self.report(done, Some(detail));
+    }
+
+    fn report(&self, done: u64, step: Option<&str>) {
         use std::sync::atomic::Ordering::Relaxed;
         if let Some(pb) = &self.bar {
             pb.set_position(done);
@@ -49,8 +57,12 @@ impl Progress {
         if self.next_pct.compare_exchange(next, (pct / 5 + 1) * 5, Relaxed, Relaxed).is_err() {
             return;
         }
-        let eta = elapsed * (self.total.saturating_sub(done)) as f64 / done.max(1) as f64;
-        eprintln!("{}: {done}/{} ({pct}%)  elapsed {}  ETA {}", self.what, self.total, clock(elapsed), clock(eta));
+        let eta = clock(elapsed * (self.total.saturating_sub(done)) as f64 / done.max(1) as f64);
+        let (what, total, elapsed) = (&self.what, self.total, clock(elapsed));
+        match step {
+            Some(detail) => eprintln!("{what}: step {done}/{total} ({pct}%)  {detail}  elapsed {elapsed}  ETA {eta}"),
+            None => eprintln!("{what}: {done}/{total} ({pct}%)  elapsed {elapsed}  ETA {eta}"),
+        }
     }
 
     /// The words beside the bar on a terminal (nothing without one).
@@ -70,22 +82,29 @@ impl Progress {
 
 /// A [`Progress`] over `len` items, named `what`.
 pub fn progress(len: u64, what: &str) -> Progress {
-    use std::io::IsTerminal;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let pb = indicatif::ProgressBar::new(len);
-        pb.set_style(
-            indicatif::ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} ({per_sec}, {eta})")
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
-        pb.set_message(what.to_string());
-        pb
-    });
     let quiet_s = std::env::var("MAOBI_PROGRESS_AFTER_S")
         .ok()
         .and_then(|v| v.parse::<f64>().ok())
         .filter(|v| v.is_finite() && *v >= 0.0)
         .unwrap_or(PROGRESS_QUIET_S);
+    let p = new_progress(len, what, "{msg:>10} [{bar:40}] {pos}/{len} ({per_sec}, {eta})", quiet_s);
+    p.set_message(what.to_string());
+    p
+}
+
+/// A [`Progress`] over the `total` steps of a long loop named `what` (`train`), reported with
+/// [`Progress::step`]: its lines start at once.
+pub fn step_progress(total: u64, what: &str) -> Progress {
+    new_progress(total, what, &format!("{what} [{{bar:40}}] {{pos}}/{{len}} {{msg}} ({{per_sec}}, {{eta}})"), 0.0)
+}
+
+fn new_progress(len: u64, what: &str, template: &str, quiet_s: f64) -> Progress {
+    use std::io::IsTerminal;
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let pb = indicatif::ProgressBar::new(len);
+        pb.set_style(indicatif::ProgressStyle::with_template(template).expect("valid template").progress_chars("=> "));
+        pb
+    });
     Progress {
         bar,
         what: what.to_string(),
@@ -94,78 +113,6 @@ pub fn progress(len: u64, what: &str) -> Progress {
         next_pct: std::sync::atomic::AtomicU64::new(5),
         quiet_s,
         start: std::time::Instant::now(),
-    }
-}
-
-/// Progress of a long loop (`maobi train`): an indicatif bar when stderr is a terminal; otherwise
-/// (a log file, a pipe, CI) one line on stderr each time another `every_pct` percent is done, with
-/// the step, the caller's figures, the elapsed time and an estimate of the time left.
-pub struct StepProgress {
-    bar: Option<indicatif::ProgressBar>,
-    what: &'static str,
-    total: u64,
-    every_pct: u64,
-    next_pct: u64,
-    start: std::time::Instant,
-}
-
-impl StepProgress {
-    /// A progress report over `total` steps, named `what` (`train`).
-    pub fn new(total: u64, what: &'static str, every_pct: u64) -> Self {
-        use std::io::IsTerminal;
-        let bar = std::io::stderr().is_terminal().then(|| {
-            let pb = indicatif::ProgressBar::new(total);
-            pb.set_style(
-                indicatif::ProgressStyle::with_template(&format!(
-                    "{what} [{{bar:40}}] {{pos}}/{{len}} {{msg}} ({{per_sec}}, {{eta}})"
-                ))
-                .expect("valid template")
-                .progress_chars("=> "),
-            );
-            pb
-        });
-        let every_pct = every_pct.clamp(1, 100);
-        StepProgress {
-            bar,
-            what,
-            total: total.max(1),
-            every_pct,
-            next_pct: every_pct,
-            start: std::time::Instant::now(),
-        }
-    }
-
-    /// Step `done` (1-based) of the total is finished; `detail` is what to show with it
-    /// (`loss 0.00123  validation 0.00110`).
-    pub fn step(&mut self, done: u64, detail: &str) {
-        if let Some(pb) = &self.bar {
-            pb.set_message(detail.to_string());
-            pb.set_position(done);
-            return;
-        }
-        let pct = done.min(self.total) * 100 / self.total;
-        if pct < self.next_pct && done < self.total {
-            return;
-        }
-        while self.next_pct <= pct {
-            self.next_pct += self.every_pct;
-        }
-        let elapsed = self.start.elapsed().as_secs_f64();
-        let eta = elapsed * (self.total - done.min(self.total)) as f64 / done.max(1) as f64;
-        eprintln!(
-            "{}: step {done}/{} ({pct}%)  {detail}  elapsed {}  ETA {}",
-            self.what,
-            self.total,
-            clock(elapsed),
-            clock(eta)
-        );
-    }
-
-    /// Removes the bar (the lines stay).
-    pub fn finish(self) {
-        if let Some(pb) = self.bar {
-            pb.finish_and_clear();
-        }
     }
 }
 
