@@ -133,26 +133,3 @@ pub fn prepare_loaded(loaded: (Glyph, Option<Glyph>), method: Option<Method>) ->
     }
     Ok(p)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn an_image_folder_lists_one_character_images_and_refuses_others() {
-        let dir = tempfile::tempdir().unwrap();
-        for name in ["永.png", "十.JPG", "notes.txt", "口.jpeg"] {
-            std::fs::write(dir.path().join(name), b"").unwrap();
-        }
-        let found: String = image_folder(dir.path()).unwrap().iter().map(|(c, _)| *c).collect();
-        assert_eq!(found, "十口永");
-        std::fs::write(dir.path().join("永字.png"), b"").unwrap();
-        let e = image_folder(dir.path()).unwrap_err().to_string();
-        assert!(e.contains("永字.png") && e.contains("named after its one character"), "{e}");
-        let empty = tempfile::tempdir().unwrap();
-        let e = image_folder(empty.path()).unwrap_err().to_string();
-        assert!(e.contains("no <char>.png"), "{e}");
-        let e = image_folder(&empty.path().join("missing")).unwrap_err();
-        assert!(e.to_string().contains("cannot read the folder") && std::error::Error::source(&e).is_some());
-    }
-}

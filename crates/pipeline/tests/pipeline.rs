@@ -100,3 +100,21 @@ fn a_blank_photo_is_refused_naming_the_file_and_no_flag() {
     // A character the images do not cover is its own error.
     assert!(matches!(input.load('十'), Err(Error::NoImage('十'))));
 }
+
+#[test]
+fn an_image_folder_lists_one_character_images_and_refuses_others() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["永.png", "十.JPG", "notes.txt", "口.jpeg"] {
+        std::fs::write(dir.path().join(name), b"").unwrap();
+    }
+    let found: String = pipeline::image_folder(dir.path()).unwrap().iter().map(|(c, _)| *c).collect();
+    assert_eq!(found, "十口永");
+    std::fs::write(dir.path().join("永字.png"), b"").unwrap();
+    let e = pipeline::image_folder(dir.path()).unwrap_err().to_string();
+    assert!(e.contains("永字.png") && e.contains("named after its one character"), "{e}");
+    let empty = tempfile::tempdir().unwrap();
+    let e = pipeline::image_folder(empty.path()).unwrap_err().to_string();
+    assert!(e.contains("no <char>.png"), "{e}");
+    let e = pipeline::image_folder(&empty.path().join("missing")).unwrap_err();
+    assert!(e.to_string().contains("cannot read the folder") && std::error::Error::source(&e).is_some());
+}
