@@ -2,7 +2,11 @@
 //! `maobi robot check --json` and `maobi robot export` build it.
 
 use pyo3::prelude::*;
-use robot_io::{ArmKinematics, DhParams, PaperFile, PaperFrame, Program, RobotConfig, TrackFile, build_program_chars};
+use robot_io::aubo::Motion;
+use robot_io::{
+    ArmKinematics, DhParams, ExportFormat, PaperFile, PaperFrame, Plan, Program, RobotConfig, TrackFile,
+    build_program_chars,
+};
 
 use crate::arrays::{input_path, json_to_py};
 use crate::errors::value_err;
@@ -137,31 +141,26 @@ pub(crate) fn robot_export<'py>(
              arm whose controller reports other parameters), or motion=\"moves\"",
         ));
     }
-    let format = format.to_string();
+    let format = match format {
+        "aubo-lua" if by_moves => ExportFormat::AuboLua(Motion::Moves),
+        "aubo-lua" => ExportFormat::AuboLua(Motion::PathBuffer),
+        "urscript" => ExportFormat::UrScript,
+        _ => ExportFormat::Gcode,
+    };
     let (text, warnings) = guarded(py, "robot.export", move || {
         let (program, _) = program(&t, &frame, &cfg)?;
+        let (track, title) = (t.track(), t.title());
+        let plan = Plan {
+            program: &program,
+            config: &cfg,
+            track: &track,
+            stroke_chars: t.stroke_chars.as_deref(),
+            title: &title,
+        };
         let kin = arm.as_ref().map_or(DhParams::AUBO_I5, |k| k.kinematics);
-        let title = t.char.clone().unwrap_or_else(|| "track".into());
-        let err = |e: robot_io::RobotError| MaobiError::new_err(format!("export: {}", crate::errors::chain(&e)));
-        match format.as_str() {
-            "aubo-lua" if by_moves => {
-                let compact = robot_io::compact_program(&program, &cfg);
-                robot_io::check_blends(&compact).map_err(err)?;
-                Ok((robot_io::aubo_lua(&compact, &title).map_err(err)?, Vec::new()))
-            }
-            "aubo-lua" => Ok((robot_io::aubo_lua_path_buffer(&program, &kin, &cfg, &title).map_err(err)?, Vec::new())),
-            "urscript" => {
-                let timing = robot_io::time_program(&program, &kin, &cfg).map_err(err)?;
-                Ok((robot_io::urscript(&program, &timing, &cfg, &title).map_err(err)?, Vec::new()))
-            }
-            _ => {
-                let timing = robot_io::time_program(&program, &kin, &cfg).map_err(err)?;
-                let times = robot_io::point_times(&program, &timing).map_err(err)?;
-                let (g, warnings) =
-                    robot_io::gcode_chars(&t.track(), t.stroke_chars.as_deref(), &times, &cfg, &title).map_err(err)?;
-                Ok((g, warnings.iter().map(|w| w.to_string()).collect::<Vec<String>>()))
-            }
-        }
+        let e = robot_io::export_program(&plan, format, &kin)
+            .map_err(|e| MaobiError::new_err(format!("export: {}", crate::errors::chain(&e))))?;
+        Ok((e.text, e.warnings.iter().map(|w| w.to_string()).collect::<Vec<String>>()))
     })?;
     // What `maobi robot export` prints as warnings on stderr.
     let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
