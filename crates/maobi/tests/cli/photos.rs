@@ -101,3 +101,16 @@ fn bad_photos_are_listed_or_refused() {
     fails(&maobi(&["calibrate", "--images", s(dir.path()), "-o", s(&dir.path().join("q.json"))]), "already exists");
     fails(&maobi(&["calibrate", "--images", s(dir.path()), "-o", s(&q)]), "labels.csv");
 }
+
+#[test]
+fn a_refused_fit_from_photos_writes_none_of_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cal/profile.json");
+    // Every fit below an IoU of 1: no photo is used, the fit is refused.
+    let o = maobi(&["calibrate", "--images", s(&photos()), "--min-iou", "1", "-o", s(&out)]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && e.contains("left out 12 photo(s)") && e.contains("cannot fit"), "{e}");
+    for f in ["profile.json", "measurements.csv", "regression.png"] {
+        assert!(!dir.path().join("cal").join(f).exists(), "{f} was written");
+    }
+}

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use brush_model::{BrushProfile, Form, PressRanges, load_measurements};
 
-use crate::common::{check_output_file, check_range, load_brush, print_json, write_atomic};
+use crate::common::{FileSet, check_output_file, check_range, install_files, load_brush, print_json};
 
 mod photos;
 mod sheet_photo;
@@ -72,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    let (rows, source, sheet_csv, sheet_brush) = measurements(&args)?;
+    let (rows, source, photo_csv, sheet_brush) = measurements(&args)?;
     let form = match args.form {
         FormArg::General => Form::General,
         FormArg::Paper => Form::Paper,
@@ -108,18 +108,17 @@ pub fn run(args: Args) -> Result<()> {
         profile
             .validate(&format!("the profile fitted from {}", source.display()))
             .with_context(|| format!("not writing {}: the fitted model is not a usable profile", out.display()))?;
-        // Every file's bytes first: a failure writes nothing.
-        let plot = (args.images.is_some() || sheet_csv.is_some())
-            .then(|| figures::regression_png(&rows, &profile))
-            .transpose()?;
-        if let Some(csv) = &sheet_csv {
-            write_atomic(&out.with_file_name("measurements.csv"), csv.as_bytes())?;
+        // Every file's bytes first, then all replaced together: a failure writes nothing.
+        let (csv, plot) = (out.with_file_name("measurements.csv"), out.with_file_name("regression.png"));
+        let mut files = FileSet::new();
+        if let Some(text) = &photo_csv {
+            files.add(&csv, text.clone().into_bytes());
+            files.add(&plot, figures::regression_png(&rows, &profile)?);
         }
-        write_atomic(out, profile.to_json().as_bytes())?;
-        if let Some(png) = plot {
-            let plot = out.with_file_name("regression.png");
-            write_atomic(&plot, &png)?;
-            eprintln!("wrote {} and {}", out.with_file_name("measurements.csv").display(), plot.display());
+        files.add(out, profile.to_json().into_bytes());
+        install_files(files, "calibrate-install")?;
+        if photo_csv.is_some() {
+            eprintln!("wrote {} and {}", csv.display(), plot.display());
         }
     }
     if args.json {
@@ -136,8 +135,8 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The measurements the flags give, where they came from, and for a sheet photo its
-/// measurements.csv (written once the fit is accepted: a refused photo writes nothing) and the
+/// The measurements the flags give, where they came from, for photos their measurements.csv
+/// (written once the fit is accepted: a refused fit writes nothing) and for a sheet photo the
 /// brush the sheet was made for.
 type Measured = (Vec<brush_model::Measurement>, PathBuf, Option<String>, Option<brush_model::Brush>);
 
@@ -154,11 +153,11 @@ fn measurements(args: &Args) -> Result<Measured> {
             (rows, photo.clone(), Some(csv), Some(brush))
         }
         (None, Some(dir)) => {
-            let out = args
-                .output
+            args.output
                 .as_ref()
                 .context("--images needs -o PROFILE.json (measurements.csv and regression.png go beside it)")?;
-            (photos::measure(dir, args.labels.as_deref(), args.min_iou, out)?, dir.clone(), None, None)
+            let (rows, csv) = photos::measure(dir, args.labels.as_deref(), args.min_iou)?;
+            (rows, dir.clone(), Some(csv), None)
         }
         (None, None) => bail!("give a measurements CSV, --images DIR or --sheet-photo PHOTO --layout CAL"),
     })

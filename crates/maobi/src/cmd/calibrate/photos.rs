@@ -1,4 +1,4 @@
-//! The photo path of `maobi calibrate`: fit every labelled photo, keep the good fits, write
+//! The photo path of `maobi calibrate`: fit every labelled photo, keep the good fits, and
 //! `measurements.csv`.
 
 use std::path::Path;
@@ -7,11 +7,11 @@ use anyhow::Result;
 use brush_model::Measurement;
 use rayon::prelude::*;
 
-use crate::common::{fit_photo, progress, write_atomic};
+use crate::common::{fit_photo, progress};
 
 /// Fits every photo listed in the labels (in parallel, with a progress bar), lists and drops
-/// the poor fits, writes `measurements.csv` beside `profile_out`, and returns the measurements.
-pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Path) -> Result<Vec<Measurement>> {
+/// the poor fits, and returns the measurements and `measurements.csv` (every fit).
+pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64) -> Result<(Vec<Measurement>, String)> {
     let labels_path = labels.map(Path::to_path_buf).unwrap_or_else(|| dir.join("labels.csv"));
     let labels = stroke_fit::read_labels(&labels_path)?;
     let pb = progress(labels.len() as u64, "fitting");
@@ -39,11 +39,10 @@ pub fn measure(dir: &Path, labels: Option<&Path>, min_iou: f64, profile_out: &Pa
         eprintln!("left out {} photo(s) that could not be fitted: {}", failed.len(), failed.join("; "));
     }
     let m = stroke_fit::photo_measurements(fits.iter().map(|(i, f)| (&labels[*i], f)), min_iou);
-    write_atomic(&profile_out.with_file_name("measurements.csv"), m.csv.as_bytes())?;
     if !m.poor.is_empty() {
         let poor: Vec<String> = m.poor.iter().map(|(file, iou)| format!("{file} (IoU {iou:.3})")).collect();
         eprintln!("left out {} photo(s) whose fit IoU is below {min_iou}: {}", poor.len(), poor.join(", "));
     }
     eprintln!("fitted {} photo(s), {} used", fits.len(), m.rows.len());
-    Ok(m.rows)
+    Ok((m.rows, m.csv))
 }
