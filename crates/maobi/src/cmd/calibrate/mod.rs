@@ -111,13 +111,14 @@ pub fn run(args: Args) -> Result<()> {
         // Every file's bytes first, then all replaced together: a failure writes nothing.
         let (csv, plot) = (out.with_file_name("measurements.csv"), out.with_file_name("regression.png"));
         let mut files = FileSet::new();
-        if let Some(text) = &photo_csv {
-            files.add(&csv, text.clone().into_bytes());
+        let photos = photo_csv.is_some();
+        if let Some(text) = photo_csv {
+            files.add(&csv, text.into_bytes());
             files.add(&plot, figures::regression_png(&rows, &profile)?);
         }
         files.add(out, profile.to_json().into_bytes());
         install_files(files, "calibrate-install")?;
-        if photo_csv.is_some() {
+        if photos {
             eprintln!("wrote {} and {}", csv.display(), plot.display());
         }
     }
